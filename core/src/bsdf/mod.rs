@@ -1,0 +1,1 @@
+//! Materials (filled in by the materials work).

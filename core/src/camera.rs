@@ -1,0 +1,1 @@
+//! Pinhole camera (filled in by the camera work).

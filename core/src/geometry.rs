@@ -1,0 +1,117 @@
+//! Rays, surface hits and the ray-query trait through which hosts and embedding engines
+//! plug in their own tracer.
+
+use crate::math::{Vec2, Vec3};
+
+/// A ray `origin + t·dir`, t in (0, t_max). `dir` need not be unit length, but the
+/// estimators always pass unit directions so that `t` is a distance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub dir: Vec3,
+    pub t_max: f32,
+}
+
+impl Ray {
+    #[inline]
+    pub fn new(origin: Vec3, dir: Vec3, t_max: f32) -> Self {
+        Self { origin, dir, t_max }
+    }
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + self.dir * t
+    }
+}
+
+/// Index of a material in the scene description.
+pub type MaterialId = u32;
+/// Index of a light in the scene description.
+pub type LightId = u32;
+
+/// What a closest-hit query reports: enough to shade, nothing engine-specific.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceHit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Hit position.
+    pub p: Vec3,
+    /// Unit geometric normal, oriented by the primitive's winding (not flipped toward the
+    /// ray): one-sided emitters and materials read the side from it.
+    pub ng: Vec3,
+    /// Unit shading normal (interpolated); equal to `ng` where the mesh has none. Always
+    /// in the same hemisphere as `ng`.
+    pub ns: Vec3,
+    /// Surface parameterisation (barycentrics for triangles).
+    pub uv: Vec2,
+    pub material: MaterialId,
+    /// The area light attached to this primitive, if any.
+    pub emitter: Option<LightId>,
+}
+
+/// Ray queries against the scene's geometry. Implemented by hosts (obvhs in the CLI and
+/// the browser) or by an embedding engine's own tracer. Implementations must be
+/// thread-safe to share (`Sync`) if a host renders in parallel.
+pub trait RayQuery {
+    /// Closest intersection with t in (0, ray.t_max), or `None`.
+    fn intersect(&self, ray: &Ray) -> Option<SurfaceHit>;
+    /// True if anything blocks the ray for t in (0, ray.t_max). May stop at the first hit.
+    fn occluded(&self, ray: &Ray) -> bool;
+}
+
+/// Offset a ray origin off a surface, robustly at every scale (Wächter and Binder, "A
+/// Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems ch. 6):
+/// move `p` by a fixed number of ulps along `n` (the geometric normal, pointing to the
+/// side the ray leaves toward), with a small absolute offset near the origin where ulps
+/// vanish.
+#[inline]
+pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
+    const ORIGIN: f32 = 1.0 / 32.0;
+    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
+    const INT_SCALE: f32 = 256.0;
+    let nudge = |p: f32, n: f32| -> f32 {
+        if p.abs() < ORIGIN {
+            return p + FLOAT_SCALE * n;
+        }
+        let of = (INT_SCALE * n) as i32;
+        let bits = p.to_bits() as i32;
+        // Moving away from zero adds ulps to the magnitude; toward zero removes them.
+        let moved = if (p < 0.0) == (of < 0) { bits.wrapping_add(of.abs()) } else { bits.wrapping_sub(of.abs()) };
+        f32::from_bits(moved as u32)
+    };
+    Vec3::new(nudge(p.x, n.x), nudge(p.y, n.y), nudge(p.z, n.z))
+}
+
+/// A ray leaving surface point `p` (geometric normal `ng`) in direction `dir`.
+#[inline]
+pub fn spawn_ray(p: Vec3, ng: Vec3, dir: Vec3) -> Ray {
+    let n = if ng.dot(dir) >= 0.0 { ng } else { -ng };
+    Ray::new(offset_ray_origin(p, n), dir, f32::INFINITY)
+}
+
+/// A shadow ray from surface point `p` (normal `ng`) to point `q` (normal `nq`, zero for
+/// points not on a surface), offset at both ends; `t_max` is in units of the
+/// unnormalised direction, so the ray stops just short of `q`.
+#[inline]
+pub fn spawn_ray_to(p: Vec3, ng: Vec3, q: Vec3, nq: Vec3) -> Ray {
+    let d = q - p;
+    let from = offset_ray_origin(p, if ng.dot(d) >= 0.0 { ng } else { -ng });
+    let to = if nq == Vec3::ZERO { q } else { offset_ray_origin(q, if nq.dot(d) <= 0.0 { nq } else { -nq }) };
+    Ray::new(from, to - from, 1.0 - 1e-4)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn offset_moves_to_the_requested_side_at_every_scale() {
+        for &s in &[1e-4f32, 1e-2, 1.0, 1e2, 1e5] {
+            for &p in &[Vec3::new(s, -s, 0.3 * s), Vec3::new(-s, s, -2.0 * s)] {
+                let n = Vec3::new(0.3, -0.5, 0.81).normalize();
+                let q = offset_ray_origin(p, n);
+                assert!((q - p).dot(n) > 0.0, "scale {s}");
+                assert!((q - p).length() < 1e-3 * s.max(1.0), "scale {s}");
+            }
+        }
+    }
+}

@@ -1,0 +1,30 @@
+//! `ember-core`: the `no_std` heart of the ember light-transport library.
+//!
+//! Densities (warps, materials, lights, camera), random streams, the ray-query trait an
+//! engine implements, and the estimators built on them. No threads, files, clocks or
+//! printing live here; allocation happens only at setup, in caller-visible places.
+//!
+//! Glossary: `wo` is the direction toward where the path came from, `wi` the sampled or
+//! connected direction (both point away from the surface); `beta` is a path throughput;
+//! `pdf_fwd`/`pdf_rev` are the densities of sampling a vertex in the path's own
+//! direction and in the opposite one.
+#![no_std]
+#![warn(missing_docs)]
+#![allow(missing_docs)] // Public fields and small math helpers document themselves by name.
+
+extern crate alloc;
+
+pub mod alias;
+pub mod bsdf;
+pub mod camera;
+pub mod geometry;
+pub mod light;
+pub mod math;
+pub mod measure;
+pub mod rng;
+pub mod spectrum;
+pub mod warp;
+
+pub use math::{Vec2, Vec3};
+pub use measure::{AreaPdf, SolidAnglePdf};
+pub use spectrum::Rgb;

@@ -1,0 +1,1 @@
+//! Lights (filled in by the lights work).

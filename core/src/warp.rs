@@ -1,0 +1,232 @@
+//! Warps from the unit square to common domains.
+//!
+//! Each warp is a triple placed together, as in pbrt-v4: `sample_X(u)`, `X_pdf(..)` and
+//! `invert_X(..)` with `invert_X(sample_X(u)) ≈ u`. Densities carry their measure:
+//! directions are per steradian ([`SolidAnglePdf`]), points on planar domains per unit
+//! area ([`AreaPdf`], for the canonical unit-sized domain; callers scale by their own area).
+
+use crate::math::{INV_2PI, INV_4PI, INV_PI, PI, TWO_PI, Vec2, Vec3, atan2, safe_sqrt, sin_cos, sqrt};
+use crate::measure::{AreaPdf, SolidAnglePdf};
+
+/// Wrap an angle from `atan2` into [0, 2π).
+#[inline]
+fn wrap_angle(phi: f32) -> f32 {
+    if phi < 0.0 { phi + TWO_PI } else { phi }
+}
+
+/// Clamp a reconstructed sample into [0, 1) (inverse warps may land a hair outside).
+#[inline]
+fn unit(x: f32) -> f32 {
+    x.clamp(0.0, 1.0 - f32::EPSILON * 0.5)
+}
+
+// ---------------------------------------------------------------- disk (concentric)
+
+/// Shirley–Chiu concentric map of [0,1)² onto the unit disk (area-preserving, low distortion).
+#[inline]
+pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
+    let o = 2.0 * u - Vec2::ONE;
+    if o.x == 0.0 && o.y == 0.0 {
+        return Vec2::ZERO;
+    }
+    let (r, theta) = if o.x.abs() > o.y.abs() {
+        (o.x, (PI / 4.0) * (o.y / o.x))
+    } else {
+        (o.y, PI / 2.0 - (PI / 4.0) * (o.x / o.y))
+    };
+    let (s, c) = sin_cos(theta);
+    Vec2::new(r * c, r * s)
+}
+
+/// Density of [`sample_concentric_disk`] per unit area: 1/π.
+#[inline]
+pub fn concentric_disk_pdf(p: Vec2) -> AreaPdf {
+    if p.length_squared() <= 1.0 { AreaPdf(INV_PI) } else { AreaPdf(0.0) }
+}
+
+/// Inverse of [`sample_concentric_disk`].
+#[inline]
+pub fn invert_concentric_disk(p: Vec2) -> Vec2 {
+    let r = p.length();
+    if r == 0.0 {
+        return Vec2::splat(0.5);
+    }
+    let mut phi = atan2(p.y, p.x);
+    // Map phi into (-π/4, 7π/4] so that each of the four wedges is contiguous.
+    if phi < -PI / 4.0 {
+        phi += TWO_PI;
+    }
+    let (x, y) = if phi < PI / 4.0 {
+        (r, r * phi * (4.0 / PI))
+    } else if phi < 3.0 * PI / 4.0 {
+        (-r * (phi - PI / 2.0) * (4.0 / PI), r)
+    } else if phi < 5.0 * PI / 4.0 {
+        (-r, -r * (phi - PI) * (4.0 / PI))
+    } else {
+        (r * (phi - 3.0 * PI / 2.0) * (4.0 / PI), -r)
+    };
+    Vec2::new(unit(0.5 * (x + 1.0)), unit(0.5 * (y + 1.0)))
+}
+
+// ---------------------------------------------------------------- hemisphere, uniform
+
+/// Uniform direction on the +z hemisphere.
+#[inline]
+pub fn sample_uniform_hemisphere(u: Vec2) -> Vec3 {
+    let z = u.x;
+    let r = safe_sqrt(1.0 - z * z);
+    let (s, c) = sin_cos(TWO_PI * u.y);
+    Vec3::new(r * c, r * s, z)
+}
+
+/// Density of [`sample_uniform_hemisphere`]: 1/(2π) on z > 0.
+#[inline]
+pub fn uniform_hemisphere_pdf(w: Vec3) -> SolidAnglePdf {
+    if w.z > 0.0 { SolidAnglePdf(INV_2PI) } else { SolidAnglePdf(0.0) }
+}
+
+/// Inverse of [`sample_uniform_hemisphere`].
+#[inline]
+pub fn invert_uniform_hemisphere(w: Vec3) -> Vec2 {
+    Vec2::new(unit(w.z), unit(wrap_angle(atan2(w.y, w.x)) * INV_2PI))
+}
+
+// ---------------------------------------------------------------- hemisphere, cosine
+
+/// Cosine-weighted direction on the +z hemisphere (Malley's method on the concentric disk).
+#[inline]
+pub fn sample_cosine_hemisphere(u: Vec2) -> Vec3 {
+    let d = sample_concentric_disk(u);
+    let z = safe_sqrt(1.0 - d.length_squared());
+    Vec3::new(d.x, d.y, z)
+}
+
+/// Density of [`sample_cosine_hemisphere`]: cos θ / π on z > 0.
+#[inline]
+pub fn cosine_hemisphere_pdf(w: Vec3) -> SolidAnglePdf {
+    SolidAnglePdf(w.z.max(0.0) * INV_PI)
+}
+
+/// Inverse of [`sample_cosine_hemisphere`].
+#[inline]
+pub fn invert_cosine_hemisphere(w: Vec3) -> Vec2 {
+    invert_concentric_disk(Vec2::new(w.x, w.y))
+}
+
+// ---------------------------------------------------------------- sphere
+
+/// Uniform direction on the unit sphere.
+#[inline]
+pub fn sample_uniform_sphere(u: Vec2) -> Vec3 {
+    let z = 1.0 - 2.0 * u.x;
+    let r = safe_sqrt(1.0 - z * z);
+    let (s, c) = sin_cos(TWO_PI * u.y);
+    Vec3::new(r * c, r * s, z)
+}
+
+/// Density of [`sample_uniform_sphere`]: 1/(4π).
+#[inline]
+pub fn uniform_sphere_pdf() -> SolidAnglePdf {
+    SolidAnglePdf(INV_4PI)
+}
+
+/// Inverse of [`sample_uniform_sphere`].
+#[inline]
+pub fn invert_uniform_sphere(w: Vec3) -> Vec2 {
+    Vec2::new(unit(0.5 * (1.0 - w.z)), unit(wrap_angle(atan2(w.y, w.x)) * INV_2PI))
+}
+
+// ---------------------------------------------------------------- cone
+
+/// Uniform direction in the cone around +z with half-angle cosine `cos_max`.
+///
+/// Written in terms of 1 − cos θ so narrow cones (cos_max → 1, e.g. small distant
+/// sphere lights) keep their precision: sin²θ = (1−cos θ)(1+cos θ).
+#[inline]
+pub fn sample_uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
+    let one_minus_cos_max = 1.0 - cos_max;
+    let one_minus_cos = u.x * one_minus_cos_max;
+    let cos_theta = 1.0 - one_minus_cos;
+    let sin_theta = safe_sqrt(one_minus_cos * (2.0 - one_minus_cos));
+    let (s, c) = sin_cos(TWO_PI * u.y);
+    Vec3::new(sin_theta * c, sin_theta * s, cos_theta)
+}
+
+/// Density of [`sample_uniform_cone`]: 1/(2π(1 − cos_max)) inside the cone.
+#[inline]
+pub fn uniform_cone_pdf(w: Vec3, cos_max: f32) -> SolidAnglePdf {
+    if w.z >= cos_max && cos_max < 1.0 {
+        SolidAnglePdf(1.0 / (TWO_PI * (1.0 - cos_max)))
+    } else {
+        SolidAnglePdf(0.0)
+    }
+}
+
+/// Inverse of [`sample_uniform_cone`].
+#[inline]
+pub fn invert_uniform_cone(w: Vec3, cos_max: f32) -> Vec2 {
+    let u0 = (1.0 - w.z) / (1.0 - cos_max);
+    Vec2::new(unit(u0), unit(wrap_angle(atan2(w.y, w.x)) * INV_2PI))
+}
+
+// ---------------------------------------------------------------- triangle
+
+/// Uniform barycentrics (b0, b1) on a triangle; b2 = 1 − b0 − b1.
+#[inline]
+pub fn sample_uniform_triangle(u: Vec2) -> Vec2 {
+    let su0 = sqrt(u.x);
+    Vec2::new(1.0 - su0, u.y * su0)
+}
+
+/// Density of [`sample_uniform_triangle`] per unit area on a triangle of area `area`.
+#[inline]
+pub fn uniform_triangle_pdf(area: f32) -> AreaPdf {
+    if area > 0.0 { AreaPdf(1.0 / area) } else { AreaPdf(0.0) }
+}
+
+/// Inverse of [`sample_uniform_triangle`] from barycentrics (b0, b1).
+#[inline]
+pub fn invert_uniform_triangle(b: Vec2) -> Vec2 {
+    let su0 = 1.0 - b.x;
+    let u1 = if su0 > 0.0 { b.y / su0 } else { 0.5 };
+    Vec2::new(unit(su0 * su0), unit(u1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(mut f: impl FnMut(Vec2)) {
+        for i in 0..37 {
+            for j in 0..41 {
+                f(Vec2::new((i as f32 + 0.31) / 37.0, (j as f32 + 0.77) / 41.0));
+            }
+        }
+    }
+
+    #[test]
+    fn inverses_round_trip() {
+        let close = |a: Vec2, b: Vec2| (a - b).abs().max_element() < 2e-4;
+        grid(|u| {
+            assert!(close(invert_concentric_disk(sample_concentric_disk(u)), u), "disk {u}");
+            assert!(close(invert_uniform_hemisphere(sample_uniform_hemisphere(u)), u), "hemi {u}");
+            assert!(close(invert_cosine_hemisphere(sample_cosine_hemisphere(u)), u), "cos {u}");
+            assert!(close(invert_uniform_sphere(sample_uniform_sphere(u)), u), "sphere {u}");
+            assert!(close(invert_uniform_cone(sample_uniform_cone(u, 0.3), 0.3), u), "cone {u}");
+            assert!(close(invert_uniform_triangle(sample_uniform_triangle(u)), u), "tri {u}");
+        });
+    }
+
+    #[test]
+    fn samples_are_unit_and_in_domain() {
+        grid(|u| {
+            for w in [sample_uniform_hemisphere(u), sample_cosine_hemisphere(u), sample_uniform_sphere(u)] {
+                assert!((w.length() - 1.0).abs() < 1e-5);
+            }
+            assert!(sample_cosine_hemisphere(u).z >= 0.0);
+            assert!(sample_uniform_cone(u, 0.9).z >= 0.9 - 1e-6);
+            let b = sample_uniform_triangle(u);
+            assert!(b.x >= 0.0 && b.y >= 0.0 && b.x + b.y <= 1.0 + 1e-6);
+        });
+    }
+}

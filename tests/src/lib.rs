@@ -1,0 +1,1 @@
+//! Shared statistical test kit.
