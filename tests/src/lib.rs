@@ -1,1 +1,6 @@
-//! Shared statistical test kit.
+//! Shared test kit of the ember workspace: χ² goodness-of-fit tests of samplers,
+//! distribution functions for significance levels, and running statistics.
+//! Integration tests live in `tests/tests/`.
+
+pub mod chi2;
+pub mod stats;
