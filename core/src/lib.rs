@@ -21,7 +21,10 @@ pub mod geometry;
 pub mod light;
 pub mod math;
 pub mod measure;
+pub mod integrator;
 pub mod rng;
+pub mod scene;
+pub mod shapes;
 pub mod spectrum;
 pub mod warp;
 

@@ -4,3 +4,6 @@
 
 pub mod chi2;
 pub mod stats;
+pub mod tracer;
+pub mod scenes;
+pub mod render;

@@ -1,1 +1,291 @@
-//! Materials (filled in by the materials work).
+//! Materials: BSDFs evaluated, sampled and given densities in the local shading frame.
+//!
+//! Every function takes directions in the local shading frame (normal = +z), both
+//! pointing away from the surface: `wo` toward where the path came from, `wi` the other
+//! one (sampled or connected). [`Material::eval`] returns f(wo, wi) *without* the cosine
+//! |cos θi|; [`Material::pdf`] is the solid-angle density with which
+//! [`Material::sample`] draws `wi` given `wo` (continuous lobes only), and
+//! [`Material::pdf_rev`] the density of drawing `wo` given `wi`.
+//!
+//! The models and their conventions are Mitsuba 3's (the suite's references are Mitsuba
+//! renders): `diffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`
+//! and the `twosided` adapter. Microfacet models use Smith's separable masking and
+//! sample visible normals (see `microfacet.rs`).
+//!
+//! [`TransportMode`] matters only for refraction: in `Radiance` mode (camera paths,
+//! where `wi` points toward the light) transmitted values carry the (η_i/η_t)² radiance
+//! compression; `Importance` mode (light paths) evaluates the adjoint BSDF
+//! f*(wo, wi) = f(wi, wo), which does not. Shading-normal asymmetry is separate: see
+//! [`shading_normal_correction`].
+//!
+//! Reciprocity, with η_w the index of the medium on `w`'s side: reflection is symmetric,
+//! f(wo, wi) = f(wi, wo); Radiance-mode transmission obeys f(wo, wi)/η_wo² = f(wi, wo)/η_wi²
+//! (Veach's thesis §5.2, with light flowing from wi to wo).
+
+// `!(x > 0.0)` is used on purpose throughout: it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+mod conductor;
+mod dielectric;
+mod diffuse;
+mod fresnel;
+mod microfacet;
+mod rough_conductor;
+mod rough_dielectric;
+
+use crate::math::{Vec2, Vec3};
+use crate::measure::SolidAnglePdf;
+use crate::spectrum::Rgb;
+use conductor::Conductor;
+use dielectric::Dielectric;
+use diffuse::Diffuse;
+use microfacet::Microfacet;
+use rough_conductor::RoughConductor;
+use rough_dielectric::RoughDielectric;
+
+/// Which quantity a path carries, which decides whether a BSDF or its adjoint applies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransportMode {
+    /// Camera subpaths: radiance flows from `wi` toward `wo`.
+    Radiance,
+    /// Light subpaths: importance flows from `wi` toward `wo`; the adjoint BSDF applies.
+    Importance,
+}
+
+/// Microfacet normal distribution (Mitsuba's `distribution` parameter).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MicrofacetKind {
+    /// Beckmann (Gaussian slopes); `alpha` is the RMS slope. Mitsuba's default.
+    Beckmann,
+    /// GGX / Trowbridge–Reitz, long-tailed.
+    Ggx,
+}
+
+/// A direction drawn by [`Material::sample`].
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    /// Sampled direction in the local shading frame (normal = +z), unit, away from the surface.
+    pub wi: Vec3,
+    /// BSDF value f(wo, wi) for the mode (the adjoint for `Importance`), without the cosine.
+    /// For a Dirac lobe, the value that makes f·|cos θi|/pdf the lobe's weight.
+    pub f: Rgb,
+    /// Density of `wi` given `wo`; for a Dirac lobe, the discrete probability of the lobe.
+    pub pdf: SolidAnglePdf,
+    /// Density of sampling `wo` given `wi` (same convention for Dirac lobes).
+    pub pdf_rev: SolidAnglePdf,
+    /// The sampled lobe is a Dirac distribution (mirror or smooth refraction).
+    pub is_delta: bool,
+    /// `wi` is on the other side of the surface from `wo`.
+    pub is_transmission: bool,
+    /// Relative index η_t/η_i crossed (seen from the `wo` side) for transmission, else 1.
+    pub eta: f32,
+}
+
+impl BsdfSample {
+    /// A continuous reflection sample.
+    #[inline]
+    fn continuous_reflection(wi: Vec3, f: Rgb, pdf: SolidAnglePdf, pdf_rev: SolidAnglePdf) -> Self {
+        Self { wi, f, pdf, pdf_rev, is_delta: false, is_transmission: false, eta: 1.0 }
+    }
+}
+
+/// The closed set of scattering models.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    Diffuse(Diffuse),
+    Conductor(Conductor),
+    RoughConductor(RoughConductor),
+    Dielectric(Dielectric),
+    RoughDielectric(RoughDielectric),
+}
+
+/// A surface's scattering model (a closed enum) and whether it is mirrored to the back.
+#[derive(Clone, Copy, Debug)]
+pub struct Material {
+    kind: Kind,
+    two_sided: bool,
+}
+
+/// η_int/η_ext, with invalid input (non-positive, non-finite) read as index-matched.
+fn relative_ior(int_ior: f32, ext_ior: f32) -> f32 {
+    let eta = int_ior / ext_ior;
+    if eta > 0.0 && eta.is_finite() { eta } else { 1.0 }
+}
+
+/// Mirror a direction through the surface plane (Mitsuba's `twosided` flips z only).
+#[inline]
+fn flip_z(w: Vec3) -> Vec3 {
+    Vec3::new(w.x, w.y, -w.z)
+}
+
+impl Material {
+    fn new(kind: Kind) -> Self {
+        Self { kind, two_sided: false }
+    }
+
+    /// Lambertian reflector, f = ρ/π (Mitsuba `diffuse`). Black from the back unless
+    /// [`Self::two_sided`].
+    pub fn diffuse(reflectance: Rgb) -> Self {
+        Self::new(Kind::Diffuse(Diffuse { reflectance }))
+    }
+
+    /// Smooth conductor (Mitsuba `conductor`): a mirror weighted by the unpolarised
+    /// Fresnel reflectance of the complex relative index `eta` + i`k` (per RGB channel,
+    /// relative to the outside medium), times `specular_reflectance`. Mitsuba's default
+    /// (η = 0, k = 1) is a perfect mirror.
+    pub fn conductor(eta: Rgb, k: Rgb, specular_reflectance: Rgb) -> Self {
+        Self::new(Kind::Conductor(Conductor { eta, k, specular_reflectance }))
+    }
+
+    /// Rough conductor (Mitsuba `roughconductor`, isotropic): microfacet reflection with
+    /// distribution `kind` of roughness `alpha` (clamped to ≥ 10⁻⁴), Smith masking, and
+    /// the conductor Fresnel term of [`Self::conductor`].
+    pub fn rough_conductor(kind: MicrofacetKind, alpha: f32, eta: Rgb, k: Rgb, specular_reflectance: Rgb) -> Self {
+        Self::new(Kind::RoughConductor(RoughConductor {
+            distr: Microfacet::new(kind, alpha),
+            eta,
+            k,
+            specular_reflectance,
+        }))
+    }
+
+    /// Smooth dielectric interface (Mitsuba `dielectric`) between an inside of index
+    /// `int_ior` (below the surface, z < 0) and an outside of index `ext_ior`. Reflects
+    /// with probability F and refracts with 1 − F. Invalid indices (non-positive or
+    /// non-finite ratio) are read as index-matched.
+    pub fn dielectric(int_ior: f32, ext_ior: f32, specular_reflectance: Rgb, specular_transmittance: Rgb) -> Self {
+        Self::new(Kind::Dielectric(Dielectric {
+            eta: relative_ior(int_ior, ext_ior),
+            specular_reflectance,
+            specular_transmittance,
+        }))
+    }
+
+    /// Rough dielectric interface (Mitsuba `roughdielectric`, isotropic): Walter et al.'s
+    /// microfacet reflection and refraction, roughness `alpha` clamped to ≥ 10⁻⁴.
+    pub fn rough_dielectric(
+        kind: MicrofacetKind,
+        alpha: f32,
+        int_ior: f32,
+        ext_ior: f32,
+        specular_reflectance: Rgb,
+        specular_transmittance: Rgb,
+    ) -> Self {
+        Self::new(Kind::RoughDielectric(RoughDielectric {
+            distr: Microfacet::new(kind, alpha),
+            eta: relative_ior(int_ior, ext_ior),
+            specular_reflectance,
+            specular_transmittance,
+        }))
+    }
+
+    /// Mitsuba's `twosided`: the back side (wo.z < 0) behaves like the front, mirrored
+    /// through the surface plane. No effect on dielectrics, which are two-sided already.
+    pub fn two_sided(self) -> Self {
+        Self { two_sided: !self.has_transmission(), ..self }
+    }
+
+    /// True when a two-sided material is seen from the back, so directions are mirrored.
+    #[inline]
+    fn mirrored(&self, wo: Vec3) -> bool {
+        self.two_sided && wo.z < 0.0
+    }
+
+    /// BSDF value f(wo, wi) for `mode` (the adjoint in `Importance` mode), without the
+    /// cosine. Zero for Dirac materials.
+    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
+        if self.mirrored(wo) {
+            return self.eval_front(flip_z(wo), flip_z(wi), mode);
+        }
+        self.eval_front(wo, wi, mode)
+    }
+
+    fn eval_front(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
+        match &self.kind {
+            Kind::Diffuse(b) => b.eval(wo, wi),
+            Kind::RoughConductor(b) => b.eval(wo, wi),
+            Kind::RoughDielectric(b) => b.eval(wo, wi, mode),
+            Kind::Conductor(_) | Kind::Dielectric(_) => Rgb::ZERO,
+        }
+    }
+
+    /// Solid-angle density with which [`Self::sample`] draws `wi` given `wo` (continuous
+    /// lobes; 0 for Dirac materials). Independent of the mode.
+    pub fn pdf(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> SolidAnglePdf {
+        let (wo, wi) = if self.mirrored(wo) { (flip_z(wo), flip_z(wi)) } else { (wo, wi) };
+        match &self.kind {
+            Kind::Diffuse(b) => b.pdf(wo, wi),
+            Kind::RoughConductor(b) => b.pdf(wo, wi),
+            Kind::RoughDielectric(b) => b.pdf(wo, wi),
+            Kind::Conductor(_) | Kind::Dielectric(_) => SolidAnglePdf::ZERO,
+        }
+    }
+
+    /// Density of sampling `wo` given `wi`: `pdf(wi, wo)`.
+    pub fn pdf_rev(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> SolidAnglePdf {
+        self.pdf(wi, wo, mode)
+    }
+
+    /// Draw `wi` given `wo`: `u_lobe` chooses between reflection and refraction
+    /// (dielectrics), `u` draws the direction. `None` when nothing is scattered (back side
+    /// of a one-sided material, grazing `wo`, an absorbed microfacet sample).
+    pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        if self.mirrored(wo) {
+            let mut s = self.sample_front(flip_z(wo), u_lobe, u, mode)?;
+            s.wi = flip_z(s.wi);
+            return Some(s);
+        }
+        self.sample_front(wo, u_lobe, u, mode)
+    }
+
+    fn sample_front(&self, wo: Vec3, u_lobe: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        if !(wo.z != 0.0 && wo.is_finite()) {
+            return None;
+        }
+        match &self.kind {
+            Kind::Diffuse(b) => b.sample(wo, u),
+            Kind::Conductor(b) => b.sample(wo),
+            Kind::RoughConductor(b) => b.sample(wo, u),
+            Kind::Dielectric(b) => b.sample(wo, u_lobe, mode),
+            Kind::RoughDielectric(b) => b.sample(wo, u_lobe, u, mode),
+        }
+    }
+
+    /// Every lobe is a Dirac distribution (smooth conductor, smooth dielectric).
+    pub fn is_delta(&self) -> bool {
+        matches!(self.kind, Kind::Conductor(_) | Kind::Dielectric(_))
+    }
+
+    /// The material can transmit light to the other side.
+    pub fn has_transmission(&self) -> bool {
+        matches!(self.kind, Kind::Dielectric(_) | Kind::RoughDielectric(_))
+    }
+
+    /// A rough reflectance-like colour, for Russian roulette and SPCBPT features:
+    /// ρ for diffuse, the normal-incidence Fresnel reflectance times the specular
+    /// reflectance for conductors, F0·R_s + (1 − F0)·T_s for dielectrics.
+    pub fn albedo_hint(&self) -> Rgb {
+        match &self.kind {
+            Kind::Diffuse(b) => b.reflectance,
+            Kind::Conductor(b) => b.reflectance(1.0),
+            Kind::RoughConductor(b) => fresnel::conductor(1.0, b.eta, b.k) * b.specular_reflectance,
+            Kind::Dielectric(b) => b.albedo_hint(),
+            Kind::RoughDielectric(b) => b.albedo_hint(),
+        }
+    }
+}
+
+/// Veach's adjoint correction for shading normals (thesis §5.3; pbrt-v3
+/// `CorrectShadingNormal`): for `Importance` mode |wo·ns| |wi·ng| / (|wo·ng| |wi·ns|), 1 for
+/// `Radiance`. World-space directions and normals. Returns 0 instead of ∞ or NaN.
+pub fn shading_normal_correction(mode: TransportMode, wo: Vec3, wi: Vec3, ng: Vec3, ns: Vec3) -> f32 {
+    match mode {
+        TransportMode::Radiance => 1.0,
+        TransportMode::Importance => {
+            let num = wo.dot(ns).abs() * wi.dot(ng).abs();
+            let denom = wo.dot(ng).abs() * wi.dot(ns).abs();
+            let r = num / denom;
+            if denom > 0.0 && r.is_finite() { r } else { 0.0 }
+        }
+    }
+}

@@ -1,0 +1,152 @@
+//! Evaluation of one (s, t) strategy: join the first s light vertices and the first t
+//! camera vertices (pbrt-v3's `ConnectBDPT`).
+
+use super::mis::mis_weight;
+use super::vertex::{Vertex, VertexKind};
+use crate::bsdf::TransportMode;
+use crate::geometry::{Ray, RayQuery, spawn_ray_to};
+use crate::integrator::Counters;
+use crate::math::{Vec2, Vec3};
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+
+/// Result of a strategy: its weighted contribution and, for t = 1, the film position.
+#[derive(Clone, Copy, Debug)]
+pub struct Connection {
+    pub value: Rgb,
+    pub film: Option<Vec2>,
+    /// The MIS weight that was applied.
+    pub weight: f32,
+    /// The endpoint resampled at connection time (the light point for s = 1, the
+    /// camera for t = 1), which replaces the sub-path's own endpoint in the full path.
+    pub sampled: Option<Vertex>,
+}
+
+/// Evaluate strategy (s, t). `u_light`, `u_point` drive the light resampling of s = 1.
+pub fn connect<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    light: &[Vertex],
+    camera: &[Vertex],
+    s: usize,
+    t: usize,
+    u_light: f32,
+    u_point: Vec2,
+    counters: &mut Counters,
+) -> Option<Connection> {
+    // An escaped camera path can only be used as is (s = 0).
+    if t > 1 && s != 0 && camera[t - 1].kind == VertexKind::InfiniteLight {
+        return None;
+    }
+    let mut sampled: Option<Vertex> = None;
+    let mut film = None;
+    let value: Rgb;
+    if s == 0 {
+        // The camera path itself reached an emitter.
+        let pt = &camera[t - 1];
+        if !pt.is_light() {
+            return None;
+        }
+        value = pt.le(scene, &camera[t - 2]) * pt.beta;
+    } else if t == 1 {
+        // Connect a light-path vertex (s ≥ 2: (1, 1) is covered by (0, 2)) to the camera.
+        let qs = &light[s - 1];
+        if !qs.is_connectible(scene) || qs.kind != VertexKind::Surface {
+            return None;
+        }
+        let cs = scene.camera.sample_wi(qs.p)?;
+        // Importance arriving at qs per unit projected area: W_e |cos θ_c| / d².
+        let cos_c = scene.camera.forward().dot(-cs.wi).abs();
+        let cam = Vertex::camera(scene.camera.position(), Rgb::splat(cs.importance * cos_c / (cs.dist * cs.dist)));
+        let v = qs.beta * qs.f(scene, &cam, TransportMode::Importance) * cam.beta * cs.wi.dot(qs.frame.n).abs();
+        if v.is_black() {
+            return None;
+        }
+        counters.rays += 1;
+        if tracer.occluded(&spawn_ray_to(qs.p, qs.ng, cam.p, Vec3::ZERO)) {
+            return None;
+        }
+        film = Some(cs.film);
+        sampled = Some(cam);
+        value = v;
+    } else if s == 1 {
+        // Sample a fresh point on a light (next-event estimation).
+        let pt = &camera[t - 1];
+        if !pt.is_connectible(scene) {
+            return None;
+        }
+        let table = scene.light_selection.as_ref()?;
+        let chosen = table.sample(u_light);
+        let id = chosen.index as u32;
+        let light_ref = &scene.lights[chosen.index];
+        let ls = light_ref.sample_li(pt.p, u_point)?;
+        if !ls.pdf.is_positive() || ls.radiance.is_black() {
+            return None;
+        }
+        let beta_l = ls.radiance / (ls.pdf.0 * chosen.pmf);
+        let mut lv = if light_ref.is_infinite() {
+            Vertex::infinite(ls.p, beta_l, 0.0)
+        } else {
+            Vertex::light(id, ls.p, ls.n, beta_l, 0.0, light_ref.is_delta())
+        };
+        lv.pdf_fwd = lv.pdf_light_origin(scene, pt);
+        let mut v = pt.beta * pt.f(scene, &lv, TransportMode::Radiance) * lv.beta;
+        if pt.is_on_surface() {
+            v *= ls.wi.dot(pt.frame.n).abs();
+        }
+        if v.is_black() {
+            return None;
+        }
+        counters.rays += 1;
+        let shadow = if ls.dist.is_finite() { spawn_ray_to(pt.p, pt.ng, ls.p, ls.n) } else { crate::geometry::spawn_ray(pt.p, pt.ng, ls.wi) };
+        if tracer.occluded(&shadow) {
+            return None;
+        }
+        sampled = Some(lv);
+        value = v;
+    } else {
+        // Join two interior vertices.
+        let (qs, pt) = (&light[s - 1], &camera[t - 1]);
+        if !qs.is_connectible(scene) || !pt.is_connectible(scene) {
+            return None;
+        }
+        let mut v = qs.beta * qs.f(scene, pt, TransportMode::Importance) * pt.f(scene, qs, TransportMode::Radiance) * pt.beta;
+        if v.is_black() {
+            return None;
+        }
+        v *= geometry_term(qs, pt);
+        if v.is_black() {
+            return None;
+        }
+        counters.rays += 1;
+        if tracer.occluded(&connect_ray(qs, pt)) {
+            return None;
+        }
+        value = v;
+    }
+    if value.is_black() {
+        return None;
+    }
+    let weight = mis_weight(scene, light, camera, sampled.as_ref(), s, t);
+    Some(Connection { value: value * weight, film, weight, sampled })
+}
+
+/// G = |cos θ_q| |cos θ_p| / d² with shading cosines left to the BSDF factors (the
+/// geometric cosines belong to the measure).
+#[inline]
+fn geometry_term(a: &Vertex, b: &Vertex) -> f32 {
+    let d = b.p - a.p;
+    let d2 = d.length_squared();
+    if !(d2 > 0.0) {
+        return 0.0;
+    }
+    let w = d / crate::math::sqrt(d2);
+    let ca = if a.is_on_surface() { a.frame.n.dot(w).abs() } else { 1.0 };
+    let cb = if b.is_on_surface() { b.frame.n.dot(w).abs() } else { 1.0 };
+    ca * cb / d2
+}
+
+#[inline]
+fn connect_ray(a: &Vertex, b: &Vertex) -> Ray {
+    spawn_ray_to(a.p, a.ng, b.p, b.ng)
+}

@@ -1,0 +1,80 @@
+//! Bidirectional path tracing (Veach 1997 ch. 10; Lafortune and Willems 1993).
+//!
+//! For each pixel sample, a camera sub-path z₀…z_{t−1} and a light sub-path y₀…y_{s−1}
+//! are traced; every pair of prefixes (s, t) is joined into a full path, giving one
+//! estimate per path length from each strategy:
+//! - s = 0: the camera path hits an emitter by itself;
+//! - s = 1: the camera vertex connects to a freshly sampled light point (next-event
+//!   estimation, whose density is taken as the light's position density in the weights);
+//! - t = 1: the light vertex connects to the pinhole and splats to the pixel it sees;
+//! - s, t ≥ 2: the two end vertices are joined by a shadow ray.
+//! (s, t) = (1, 1) is skipped: (0, 2) already sees emitters directly.
+//!
+//! Strategies are combined by the balance heuristic, w_{s,t} = p_{s,t} / Σ p_{i,j} over
+//! the strategies producing the same path, computed in O(s + t) from per-vertex ratios
+//! of reverse and forward area densities ([`mis`]). Camera paths and light paths are
+//! traced one each per pixel sample, so every strategy has sample count one; splats
+//! from t = 1 are divided by the number of light paths per pass (W·H) by the host.
+
+pub mod connect;
+pub mod mis;
+pub mod vertex;
+pub mod walk;
+
+use core::ops::Range;
+
+use super::{Counters, RenderParams, Splat};
+use crate::geometry::RayQuery;
+use crate::math::Vec2;
+use crate::rng::{SampleStream, Stream};
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+
+pub use connect::{Connection, connect};
+pub use vertex::{Vertex, VertexKind};
+pub use walk::{SubPath, camera_subpath, light_subpath};
+
+/// Capacity of a sub-path (vertices); unbounded depth truncates here (counted).
+pub const MAX_VERTICES: usize = 34;
+
+/// Sub-path vertex budgets implied by `max_depth`: a path of s + t vertices has
+/// s + t − 1 segments.
+pub fn vertex_budgets(params: &RenderParams) -> (usize, usize) {
+    let segments = params.max_depth.capped(MAX_VERTICES as u32 - 1) as usize;
+    // Camera: up to segments + 1 vertices (s = 0); light: up to `segments` (t = 1).
+    (segments + 1, segments)
+}
+
+/// Render one BDPT sample for each pixel in `pixels` of pass `pass`; camera-side
+/// estimates go to `out`, t = 1 splats to `splat`.
+pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, pass: u32, pixels: Range<u32>, out: &mut [Rgb], splat: &mut dyn FnMut(Splat)) -> Counters {
+    let mut counters = Counters::default();
+    let width = scene.camera.width().max(1);
+    let (max_camera, max_light) = vertex_budgets(params);
+    for (slot, pixel) in out.iter_mut().zip(pixels) {
+        let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
+        let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
+        let camera = camera_subpath(scene, tracer, params, film, max_camera, &mut rng, &mut counters);
+        let mut light_rng = SampleStream::for_sample(params.seed, Stream::Light, pixel, pass, 0);
+        let light = light_subpath(scene, tracer, params, max_light, &mut light_rng, &mut counters);
+        let mut connect_rng = SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, 0);
+        let mut l = Rgb::ZERO;
+        for t in 1..=camera.len() {
+            for s in 0..=light.len() {
+                let segments = s + t;
+                if (s == 1 && t == 1) || segments < 2 || !params.max_depth.allows(segments as u32 - 1) {
+                    continue;
+                }
+                let (u_light, u_point) = (connect_rng.next_f32(), connect_rng.next_2d());
+                let Some(c) = connect(scene, tracer, &light, &camera, s, t, u_light, u_point, &mut counters) else { continue };
+                let value = counters.sanitize(c.value);
+                match c.film {
+                    Some(film) => splat(Splat { film, value }),
+                    None => l += value,
+                }
+            }
+        }
+        *slot = l;
+    }
+    counters
+}

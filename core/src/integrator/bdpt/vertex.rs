@@ -1,0 +1,206 @@
+//! Path vertices of BDPT and the densities between them (pbrt-v3's `Vertex`, in our
+//! typed conventions).
+//!
+//! Every vertex stores `pdf_fwd`, the density with which its own sub-path generated it,
+//! and `pdf_rev`, the density with which the opposite sub-path would have generated it;
+//! both per unit AREA at the vertex (infinite-light vertices: per solid angle). The
+//! conversion from the sampler's solid-angle density is [`Vertex::convert_density`].
+
+use crate::bsdf::{TransportMode, shading_normal_correction};
+use crate::geometry::LightId;
+use crate::math::{Frame, Vec3};
+use crate::measure::SolidAnglePdf;
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+
+/// What a vertex is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VertexKind {
+    /// The pinhole.
+    Camera,
+    /// A point on a light (area, sphere, point or spot).
+    Light(LightId),
+    /// A direction toward the infinite lights (environment, directional); `p` is a
+    /// point one unit (or a scene diameter) along that direction.
+    InfiniteLight,
+    /// A scattering surface point.
+    Surface,
+}
+
+/// One vertex of a camera or light sub-path.
+#[derive(Clone, Copy, Debug)]
+pub struct Vertex {
+    pub kind: VertexKind,
+    pub p: Vec3,
+    /// Geometric normal; `Vec3::ZERO` for vertices not on a surface (camera, point lights,
+    /// infinite lights).
+    pub ng: Vec3,
+    /// Shading frame (surfaces only).
+    pub frame: Frame,
+    /// Unit direction toward the previous vertex of its own sub-path (surfaces only).
+    pub wo: Vec3,
+    pub material: u32,
+    /// The light attached to a surface vertex, if it is an emitter.
+    pub emitter: Option<LightId>,
+    /// Sub-path throughput up to and including this vertex's arrival.
+    pub beta: Rgb,
+    /// Reached by (or, for lights, emitted from) a Dirac distribution.
+    pub delta: bool,
+    pub pdf_fwd: f32,
+    pub pdf_rev: f32,
+}
+
+impl Vertex {
+    pub fn camera(p: Vec3, beta: Rgb) -> Self {
+        Self { kind: VertexKind::Camera, p, ng: Vec3::ZERO, frame: Frame::from_normal(Vec3::Z), wo: Vec3::ZERO, material: 0, emitter: None, beta, delta: false, pdf_fwd: 0.0, pdf_rev: 0.0 }
+    }
+
+    pub fn light(id: LightId, p: Vec3, n: Vec3, beta: Rgb, pdf_fwd: f32, delta: bool) -> Self {
+        Self { kind: VertexKind::Light(id), p, ng: n, frame: Frame::from_normal(if n == Vec3::ZERO { Vec3::Z } else { n }), wo: Vec3::ZERO, material: 0, emitter: Some(id), beta, delta, pdf_fwd, pdf_rev: 0.0 }
+    }
+
+    pub fn infinite(p: Vec3, beta: Rgb, pdf_fwd: f32) -> Self {
+        Self { kind: VertexKind::InfiniteLight, p, ng: Vec3::ZERO, frame: Frame::from_normal(Vec3::Z), wo: Vec3::ZERO, material: 0, emitter: None, beta, delta: false, pdf_fwd, pdf_rev: 0.0 }
+    }
+
+    #[inline]
+    pub fn is_on_surface(&self) -> bool {
+        self.ng != Vec3::ZERO
+    }
+
+    #[inline]
+    pub fn is_light(&self) -> bool {
+        matches!(self.kind, VertexKind::Light(_) | VertexKind::InfiniteLight) || self.emitter.is_some()
+    }
+
+    /// Is the vertex a light whose position or direction is a Dirac (point, spot,
+    /// directional)? Strategies that would have to hit such a light are impossible.
+    pub fn is_delta_light(&self, scene: &Scene) -> bool {
+        match self.kind {
+            VertexKind::Light(id) => scene.lights[id as usize].is_delta(),
+            VertexKind::InfiniteLight => false,
+            _ => false,
+        }
+    }
+
+    /// Can a deterministic connection reach this vertex?
+    pub fn is_connectible(&self, scene: &Scene) -> bool {
+        match self.kind {
+            VertexKind::Camera => true,
+            // A directional light emits along one direction only: nothing can connect to it.
+            VertexKind::Light(id) => !scene.lights[id as usize].is_delta_direction(),
+            VertexKind::InfiniteLight => false,
+            VertexKind::Surface => !scene.materials[self.material as usize].is_delta(),
+        }
+    }
+
+    /// BSDF value toward `next` (no cosine), with the adjoint shading-normal correction.
+    pub fn f(&self, scene: &Scene, next: &Vertex, mode: TransportMode) -> Rgb {
+        if self.kind != VertexKind::Surface {
+            return Rgb::ZERO;
+        }
+        let wi = (next.p - self.p).normalize_or_zero();
+        let m = &scene.materials[self.material as usize];
+        m.eval(self.frame.to_local(self.wo), self.frame.to_local(wi), mode) * shading_normal_correction(mode, self.wo, wi, self.ng, self.frame.n)
+    }
+
+    /// Convert a solid-angle density of sampling `next` from here into an area density
+    /// at `next` (an infinite-light vertex keeps the solid-angle density).
+    pub fn convert_density(&self, pdf: SolidAnglePdf, next: &Vertex) -> f32 {
+        if next.kind == VertexKind::InfiniteLight {
+            return pdf.0;
+        }
+        // In f64: near-grazing cosines lose most of their digits in f32, and these
+        // densities feed ratios that must match a brute-force evaluation to 1e-5.
+        let w = next.p.as_dvec3() - self.p.as_dvec3();
+        let d2 = w.length_squared();
+        if !(d2 > 0.0) {
+            return 0.0;
+        }
+        let cos = if next.is_on_surface() { next.ng.as_dvec3().dot(w).abs() / crate::math::sqrt_f64(d2) } else { 1.0 };
+        (pdf.0 as f64 * cos / d2) as f32
+    }
+
+    /// Area density of sampling `next` from this vertex, given it was reached from
+    /// `prev` (pbrt-v3's `Vertex::Pdf`).
+    pub fn pdf(&self, scene: &Scene, prev: Option<&Vertex>, next: &Vertex) -> f32 {
+        match self.kind {
+            VertexKind::Light(_) | VertexKind::InfiniteLight => return self.pdf_light(scene, next),
+            _ => {}
+        }
+        let wn = (next.p - self.p).normalize_or_zero();
+        let pdf = match self.kind {
+            VertexKind::Camera => scene.camera.pdf_dir(wn),
+            _ => {
+                let Some(prev) = prev else { return 0.0 };
+                let wp = (prev.p - self.p).normalize_or_zero();
+                let m = &scene.materials[self.material as usize];
+                m.pdf(self.frame.to_local(wp), self.frame.to_local(wn), TransportMode::Radiance)
+            }
+        };
+        self.convert_density(pdf, next)
+    }
+
+    /// Area density at `next` of a light path leaving this light vertex toward it.
+    pub fn pdf_light(&self, scene: &Scene, next: &Vertex) -> f32 {
+        let wd = next.p.as_dvec3() - self.p.as_dvec3();
+        let d2 = wd.length_squared();
+        if !(d2 > 0.0) {
+            return 0.0;
+        }
+        let wd = wd / crate::math::sqrt_f64(d2);
+        let w = wd.as_vec3();
+        let mut pdf = match self.kind {
+            VertexKind::InfiniteLight => {
+                // Rays from infinite lights start on a disk of the scene's bounding radius.
+                let (_, r) = scene.bounds.bounding_sphere();
+                1.0 / (core::f64::consts::PI * r as f64 * r as f64)
+            }
+            VertexKind::Light(id) => scene.lights[id as usize].pdf_le(self.p, self.ng, w).1.0 as f64 / d2,
+            VertexKind::Surface => match self.emitter {
+                Some(id) => scene.lights[id as usize].pdf_le(self.p, self.ng, w).1.0 as f64 / d2,
+                None => 0.0,
+            },
+            VertexKind::Camera => 0.0,
+        };
+        if next.is_on_surface() {
+            pdf *= next.ng.as_dvec3().dot(wd).abs();
+        }
+        pdf as f32
+    }
+
+    /// Density of this light vertex as the origin of a light path (light selection ×
+    /// position density; for infinite lights, the selection-weighted direction density).
+    pub fn pdf_light_origin(&self, scene: &Scene, next: &Vertex) -> f32 {
+        let w = (next.p - self.p).normalize_or_zero();
+        match self.kind {
+            VertexKind::InfiniteLight => infinite_light_density(scene, -w),
+            VertexKind::Light(id) => light_origin(scene, id, self.p, self.ng, w),
+            VertexKind::Surface => self.emitter.map_or(0.0, |id| light_origin(scene, id, self.p, self.ng, w)),
+            VertexKind::Camera => 0.0,
+        }
+    }
+
+    /// Radiance emitted from this vertex toward `toward` (emitters and infinite lights).
+    pub fn le(&self, scene: &Scene, toward: &Vertex) -> Rgb {
+        let w = (toward.p - self.p).normalize_or_zero();
+        match self.kind {
+            VertexKind::InfiniteLight => scene.infinite_lights().fold(Rgb::ZERO, |acc, (_, l)| acc + l.environment_radiance(-w)),
+            _ => self.emitter.map_or(Rgb::ZERO, |id| scene.lights[id as usize].radiance(self.p, self.ng, w)),
+        }
+    }
+}
+
+fn light_origin(scene: &Scene, id: LightId, p: Vec3, n: Vec3, w: Vec3) -> f32 {
+    let light = &scene.lights[id as usize];
+    let pmf = scene.light_pmf(id);
+    if light.is_delta_position() {
+        return pmf;
+    }
+    pmf * light.pdf_le(p, n, w).0.0
+}
+
+/// Σ over infinite lights of P(light) · p_light(ω), ω pointing toward the sky.
+pub fn infinite_light_density(scene: &Scene, dir_to_sky: Vec3) -> f32 {
+    scene.infinite_lights().map(|(id, l)| scene.light_pmf(id) * l.pdf_li(Vec3::ZERO, dir_to_sky, Vec3::ZERO, Vec3::ZERO).0).sum()
+}

@@ -1,0 +1,157 @@
+//! Generation of the camera and light sub-paths (pbrt-v3's `RandomWalk`).
+
+use heapless::Vec as FixedVec;
+
+use super::vertex::{Vertex, VertexKind, infinite_light_density};
+use super::MAX_VERTICES;
+use crate::bsdf::{TransportMode, shading_normal_correction};
+use crate::geometry::{Ray, RayQuery, spawn_ray};
+use crate::integrator::{Counters, RenderParams, rr_survival};
+use crate::math::{Frame, Vec2, Vec3};
+use crate::rng::SampleStream;
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+
+/// A sub-path: vertices in the order they were generated.
+pub type SubPath = FixedVec<Vertex, MAX_VERTICES>;
+
+/// Random dimensions per bounce of a walk.
+const DIMS_PER_BOUNCE: u32 = 4;
+
+/// Camera sub-path through continuous film position `film`, at most `max_vertices`
+/// vertices including the camera.
+pub fn camera_subpath<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, film: Vec2, max_vertices: usize, rng: &mut SampleStream, counters: &mut Counters) -> SubPath {
+    let mut path = SubPath::new();
+    if max_vertices == 0 {
+        return path;
+    }
+    let ray = scene.camera.generate_ray(film);
+    let _ = path.push(Vertex::camera(ray.origin, Rgb::ONE));
+    random_walk(scene, tracer, params, ray, Rgb::ONE, max_vertices, TransportMode::Radiance, rng, counters, &mut path);
+    path
+}
+
+/// Light sub-path with at most `max_vertices` vertices including the light.
+pub fn light_subpath<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, max_vertices: usize, rng: &mut SampleStream, counters: &mut Counters) -> SubPath {
+    let mut path = SubPath::new();
+    let (u_light, u_pos, u_dir) = (rng.next_f32(), rng.next_2d(), rng.next_2d());
+    if max_vertices == 0 {
+        return path;
+    }
+    let Some(table) = scene.light_selection.as_ref() else { return path };
+    let chosen = table.sample(u_light);
+    let id = chosen.index as u32;
+    let light = &scene.lights[chosen.index];
+    let Some(es) = light.sample_le(u_pos, u_dir) else { return path };
+    let pdf_pos = if es.delta_pos { 1.0 } else { es.pdf_pos.0 };
+    if !(pdf_pos > 0.0) || !es.pdf_dir.is_positive() || es.radiance.is_black() {
+        return path;
+    }
+    let cos0 = if es.n == Vec3::ZERO { 1.0 } else { es.n.dot(es.dir).abs() };
+    let beta = es.radiance * (cos0 / (chosen.pmf * pdf_pos * es.pdf_dir.0));
+    let ray = if es.n == Vec3::ZERO { Ray::new(es.p, es.dir, f32::INFINITY) } else { spawn_ray(es.p, es.n, es.dir) };
+    if light.is_infinite() {
+        let mut v0 = Vertex::infinite(es.p - es.dir, es.radiance, infinite_light_density(scene, -es.dir));
+        v0.delta = light.is_delta();
+        let _ = path.push(v0);
+        random_walk(scene, tracer, params, ray, beta, max_vertices, TransportMode::Importance, rng, counters, &mut path);
+        // The second vertex's forward density is the disk's position density, per area.
+        if let Some(v1) = path.get_mut(1) {
+            v1.pdf_fwd = pdf_pos * if v1.is_on_surface() { v1.ng.dot(es.dir).abs() } else { 1.0 };
+        }
+    } else {
+        let _ = path.push(Vertex::light(id, es.p, es.n, es.radiance, chosen.pmf * pdf_pos, light.is_delta()));
+        random_walk(scene, tracer, params, ray, beta, max_vertices, TransportMode::Importance, rng, counters, &mut path);
+    }
+    path
+}
+
+/// Extend `path` by sampling BSDFs from `ray` until `max_vertices`, absorption,
+/// escape or Russian roulette.
+///
+/// Forward and reverse densities are evaluated from the stored vertex positions, not
+/// taken from the sampler: the ray left from an offset origin, so near corners the
+/// sampled direction and the direction between stored vertices differ by up to a few
+/// percent in density. Evaluating every strategy's densities from the same positions
+/// makes the balance weights of one path sum to one exactly (pbrt-v3 mixes the two).
+fn random_walk<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    mut ray: Ray,
+    mut beta: Rgb,
+    max_vertices: usize,
+    mode: TransportMode,
+    rng: &mut SampleStream,
+    counters: &mut Counters,
+    path: &mut SubPath,
+) {
+    let first_dim = rng.dimension();
+    loop {
+        if path.len() >= max_vertices {
+            if params.max_depth.0 < 0 {
+                counters.truncated += 1;
+            }
+            return;
+        }
+        counters.rays += 1;
+        let n = path.len();
+        let Some(prev) = path.last().copied() else { return };
+        let Some(hit) = tracer.intersect(&ray) else {
+            // Camera paths that escape end on the infinite lights.
+            if mode == TransportMode::Radiance && scene.infinite_lights().next().is_some() {
+                let mut v = Vertex::infinite(prev.p + ray.dir, beta, 0.0);
+                v.pdf_fwd = prev.pdf(scene, n.checked_sub(2).map(|i| &path[i]), &v);
+                let _ = path.push(v);
+            }
+            return;
+        };
+        let frame = Frame::from_normal(hit.ns);
+        let mut v = Vertex {
+            kind: VertexKind::Surface,
+            p: hit.p,
+            ng: hit.ng,
+            frame,
+            wo: -ray.dir,
+            material: hit.material,
+            emitter: hit.emitter,
+            beta,
+            delta: false,
+            pdf_fwd: 0.0,
+            pdf_rev: 0.0,
+        };
+        v.pdf_fwd = prev.pdf(scene, n.checked_sub(2).map(|i| &path[i]), &v);
+        if n >= 2 {
+            // Now that the successor is known: density of reaching path[n−2] from prev.
+            path[n - 2].pdf_rev = prev.pdf(scene, Some(&v), &path[n - 2]);
+        }
+        if path.push(v).is_err() || path.len() >= max_vertices {
+            return;
+        }
+        rng.set_dimension(first_dim + (n + 1) as u32 * DIMS_PER_BOUNCE);
+
+        // Sample the BSDF for the next direction.
+        let material = &scene.materials[hit.material as usize];
+        let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
+        let Some(bs) = material.sample(frame.to_local(v.wo), u_lobe, u_dir, mode) else { return };
+        if !bs.pdf.is_positive() {
+            return;
+        }
+        let wi = frame.to_world(bs.wi);
+        beta *= bs.f * (bs.wi.z.abs() * shading_normal_correction(mode, v.wo, wi, hit.ng, hit.ns) / bs.pdf.0);
+        if beta.is_black() || !beta.is_finite() {
+            return;
+        }
+        if bs.is_delta {
+            path[n].delta = true;
+        }
+        let q = rr_survival(params, (n + 1) as u32, beta);
+        if q < 1.0 {
+            if rng.next_f32() >= q {
+                return;
+            }
+            beta /= q;
+        }
+        ray = spawn_ray(hit.p, hit.ng, wi);
+    }
+}

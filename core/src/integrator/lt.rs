@@ -1,0 +1,123 @@
+//! Light tracing (particle tracing), splatted to the film.
+//!
+//! Each light path starts on a light chosen ∝ power, at a point and direction drawn by
+//! the light's emission sampler: β₀ = L_e |cos θ| / (P(light) p_A(y₀) p_ω(ω₀)). At every
+//! vertex y_i it is connected to the pinhole (the t = 1 strategy of BDPT alone): the
+//! contribution β_i f(y_{i−1} → y_i → c) |cos θ_i| · W_e |cos θ_c| / d² lands on the pixel
+//! the connection passes through. BSDFs are evaluated in their adjoint form
+//! (`TransportMode::Importance`, Veach 1997 ch. 5) with the shading-normal correction.
+//! With M paths per pass, the host divides the pass's splats by M.
+
+use core::ops::Range;
+
+use super::{Counters, RenderParams, Splat, SurfacePoint, rr_survival};
+use crate::bsdf::TransportMode;
+use crate::geometry::{RayQuery, spawn_ray_to};
+use crate::math::Vec3;
+use crate::rng::{SampleStream, Stream};
+use crate::scene::Scene;
+
+const DIMS_PER_BOUNCE: u32 = 4;
+
+/// Trace light paths `paths` of pass `pass`; every camera connection goes to `splat`.
+pub fn trace_paths<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, pass: u32, paths: Range<u32>, splat: &mut dyn FnMut(Splat)) -> Counters {
+    let mut counters = Counters::default();
+    for path in paths {
+        let mut rng = SampleStream::for_sample(params.seed, Stream::Light, path, pass, 0);
+        trace_one(scene, tracer, params, &mut rng, &mut counters, splat);
+    }
+    counters
+}
+
+fn trace_one<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, rng: &mut SampleStream, counters: &mut Counters, splat: &mut dyn FnMut(Splat)) {
+    let Some(table) = scene.light_selection.as_ref() else { return };
+    // Sample the light path's first vertex and direction.
+    let chosen = table.sample(rng.next_f32());
+    let light = &scene.lights[chosen.index];
+    let (u_pos, u_dir) = (rng.next_2d(), rng.next_2d());
+    let Some(es) = light.sample_le(u_pos, u_dir) else { return };
+    let pdf_pos = chosen.pmf * if es.delta_pos { 1.0 } else { es.pdf_pos.0 };
+    if !(pdf_pos > 0.0) || !es.pdf_dir.is_positive() {
+        return;
+    }
+
+    // Connect the light vertex itself to the camera (a directly visible emitter).
+    if params.max_depth.allows(1) && !light.is_infinite() {
+        if let Some(cs) = scene.camera.sample_wi(es.p) {
+            let le = light.radiance(es.p, es.n, cs.wi);
+            let cos_light = if es.n == Vec3::ZERO { 1.0 } else { es.n.dot(cs.wi).abs() };
+            let value = le * (cos_light * camera_factor(scene, &cs) / pdf_pos);
+            if !value.is_black() {
+                counters.rays += 1;
+                if !tracer.occluded(&spawn_ray_to(es.p, es.n, cs_origin(scene), Vec3::ZERO)) {
+                    splat(Splat { film: cs.film, value: counters.sanitize(value) });
+                }
+            }
+        }
+    }
+
+    let cos0 = if es.n == Vec3::ZERO { 1.0 } else { es.n.dot(es.dir).abs() };
+    let mut beta = es.radiance * (cos0 / (pdf_pos * es.pdf_dir.0));
+    let mut ray = if es.n == Vec3::ZERO { crate::geometry::Ray::new(es.p, es.dir, f32::INFINITY) } else { crate::geometry::spawn_ray(es.p, es.n, es.dir) };
+    let first_dim = rng.dimension();
+    let mut segments = 1u32;
+    loop {
+        counters.rays += 1;
+        let Some(hit) = tracer.intersect(&ray) else { break };
+        let sp = SurfacePoint::new(hit, -ray.dir);
+        let material = sp.material(scene);
+        rng.set_dimension(first_dim + segments * DIMS_PER_BOUNCE);
+
+        // Connect this vertex to the camera: segments + 1 segments in all.
+        if !material.is_delta() && params.max_depth.allows(segments + 1) {
+            if let Some(cs) = scene.camera.sample_wi(hit.p) {
+                let f = sp.f_cos(scene, cs.wi, TransportMode::Importance);
+                let value = beta * f * camera_factor(scene, &cs);
+                if !value.is_black() {
+                    counters.rays += 1;
+                    if !tracer.occluded(&sp.spawn_to(cs_origin(scene), Vec3::ZERO)) {
+                        splat(Splat { film: cs.film, value: counters.sanitize(value) });
+                    }
+                }
+            }
+        }
+        if !params.max_depth.allows(segments + 2) {
+            break;
+        }
+
+        // Sample the adjoint BSDF to continue.
+        let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
+        let Some(bs) = material.sample(sp.frame.to_local(sp.wo), u_lobe, u_dir, TransportMode::Importance) else { break };
+        if !bs.pdf.is_positive() {
+            break;
+        }
+        let wi = sp.frame.to_world(bs.wi);
+        let correction = crate::bsdf::shading_normal_correction(TransportMode::Importance, sp.wo, wi, hit.ng, hit.ns);
+        beta *= bs.f * (bs.wi.z.abs() * correction / bs.pdf.0);
+        if beta.is_black() || !beta.is_finite() {
+            break;
+        }
+        segments += 1;
+        let q = rr_survival(params, segments, beta);
+        if q < 1.0 {
+            if rng.next_f32() >= q {
+                break;
+            }
+            beta /= q;
+        }
+        ray = sp.spawn(wi);
+    }
+}
+
+/// W_e |cos θ_c| / d² of a connection to the pinhole: the importance arriving at the
+/// connected point per unit projected area there.
+#[inline]
+fn camera_factor(scene: &Scene, cs: &crate::camera::CameraSample) -> f32 {
+    let cos_c = scene.camera.forward().dot(-cs.wi).abs();
+    cs.importance * cos_c / (cs.dist * cs.dist)
+}
+
+#[inline]
+fn cs_origin(scene: &Scene) -> Vec3 {
+    scene.camera.position()
+}

@@ -1,0 +1,129 @@
+//! Estimators of the pixel measurement, as functions over index ranges writing into
+//! caller-provided storage, so hosts parallelise them however they like.
+//!
+//! - [`pt`]: path tracing, BSDF sampling + next-event estimation, balance or power MIS.
+//! - [`lt`]: light tracing (particle tracing splatted to the film).
+//! - [`bdpt`]: bidirectional path tracing with every (s, t) strategy and recursive
+//!   balance-heuristic weights.
+//!
+//! Depth follows Mitsuba's `max_depth`: the largest number of path segments (edges)
+//! from the camera to the emitter; 1 = emitters seen directly, 2 = direct lighting,
+//! −1 = unbounded. Unbounded paths end by Russian roulette from the fifth segment on.
+
+pub mod bdpt;
+pub mod lt;
+pub mod pt;
+mod surface;
+
+pub use surface::SurfacePoint;
+
+use crate::math::Vec2;
+use crate::spectrum::Rgb;
+
+/// Mitsuba's `max_depth` as a type: a bound on the number of path segments.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MaxDepth(pub i32);
+
+impl MaxDepth {
+    pub const UNBOUNDED: Self = Self(-1);
+    /// May a path have `segments` segments?
+    #[inline]
+    pub fn allows(self, segments: u32) -> bool {
+        self.0 < 0 || segments <= self.0 as u32
+    }
+    /// A hard cap for fixed-capacity vertex storage: unbounded depth still stops here
+    /// (Russian roulette makes reaching it vanishingly rare; the truncation is reported).
+    #[inline]
+    pub fn capped(self, cap: u32) -> u32 {
+        if self.0 < 0 { cap } else { (self.0 as u32).min(cap) }
+    }
+}
+
+/// MIS heuristic for combining two or more techniques.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Heuristic {
+    Balance,
+    Power,
+}
+
+impl Heuristic {
+    /// Weight of technique `a` against `b` (both densities in the same measure,
+    /// already multiplied by their sample counts).
+    #[inline]
+    pub fn weight(self, a: f32, b: f32) -> f32 {
+        let (a, b) = match self {
+            Self::Balance => (a, b),
+            Self::Power => (a * a, b * b),
+        };
+        if a + b > 0.0 { a / (a + b) } else { 0.0 }
+    }
+}
+
+/// Settings shared by the estimators.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderParams {
+    pub max_depth: MaxDepth,
+    pub seed: u64,
+    pub heuristic: Heuristic,
+    /// Segments before Russian roulette may end a path (Mitsuba's `rr_depth`, 5).
+    pub rr_depth: u32,
+}
+
+impl Default for RenderParams {
+    fn default() -> Self {
+        Self { max_depth: MaxDepth::UNBOUNDED, seed: 0, heuristic: Heuristic::Balance, rr_depth: 5 }
+    }
+}
+
+/// A contribution to the film at a position other than the sample's own pixel
+/// (light tracing, BDPT's t = 1 strategy). The host scales a pass's splats by
+/// 1 / (light paths per pass).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Splat {
+    /// Continuous pixel coordinates.
+    pub film: Vec2,
+    pub value: Rgb,
+}
+
+/// Work counters of one call, summed by the host.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Rays traced (closest-hit and shadow).
+    pub rays: u64,
+    /// Contributions dropped because they were NaN, infinite or negative.
+    pub discarded: u64,
+    /// Paths truncated by the fixed vertex capacity with unbounded depth.
+    pub truncated: u64,
+}
+
+impl core::ops::AddAssign for Counters {
+    fn add_assign(&mut self, o: Self) {
+        self.rays += o.rays;
+        self.discarded += o.discarded;
+        self.truncated += o.truncated;
+    }
+}
+
+impl Counters {
+    /// Pass `c` through if it is a valid radiance, else count it and return black.
+    #[inline]
+    pub fn sanitize(&mut self, c: Rgb) -> Rgb {
+        if c.is_valid_radiance() {
+            c
+        } else {
+            self.discarded += 1;
+            Rgb::ZERO
+        }
+    }
+}
+
+/// Russian roulette survival probability for throughput `beta` after `segments`
+/// segments (Mitsuba's rule: min(max component, 0.95) from `rr_depth` on).
+#[inline]
+pub fn rr_survival(params: &RenderParams, segments: u32, beta: Rgb) -> f32 {
+    if segments < params.rr_depth {
+        1.0
+    } else {
+        beta.max_component().min(0.95)
+    }
+}

@@ -1,0 +1,165 @@
+//! Path tracing with next-event estimation.
+//!
+//! Estimates the pixel measurement I = ∫ W_e L dA dω by walking a path from the camera.
+//! At each non-Dirac vertex two techniques reach an emitter: sampling a light (pick a
+//! light ∝ power, then a point on it: density p_L = P(light) · p_light(ω), per solid
+//! angle) and sampling the BSDF (p_B(ω), per solid angle), which continues the walk.
+//! Both estimates of the emitted radiance are combined by one-sample-each MIS with the
+//! balance or power heuristic, w_L = h(p_L, p_B), w_B = h(p_B, p_L) (Veach 1997,
+//! eq. 9.13/9.14); emitters reached after a Dirac bounce, or seen directly, carry weight 1.
+//! Throughput β = Π f |cos θ| / p_B; Russian roulette from `rr_depth` keeps it unbiased.
+
+use core::ops::Range;
+
+use super::{Counters, RenderParams, SurfacePoint, rr_survival};
+use crate::bsdf::TransportMode;
+use crate::geometry::{Ray, RayQuery};
+use crate::math::{Vec2, Vec3};
+use crate::rng::{SampleStream, Stream};
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+
+/// Random dimensions used per bounce (light choice 1, light point 2, lobe 1, direction 2, roulette 1).
+const DIMS_PER_BOUNCE: u32 = 8;
+
+/// Where the path was before the current segment, for the MIS weight of emission found
+/// by BSDF sampling.
+#[derive(Clone, Copy, Debug)]
+struct PrevBounce {
+    p: Vec3,
+    bsdf_pdf: f32,
+    is_delta: bool,
+}
+
+/// Render one sample for each pixel in `pixels` (index y·width + x) of pass `pass`
+/// into `out[i − pixels.start]`.
+pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, pass: u32, pixels: Range<u32>, out: &mut [Rgb]) -> Counters {
+    let mut counters = Counters::default();
+    let width = scene.camera.width().max(1);
+    for (slot, pixel) in out.iter_mut().zip(pixels) {
+        let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
+        let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
+        let ray = scene.camera.generate_ray(film);
+        let l = radiance(scene, tracer, params, ray, &mut rng, &mut counters);
+        *slot = counters.sanitize(l);
+    }
+    counters
+}
+
+/// Radiance arriving along `ray` (a camera ray), estimated by one path.
+pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, mut ray: Ray, rng: &mut SampleStream, counters: &mut Counters) -> Rgb {
+    let mut l = Rgb::ZERO;
+    let mut beta = Rgb::ONE;
+    let mut prev: Option<PrevBounce> = None;
+    let first_dim = rng.dimension();
+    // `segments` counts the segment the current ray is about to trace.
+    let mut segments = 1u32;
+    loop {
+        counters.rays += 1;
+        let Some(hit) = tracer.intersect(&ray) else {
+            // Escaped: add the infinite lights, weighted against light sampling.
+            for (id, light) in scene.infinite_lights() {
+                let le = light.environment_radiance(ray.dir);
+                if le.is_black() {
+                    continue;
+                }
+                let w = emission_weight(scene, params, prev, || scene.light_pmf(id) * light.pdf_li(prev_p(prev), ray.dir, Vec3::ZERO, Vec3::ZERO).0);
+                l += beta * le * w;
+            }
+            break;
+        };
+        let sp = SurfacePoint::new(hit, -ray.dir);
+
+        // Add emission found by BSDF sampling (or seen directly).
+        if let Some(id) = hit.emitter {
+            let light = &scene.lights[id as usize];
+            let le = light.radiance(hit.p, hit.ng, -ray.dir);
+            if !le.is_black() {
+                let w = emission_weight(scene, params, prev, || scene.light_pmf(id) * light.pdf_li(prev_p(prev), ray.dir, hit.p, hit.ng).0);
+                l += beta * le * w;
+            }
+        }
+        if !params.max_depth.allows(segments + 1) {
+            break;
+        }
+        rng.set_dimension(first_dim + segments * DIMS_PER_BOUNCE);
+        let material = sp.material(scene);
+        let wo_local = sp.frame.to_local(sp.wo);
+
+        // Sample a light (next-event estimation) unless the BSDF is all Dirac.
+        let u_light = rng.next_f32();
+        let u_point = rng.next_2d();
+        if !material.is_delta() {
+            l += beta * next_event(scene, tracer, params, &sp, u_light, u_point, counters);
+        }
+
+        // Sample the BSDF to continue the path.
+        let u_lobe = rng.next_f32();
+        let u_dir = rng.next_2d();
+        let Some(bs) = material.sample(wo_local, u_lobe, u_dir, TransportMode::Radiance) else { break };
+        let wi = sp.frame.to_world(bs.wi);
+        if !bs.pdf.is_positive() {
+            break;
+        }
+        beta *= bs.f * (bs.wi.z.abs() / bs.pdf.0);
+        if beta.is_black() || !beta.is_finite() {
+            break;
+        }
+        segments += 1;
+        let q = rr_survival(params, segments, beta);
+        if q < 1.0 {
+            if rng.next_f32() >= q {
+                break;
+            }
+            beta /= q;
+        }
+        prev = Some(PrevBounce { p: hit.p, bsdf_pdf: bs.pdf.0, is_delta: bs.is_delta });
+        ray = sp.spawn(wi);
+    }
+    l
+}
+
+#[inline]
+fn prev_p(prev: Option<PrevBounce>) -> Vec3 {
+    prev.map_or(Vec3::ZERO, |p| p.p)
+}
+
+/// MIS weight of emission reached by the BSDF-sampled segment from `prev`.
+#[inline]
+fn emission_weight(_scene: &Scene, params: &RenderParams, prev: Option<PrevBounce>, light_pdf: impl FnOnce() -> f32) -> f32 {
+    match prev {
+        None => 1.0,
+        Some(p) if p.is_delta => 1.0,
+        Some(p) => params.heuristic.weight(p.bsdf_pdf, light_pdf()),
+    }
+}
+
+/// One light sample from `sp`: choose a light ∝ power, sample a point on it, trace the
+/// shadow ray, weight against BSDF sampling. Returns the weighted contribution (without β).
+fn next_event<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, sp: &SurfacePoint, u_light: f32, u_point: Vec2, counters: &mut Counters) -> Rgb {
+    let Some(table) = scene.light_selection.as_ref() else { return Rgb::ZERO };
+    let chosen = table.sample(u_light);
+    let light = &scene.lights[chosen.index];
+    let Some(ls) = light.sample_li(sp.p(), u_point) else { return Rgb::ZERO };
+    if !ls.pdf.is_positive() || ls.radiance.is_black() {
+        return Rgb::ZERO;
+    }
+    let f = sp.f_cos(scene, ls.wi, TransportMode::Radiance);
+    if f.is_black() {
+        return Rgb::ZERO;
+    }
+    counters.rays += 1;
+    let shadow = if ls.dist.is_finite() { sp.spawn_to(ls.p, ls.n) } else { sp.spawn(ls.wi) };
+    if tracer.occluded(&shadow) {
+        return Rgb::ZERO;
+    }
+    let light_pdf = chosen.pmf * ls.pdf.0;
+    let w = if ls.is_delta {
+        1.0
+    } else {
+        let material = sp.material(scene);
+        let bsdf_pdf = material.pdf(sp.frame.to_local(sp.wo), sp.frame.to_local(ls.wi), TransportMode::Radiance).0;
+        params.heuristic.weight(light_pdf, bsdf_pdf)
+    };
+    f * ls.radiance * (w / light_pdf)
+}

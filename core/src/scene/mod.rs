@@ -1,0 +1,251 @@
+//! The scene description the estimators read, and the flat geometry hosts hand to
+//! their ray-query structure.
+//!
+//! A host (or an embedding engine) builds a scene with [`SceneBuilder`]: materials,
+//! shapes (triangle meshes, rectangles, cubes, spheres), emitters and a camera. `build`
+//! validates and splits it into a [`Scene`] (camera, materials, lights and the light
+//! selection distribution: what the estimators need) and a [`SceneGeometry`] (triangles
+//! and spheres with material and emitter ids: what a tracer needs). Allocation happens
+//! here, once, at setup.
+
+pub mod builtin;
+
+use alloc::vec::Vec;
+
+use crate::alias::AliasTable;
+use crate::bsdf::Material;
+use crate::camera::PerspectiveCamera;
+use crate::geometry::{LightId, MaterialId};
+use crate::light::Light;
+use crate::math::{Bounds3, Mat4, Vec3};
+pub use crate::shapes::{SceneGeometry, Sphere, Triangle};
+use crate::spectrum::Rgb;
+
+/// What the estimators read.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub camera: PerspectiveCamera,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Light>,
+    /// Light selection proportional to power; `None` when the scene has no light.
+    pub light_selection: Option<AliasTable>,
+    pub bounds: Bounds3,
+}
+
+impl Scene {
+    /// Probability of selecting light `id` for next-event estimation or a light path.
+    #[inline]
+    pub fn light_pmf(&self, id: LightId) -> f32 {
+        self.light_selection.as_ref().map_or(0.0, |t| t.pmf(id as usize))
+    }
+    /// The infinite lights (environment, directional), for rays that escape.
+    pub fn infinite_lights(&self) -> impl Iterator<Item = (LightId, &Light)> {
+        self.lights.iter().enumerate().filter(|(_, l)| l.is_infinite()).map(|(i, l)| (i as LightId, l))
+    }
+    /// Does any light emit from a surface a ray can hit (so s = 0 strategies exist)?
+    pub fn has_area_lights(&self) -> bool {
+        self.lights.iter().any(|l| !l.is_delta() && !l.is_infinite())
+    }
+}
+
+/// Emission attached to a shape: Mitsuba's `area` emitter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AreaEmission {
+    pub radiance: Rgb,
+    /// Emit from both sides (Mitsuba emits from the front only).
+    pub two_sided: bool,
+}
+
+/// Problems `build` reports.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SceneError {
+    NoCamera,
+    /// A shape refers to a material id that was never added.
+    UnknownMaterial(MaterialId),
+    /// A position, radius or radiance is NaN or infinite.
+    NonFinite(&'static str),
+}
+
+impl core::fmt::Display for SceneError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::NoCamera => write!(f, "the scene has no camera"),
+            Self::UnknownMaterial(m) => write!(f, "a shape refers to material {m}, which does not exist"),
+            Self::NonFinite(what) => write!(f, "non-finite value in {what}"),
+        }
+    }
+}
+
+/// Counts of things `build` dropped, for the host to report as warnings.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BuildWarnings {
+    /// Triangles with zero area (they cannot be hit or sampled).
+    pub degenerate_triangles: usize,
+    /// Lights that emit nothing (zero radiance, zero-size shape).
+    pub dark_lights: usize,
+}
+
+/// Assembles a scene; see the module documentation.
+#[derive(Clone, Debug, Default)]
+pub struct SceneBuilder {
+    camera: Option<PerspectiveCamera>,
+    materials: Vec<Material>,
+    lights: Vec<Light>,
+    geometry: SceneGeometry,
+    warnings: BuildWarnings,
+    error: Option<SceneError>,
+}
+
+impl SceneBuilder {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    pub fn set_camera(&mut self, camera: PerspectiveCamera) {
+        self.camera = Some(camera);
+    }
+
+    pub fn add_material(&mut self, m: Material) -> MaterialId {
+        self.materials.push(m);
+        (self.materials.len() - 1) as MaterialId
+    }
+
+    /// A light that is not attached to a shape (point, spot, directional, environment).
+    pub fn add_light(&mut self, light: Light) -> LightId {
+        if light.power() <= 0.0 {
+            self.warnings.dark_lights += 1;
+        }
+        self.lights.push(light);
+        (self.lights.len() - 1) as LightId
+    }
+
+    fn check_material(&mut self, m: MaterialId) -> bool {
+        if (m as usize) < self.materials.len() {
+            return true;
+        }
+        self.error.get_or_insert(SceneError::UnknownMaterial(m));
+        false
+    }
+
+    /// Add one triangle; zero-area and non-finite triangles are dropped (counted in the
+    /// warnings; non-finite ones are an error). Returns whether it was kept.
+    pub fn add_triangle(&mut self, p: [Vec3; 3], n: Option<[Vec3; 3]>, material: MaterialId, emission: Option<AreaEmission>) -> bool {
+        if !self.check_material(material) {
+            return false;
+        }
+        if !p.iter().all(|v| v.is_finite()) {
+            self.error.get_or_insert(SceneError::NonFinite("a triangle vertex"));
+            return false;
+        }
+        let cross = (p[1] - p[0]).cross(p[2] - p[0]);
+        let len2 = cross.length_squared();
+        if !(len2 > 0.0) || !len2.is_finite() {
+            self.warnings.degenerate_triangles += 1;
+            return false;
+        }
+        // Shading normals must be finite and usable; otherwise fall back to the face.
+        let n = n.filter(|ns| ns.iter().all(|v| v.is_finite() && v.length_squared() > 0.0)).map(|ns| ns.map(|v| v.normalize()));
+        let emitter = emission.and_then(|e| {
+            if !e.radiance.is_finite() {
+                self.error.get_or_insert(SceneError::NonFinite("an emitter's radiance"));
+                return None;
+            }
+            if e.radiance.is_black() {
+                self.warnings.dark_lights += 1;
+                return None;
+            }
+            self.lights.push(Light::triangle(p[0], p[1], p[2], e.radiance, e.two_sided));
+            Some((self.lights.len() - 1) as LightId)
+        });
+        self.geometry.triangles.push(Triangle { p, n, material, emitter });
+        true
+    }
+
+    /// Add an indexed triangle mesh with optional per-vertex normals.
+    pub fn add_mesh(&mut self, positions: &[Vec3], normals: Option<&[Vec3]>, indices: &[[u32; 3]], material: MaterialId, emission: Option<AreaEmission>) {
+        for tri in indices {
+            let Some(p) = fetch3(positions, tri) else {
+                self.error.get_or_insert(SceneError::NonFinite("a mesh index (out of range)"));
+                return;
+            };
+            let n = normals.and_then(|ns| fetch3(ns, tri));
+            self.add_triangle(p, n, material, emission);
+        }
+    }
+
+    /// Mitsuba's `rectangle`: [−1, 1]² in the z = 0 plane, normal +z (−z when flipped), then `to_world`.
+    pub fn add_rectangle(&mut self, to_world: Mat4, flip_normals: bool, material: MaterialId, emission: Option<AreaEmission>) {
+        let c = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)].map(|(x, y)| to_world.transform_point3(Vec3::new(x, y, 0.0)));
+        let quads = [[0u32, 1, 2], [0, 2, 3]];
+        let idx = if flip_normals { quads.map(|[a, b, c]| [a, c, b]) } else { quads };
+        self.add_mesh(&c, None, &idx, material, emission);
+    }
+
+    /// Mitsuba's `cube`: [−1, 1]³ with outward normals, then `to_world`.
+    pub fn add_cube(&mut self, to_world: Mat4, flip_normals: bool, material: MaterialId, emission: Option<AreaEmission>) {
+        let mut v = [Vec3::ZERO; 8];
+        for (i, p) in v.iter_mut().enumerate() {
+            let s = |bit: usize| if i & bit != 0 { 1.0 } else { -1.0 };
+            *p = to_world.transform_point3(Vec3::new(s(1), s(2), s(4)));
+        }
+        // Faces as quads with counter-clockwise winding seen from outside.
+        const FACES: [[u32; 4]; 6] = [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]];
+        let mut idx = [[0u32; 3]; 12];
+        for (f, q) in FACES.iter().enumerate() {
+            idx[2 * f] = [q[0], q[1], q[2]];
+            idx[2 * f + 1] = [q[0], q[2], q[3]];
+            if flip_normals {
+                idx[2 * f].swap(1, 2);
+                idx[2 * f + 1].swap(1, 2);
+            }
+        }
+        // A to_world with negative determinant mirrors the winding; undo it so normals stay outward.
+        if to_world.determinant() < 0.0 {
+            for t in &mut idx {
+                t.swap(1, 2);
+            }
+        }
+        self.add_mesh(&v, None, &idx, material, emission);
+    }
+
+    /// An analytic sphere, optionally emitting (sampled by solid angle, see `Light::sphere`).
+    pub fn add_sphere(&mut self, center: Vec3, radius: f32, flip_normals: bool, material: MaterialId, emission: Option<AreaEmission>) {
+        if !self.check_material(material) {
+            return;
+        }
+        if !center.is_finite() || !radius.is_finite() {
+            self.error.get_or_insert(SceneError::NonFinite("a sphere"));
+            return;
+        }
+        if !(radius > 0.0) {
+            self.warnings.degenerate_triangles += 1;
+            return;
+        }
+        let emitter = emission.filter(|e| !e.radiance.is_black()).map(|e| {
+            self.lights.push(Light::sphere(center, radius, e.radiance));
+            (self.lights.len() - 1) as LightId
+        });
+        self.geometry.spheres.push(Sphere { center, radius, flip_normals, material, emitter });
+    }
+
+    /// Validate and split into the estimators' scene and the tracer's geometry.
+    pub fn build(mut self) -> Result<(Scene, SceneGeometry, BuildWarnings), SceneError> {
+        if let Some(e) = self.error {
+            return Err(e);
+        }
+        let camera = self.camera.ok_or(SceneError::NoCamera)?;
+        let bounds = self.geometry.bounds();
+        let (center, radius) = bounds.bounding_sphere();
+        for l in &mut self.lights {
+            l.set_scene_bounds(center, radius.max(1e-3));
+        }
+        let power: Vec<f32> = self.lights.iter().map(|l| l.power()).collect();
+        let light_selection = AliasTable::new(&power);
+        let scene = Scene { camera, materials: self.materials, lights: self.lights, light_selection, bounds };
+        Ok((scene, self.geometry, self.warnings))
+    }
+}
+
+fn fetch3(v: &[Vec3], idx: &[u32; 3]) -> Option<[Vec3; 3]> {
+    Some([*v.get(idx[0] as usize)?, *v.get(idx[1] as usize)?, *v.get(idx[2] as usize)?])
+}

@@ -1,0 +1,157 @@
+//! The commands: what `ember render` does between parsing and exiting.
+//!
+//! `render`: check the options that can fail cheaply (scene file, output path) before
+//! any work; build the renderer ([`crate::estimators::make_renderer`]: scene, ray
+//! queries, estimator); run the [`driver`](crate::driver) into a [`Film`]; write the
+//! EXR and the PNG; print a summary.
+
+use std::fmt;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use crate::cli::{Cli, Command, DEFAULT_RESOLUTION, RenderArgs};
+use crate::driver::{self, DriverConfig, DriverError, Limits, PassRenderer, RenderSummary};
+use crate::film::Film;
+use crate::image_io::{self, ImageError};
+
+/// Everything a command can fail with; each message says what to do or which file.
+#[derive(Debug)]
+pub enum AppError {
+    /// Scene files are parsed in a later version.
+    SceneFileUnsupported(PathBuf),
+    /// The output path is unusable.
+    Output(String),
+    /// The estimator could not be built for this scene and these options.
+    Estimator(String),
+    Driver(DriverError),
+    Image(ImageError),
+}
+
+impl fmt::Display for AppError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::SceneFileUnsupported(p) => write!(
+                f,
+                "scene files are not supported yet (got '{}'); run without SCENE to render the built-in Cornell box",
+                p.display()
+            ),
+            Self::Output(m) => f.write_str(m),
+            Self::Estimator(m) => write!(f, "cannot set up the renderer: {m}"),
+            Self::Driver(e) => e.fmt(f),
+            Self::Image(e) => e.fmt(f),
+        }
+    }
+}
+
+impl std::error::Error for AppError {}
+
+/// Run a parsed command line; `start` is when the program started.
+pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
+    match &cli.command {
+        Command::Render(args) => {
+            let report = render(args, start, true, crate::estimators::make_renderer)?;
+            println!("{report}");
+            Ok(())
+        }
+    }
+}
+
+/// What `render` did, printed as the closing summary.
+#[derive(Clone, Debug)]
+pub struct RenderReport {
+    pub scene: String,
+    pub estimator: &'static str,
+    pub width: u32,
+    pub height: u32,
+    pub max_depth: i32,
+    pub seed: u64,
+    pub summary: RenderSummary,
+    pub exr: PathBuf,
+    pub png: PathBuf,
+}
+
+/// `ember render` with the renderer built by `make` (the estimator wiring, or a test's).
+pub fn render(
+    args: &RenderArgs,
+    start: Instant,
+    progress: bool,
+    make: impl FnOnce(&RenderArgs) -> Result<Box<dyn PassRenderer>, String>,
+) -> Result<RenderReport, AppError> {
+    // Fail early on what needs no work.
+    if let Some(path) = &args.scene {
+        return Err(AppError::SceneFileUnsupported(path.clone()));
+    }
+    let (exr, png) = args.output_paths().map_err(AppError::Output)?;
+    if let Some(dir) = exr.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir()) {
+        return Err(AppError::Output(format!("output directory '{}' does not exist", dir.display())));
+    }
+
+    // Build the scene, the ray queries and the estimator.
+    let renderer = make(args).map_err(AppError::Estimator)?;
+    let (width, height) = (renderer.width(), renderer.height());
+
+    // Render passes until the spp or time limit.
+    let mut film = Film::new(width, height);
+    let deadline = args.time.map(|t| start + Duration::from_secs_f64(t));
+    let limits = Limits { spp: args.spp_limit(), deadline };
+    let config = DriverConfig { progress, ..DriverConfig::with_threads(args.thread_count()) };
+    let summary = driver::render(&*renderer, &mut film, limits, config, start).map_err(AppError::Driver)?;
+
+    // Write the images.
+    let image = film.to_rgb_f32();
+    image_io::write_exr(&exr, width, height, &image).map_err(AppError::Image)?;
+    image_io::write_png(&png, width, height, &image, args.exposure).map_err(AppError::Image)?;
+
+    Ok(RenderReport {
+        scene: "built-in Cornell box".into(),
+        estimator: args.estimator.name(),
+        width,
+        height,
+        max_depth: args.max_depth_or(-1),
+        seed: args.seed,
+        summary,
+        exr,
+        png,
+    })
+}
+
+/// `1234567.0` → `"1.23 M"`.
+fn si(v: f64) -> String {
+    match v {
+        v if v >= 1e9 => format!("{:.2} G", v / 1e9),
+        v if v >= 1e6 => format!("{:.2} M", v / 1e6),
+        v if v >= 1e3 => format!("{:.2} k", v / 1e3),
+        v => format!("{v:.0} "),
+    }
+}
+
+impl fmt::Display for RenderReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = &self.summary;
+        let depth = if self.max_depth < 0 { "-1 (unbounded)".to_string() } else { self.max_depth.to_string() };
+        writeln!(
+            f,
+            "rendered   {} with {}, {}x{}, max depth {}, seed {}",
+            self.scene, self.estimator, self.width, self.height, depth, self.seed
+        )?;
+        let setup = (s.total_seconds - s.render_seconds).max(0.0);
+        writeln!(
+            f,
+            "time       {:.2} s ({:.2} s setup, {:.2} s rendering) on {} threads",
+            s.total_seconds, setup, s.render_seconds, s.threads
+        )?;
+        writeln!(f, "passes     {} (samples per pixel)", s.passes)?;
+        writeln!(f, "samples    {}samples/s ({}samples)", si(s.samples_per_second), si(s.stats.samples as f64))?;
+        writeln!(f, "rays       {}rays/s ({}rays)", si(s.rays_per_second), si(s.stats.rays as f64))?;
+        writeln!(f, "discarded  {} samples (NaN, infinite or negative)", s.discarded)?;
+        write!(f, "wrote      {} and {}", self.exr.display(), self.png.display())
+    }
+}
+
+/// The built-in scene's resolution under these options (for the estimator wiring).
+pub fn builtin_resolution(args: &RenderArgs) -> (u32, u32) {
+    args.resolution_or(DEFAULT_RESOLUTION)
+}
+
+#[cfg(test)]
+mod tests;

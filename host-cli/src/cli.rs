@@ -1,0 +1,261 @@
+//! Command-line syntax (clap derive): `ember render [SCENE] [OPTIONS]`.
+//!
+//! Options are parsed and range-checked here, once; the rest of the program reads typed
+//! values (the estimator as an enum, depths as integers) and never a string.
+
+use std::path::{Path, PathBuf};
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+/// Passes rendered when neither `--spp` nor `--time` is given (pbrt's default).
+pub const DEFAULT_SPP: u32 = 16;
+/// Resolution of the built-in scene when `--width`/`--height` are not given.
+pub const DEFAULT_RESOLUTION: (u32, u32) = (512, 512);
+
+/// ember: a physically based light-transport renderer.
+#[derive(Parser, Debug, Clone, PartialEq)]
+#[command(name = "ember", version, about, propagate_version = true)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug, Clone, PartialEq)]
+pub enum Command {
+    /// Render a scene to a linear-RGB EXR image, with a tone-mapped PNG beside it.
+    Render(RenderArgs),
+}
+
+/// The light-transport algorithm.
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EstimatorArg {
+    /// Path tracing: camera paths with next-event estimation and MIS (Mitsuba's `path`).
+    Pt,
+    /// Light tracing: light paths connected to the camera (Mitsuba's `ptracer`).
+    Lt,
+    /// Bidirectional path tracing with multiple importance sampling (Veach 1997).
+    Bdpt,
+}
+
+impl EstimatorArg {
+    /// The name as typed on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Pt => "pt",
+            Self::Lt => "lt",
+            Self::Bdpt => "bdpt",
+        }
+    }
+}
+
+/// Options of `ember render`.
+#[derive(Args, Debug, Clone, PartialEq)]
+pub struct RenderArgs {
+    /// Mitsuba 3 XML scene file. Omit it to render the built-in Cornell box.
+    #[arg(value_name = "SCENE")]
+    pub scene: Option<PathBuf>,
+
+    /// Light-transport algorithm.
+    #[arg(short, long, value_enum, default_value_t = EstimatorArg::Pt)]
+    pub estimator: EstimatorArg,
+
+    /// Samples per pixel (passes). Defaults to 16, or to unlimited when --time is given.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: Option<u32>,
+
+    /// Wall-clock budget in seconds, counted from program start (scene loading and
+    /// preprocessing included). The pass running when it expires is finished; with --spp
+    /// too, whichever limit comes first stops the render.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    pub time: Option<f64>,
+
+    /// Render threads [default: all cores].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub threads: Option<u32>,
+
+    /// Random seed. The image is a pure function of the scene, the options and the seed,
+    /// whatever the thread count.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u64,
+
+    /// Image width in pixels [default: the scene's film; 512 for the built-in scene].
+    #[arg(long, value_name = "PIXELS", value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub width: Option<u32>,
+
+    /// Image height in pixels [default: the scene's film; 512 for the built-in scene].
+    #[arg(long, value_name = "PIXELS", value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub height: Option<u32>,
+
+    /// Longest path, in segments, as Mitsuba's max_depth: 1 = directly visible emitters
+    /// only, 2 = direct illumination, -1 = unbounded (Russian roulette ends paths)
+    /// [default: the scene's integrator; -1 for the built-in scene].
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          value_parser = clap::value_parser!(i32).range(-1..))]
+    pub max_depth: Option<i32>,
+
+    /// Output EXR file (linear RGB, 32-bit float); an sRGB PNG with the same stem is
+    /// written beside it.
+    #[arg(short, long, value_name = "FILE", default_value = "out.exr")]
+    pub output: PathBuf,
+
+    /// Exposure of the PNG in stops (the PNG is linear × 2^STOPS, clamped, sRGB-encoded;
+    /// the EXR is never scaled).
+    #[arg(long, value_name = "STOPS", default_value_t = 0.0, allow_negative_numbers = true,
+          value_parser = parse_exposure)]
+    pub exposure: f32,
+}
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|_| format!("'{s}' is not a number of seconds"))?;
+    if v.is_finite() && v > 0.0 { Ok(v) } else { Err(format!("the time budget must be positive, got {s}")) }
+}
+
+fn parse_exposure(s: &str) -> Result<f32, String> {
+    let v: f32 = s.parse().map_err(|_| format!("'{s}' is not a number of stops"))?;
+    if v.is_finite() && v.abs() <= 64.0 { Ok(v) } else { Err(format!("exposure must lie in [-64, 64] stops, got {s}")) }
+}
+
+impl RenderArgs {
+    /// Maximum passes: `--spp`, else unlimited under `--time`, else [`DEFAULT_SPP`].
+    pub fn spp_limit(&self) -> u32 {
+        match (self.spp, self.time) {
+            (Some(n), _) => n,
+            (None, Some(_)) => u32::MAX,
+            (None, None) => DEFAULT_SPP,
+        }
+    }
+
+    /// Render threads: `--threads`, else every core.
+    pub fn thread_count(&self) -> usize {
+        match self.threads {
+            Some(n) => n as usize,
+            None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        }
+    }
+
+    /// Resolution: the options where given, `default` (the scene's film) otherwise.
+    pub fn resolution_or(&self, default: (u32, u32)) -> (u32, u32) {
+        (self.width.unwrap_or(default.0), self.height.unwrap_or(default.1))
+    }
+
+    /// Mitsuba max_depth: the option where given, `default` (the scene's) otherwise.
+    pub fn max_depth_or(&self, default: i32) -> i32 {
+        self.max_depth.unwrap_or(default)
+    }
+
+    /// The EXR and PNG paths. The output must name an `.exr` file (or have no
+    /// extension, which gets `.exr`).
+    pub fn output_paths(&self) -> Result<(PathBuf, PathBuf), String> {
+        output_paths(&self.output)
+    }
+}
+
+/// See [`RenderArgs::output_paths`].
+pub fn output_paths(output: &Path) -> Result<(PathBuf, PathBuf), String> {
+    let exr = match output.extension().and_then(|e| e.to_str()) {
+        None if output.file_name().is_some() => output.with_extension("exr"),
+        Some(e) if e.eq_ignore_ascii_case("exr") => output.to_path_buf(),
+        _ => {
+            return Err(format!(
+                "output '{}' must be an .exr file (a tone-mapped .png is written beside it)",
+                output.display()
+            ));
+        }
+    };
+    let png = exr.with_extension("png");
+    Ok((exr, png))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    fn parse(args: &[&str]) -> Result<RenderArgs, clap::Error> {
+        let mut v = vec!["ember", "render"];
+        v.extend_from_slice(args);
+        Cli::try_parse_from(v).map(|c| match c.command {
+            Command::Render(r) => r,
+        })
+    }
+
+    #[test]
+    fn command_definition_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn defaults() {
+        let a = parse(&[]).unwrap();
+        assert_eq!(a.scene, None);
+        assert_eq!(a.estimator, EstimatorArg::Pt);
+        assert_eq!((a.spp, a.time, a.threads, a.seed), (None, None, None, 0));
+        assert_eq!(a.spp_limit(), DEFAULT_SPP);
+        assert_eq!(a.resolution_or(DEFAULT_RESOLUTION), (512, 512));
+        assert_eq!(a.max_depth_or(-1), -1);
+        assert_eq!(a.output, PathBuf::from("out.exr"));
+        assert_eq!(a.output_paths().unwrap(), (PathBuf::from("out.exr"), PathBuf::from("out.png")));
+        assert!(a.thread_count() >= 1);
+    }
+
+    #[test]
+    fn every_option() {
+        let a = parse(&[
+            "scene.xml", "--estimator", "bdpt", "--spp", "64", "--time", "2.5", "--threads", "3", "--seed", "42",
+            "--width", "320", "--height", "200", "--max-depth", "-1", "-o", "img/x.exr", "--exposure", "-1.5",
+        ])
+        .unwrap();
+        assert_eq!(a.scene, Some(PathBuf::from("scene.xml")));
+        assert_eq!(a.estimator, EstimatorArg::Bdpt);
+        assert_eq!((a.spp, a.time, a.threads, a.seed), (Some(64), Some(2.5), Some(3), 42));
+        assert_eq!(a.spp_limit(), 64);
+        assert_eq!(a.thread_count(), 3);
+        assert_eq!(a.resolution_or((1, 1)), (320, 200));
+        assert_eq!(a.max_depth_or(5), -1);
+        assert_eq!(a.exposure, -1.5);
+        assert_eq!(a.output_paths().unwrap().1, PathBuf::from("img/x.png"));
+        let b = parse(&["-e", "lt", "--max-depth", "3", "--time", "1"]).unwrap();
+        assert_eq!((b.estimator, b.max_depth, b.spp_limit()), (EstimatorArg::Lt, Some(3), u32::MAX));
+        assert_eq!(parse(&["--width", "100"]).unwrap().resolution_or((7, 9)), (100, 9));
+    }
+
+    #[test]
+    fn bad_values_are_rejected() {
+        for bad in [
+            &["--estimator", "mlt"][..],
+            &["--spp", "0"],
+            &["--spp", "-3"],
+            &["--spp", "many"],
+            &["--time", "0"],
+            &["--time", "-1"],
+            &["--time", "inf"],
+            &["--time", "NaN"],
+            &["--threads", "0"],
+            &["--max-depth", "-2"],
+            &["--width", "0"],
+            &["--seed", "-1"],
+            &["--exposure", "1e9"],
+            &["--frobnicate"],
+            &["a.xml", "b.xml"],
+        ] {
+            assert!(parse(bad).is_err(), "accepted {bad:?}");
+        }
+        assert!(Cli::try_parse_from(["ember"]).is_err(), "a subcommand is required");
+    }
+
+    #[test]
+    fn output_must_be_exr() {
+        assert_eq!(output_paths(Path::new("a/b")).unwrap(), (PathBuf::from("a/b.exr"), PathBuf::from("a/b.png")));
+        assert_eq!(output_paths(Path::new("R.EXR")).unwrap().1, PathBuf::from("R.png"));
+        assert!(output_paths(Path::new("x.png")).is_err());
+        assert!(output_paths(Path::new("/")).is_err());
+    }
+
+    #[test]
+    fn help_mentions_the_pbrt_and_mitsuba_terms() {
+        let help = Cli::command().find_subcommand_mut("render").unwrap().render_long_help().to_string();
+        for word in ["--spp", "--time", "--max-depth", "unbounded", "pt", "lt", "bdpt", "out.exr", "all cores"] {
+            assert!(help.contains(word), "help lacks {word}:\n{help}");
+        }
+    }
+}

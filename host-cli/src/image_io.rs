@@ -1,0 +1,189 @@
+//! Image files: linear RGB float EXR (the renderer's output and the references'
+//! format) and a tone-mapped 8-bit sRGB PNG for a quick look.
+//!
+//! Pixels are row-major `[r, g, b]` linear values, index `y·width + x`, y down.
+
+use std::fmt;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+/// A linear RGB float image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 3]>,
+}
+
+/// What went wrong with which file.
+#[derive(Debug)]
+pub struct ImageError {
+    pub path: PathBuf,
+    pub kind: ImageErrorKind,
+}
+
+/// The cause of an [`ImageError`].
+#[derive(Debug)]
+pub enum ImageErrorKind {
+    /// The exr crate failed to write or read (I/O errors included).
+    Exr(exr::error::Error),
+    /// The png crate failed to encode.
+    Png(png::EncodingError),
+    /// The file could not be created.
+    Io(std::io::Error),
+    /// The pixel buffer does not match the stated size.
+    Size { width: u32, height: u32, pixels: usize },
+}
+
+impl ImageError {
+    fn new(path: &Path, kind: ImageErrorKind) -> Self {
+        Self { path: path.to_path_buf(), kind }
+    }
+}
+
+impl fmt::Display for ImageError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let p = self.path.display();
+        match &self.kind {
+            ImageErrorKind::Exr(e) => write!(f, "EXR file '{p}': {e}"),
+            ImageErrorKind::Png(e) => write!(f, "PNG file '{p}': {e}"),
+            ImageErrorKind::Io(e) => write!(f, "could not create '{p}': {e}"),
+            ImageErrorKind::Size { width, height, pixels } => {
+                write!(f, "image for '{p}': {pixels} pixels given for {width}x{height}")
+            }
+        }
+    }
+}
+
+impl std::error::Error for ImageError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match &self.kind {
+            ImageErrorKind::Exr(e) => Some(e),
+            ImageErrorKind::Png(e) => Some(e),
+            ImageErrorKind::Io(e) => Some(e),
+            ImageErrorKind::Size { .. } => None,
+        }
+    }
+}
+
+fn check_size(path: &Path, width: u32, height: u32, pixels: &[[f32; 3]]) -> Result<(), ImageError> {
+    if pixels.len() != width as usize * height as usize || width == 0 || height == 0 {
+        return Err(ImageError::new(path, ImageErrorKind::Size { width, height, pixels: pixels.len() }));
+    }
+    Ok(())
+}
+
+/// Write linear RGB as 32-bit float channels R, G, B (RLE compression, as the exr crate
+/// defaults to). Values round-trip bit-exactly through [`read_exr`].
+pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[[f32; 3]]) -> Result<(), ImageError> {
+    check_size(path, width, height, pixels)?;
+    let w = width as usize;
+    exr::prelude::write_rgb_file(path, w, height as usize, |x, y| {
+        let p = pixels[y * w + x];
+        (p[0], p[1], p[2])
+    })
+    .map_err(|e| ImageError::new(path, ImageErrorKind::Exr(e)))
+}
+
+/// Read the first layer with R, G and B channels of an EXR file as f32 (alpha, if any,
+/// is dropped; half and uint channels are converted).
+pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |size, _| (size.width(), vec![[0.0f32; 3]; size.width() * size.height()]),
+        |(w, px): &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = [r, g, b];
+        },
+    )
+    .map_err(|e| ImageError::new(path, ImageErrorKind::Exr(e)))?;
+    let size = image.layer_data.size;
+    let (_, pixels) = image.layer_data.channel_data.pixels;
+    Ok(RgbImage { width: size.width() as u32, height: size.height() as u32, pixels })
+}
+
+/// The sRGB transfer function (IEC 61966-2-1) of a linear value, clamped to [0, 1] and
+/// quantised to 8 bits with rounding. NaN maps to 0.
+pub fn srgb_encode(linear: f32) -> u8 {
+    let v = if linear.is_nan() { 0.0 } else { linear.clamp(0.0, 1.0) };
+    let e = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
+    (e * 255.0 + 0.5).clamp(0.0, 255.0) as u8
+}
+
+/// Write an 8-bit sRGB PNG (tagged sRGB): each linear value is multiplied by
+/// 2^`exposure` (stops), clamped to [0, 1] and sRGB-encoded.
+pub fn write_png(path: &Path, width: u32, height: u32, pixels: &[[f32; 3]], exposure: f32) -> Result<(), ImageError> {
+    check_size(path, width, height, pixels)?;
+    let scale = exposure.exp2();
+    let bytes: Vec<u8> = pixels.iter().flat_map(|p| p.map(|v| srgb_encode(v * scale))).collect();
+    let file = File::create(path).map_err(|e| ImageError::new(path, ImageErrorKind::Io(e)))?;
+    let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+    let png_err = |e| ImageError::new(path, ImageErrorKind::Png(e));
+    let mut writer = encoder.write_header().map_err(png_err)?;
+    writer.write_image_data(&bytes).map_err(png_err)?;
+    writer.finish().map_err(png_err)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("ember-cli-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir.join(name)
+    }
+
+    #[test]
+    fn exr_round_trip_is_bit_exact() {
+        let (w, h) = (37u32, 11u32);
+        let pixels: Vec<[f32; 3]> = (0..w * h)
+            .map(|i| {
+                let x = i as f32;
+                [x * 0.123_456_7, (x * 1.7).sin().abs() * 1e6, f32::from_bits(0x0000_0001 + i)]
+            })
+            .collect();
+        let path = temp("round-trip.exr");
+        write_exr(&path, w, h, &pixels).unwrap();
+        let back = read_exr(&path).unwrap();
+        assert_eq!((back.width, back.height), (w, h));
+        let bits = |p: &[[f32; 3]]| p.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&back.pixels), bits(&pixels));
+        std::fs::remove_file(&path).ok();
+    }
+
+    #[test]
+    fn png_writes_srgb_bytes() {
+        let path = temp("tone.png");
+        let pixels = [[0.0, 0.5, 1.0], [2.0, f32::NAN, 0.001], [0.2, 0.0, 0.0], [0.25, 0.25, 0.25]];
+        write_png(&path, 2, 2, &pixels, 0.0).unwrap();
+        let decoder = png::Decoder::new(std::io::BufReader::new(File::open(&path).unwrap()));
+        let mut reader = decoder.read_info().unwrap();
+        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        assert_eq!((info.width, info.height, info.color_type), (2, 2, png::ColorType::Rgb));
+        assert_eq!(&buf[..12], &[0, 188, 255, 255, 0, 3, 124, 0, 0, 137, 137, 137]);
+        // One stop of exposure doubles before encoding.
+        write_png(&path, 2, 2, &pixels, 1.0).unwrap();
+        let mut reader = png::Decoder::new(std::io::BufReader::new(File::open(&path).unwrap())).read_info().unwrap();
+        reader.next_frame(&mut buf).unwrap();
+        assert_eq!(&buf[9..12], &[188, 188, 188]);
+        std::fs::remove_file(&path).ok();
+    }
+
+    #[test]
+    fn errors_name_the_file() {
+        let bad = Path::new("/nonexistent-dir-for-ember/x.exr");
+        let e = write_exr(bad, 1, 1, &[[0.0; 3]]).unwrap_err();
+        assert!(e.to_string().contains("/nonexistent-dir-for-ember/x.exr"), "{e}");
+        let e = write_png(Path::new("/nonexistent-dir-for-ember/x.png"), 1, 1, &[[0.0; 3]], 0.0).unwrap_err();
+        assert!(e.to_string().contains("x.png"), "{e}");
+        let e = read_exr(Path::new("/nonexistent-dir-for-ember/y.exr")).unwrap_err();
+        assert!(e.to_string().contains("y.exr"), "{e}");
+        let e = write_exr(Path::new("z.exr"), 2, 2, &[[0.0; 3]]).unwrap_err();
+        assert!(matches!(e.kind, ImageErrorKind::Size { .. }) && e.to_string().contains("z.exr"));
+    }
+}

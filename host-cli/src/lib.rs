@@ -1,0 +1,13 @@
+//! `ember` command-line host: ray queries (obvhs), the parallel render loop, the film
+//! and EXR/PNG output around the `no_std` core.
+//!
+//! The binary (`src/main.rs`) only parses and dispatches; everything lives in this
+//! library so the benchmarks and integration tests can reach it.
+
+pub mod accel;
+pub mod app;
+pub mod cli;
+pub mod driver;
+pub mod estimators;
+pub mod film;
+pub mod image_io;

@@ -1,0 +1,48 @@
+//! Single-threaded pass rendering for tests: one image per pass, so per-pass statistics
+//! (independent across passes) give honest error bars.
+
+use ember_core::geometry::RayQuery;
+use ember_core::integrator::{Counters, RenderParams, Splat, bdpt, lt, pt};
+use ember_core::scene::Scene;
+use ember_core::spectrum::Rgb;
+
+/// The estimators under test.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Estimator {
+    Pt,
+    Lt,
+    Bdpt,
+}
+
+impl Estimator {
+    pub const ALL: [Estimator; 3] = [Estimator::Pt, Estimator::Lt, Estimator::Bdpt];
+}
+
+/// Render one pass: one sample per pixel (PT, BDPT) or W·H light paths (LT, and BDPT's
+/// light paths); returns the pass image in f64 and the counters.
+pub fn render_pass<Q: RayQuery>(est: Estimator, scene: &Scene, tracer: &Q, params: &RenderParams, pass: u32) -> (Vec<[f64; 3]>, Counters) {
+    let (w, h) = (scene.camera.width(), scene.camera.height());
+    let n = (w * h) as usize;
+    let mut img = vec![[0.0f64; 3]; n];
+    let mut camera = vec![Rgb::ZERO; n];
+    let mut splats: Vec<Splat> = Vec::new();
+    let counters = match est {
+        Estimator::Pt => pt::render_pixels(scene, tracer, params, pass, 0..n as u32, &mut camera),
+        Estimator::Lt => lt::trace_paths(scene, tracer, params, pass, 0..n as u32, &mut |s| splats.push(s)),
+        Estimator::Bdpt => bdpt::render_pixels(scene, tracer, params, pass, 0..n as u32, &mut camera, &mut |s| splats.push(s)),
+    };
+    for (px, c) in img.iter_mut().zip(&camera) {
+        *px = c.to_f64();
+    }
+    let scale = 1.0 / n as f64;
+    for s in splats {
+        let (x, y) = (s.film.x.floor() as i64, s.film.y.floor() as i64);
+        if x >= 0 && y >= 0 && (x as u32) < w && (y as u32) < h {
+            let px = &mut img[(y as u32 * w + x as u32) as usize];
+            for c in 0..3 {
+                px[c] += s.value[c] as f64 * scale;
+            }
+        }
+    }
+    (img, counters)
+}

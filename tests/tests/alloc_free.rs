@@ -1,0 +1,98 @@
+//! The per-sample functions allocate nothing: a counting global allocator records every
+//! allocation made on this thread while they run.
+//!
+//! Injected-bug check (done once, reverted): collecting the BDPT strategies into an
+//! `alloc::vec::Vec` inside `bdpt::render_pixels` makes this test report allocations.
+
+#![allow(unsafe_code)] // A global allocator is unsafe by definition.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
+use ember_core::integrator::{MaxDepth, RenderParams, Splat, bdpt, lt, pt};
+use ember_core::rng::{SampleStream, Stream};
+use ember_core::spectrum::Rgb;
+use ember_core::warp;
+use ember_tests::scenes::cornell_with_spheres;
+use ember_tests::tracer::BruteForce;
+use glam::{Vec2, Vec3};
+
+struct Counting;
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+thread_local! {
+    static ACTIVE: Cell<bool> = const { Cell::new(false) };
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        if ACTIVE.with(|a| a.get()) {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn count_allocations(f: impl FnOnce()) -> usize {
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    ACTIVE.with(|a| a.set(true));
+    f();
+    ACTIVE.with(|a| a.set(false));
+    ALLOCATIONS.load(Ordering::Relaxed) - before
+}
+
+#[test]
+fn per_sample_functions_do_not_allocate() {
+    // Setup allocates, outside the counted region.
+    let (scene, geometry, _) = cornell_with_spheres(8, 8).build().unwrap();
+    let tracer = BruteForce::new(geometry);
+    let params = RenderParams { max_depth: MaxDepth::UNBOUNDED, ..RenderParams::default() };
+    let materials = [
+        Material::diffuse(Rgb::splat(0.5)),
+        Material::rough_conductor(MicrofacetKind::Beckmann, 0.3, Rgb::splat(0.2), Rgb::splat(3.0), Rgb::ONE),
+        Material::rough_dielectric(MicrofacetKind::Ggx, 0.3, 1.5, 1.0, Rgb::ONE, Rgb::ONE),
+        Material::dielectric(1.5, 1.0, Rgb::ONE, Rgb::ONE),
+    ];
+    let mut out = vec![Rgb::ZERO; 64];
+    let mut sink = 0.0f32;
+    let n = count_allocations(|| {
+        let mut rng = SampleStream::for_sample(0, Stream::Aux, 0, 0, 0);
+        for _ in 0..1000 {
+            let u = rng.next_2d();
+            sink += warp::sample_cosine_hemisphere(u).z + warp::sample_uniform_cone(u, 0.5).z + warp::invert_concentric_disk(u).x;
+            let wo = warp::sample_uniform_sphere(rng.next_2d());
+            for m in &materials {
+                if let Some(s) = m.sample(wo, rng.next_f32(), rng.next_2d(), TransportMode::Radiance) {
+                    sink += m.eval(wo, s.wi, TransportMode::Importance).r + m.pdf(wo, s.wi, TransportMode::Radiance).0;
+                }
+            }
+            for l in &scene.lights {
+                if let Some(s) = l.sample_li(Vec3::new(0.1, 1.0, 0.2), rng.next_2d()) {
+                    sink += s.pdf.0;
+                }
+                if let Some(e) = l.sample_le(rng.next_2d(), rng.next_2d()) {
+                    sink += e.pdf_dir.0;
+                }
+            }
+            if let Some(c) = scene.camera.sample_wi(Vec3::new(0.0, 1.0, 0.0)) {
+                sink += c.importance;
+            }
+            sink += scene.camera.generate_ray(Vec2::new(3.5, 4.5)).dir.x;
+        }
+        for pass in 0..4 {
+            pt::render_pixels(&scene, &tracer, &params, pass, 0..64, &mut out);
+            let mut splat = |s: Splat| sink += s.value.r;
+            lt::trace_paths(&scene, &tracer, &params, pass, 0..64, &mut splat);
+            bdpt::render_pixels(&scene, &tracer, &params, pass, 0..64, &mut out, &mut splat);
+        }
+    });
+    assert!(sink.is_finite());
+    assert_eq!(n, 0, "per-sample code allocated {n} times");
+}
