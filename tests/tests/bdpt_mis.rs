@@ -10,13 +10,16 @@
 //! Checked on many paths of the Cornell box with a rough gold and a smooth glass sphere:
 //! (1) every weight BDPT applies equals the brute force within 1e-5;
 //! (2) rebuilding the sub-paths of one full path for every split, the recursive weights
-//!     sum to 1 within 1e-4.
-//! Injected-bug checks (each done once, reverted): using the forward instead of the
-//! reverse BSDF density for `pdf_rev` in the walk (`bs.pdf` for `bs.pdf_rev`) fails
-//! (1) at |Δw| ≈ 0.3 on glossy vertices; dropping the |cos| in `convert_density` fails
-//! (1) and (2); not clearing `delta` on the connection vertex fails (2) on glass paths.
+//!     of all strategies able to produce it sum to 1 within 1e-5.
+//! Injected-bug checks (each done once, reverted): dropping the |cos| in
+//! `Vertex::convert_density` fails (1) (w = 0.38 vs 0.81 at (2, 1)) but not (2), which
+//! any consistent density definition satisfies; inverting the camera-side ratio in
+//! `mis_weight` (pdf_fwd/pdf_rev) fails both; storing
+//! the forward instead of the reverse density as `pdf_rev` in the walk fails (1)
+//! (0.625 vs 0.639 at (3, 1)).
 
 use ember_core::bsdf::TransportMode;
+use ember_core::integrator::bdpt::mis::mis_weight;
 use ember_core::integrator::bdpt::{Vertex, VertexKind, camera_subpath, connect, light_subpath};
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::math::Frame;
@@ -156,4 +159,67 @@ fn recursive_weights_equal_brute_force() {
     }
     println!("checked {checked} strategy weights, worst |Δw| = {worst:e}");
     assert!(checked > 5000, "too few connections exercised: {checked}");
+}
+
+/// The sub-paths strategy (s, n − s) would have generated for full path `x`, with their
+/// densities filled in as the random walk fills them.
+fn split(scene: &Scene, x: &[Vertex], s: usize) -> (Vec<Vertex>, Vec<Vertex>) {
+    let mut light: Vec<Vertex> = x[..s].to_vec();
+    let mut cam: Vec<Vertex> = x[s..].iter().rev().copied().collect();
+    for path in [&mut light, &mut cam] {
+        for i in 0..path.len() {
+            path[i].pdf_rev = 0.0;
+            path[i].pdf_fwd = match i {
+                0 if path[0].kind == VertexKind::Camera => 0.0,
+                0 => path.get(1).or(x.get(1)).map_or(0.0, |next| path[0].pdf_light_origin(scene, next)),
+                1 => path[0].pdf(scene, None, &path[1]),
+                _ => path[i - 1].pdf(scene, Some(&path[i - 2]), &path[i]),
+            };
+            if i + 2 < path.len() {
+                path[i].pdf_rev = path[i + 1].pdf(scene, Some(&path[i + 2]), &path[i]);
+            }
+        }
+    }
+    (light, cam)
+}
+
+#[test]
+fn recursive_weights_of_one_path_sum_to_one() {
+    let (scene, tracer) = setup();
+    let params = RenderParams { max_depth: MaxDepth(8), seed: 5, ..RenderParams::default() };
+    let (mut paths, mut worst) = (0usize, 0.0f64);
+    for i in 0..1500u32 {
+        let mut counters = Counters::default();
+        let mut rng = SampleStream::for_sample(2, Stream::Camera, i, 0, 0);
+        let film = rng.next_2d() * Vec2::splat(24.0);
+        let cam = camera_subpath(&scene, &tracer, &params, film, 9, &mut rng, &mut counters);
+        let mut lrng = SampleStream::for_sample(2, Stream::Light, i, 0, 0);
+        let light = light_subpath(&scene, &tracer, &params, 8, &mut lrng, &mut counters);
+        // Full paths from the light sub-path joined to the camera path at a diffuse vertex.
+        for s in 2..=light.len() {
+            for t in 2..=cam.len() {
+                if s + t > 9 || connect(&scene, &tracer, &light, &cam, s, t, 0.5, Vec2::splat(0.5), &mut counters).is_none() {
+                    continue;
+                }
+                let mut x: Vec<Vertex> = light[..s].to_vec();
+                x.extend(cam[..t].iter().rev().copied());
+                let n = x.len();
+                let mut sum = 0.0f64;
+                for s2 in 0..n {
+                    let t2 = n - s2;
+                    let possible = if s2 == 0 { x[0].emitter.is_some() } else { !is_delta_surface(&scene, &x[s2 - 1]) && !is_delta_surface(&scene, &x[s2]) };
+                    if !possible || (s2 == 1 && t2 == 1) {
+                        continue;
+                    }
+                    let (l, c) = split(&scene, &x, s2);
+                    sum += mis_weight(&scene, &l, &c, None, s2, t2) as f64;
+                }
+                worst = worst.max((sum - 1.0).abs());
+                assert!((sum - 1.0).abs() <= 1e-5, "weights of a {n}-vertex path sum to {sum}");
+                paths += 1;
+            }
+        }
+    }
+    println!("{paths} full paths, worst |Σw − 1| = {worst:e}");
+    assert!(paths > 2000, "too few paths: {paths}");
 }

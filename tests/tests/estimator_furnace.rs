@@ -5,9 +5,9 @@
 //! Per-pass image means are independent across passes (each pass has its own random
 //! streams), so their spread gives the standard error of the overall mean.
 //!
-//! Injected-bug check (done once, reverted): dropping the |cos θ| of the light-path
-//! origin in `lt` (β₀ = Le / pdfs) made LT read ≈0.67 of the truth (z ≈ −90), and
-//! omitting the 1/q Russian-roulette compensation in `pt` made PT fail (z ≈ −40).
+//! Injected-bug checks (each done once, reverted): dropping the |cos θ| of the light-path
+//! origin in `lt` (β₀ = Le / pdfs) made LT read 3.00 for 2 (z ≈ 28); omitting the 1/q
+//! Russian-roulette compensation in `pt` made PT read 1.90 (z ≈ −139).
 
 use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_tests::render::{Estimator, render_pass};
