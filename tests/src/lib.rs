@@ -7,3 +7,4 @@ pub mod stats;
 pub mod tracer;
 pub mod scenes;
 pub mod render;
+pub mod reference;
