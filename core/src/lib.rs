@@ -21,6 +21,7 @@ pub mod geometry;
 pub mod light;
 pub mod math;
 pub mod measure;
+pub mod mmis;
 pub mod integrator;
 pub mod rng;
 pub mod scene;

@@ -161,7 +161,8 @@ fn main() {
         }
     }
     println!("{:<30} {:>7} {:>7} {:>13}", "Mrays/s, 1 thread, best of 7", "BVH2", "CWBVH", "CWBVH / BVH2");
-    let names = ["camera, closest hit", "camera, occlusion (NEE)", "random, closest hit", "random, occlusion (segments)"];
+    let names =
+        ["camera, closest hit", "camera, occlusion (NEE)", "random, closest hit", "random, occlusion (segments)"];
     for (k, name) in names.iter().enumerate() {
         let (a, b) = (best[0][k], best[1][k]);
         assert_eq!(a.1, b.1, "{name}: the hierarchies disagree on the hit count");

@@ -7,30 +7,38 @@
 //! `primitive_indices`, so a leaf's primitive range indexes the vertex array directly.
 //! Hot data (three `Vec3A` vertices, 48 bytes) and cold data (normals, material,
 //! emitter, original index) live in separate arrays, so traversal touches only the
-//! former. Triangles are intersected with the watertight test ([`triangle`]).
+//! former. Triangles are intersected with the watertight test (module `triangle`).
 //! Degenerate triangles (zero area or non-finite vertices) cannot be hit and are dropped.
+//! The hierarchy is built over leaf boxes grown by a few ulps of the scene's scale, as
+//! obvhs's slab test is not conservative (see `box_padding`: without it, rays aimed at
+//! the edge where two walls meet escaped a closed box).
 //!
 //! # Which hierarchy: measured
-//! `cargo bench -p ember-cli --bench bvh` (host-cli/benches/bvh.rs) builds both on a
-//! procedural scene of 131 084 triangles (a displaced, tessellated sphere inside a closed
-//! box, seen from inside the box) and traces 1 M rays per query kind, one thread, through
-//! this very `RayQuery` implementation (watertight test included):
+//! `cargo bench -p ember-cli --bench bvh` (host-cli/benches/bvh.rs) builds both over a
+//! procedural scene of 131 084 triangles (a displaced sphere tessellated into 256 × 256
+//! quads, inside a closed box, seen from inside the box) and traces 512² rays per set,
+//! one thread, through this very `RayQuery` implementation (watertight test included),
+//! alternating the two structures and keeping each one's best of 7:
 //!
-//! | rays (Mrays/s, 1 thread)  | BVH2 | CWBVH | CWBVH / BVH2 |
-//! |---------------------------|------|-------|--------------|
-//! | camera, closest hit       | 9.48 | 10.17 | 1.07         |
-//! | camera, occlusion         | 12.72| 14.02 | 1.10         |
-//! | random, closest hit       | 2.06 | 3.15  | 1.53         |
-//! | random, occlusion         | 4.59 | 6.33  | 1.38         |
+//! | Mrays/s, 1 thread                     | BVH2 | CWBVH | CWBVH / BVH2 |
+//! |---------------------------------------|------|-------|--------------|
+//! | camera rays, closest hit              | 2.02 | 1.74  | 0.86         |
+//! | camera hits → light, occlusion        | 1.36 | 2.14  | 1.57         |
+//! | random origin and direction, closest  | 1.98 | 2.34  | 1.18         |
+//! | random segments, occlusion            | 1.33 | 1.95  | 1.46         |
 //!
-//! Build: BVH2 0.13 s, CWBVH 0.12 s. (A 2-core x86-64 machine, release build; the
-//! numbers vary ±10 % run to run, the ratios much less.) The estimators' rays are
-//! mostly incoherent (every bounce, every BDPT connection), where the compressed 8-wide
-//! hierarchy is 1.4–1.5× faster, and it is no slower on camera rays: [`Accel`] uses
-//! **CWBVH**. [`AccelWith`] keeps the BVH2 variant for the benchmark and the tests.
+//! Build: 0.15 s (BVH2) and 0.14 s (CWBVH). Measured on a 2-core x86-64 VM (Xeon,
+//! AVX-512, 2 GHz) shared with other builds: absolute rates moved by up to 2× from run
+//! to run, the ratios much less (over five runs: camera closest 0.82–1.08, camera
+//! occlusion 1.33–1.95, random closest 1.18–1.77, random occlusion 1.42–1.58). BVH2
+//! wins only on coherent closest-hit camera rays, by ~15 %; CWBVH wins every
+//! incoherent and every occlusion query, by 1.2–1.6×. The estimators trace one camera
+//! ray per path but one closest-hit bounce ray and at least one shadow or connection
+//! ray per vertex (all incoherent), so [`Accel`] uses **CWBVH**. [`AccelWith`] keeps
+//! the BVH2 variant for the benchmark and the tests.
 //!
 //! # Spheres
-//! Analytic spheres are intersected exactly, in f64 ([`sphere`]). Scenes hold a handful
+//! Analytic spheres are intersected exactly, in f64 (module `sphere`). Scenes hold a handful
 //! (the suite's largest has three), and one ray–sphere test costs about as much as one
 //! ray–box test, so up to [`SPHERE_LIST_MAX`] spheres are simply tested in a list (a
 //! hierarchy would add a box test per sphere and save nothing). Above that they get
@@ -169,9 +177,13 @@ fn finite(v: Vec3) -> bool {
 /// obvhs does not): a flat box, such as an axis-aligned wall's, hit exactly on its rim
 /// can be missed by a few ulps. A camera ray through the exact edge where two such
 /// walls meet then misses both boxes and leaks out of a closed room, although the
-/// watertight triangle test would have caught it: measured on the benchmark scene, the
-/// unpadded BVH2 let 2 of 1 M camera rays escape the box. Growing the boxes by a few
-/// ulps of the scene's scale closes those gaps at no measurable cost.
+/// watertight triangle test would have caught it. Measured: unpadded, the BVH2 let 2
+/// of 1 M pixel-centre camera rays (the benchmark scene at 1024²) escape its closed
+/// box, and rays aimed exactly at the edges of a closed tessellated box escaped by
+/// thousands (test `closed_box_does_not_leak_at_edges`: 2 244 BVH2, 5 609 CWBVH of
+/// 120 000; none padded). Growing the boxes by a few ulps of the scene's scale closes
+/// those gaps at no measurable cost. The slab test's error grows with the distance of
+/// the ray origin, so the margin covers origins up to roughly ten scene sizes away.
 fn box_padding(geometry: &SceneGeometry) -> f32 {
     let b = geometry.bounds();
     let scale = if b.is_empty() { 1.0 } else { b.min.abs().max(b.max.abs()).max_element().max(1e-3) };

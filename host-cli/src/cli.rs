@@ -201,8 +201,27 @@ mod tests {
     #[test]
     fn every_option() {
         let a = parse(&[
-            "scene.xml", "--estimator", "bdpt", "--spp", "64", "--time", "2.5", "--threads", "3", "--seed", "42",
-            "--width", "320", "--height", "200", "--max-depth", "-1", "-o", "img/x.exr", "--exposure", "-1.5",
+            "scene.xml",
+            "--estimator",
+            "bdpt",
+            "--spp",
+            "64",
+            "--time",
+            "2.5",
+            "--threads",
+            "3",
+            "--seed",
+            "42",
+            "--width",
+            "320",
+            "--height",
+            "200",
+            "--max-depth",
+            "-1",
+            "-o",
+            "img/x.exr",
+            "--exposure",
+            "-1.5",
         ])
         .unwrap();
         assert_eq!(a.scene, Some(PathBuf::from("scene.xml")));

@@ -29,12 +29,9 @@ use ember_core::Rgb;
 
 use crate::film::Film;
 
-/// A contribution at a continuous film position (pixel (x, y) covers [x, x+1) × [y, y+1)).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Splat {
-    pub film: glam::Vec2,
-    pub value: Rgb,
-}
+/// A contribution at a continuous film position (pixel (x, y) covers [x, x+1) × [y, y+1)):
+/// the core's type, so estimators splat straight into the driver.
+pub use ember_core::integrator::Splat;
 
 /// Work counted by a renderer.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -128,11 +125,9 @@ impl core::fmt::Display for DriverError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             Self::ThreadPool(e) => write!(f, "could not start the render threads: {e}"),
-            Self::Resolution { film, renderer } => write!(
-                f,
-                "film is {}x{} but the renderer draws {}x{}",
-                film.0, film.1, renderer.0, renderer.1
-            ),
+            Self::Resolution { film, renderer } => {
+                write!(f, "film is {}x{} but the renderer draws {}x{}", film.0, film.1, renderer.0, renderer.1)
+            }
         }
     }
 }
@@ -241,8 +236,11 @@ struct Progress {
 
 impl Progress {
     fn new(enabled: bool, limits: Limits, program_start: Instant) -> Self {
-        let target =
-            if enabled && std::io::stderr().is_terminal() { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() };
+        let target = if enabled && std::io::stderr().is_terminal() {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        };
         let by_time = limits.deadline.filter(|_| limits.spp == u32::MAX);
         let (len, template) = match by_time {
             Some(d) => (

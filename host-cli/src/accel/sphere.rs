@@ -30,7 +30,7 @@ pub(crate) fn intersect(s: &Sphere, origin: Vec3, dir: Vec3, t_max: f32) -> Opti
     let v = f - (b / (2.0 * a)) * d;
     let len = v.length();
     let discrim = 4.0 * a * (r + len) * (r - len);
-    if !(discrim >= 0.0) {
+    if discrim.is_nan() || discrim < 0.0 {
         return None;
     }
     let root = discrim.sqrt();

@@ -39,7 +39,13 @@ impl WatertightRay {
     #[inline]
     pub(crate) fn new(origin: Vec3A, dir: Vec3A) -> Self {
         let a = dir.abs();
-        let kz = if a.x > a.y { if a.x > a.z { 0 } else { 2 } } else if a.y > a.z { 1 } else { 2 };
+        let kz = if a.x > a.y {
+            if a.x > a.z { 0 } else { 2 }
+        } else if a.y > a.z {
+            1
+        } else {
+            2
+        };
         let kx = if kz == 2 { 0 } else { kz + 1 };
         let ky = if kx == 2 { 0 } else { kx + 1 };
         let d = dir.to_array();
@@ -101,7 +107,7 @@ impl WatertightRay {
         let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
         let max_e = e0.abs().max(e1.abs()).max(e2.abs());
         let delta_t = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
-        if t <= delta_t || !(t < t_max) {
+        if t.is_nan() || t <= delta_t || t >= t_max {
             return None;
         }
         Some((t, [e0 * inv_det, e1 * inv_det, e2 * inv_det]))

@@ -18,7 +18,13 @@ impl PassRenderer for Ramp {
     fn height(&self) -> u32 {
         self.h
     }
-    fn camera_pass(&self, _: u32, pixels: core::ops::Range<u32>, out: &mut [Rgb], _: &mut dyn FnMut(Splat)) -> PassStats {
+    fn camera_pass(
+        &self,
+        _: u32,
+        pixels: core::ops::Range<u32>,
+        out: &mut [Rgb],
+        _: &mut dyn FnMut(Splat),
+    ) -> PassStats {
         for (i, o) in pixels.clone().zip(out.iter_mut()) {
             *o = Rgb::splat((i % self.w) as f32 / self.w as f32);
         }
