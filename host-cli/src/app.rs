@@ -9,7 +9,8 @@ use std::fmt;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use crate::cli::{Cli, Command, DEFAULT_RESOLUTION, RenderArgs};
+use crate::cli::{Cli, Command, CompareArgs, DEFAULT_RESOLUTION, RenderArgs};
+use crate::metrics::{self, ErrorMetrics};
 use crate::driver::{self, DriverConfig, DriverError, Limits, PassRenderer, RenderSummary};
 use crate::film::Film;
 use crate::image_io::{self, ImageError};
@@ -53,7 +54,41 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
             println!("{report}");
             Ok(())
         }
+        Command::Compare(args) => {
+            let m = compare_files(args)?;
+            println!("relMSE     {:.6e}", m.rel_mse);
+            println!("MAPE       {:.4} %", m.mape);
+            println!("MAE        {:.6e}", m.mae);
+            println!("mean ratio {:.6} (test / reference)", m.mean_ratio);
+            Ok(())
+        }
     }
+}
+
+/// `ember compare`: read both images, check their sizes, compute the metrics and
+/// optionally write the false-colour error image.
+pub fn compare_files(args: &CompareArgs) -> Result<ErrorMetrics, AppError> {
+    let test = image_io::read_exr(&args.test).map_err(AppError::Image)?;
+    let reference = image_io::read_exr(&args.reference).map_err(AppError::Image)?;
+    if (test.width, test.height) != (reference.width, reference.height) {
+        return Err(AppError::Output(format!(
+            "'{}' is {}x{} but the reference '{}' is {}x{}",
+            args.test.display(),
+            test.width,
+            test.height,
+            args.reference.display(),
+            reference.width,
+            reference.height
+        )));
+    }
+    if let Some(png) = &args.error_image {
+        let err = metrics::per_pixel_relative_error(&test.pixels, &reference.pixels);
+        let colours: Vec<[f32; 3]> = err.iter().map(|&e| metrics::false_colour(e, args.error_max)).collect();
+        // The PNG writer applies the sRGB curve; undo it so the ramp shows as designed.
+        let linear: Vec<[f32; 3]> = colours.iter().map(|c| c.map(|v| v.powf(2.2))).collect();
+        image_io::write_png(png, test.width, test.height, &linear, 0.0).map_err(AppError::Image)?;
+    }
+    Ok(metrics::compare(&test.pixels, &reference.pixels))
 }
 
 /// What `render` did, printed as the closing summary.

@@ -24,6 +24,25 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene to a linear-RGB EXR image, with a tone-mapped PNG beside it.
     Render(RenderArgs),
+    /// Compare an EXR image with a reference: relMSE, MAPE, mean absolute error, ratio of means.
+    Compare(CompareArgs),
+}
+
+/// Options of `ember compare`.
+#[derive(Args, Debug, Clone, PartialEq)]
+pub struct CompareArgs {
+    /// The image under test (EXR).
+    #[arg(value_name = "TEST")]
+    pub test: PathBuf,
+    /// The reference image (EXR), same resolution.
+    #[arg(value_name = "REFERENCE")]
+    pub reference: PathBuf,
+    /// Write a false-colour PNG of the per-pixel relative error |a − b| / (b + 0.01).
+    #[arg(long, value_name = "PNG")]
+    pub error_image: Option<PathBuf>,
+    /// Relative error shown as full red in the false-colour image (log scale over three decades).
+    #[arg(long, default_value_t = 1.0, value_name = "ERR")]
+    pub error_max: f32,
 }
 
 /// The light-transport algorithm.
@@ -176,6 +195,7 @@ mod tests {
         v.extend_from_slice(args);
         Cli::try_parse_from(v).map(|c| match c.command {
             Command::Render(r) => r,
+            other => panic!("expected render, got {other:?}"),
         })
     }
 

@@ -70,7 +70,8 @@ pub trait PassRenderer: Sync {
 /// When to stop.
 #[derive(Clone, Copy, Debug)]
 pub struct Limits {
-    /// Maximum number of passes (samples per pixel).
+    /// Total passes (samples per pixel) the film should hold when the call returns;
+    /// a film that already holds some continues from there.
     pub spp: u32,
     /// Wall-clock deadline (checked between passes).
     pub deadline: Option<Instant>,
@@ -168,8 +169,11 @@ pub fn render<R: PassRenderer + ?Sized>(
     let discarded_before = film.discarded();
     let mut stats = PassStats::default();
     let mut passes = 0;
-    for pass in 0..limits.spp {
-        if pass > 0 && limits.deadline.is_some_and(|d| Instant::now() >= d) {
+    // Continue a film that already holds passes (checkpointed renders), so pass indices,
+    // and with them the random streams, never repeat.
+    let first_pass = film.passes();
+    for pass in first_pass..limits.spp {
+        if pass > first_pass && limits.deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
         // Run the pass's chunks in parallel, each into its own output.

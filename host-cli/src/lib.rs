@@ -11,3 +11,5 @@ pub mod driver;
 pub mod estimators;
 pub mod film;
 pub mod image_io;
+pub mod metrics;
+pub mod plot;

@@ -46,6 +46,7 @@ fn args(extra: &[&str]) -> RenderArgs {
     v.extend_from_slice(extra);
     match Cli::parse_from(v).command {
         Command::Render(r) => r,
+        other => panic!("expected render, got {other:?}"),
     }
 }
 
