@@ -1,7 +1,7 @@
 //! The commands: what `ember render` does between parsing and exiting.
 //!
 //! `render`: check the options that can fail cheaply (scene file, output path) before
-//! any work; build the renderer ([`crate::estimators::make_renderer`]: scene, ray
+//! any work; build the renderer ([`crate::estimators::make_built`]: scene, ray
 //! queries, estimator); run the [`driver`] into a [`Film`]; write the
 //! EXR and the PNG; print a summary.
 
@@ -18,8 +18,6 @@ use crate::image_io::{self, ImageError};
 /// Everything a command can fail with; each message says what to do or which file.
 #[derive(Debug)]
 pub enum AppError {
-    /// Scene files are parsed in a later version.
-    SceneFileUnsupported(PathBuf),
     /// The output path is unusable.
     Output(String),
     /// The estimator could not be built for this scene and these options.
@@ -31,11 +29,6 @@ pub enum AppError {
 impl fmt::Display for AppError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::SceneFileUnsupported(p) => write!(
-                f,
-                "scene files are not supported yet (got '{}'); run without SCENE to render the built-in Cornell box",
-                p.display()
-            ),
             Self::Output(m) => f.write_str(m),
             Self::Estimator(m) => write!(f, "cannot set up the renderer: {m}"),
             Self::Driver(e) => e.fmt(f),
@@ -50,7 +43,7 @@ impl std::error::Error for AppError {}
 pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
     match &cli.command {
         Command::Render(args) => {
-            let report = render(args, start, true, crate::estimators::make_renderer)?;
+            let report = render(args, start, true, crate::estimators::make_built)?;
             println!("{report}");
             Ok(())
         }
@@ -105,30 +98,49 @@ pub struct RenderReport {
     pub png: PathBuf,
 }
 
+/// What `render` needs from the estimator wiring: the renderer and what to report.
+pub struct Built {
+    pub renderer: Box<dyn PassRenderer>,
+    /// The scene's name (its file, or "built-in Cornell box").
+    pub scene: String,
+    pub max_depth: i32,
+    /// The scene file's sample count, used when neither --spp nor --time is given.
+    pub file_spp: Option<u32>,
+}
+
+impl fmt::Debug for Built {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Built").field("scene", &self.scene).field("max_depth", &self.max_depth).field("file_spp", &self.file_spp).finish_non_exhaustive()
+    }
+}
+
 /// `ember render` with the renderer built by `make` (the estimator wiring, or a test's).
 pub fn render(
     args: &RenderArgs,
     start: Instant,
     progress: bool,
-    make: impl FnOnce(&RenderArgs) -> Result<Box<dyn PassRenderer>, String>,
+    make: impl FnOnce(&RenderArgs) -> Result<Built, String>,
 ) -> Result<RenderReport, AppError> {
     // Fail early on what needs no work.
-    if let Some(path) = &args.scene {
-        return Err(AppError::SceneFileUnsupported(path.clone()));
-    }
     let (exr, png) = args.output_paths().map_err(AppError::Output)?;
     if let Some(dir) = exr.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir()) {
         return Err(AppError::Output(format!("output directory '{}' does not exist", dir.display())));
     }
 
     // Build the scene, the ray queries and the estimator.
-    let renderer = make(args).map_err(AppError::Estimator)?;
+    let built = make(args).map_err(AppError::Estimator)?;
+    let renderer = built.renderer;
     let (width, height) = (renderer.width(), renderer.height());
 
     // Render passes until the spp or time limit.
     let mut film = Film::new(width, height);
     let deadline = args.time.map(|t| start + Duration::from_secs_f64(t));
-    let limits = Limits { spp: args.spp_limit(), deadline };
+    // --spp, else unlimited under --time, else the scene file's sample count, else the default.
+    let spp = match (args.spp, args.time, built.file_spp) {
+        (None, None, Some(n)) => n,
+        _ => args.spp_limit(),
+    };
+    let limits = Limits { spp, deadline };
     let config = DriverConfig { progress, ..DriverConfig::with_threads(args.thread_count()) };
     let summary = driver::render(&*renderer, &mut film, limits, config, start).map_err(AppError::Driver)?;
 
@@ -138,11 +150,11 @@ pub fn render(
     image_io::write_png(&png, width, height, &image, args.exposure).map_err(AppError::Image)?;
 
     Ok(RenderReport {
-        scene: "built-in Cornell box".into(),
+        scene: built.scene,
         estimator: args.estimator.name(),
         width,
         height,
-        max_depth: args.max_depth_or(-1),
+        max_depth: built.max_depth,
         seed: args.seed,
         summary,
         exr,

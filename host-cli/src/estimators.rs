@@ -4,13 +4,15 @@
 use std::ops::Range;
 
 use ember_core::integrator::{Counters, Heuristic, MaxDepth, RenderParams, bdpt, lt, pt};
-use ember_core::scene::{Scene, builtin};
+use ember_core::scene::{BuildWarnings, Scene, SceneGeometry, builtin};
+use std::path::Path;
 use ember_core::Rgb;
 
 use crate::accel::Accel;
-use crate::app::builtin_resolution;
+use crate::app::{Built, builtin_resolution};
 use crate::cli::{EstimatorArg, RenderArgs};
 use crate::driver::{PassRenderer, PassStats, Splat};
+use crate::mitsuba;
 
 /// A scene ready to render: what the estimators read and the ray queries.
 #[derive(Debug)]
@@ -29,12 +31,36 @@ pub struct PreparedScene {
 pub fn prepare_builtin(args: &RenderArgs) -> Result<PreparedScene, String> {
     let (w, h) = builtin_resolution(args);
     let (scene, geometry, warnings) = builtin::cornell_box(w, h).build().map_err(|e| format!("built-in scene: {e}"))?;
-    let accel = Accel::new(&geometry);
-    let mut notes = Vec::new();
-    if warnings.degenerate_triangles > 0 {
-        notes.push(format!("{} degenerate triangles dropped", warnings.degenerate_triangles));
+    Ok(finish("built-in Cornell box".into(), scene, &geometry, warnings, None, None, Vec::new()))
+}
+
+/// Load a Mitsuba 3 XML scene; `width`/`height` override the file's film.
+pub fn prepare_file(path: &Path, width: Option<u32>, height: Option<u32>, defaults: Vec<(String, String)>) -> Result<PreparedScene, String> {
+    let loaded = mitsuba::load_scene(path, &mitsuba::LoadOptions { defaults, width, height }).map_err(|e| e.to_string())?;
+    let (scene, geometry, warnings) = loaded.builder.build().map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(finish(path.display().to_string(), scene, &geometry, warnings, loaded.max_depth, loaded.spp, loaded.warnings))
+}
+
+/// The scene a `render` command names (a file, or the built-in one).
+pub fn prepare(args: &RenderArgs) -> Result<PreparedScene, String> {
+    match &args.scene {
+        Some(path) => prepare_file(path, args.width, args.height, Vec::new()),
+        None => prepare_builtin(args),
     }
-    Ok(PreparedScene { name: "built-in Cornell box".into(), scene, accel, max_depth: None, spp: None, warnings: notes })
+}
+
+fn finish(name: String, scene: Scene, geometry: &SceneGeometry, warnings: BuildWarnings, max_depth: Option<i32>, spp: Option<u32>, mut notes: Vec<String>) -> PreparedScene {
+    if warnings.degenerate_triangles > 0 {
+        notes.push(format!("{} degenerate (zero-area) triangles dropped", warnings.degenerate_triangles));
+    }
+    if warnings.dark_lights > 0 {
+        notes.push(format!("{} lights emit nothing and were dropped", warnings.dark_lights));
+    }
+    if scene.light_selection.is_none() {
+        notes.push("the scene has no light: the image will be black".into());
+    }
+    let accel = Accel::new(geometry);
+    PreparedScene { name, scene, accel, max_depth, spp, warnings: notes }
 }
 
 /// One of the core's estimators bound to a prepared scene.
@@ -102,12 +128,23 @@ impl PassRenderer for CoreRenderer {
     }
 }
 
-/// The renderer a `render` command asks for.
+/// The renderer a `render` command asks for, with what its report needs.
+pub fn make_built(args: &RenderArgs) -> Result<Built, String> {
+    let r = make_core_renderer(args)?;
+    Ok(Built { scene: r.prepared.name.clone(), max_depth: r.params.max_depth.0, file_spp: r.prepared.spp, renderer: Box::new(r) })
+}
+
+/// The renderer alone (benchmarks and tools that print nothing about the scene).
 pub fn make_renderer(args: &RenderArgs) -> Result<Box<dyn PassRenderer>, String> {
-    let prepared = prepare_builtin(args)?;
+    Ok(Box::new(make_core_renderer(args)?))
+}
+
+/// [`make_renderer`] with the concrete type (the scene's name and settings stay readable).
+pub fn make_core_renderer(args: &RenderArgs) -> Result<CoreRenderer, String> {
+    let prepared = prepare(args)?;
     for w in &prepared.warnings {
         eprintln!("warning: {w}");
     }
     let max_depth = args.max_depth.or(prepared.max_depth).unwrap_or(-1);
-    Ok(Box::new(CoreRenderer::new(prepared, args.estimator, max_depth, args.seed)))
+    Ok(CoreRenderer::new(prepared, args.estimator, max_depth, args.seed))
 }

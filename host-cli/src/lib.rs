@@ -7,9 +7,11 @@
 pub mod accel;
 pub mod app;
 pub mod cli;
+pub mod convergence;
 pub mod driver;
 pub mod estimators;
 pub mod film;
 pub mod image_io;
 pub mod metrics;
+pub mod mitsuba;
 pub mod plot;

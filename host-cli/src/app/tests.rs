@@ -62,7 +62,7 @@ fn render_writes_exr_and_png_and_reports() {
     let a = args(&["--spp", "3", "--threads", "2", "--width", "8", "--height", "4", "-o", out.to_str().unwrap()]);
     let report = render(&a, Instant::now(), false, |a| {
         let (w, h) = builtin_resolution(a);
-        Ok(Box::new(Ramp { w, h }))
+        Ok(Built { renderer: Box::new(Ramp { w, h }), scene: "ramp".into(), max_depth: -1, file_spp: None })
     })
     .unwrap();
     assert_eq!(report.summary.passes, 3);
@@ -79,10 +79,9 @@ fn render_writes_exr_and_png_and_reports() {
 }
 
 #[test]
-fn scene_files_are_refused_before_any_work() {
-    let e = render(&args(&["scene.xml"]), Instant::now(), false, |_| panic!("must not build")).unwrap_err();
-    assert!(e.to_string().contains("scene files are not supported yet"), "{e}");
-    assert!(e.to_string().contains("scene.xml"), "{e}");
+fn a_missing_scene_file_is_reported_with_its_name() {
+    let e = render(&args(&["no-such-scene.xml"]), Instant::now(), false, crate::estimators::make_built).unwrap_err();
+    assert!(e.to_string().contains("no-such-scene.xml"), "{e}");
 }
 
 #[test]

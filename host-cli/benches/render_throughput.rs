@@ -1,0 +1,319 @@
+//! Render throughput on the default scene (the built-in Cornell box): how fast the path
+//! tracer's hot loop runs against how fast the same rays traverse the `Accel` alone,
+//! and how the full driver scales with threads. Results and their reading are in
+//! `docs/performance.md`.
+//!
+//! 1. **PT hot loop**: `pt::render_pixels` over every pixel of a 256² image, unbounded
+//!    depth, `HOT_PASSES` passes, one thread, no driver; rays/s = the estimator's own
+//!    ray count (closest hit + shadow) / seconds.
+//! 2. **Raw traversal of the same rays**: one untimed run of the same passes through a
+//!    recording `RayQuery` that keeps every ray given to `intersect` and to `occluded`;
+//!    then exactly those rays are traced through the `Accel` alone, one thread
+//!    (closest hit for the first list, occlusion for the second). The ratio
+//!    PT rays/s ÷ raw rays/s is the share of the hot loop's time spent in ray queries.
+//!    Parts 1 and 2 alternate `HOT_REPS` times; medians are printed.
+//! 3. **Thread scaling**: the full driver (`driver::render`, progress off) on the
+//!    default scene exactly as `ember render` builds it (512², unbounded depth, seed 0),
+//!    `SCALE_SPP` passes, for pt, lt and bdpt, with 1, 2 (and all, if more) threads.
+//!    Each round runs every thread count back to back, in alternating order, and the
+//!    speedup t₁ / tₙ is taken within the round; `SCALE_ROUNDS` rounds, medians
+//!    printed. The films of all thread counts are compared bit for bit. Two controls
+//!    frame the numbers: the same thread counts on pure arithmetic (what the machine
+//!    gives right now: other processes share its cores), and the time of the driver's
+//!    sequential per-pass merge measured alone (its Amdahl bound).
+//!
+//! Run: `cargo bench -p ember-cli --bench render_throughput` (about 2 minutes on 2 cores).
+
+use std::cell::RefCell;
+use std::hint::black_box;
+use std::time::Instant;
+
+use clap::Parser;
+
+use ember_cli::accel::Accel;
+use ember_cli::cli::{Cli, Command, RenderArgs};
+use ember_cli::driver::{self, DriverConfig, Limits, PassRenderer, Splat};
+use ember_cli::estimators::{CoreRenderer, prepare_builtin};
+use ember_cli::film::Film;
+use ember_core::Rgb;
+use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
+use ember_core::integrator::pt;
+
+const HOT_RES: u32 = 256;
+const HOT_PASSES: u32 = 4;
+const HOT_REPS: usize = 5;
+const SCALE_SPP: u32 = 2;
+const SCALE_ROUNDS: usize = 3;
+
+/// `ember render` options, parsed as the binary parses them.
+fn args(extra: &[&str]) -> RenderArgs {
+    let mut v = vec!["ember", "render"];
+    v.extend_from_slice(extra);
+    let Command::Render(a) = Cli::parse_from(v).command else { unreachable!("parsed a render command") };
+    a
+}
+
+/// The built-in scene and estimator as `ember render` (no scene file) builds them.
+fn default_renderer(a: &RenderArgs) -> CoreRenderer {
+    let prepared = prepare_builtin(a).expect("built-in scene");
+    CoreRenderer::new(prepared, a.estimator, a.max_depth_or(-1), a.seed)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}
+
+/// Forwards to the `Accel` and keeps every query ray.
+struct Recorder<'a> {
+    accel: &'a Accel,
+    closest: RefCell<Vec<Ray>>,
+    shadow: RefCell<Vec<Ray>>,
+}
+
+impl RayQuery for Recorder<'_> {
+    fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
+        self.closest.borrow_mut().push(*ray);
+        self.accel.intersect(ray)
+    }
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.shadow.borrow_mut().push(*ray);
+        self.accel.occluded(ray)
+    }
+}
+
+/// The PT passes over the whole image, one thread: (rays counted, seconds).
+fn pt_passes<Q: RayQuery + ?Sized>(r: &CoreRenderer, tracer: &Q, out: &mut [Rgb]) -> (u64, f64) {
+    let pixels = out.len() as u32;
+    let t = Instant::now();
+    let mut rays = 0;
+    for pass in 0..HOT_PASSES {
+        rays += pt::render_pixels(&r.prepared.scene, tracer, &r.params, pass, 0..pixels, out).rays;
+        black_box(&mut *out);
+    }
+    (rays, t.elapsed().as_secs_f64())
+}
+
+fn hot_loop() {
+    let res = HOT_RES.to_string();
+    let a = args(&["--estimator", "pt", "--width", &res, "--height", &res, "--max-depth", "-1"]);
+    let r = default_renderer(&a);
+    let accel = &r.prepared.accel;
+    let mut out = vec![Rgb::ZERO; (HOT_RES * HOT_RES) as usize];
+
+    // Record the rays of exactly the passes timed below.
+    let rec = Recorder { accel, closest: RefCell::new(Vec::new()), shadow: RefCell::new(Vec::new()) };
+    let (counted, _) = pt_passes(&r, &rec, &mut out);
+    let (closest, shadow) = (rec.closest.into_inner(), rec.shadow.into_inner());
+    let total = (closest.len() + shadow.len()) as u64;
+    assert_eq!(counted, total, "the estimator's ray count disagrees with the queries it made");
+    println!(
+        "[1,2] PT hot loop: Cornell box {HOT_RES}², {HOT_PASSES} passes, unbounded depth, 1 thread, {} triangles",
+        accel.triangle_count()
+    );
+    println!(
+        "      {} rays = {} closest-hit + {} shadow ({:.2} rays per pixel sample)",
+        total,
+        closest.len(),
+        shadow.len(),
+        total as f64 / (HOT_PASSES * HOT_RES * HOT_RES) as f64
+    );
+
+    let (mut pt_rate, mut raw_rate, mut c_rate, mut s_rate, mut share) = (vec![], vec![], vec![], vec![], vec![]);
+    for _ in 0..HOT_REPS {
+        let (rays, t_pt) = pt_passes(&r, accel, &mut out);
+        assert_eq!(rays, total);
+        let t = Instant::now();
+        let hits = closest.iter().filter(|ray| accel.intersect(black_box(ray)).is_some()).count();
+        let t_c = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let blocked = shadow.iter().filter(|ray| accel.occluded(black_box(ray))).count();
+        let t_s = t.elapsed().as_secs_f64();
+        black_box((hits, blocked));
+        pt_rate.push(total as f64 / t_pt / 1e6);
+        raw_rate.push(total as f64 / (t_c + t_s) / 1e6);
+        c_rate.push(closest.len() as f64 / t_c / 1e6);
+        s_rate.push(shadow.len() as f64 / t_s / 1e6);
+        share.push((t_c + t_s) / t_pt);
+    }
+    let pt = median(pt_rate);
+    let raw = median(raw_rate);
+    println!("      median of {HOT_REPS} (PT and raw alternating):");
+    println!("      PT hot loop             {pt:>7.2} Mrays/s");
+    println!(
+        "      raw Accel, same rays    {raw:>7.2} Mrays/s  (closest {:.2}, occlusion {:.2})",
+        median(c_rate),
+        median(s_rate)
+    );
+    println!(
+        "      ratio PT / raw          {:>7.3}   (traversal share of the hot loop, per round: {:.3})",
+        pt / raw,
+        median(share)
+    );
+}
+
+/// A `PassRenderer` that does pure arithmetic: the machine's own scaling, right now.
+#[derive(Debug)]
+struct Spin;
+
+fn spin(seed: u32) -> Rgb {
+    let mut x = seed as u64 | 1;
+    for _ in 0..2000 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+    }
+    Rgb::splat((x >> 40) as f32)
+}
+
+impl PassRenderer for Spin {
+    fn width(&self) -> u32 {
+        512
+    }
+    fn height(&self) -> u32 {
+        512
+    }
+    fn camera_pass(&self, _: u32, pixels: std::ops::Range<u32>, out: &mut [Rgb], _: &mut dyn FnMut(Splat)) -> driver::PassStats {
+        for (o, i) in out.iter_mut().zip(pixels) {
+            *o = spin(i);
+        }
+        driver::PassStats::default()
+    }
+    fn light_paths_per_pass(&self) -> u32 {
+        0
+    }
+    fn light_pass(&self, _: u32, _: std::ops::Range<u32>, _: &mut dyn FnMut(Splat)) -> driver::PassStats {
+        driver::PassStats::default()
+    }
+    fn splat_scale(&self) -> f64 {
+        1.0
+    }
+}
+
+fn drive(r: &dyn PassRenderer, threads: usize, spp: u32) -> (f64, Film) {
+    let mut film = Film::new(r.width(), r.height());
+    let config = DriverConfig { progress: false, ..DriverConfig::with_threads(threads) };
+    let start = Instant::now();
+    let s = driver::render(r, &mut film, Limits { spp, deadline: None }, config, start).expect("render");
+    (s.render_seconds, film)
+}
+
+fn same_bits(a: &Film, b: &Film) -> bool {
+    a.passes() == b.passes()
+        && a.discarded() == b.discarded()
+        && a.sums().iter().flatten().map(|v| v.to_bits()).eq(b.sums().iter().flatten().map(|v| v.to_bits()))
+}
+
+/// The driver's merge of one pass on its own: camera samples and splats collected as
+/// the driver collects them (chunk by chunk, one thread), then added to a film.
+/// Returns (merge seconds, splats per pass).
+fn merge_cost(r: &dyn PassRenderer) -> (f64, usize) {
+    let config = DriverConfig::with_threads(1);
+    let n = (r.width() * r.height()) as usize;
+    let mut out = vec![Rgb::ZERO; n];
+    let mut chunks: Vec<Vec<Splat>> = Vec::new();
+    for (c, o) in out.chunks_mut(config.pixel_chunk as usize).enumerate() {
+        let mut s = Vec::new();
+        let start = c as u32 * config.pixel_chunk;
+        r.camera_pass(0, start..start + o.len() as u32, o, &mut |x| s.push(x));
+        chunks.push(s);
+    }
+    let m = r.light_paths_per_pass();
+    for start in (0..m).step_by(config.light_chunk as usize) {
+        let mut s = Vec::new();
+        r.light_pass(0, start..(start + config.light_chunk).min(m), &mut |x| s.push(x));
+        chunks.push(s);
+    }
+    let mut film = Film::new(r.width(), r.height());
+    let mut best = f64::INFINITY;
+    for _ in 0..5 {
+        let t = Instant::now();
+        film.add_camera_samples(0..n as u32, &out);
+        for s in &chunks {
+            film.add_splats(s, r.splat_scale());
+        }
+        film.end_pass();
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    black_box(&film);
+    (best, chunks.iter().map(Vec::len).sum())
+}
+
+fn scaling() {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut counts = vec![1, 2];
+    if cores > 2 {
+        counts.push(cores);
+    }
+    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    println!();
+    println!(
+        "[3] driver scaling: default scene (512², unbounded depth, seed 0), {SCALE_SPP} passes, \
+         {SCALE_ROUNDS} rounds, medians; {cores} cores; load average before: {}",
+        load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
+    );
+    let mut header = format!("    {:<10}", "");
+    for &n in &counts {
+        header += &format!(" {:>9}", format!("{n} thr s"));
+    }
+    for &n in &counts[1..] {
+        header += &format!(" {:>9}", format!("x{n}"));
+    }
+    println!("{header}  {:>11} {:>10}  film bits across threads", "merge/pass", "Amdahl x2");
+
+    let mut renderers: Vec<(&str, Box<dyn PassRenderer>)> = vec![("spin", Box::new(Spin))];
+    for e in ["pt", "lt", "bdpt"] {
+        let spp = SCALE_SPP.to_string();
+        let a = args(&["--estimator", e, "--spp", &spp]);
+        renderers.push((e, Box::new(default_renderer(&a))));
+    }
+    for (name, r) in &renderers {
+        let mut secs: Vec<Vec<f64>> = vec![Vec::new(); counts.len()];
+        let mut speedups: Vec<Vec<f64>> = vec![Vec::new(); counts.len()];
+        let mut identical = true;
+        let mut reference: Option<Film> = None;
+        for round in 0..SCALE_ROUNDS {
+            let mut order: Vec<usize> = (0..counts.len()).collect();
+            if round % 2 == 1 {
+                order.reverse();
+            }
+            let mut t = vec![0.0; counts.len()];
+            for k in order {
+                let (s, film) = drive(&**r, counts[k], SCALE_SPP);
+                t[k] = s;
+                match &reference {
+                    None => reference = Some(film),
+                    Some(f) => identical &= same_bits(f, &film),
+                }
+            }
+            for k in 0..counts.len() {
+                secs[k].push(t[k]);
+                speedups[k].push(t[0] / t[k]);
+            }
+        }
+        let t1 = median(secs[0].clone());
+        let mut line = format!("    {name:<10}");
+        for s in &secs {
+            line += &format!(" {:>9.3}", median(s.clone()));
+        }
+        for s in &speedups[1..] {
+            line += &format!(" {:>9.2}", median(s.clone()));
+        }
+        let (merge, splats) = merge_cost(&**r);
+        // Sequential fraction of a 1-thread pass, and the speedup it allows on 2 threads.
+        let f = (merge * SCALE_SPP as f64 / t1).min(1.0);
+        let amdahl = 1.0 / (f + (1.0 - f) / 2.0);
+        let bits = if identical { "identical" } else { "DIFFER" };
+        println!("{line}  {:>8.2} ms {:>10.2}  {bits} ({splats} splats/pass)", merge * 1e3, amdahl);
+    }
+    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    println!("    load average after: {}", load.split_whitespace().take(3).collect::<Vec<_>>().join(" "));
+}
+
+fn main() {
+    let t = Instant::now();
+    hot_loop();
+    scaling();
+    println!("\ntotal {:.1} s", t.elapsed().as_secs_f64());
+}

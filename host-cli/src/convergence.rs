@@ -1,0 +1,194 @@
+//! Error against run time: an estimator's error to a reference as a function of
+//! wall-clock seconds, preprocessing included.
+//!
+//! For each estimator and seed the clock starts before the scene is loaded; the film is
+//! snapshotted at doubling checkpoints (1, 2, 4, … s up to the budget). The deadline is
+//! checked between passes, so a snapshot lands when the pass running at its checkpoint
+//! ends: the CSV records the actual elapsed seconds, and the plot uses them. relMSE and
+//! MAPE (see [`crate::metrics`]) are averaged over seeds at each checkpoint.
+//!
+//! The reference's own noise floor comes from its two half-sample images: their squared
+//! difference is about 4× the full reference's squared error, so the floor drawn is
+//! relMSE(half a, half b)/4 and MAPE(half a, half b)/2. An estimate near the floor
+//! cannot be ranked against another.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::cli::EstimatorArg;
+use crate::driver::{self, DriverConfig, Limits, PassRenderer};
+use crate::estimators::{CoreRenderer, PreparedScene};
+use crate::film::Film;
+use crate::image_io::{self, RgbImage};
+use crate::metrics::{self, ErrorMetrics};
+use crate::plot::{self, Floor, Series};
+
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct ConvergenceSetup {
+    pub estimators: Vec<EstimatorArg>,
+    pub budget_seconds: f64,
+    pub seeds: u32,
+    pub threads: usize,
+    /// Overrides of the scene file's depth.
+    pub max_depth: Option<i32>,
+}
+
+/// One snapshot.
+#[derive(Clone, Copy, Debug)]
+pub struct Checkpoint {
+    pub estimator: EstimatorArg,
+    pub seed: u32,
+    pub target_seconds: f64,
+    pub elapsed_seconds: f64,
+    pub passes: u32,
+    pub metrics: ErrorMetrics,
+}
+
+/// The reference and its noise floor.
+#[derive(Clone, Debug)]
+pub struct Reference {
+    pub image: RgbImage,
+    /// (relMSE, MAPE) of the reference's own noise, if its halves exist.
+    pub floor: Option<(f64, f64)>,
+}
+
+impl Reference {
+    /// Read `reference.exr`, and its halves `reference-half-{a,b}.exr` when present.
+    pub fn load(path: &Path) -> Result<Self, String> {
+        let image = image_io::read_exr(path).map_err(|e| e.to_string())?;
+        let half = |s: &str| path.with_file_name(format!("reference-half-{s}.exr"));
+        let floor = match (image_io::read_exr(&half("a")), image_io::read_exr(&half("b"))) {
+            (Ok(a), Ok(b)) if a.pixels.len() == b.pixels.len() => {
+                let m = metrics::compare(&a.pixels, &b.pixels);
+                Some((m.rel_mse / 4.0, m.mape / 2.0))
+            }
+            _ => None,
+        };
+        Ok(Self { image, floor })
+    }
+}
+
+/// Doubling checkpoints 1, 2, 4, … up to and including the budget.
+pub fn checkpoints(budget: f64) -> Vec<f64> {
+    let mut v = Vec::new();
+    let mut t = 1.0;
+    while t < budget {
+        v.push(t);
+        t *= 2.0;
+    }
+    v.push(budget.max(f64::MIN_POSITIVE));
+    v
+}
+
+/// Run every estimator and seed; `prepare` loads the scene (timed as preprocessing).
+pub fn measure(
+    setup: &ConvergenceSetup,
+    reference: &Reference,
+    prepare: &dyn Fn() -> Result<PreparedScene, String>,
+    mut on_checkpoint: impl FnMut(&Checkpoint),
+) -> Result<Vec<Checkpoint>, String> {
+    let mut out = Vec::new();
+    for &estimator in &setup.estimators {
+        for seed in 0..setup.seeds {
+            let start = Instant::now();
+            let prepared = prepare()?;
+            let depth = setup.max_depth.or(prepared.max_depth).unwrap_or(-1);
+            let renderer = CoreRenderer::new(prepared, estimator, depth, seed as u64);
+            let (w, h) = (renderer.width(), renderer.height());
+            if (w as usize, h as usize) != (reference.image.width as usize, reference.image.height as usize) {
+                return Err(format!("the scene renders {w}x{h} but the reference is {}x{}", reference.image.width, reference.image.height));
+            }
+            let mut film = Film::new(w, h);
+            let config = DriverConfig { progress: false, ..DriverConfig::with_threads(setup.threads) };
+            for target in checkpoints(setup.budget_seconds) {
+                let deadline = start + std::time::Duration::from_secs_f64(target);
+                if Instant::now() < deadline {
+                    let limits = Limits { spp: u32::MAX, deadline: Some(deadline) };
+                    driver::render(&renderer, &mut film, limits, config, start).map_err(|e| e.to_string())?;
+                }
+                let image = film.to_rgb_f32();
+                let c = Checkpoint {
+                    estimator,
+                    seed,
+                    target_seconds: target,
+                    elapsed_seconds: start.elapsed().as_secs_f64(),
+                    passes: film.passes(),
+                    metrics: metrics::compare(&image, &reference.image.pixels),
+                };
+                on_checkpoint(&c);
+                out.push(c);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Seed-averaged (elapsed seconds, relMSE, MAPE) per checkpoint of one estimator.
+pub fn averaged(points: &[Checkpoint], estimator: EstimatorArg) -> Vec<(f64, f64, f64)> {
+    let mut targets: Vec<f64> = points.iter().filter(|c| c.estimator == estimator).map(|c| c.target_seconds).collect();
+    targets.dedup();
+    targets
+        .into_iter()
+        .map(|t| {
+            let at: Vec<&Checkpoint> = points.iter().filter(|c| c.estimator == estimator && c.target_seconds == t).collect();
+            let n = at.len().max(1) as f64;
+            (
+                at.iter().map(|c| c.elapsed_seconds).sum::<f64>() / n,
+                at.iter().map(|c| c.metrics.rel_mse).sum::<f64>() / n,
+                at.iter().map(|c| c.metrics.mape).sum::<f64>() / n,
+            )
+        })
+        .collect()
+}
+
+/// The CSV: one row per snapshot.
+pub fn csv(points: &[Checkpoint]) -> String {
+    let mut s = String::from("estimator,seed,checkpoint_s,elapsed_s,passes,relmse,mape,mae,mean_ratio\n");
+    for c in points {
+        let m = c.metrics;
+        let _ = writeln!(s, "{},{},{},{:.4},{},{:.6e},{:.6},{:.6e},{:.6}", c.estimator.name(), c.seed, c.target_seconds, c.elapsed_seconds, c.passes, m.rel_mse, m.mape, m.mae, m.mean_ratio);
+    }
+    s
+}
+
+/// The two plots (relMSE and MAPE against seconds) as SVG strings.
+pub fn plots(title: &str, points: &[Checkpoint], estimators: &[EstimatorArg], reference: &Reference) -> (String, String) {
+    let series = |pick: fn(&(f64, f64, f64)) -> f64| -> Vec<Series> {
+        estimators
+            .iter()
+            .map(|&e| Series { label: e.name().to_string(), points: averaged(points, e).iter().map(|p| (p.0, pick(p))).collect() })
+            .collect()
+    };
+    let floor = |v: Option<f64>| v.map(|y| vec![Floor { label: "reference noise".into(), y }]).unwrap_or_default();
+    let rel = plot::log_log_svg(&format!("{title}: relMSE"), "seconds (preprocessing included)", "relMSE", &series(|p| p.1), &floor(reference.floor.map(|f| f.0)));
+    let mape = plot::log_log_svg(&format!("{title}: MAPE"), "seconds (preprocessing included)", "MAPE (%)", &series(|p| p.2), &floor(reference.floor.map(|f| f.1)));
+    (rel, mape)
+}
+
+/// Write `NAME.csv`, `NAME-relmse.svg` and `NAME-mape.svg` into `dir`.
+pub fn write_outputs(dir: &Path, name: &str, title: &str, points: &[Checkpoint], estimators: &[EstimatorArg], reference: &Reference) -> Result<Vec<PathBuf>, String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let (rel, mape) = plots(title, points, estimators, reference);
+    let files = [(format!("{name}.csv"), csv(points)), (format!("{name}-relmse.svg"), rel), (format!("{name}-mape.svg"), mape)];
+    let mut written = Vec::new();
+    for (file, body) in files {
+        let path = dir.join(file);
+        std::fs::write(&path, body).map_err(|e| format!("{}: {e}", path.display()))?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn checkpoints_double_up_to_the_budget() {
+        assert_eq!(checkpoints(10.0), vec![1.0, 2.0, 4.0, 8.0, 10.0]);
+        assert_eq!(checkpoints(8.0), vec![1.0, 2.0, 4.0, 8.0]);
+        assert_eq!(checkpoints(0.5), vec![0.5]);
+    }
+}

@@ -1,0 +1,407 @@
+//! Second pass: instantiate the parsed objects into a [`SceneBuilder`]: the scene's
+//! members in document order, then the camera; emitters, sensor, film, sampler and
+//! integrator plugins live here, BSDFs in [`super::materials`], shapes in
+//! [`super::shapes`].
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::{DMat4, DVec3};
+
+use ember_core::camera::{FovAxis, PerspectiveCamera};
+use ember_core::geometry::MaterialId;
+use ember_core::light::Light;
+use ember_core::scene::{AreaEmission, SceneBuilder};
+use ember_core::spectrum::Rgb;
+
+use super::props::Props;
+use super::transform;
+use super::xml::{Obj, Parsed, Tag};
+use super::{Fail, LoadOptions, LoadedScene, Loc, Res};
+
+/// Largest film side accepted (a guard against absurd allocations downstream).
+const MAX_FILM_SIDE: i64 = 1 << 16;
+
+/// Mitsuba's `hdrfilm` default size.
+const DEFAULT_FILM: (u32, u32) = (768, 576);
+
+/// Instantiation state.
+#[derive(Debug)]
+pub(crate) struct Ctx<'a> {
+    pub parsed: &'a Parsed,
+    pub sb: SceneBuilder,
+    pub warnings: Vec<String>,
+    pub base_dir: &'a Path,
+    /// Material of each `bsdf` object already added.
+    pub materials: HashMap<usize, MaterialId>,
+    pub default_material: Option<MaterialId>,
+    /// Objects that were instantiated (to warn about unused declarations).
+    pub used: Vec<bool>,
+}
+
+/// What the sensor gives besides the camera transform.
+struct SensorSpec {
+    to_world: DMat4,
+    fov: f32,
+    fov_axis: FovAxis,
+    width: u32,
+    height: u32,
+    spp: Option<u32>,
+}
+
+pub(crate) fn instantiate(parsed: Parsed, base_dir: &Path, options: &LoadOptions) -> Res<LoadedScene> {
+    let mut ctx = Ctx {
+        parsed: &parsed,
+        sb: SceneBuilder::new(),
+        warnings: parsed.warnings.clone(),
+        base_dir,
+        materials: HashMap::new(),
+        default_material: None,
+        used: vec![false; parsed.objs.len()],
+    };
+    let mut sensor: Option<(SensorSpec, Loc)> = None;
+    let mut integrator: Option<(Option<i32>, Loc)> = None;
+    for &idx in &parsed.top {
+        let obj = ctx.obj(idx)?;
+        if !matches!(obj.tag, Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler) {
+            ctx.mark(idx);
+        }
+        match obj.tag {
+            Tag::Shape => ctx.shape(idx)?,
+            Tag::Emitter => ctx.emitter(idx)?,
+            Tag::Sensor => {
+                if let Some((_, first)) = &sensor {
+                    return Err(Fail::at(obj.loc, format!("only one <sensor> is supported (the first is at line {})", first.line)));
+                }
+                sensor = Some((ctx.sensor(idx)?, obj.loc));
+            }
+            Tag::Integrator => {
+                if let Some((_, first)) = &integrator {
+                    return Err(Fail::at(obj.loc, format!("only one <integrator> is supported (the first is at line {})", first.line)));
+                }
+                integrator = Some((ctx.integrator(idx)?, obj.loc));
+            }
+            // Declarations, instantiated where a `ref` uses them.
+            Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler => {}
+        }
+    }
+    for &idx in &parsed.top {
+        let obj = ctx.obj(idx)?;
+        if !ctx.used[idx] {
+            let id = obj.id.as_deref().map(|i| format!(" id=\"{i}\"")).unwrap_or_default();
+            ctx.warnings.push(format!("line {}: {}{id} is declared but never used", obj.loc.line, obj.label()));
+        }
+    }
+    let (spec, _) = sensor.ok_or_else(|| Fail::nowhere("the scene has no <sensor> (a perspective camera is required)"))?;
+    let width = override_side(options.width, spec.width, "width")?;
+    let height = override_side(options.height, spec.height, "height")?;
+    let camera = PerspectiveCamera::new(spec.to_world.as_mat4(), spec.fov, spec.fov_axis, width, height);
+    ctx.sb.set_camera(camera);
+    Ok(LoadedScene { builder: ctx.sb, max_depth: integrator.and_then(|(d, _)| d), spp: spec.spp, width, height, warnings: ctx.warnings })
+}
+
+fn override_side(option: Option<u32>, file: u32, what: &str) -> Res<u32> {
+    match option {
+        Some(0) => Err(Fail::nowhere(format!("the {what} override must be positive"))),
+        Some(v) if v as i64 > MAX_FILM_SIDE => Err(Fail::nowhere(format!("the {what} override {v} exceeds {MAX_FILM_SIDE}"))),
+        Some(v) => Ok(v),
+        None => Ok(file),
+    }
+}
+
+impl<'a> Ctx<'a> {
+    /// An object by index.
+    pub(crate) fn obj(&self, idx: usize) -> Res<&'a Obj> {
+        let parsed = self.parsed;
+        parsed.objs.get(idx).ok_or_else(|| Fail::nowhere("internal error: bad object index"))
+    }
+
+    /// Reject nested objects whose category is not in `allowed`.
+    pub(crate) fn check_children(&self, obj: &Obj, allowed: &[Tag]) -> Res<()> {
+        for c in &obj.children {
+            let t = self.obj(c.obj)?;
+            if !allowed.contains(&t.tag) {
+                let what = if allowed.is_empty() {
+                    "no nested objects".to_string()
+                } else {
+                    allowed.iter().map(|t| format!("<{}>", t.name())).collect::<Vec<_>>().join(", ")
+                };
+                return Err(Fail::at(c.loc, format!("{} cannot contain {} (it accepts {what})", obj.label(), t.label())));
+            }
+        }
+        Ok(())
+    }
+
+    pub(crate) fn no_children(&self, obj: &Obj) -> Res<()> {
+        self.check_children(obj, &[])
+    }
+
+    /// The nested object of category `tag`, at most one.
+    pub(crate) fn single_child(&self, obj: &Obj, tag: Tag) -> Res<Option<usize>> {
+        let mut found = None;
+        for c in &obj.children {
+            if self.obj(c.obj)?.tag == tag {
+                if found.is_some() {
+                    return Err(Fail::at(c.loc, format!("{} takes at most one <{}>", obj.label(), tag.name())));
+                }
+                found = Some(c.obj);
+            }
+        }
+        Ok(found)
+    }
+
+    /// Mark a declaration as used by a reference (or nesting).
+    pub(crate) fn mark(&mut self, idx: usize) {
+        if let Some(u) = self.used.get_mut(idx) {
+            *u = true;
+        }
+    }
+
+    /// An `area` emitter nested in a shape.
+    pub(crate) fn area_emission(&mut self, idx: usize) -> Res<AreaEmission> {
+        let obj = self.obj(idx)?;
+        self.mark(idx);
+        if obj.kind != "area" {
+            return Err(Fail::at(
+                obj.loc,
+                format!("only `area` emitters can be nested in a <shape>; a \"{}\" emitter belongs directly in <scene>", obj.kind),
+            ));
+        }
+        self.no_children(obj)?;
+        let mut p = Props::new(obj);
+        let radiance = p.color("radiance", Rgb::ONE)?;
+        let radiance = nonnegative(&p, "radiance", radiance)?;
+        p.finish()?;
+        Ok(AreaEmission { radiance, two_sided: false })
+    }
+
+    /// A top-level emitter: `point`, `spot`, `directional` or `constant`.
+    fn emitter(&mut self, idx: usize) -> Res<()> {
+        let obj = self.obj(idx)?;
+        self.no_children(obj)?;
+        let mut p = Props::new(obj);
+        let light = match obj.kind.as_str() {
+            "point" => {
+                let position = match (p.point_opt("position")?, p.transform_opt("to_world")?) {
+                    (Some(_), Some(_)) => return Err(Fail::at(p.loc_of("to_world"), "give either `position` or `to_world`, not both")),
+                    (Some(v), None) => DVec3::from_array(v),
+                    (None, Some(m)) => m.transform_point3(DVec3::ZERO),
+                    (None, None) => DVec3::ZERO,
+                };
+                let intensity = p.color("intensity", Rgb::ONE)?;
+                let intensity = nonnegative(&p, "intensity", intensity)?;
+                Light::point(position.as_vec3(), intensity)
+            }
+            "spot" => {
+                let m = p.transform("to_world")?;
+                let direction = m.transform_vector3(DVec3::Z);
+                if !(direction.length() > 0.0) {
+                    return Err(Fail::at(p.loc_of("to_world"), "the spot light's `to_world` is singular"));
+                }
+                let intensity = p.color("intensity", Rgb::ONE)?;
+                let cutoff = p.float("cutoff_angle", 20.0)?;
+                if !(cutoff > 0.0 && cutoff <= 180.0) {
+                    return Err(Fail::at(p.loc_of("cutoff_angle"), format!("`cutoff_angle` must be in (0, 180] degrees, got {cutoff}")));
+                }
+                let mut beam = p.float("beam_width", 0.75 * cutoff)?;
+                if !(beam >= 0.0) {
+                    return Err(Fail::at(p.loc_of("beam_width"), format!("`beam_width` must be non-negative, got {beam}")));
+                }
+                if beam > cutoff {
+                    self.warnings.push(format!("line {}: spot `beam_width` {beam} exceeds `cutoff_angle` {cutoff}; clamped", obj.loc.line));
+                    beam = cutoff;
+                }
+                let intensity = nonnegative(&p, "intensity", intensity)?;
+                let position = m.transform_point3(DVec3::ZERO);
+                Light::spot(position.as_vec3(), direction.normalize().as_vec3(), intensity, cutoff as f32, beam as f32)
+            }
+            "directional" => {
+                let direction = match (p.vector_opt("direction")?, p.transform_opt("to_world")?) {
+                    (Some(_), Some(_)) => return Err(Fail::at(p.loc_of("to_world"), "give either `direction` or `to_world`, not both")),
+                    (Some(v), None) => DVec3::from_array(v),
+                    (None, Some(m)) => m.transform_vector3(DVec3::Z),
+                    (None, None) => DVec3::Z,
+                };
+                if !(direction.length() > 0.0) {
+                    return Err(Fail::at(obj.loc, "the directional light's direction is zero"));
+                }
+                let irradiance = p.color("irradiance", Rgb::ONE)?;
+                let irradiance = nonnegative(&p, "irradiance", irradiance)?;
+                Light::directional(direction.normalize().as_vec3(), irradiance)
+            }
+            "constant" => {
+                let radiance = p.color("radiance", Rgb::ONE)?;
+                let radiance = nonnegative(&p, "radiance", radiance)?;
+                Light::constant_environment(radiance)
+            }
+            "area" => return Err(Fail::at(obj.loc, "an `area` emitter must be nested in the <shape> that emits")),
+            other => {
+                return Err(Fail::at(
+                    obj.loc,
+                    format!("unsupported emitter type \"{other}\" (supported: area inside a shape; point, spot, directional, constant)"),
+                ));
+            }
+        };
+        p.finish()?;
+        self.sb.add_light(light);
+        Ok(())
+    }
+
+    fn sensor(&mut self, idx: usize) -> Res<SensorSpec> {
+        let obj = self.obj(idx)?;
+        if obj.kind != "perspective" {
+            return Err(Fail::at(obj.loc, format!("unsupported sensor type \"{}\" (supported: perspective)", obj.kind)));
+        }
+        self.check_children(obj, &[Tag::Film, Tag::Sampler])?;
+        let film = self.single_child(obj, Tag::Film)?;
+        let sampler = self.single_child(obj, Tag::Sampler)?;
+        let mut p = Props::new(obj);
+        let fov = p
+            .float_opt("fov")?
+            .ok_or_else(|| Fail::at(obj.loc, "the perspective sensor needs `fov` (in degrees; `focal_length` is not supported)"))?;
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(Fail::at(p.loc_of("fov"), format!("`fov` must be in (0, 180) degrees, got {fov}")));
+        }
+        let fov_axis = match p.string_opt("fov_axis")?.map(str::to_ascii_lowercase).as_deref() {
+            None | Some("x") => FovAxis::X,
+            Some("y") => FovAxis::Y,
+            Some("smaller") => FovAxis::Smaller,
+            Some("larger") => FovAxis::Larger,
+            Some("diagonal") => FovAxis::Diagonal,
+            Some(other) => {
+                return Err(Fail::at(
+                    p.loc_of("fov_axis"),
+                    format!("unknown fov_axis \"{other}\" (supported: x, y, smaller, larger, diagonal)"),
+                ));
+            }
+        };
+        let to_world = p.transform("to_world")?;
+        match transform::similarity_scale(&to_world, 1e-3) {
+            Some(s) if (s - 1.0).abs() <= 1e-3 => {}
+            _ => {
+                return Err(Fail::at(
+                    p.loc_of("to_world"),
+                    "the sensor's `to_world` must be a rotation and translation (use <lookat>); scale and shear are not supported",
+                ));
+            }
+        }
+        p.finish()?;
+        let (width, height) = match film {
+            Some(f) => self.film(f)?,
+            None => {
+                self.warnings.push(format!(
+                    "line {}: the sensor has no <film>: using Mitsuba's default size {}×{} with a box filter (Mitsuba's default filter is gaussian)",
+                    obj.loc.line, DEFAULT_FILM.0, DEFAULT_FILM.1
+                ));
+                DEFAULT_FILM
+            }
+        };
+        let spp = match sampler {
+            Some(s) => self.sampler(s)?,
+            None => None,
+        };
+        Ok(SensorSpec { to_world, fov: fov as f32, fov_axis, width, height, spp })
+    }
+
+    fn film(&mut self, idx: usize) -> Res<(u32, u32)> {
+        let obj = self.obj(idx)?;
+        self.mark(idx);
+        if obj.kind != "hdrfilm" {
+            return Err(Fail::at(obj.loc, format!("unsupported film type \"{}\" (supported: hdrfilm)", obj.kind)));
+        }
+        self.check_children(obj, &[Tag::RFilter])?;
+        let mut p = Props::new(obj);
+        let width = film_side(&mut p, "width", DEFAULT_FILM.0)?;
+        let height = film_side(&mut p, "height", DEFAULT_FILM.1)?;
+        if let Some(f) = p.string_opt("file_format")?
+            && f != "openexr"
+            && f != "exr"
+        {
+            self.warnings.push(format!("line {}: film file_format \"{f}\" is not used: the command line chooses the output", obj.loc.line));
+        }
+        if let Some(f) = p.string_opt("pixel_format")?
+            && f != "rgb"
+            && f != "rgba"
+        {
+            self.warnings.push(format!("line {}: film pixel_format \"{f}\" is not used: ember writes RGB", obj.loc.line));
+        }
+        p.finish()?;
+        match self.single_child(obj, Tag::RFilter)? {
+            Some(r) => {
+                let rf = self.obj(r)?;
+                self.mark(r);
+                if rf.kind != "box" {
+                    return Err(Fail::at(rf.loc, format!("unsupported rfilter type \"{}\" (supported: box)", rf.kind)));
+                }
+                self.no_children(rf)?;
+                Props::new(rf).finish()?;
+            }
+            None => self.warnings.push(format!(
+                "line {}: the film has no <rfilter>: Mitsuba would use a gaussian filter; ember uses a box filter",
+                obj.loc.line
+            )),
+        }
+        Ok((width, height))
+    }
+
+    fn sampler(&mut self, idx: usize) -> Res<Option<u32>> {
+        let obj = self.obj(idx)?;
+        self.mark(idx);
+        self.no_children(obj)?;
+        let mut p = Props::new(obj);
+        let spp = match p.int_opt("sample_count")? {
+            Some(n) if n >= 1 && n <= u32::MAX as i64 => Some(n as u32),
+            Some(n) => return Err(Fail::at(p.loc_of("sample_count"), format!("`sample_count` must be in 1..={}, got {n}", u32::MAX))),
+            None => None,
+        };
+        p.finish()?;
+        if obj.kind != "independent" {
+            self.warnings.push(format!(
+                "line {}: sampler type \"{}\" is not modelled: ember uses its own sampler (only sample_count is read)",
+                obj.loc.line, obj.kind
+            ));
+        }
+        Ok(spp)
+    }
+
+    fn integrator(&mut self, idx: usize) -> Res<Option<i32>> {
+        let obj = self.obj(idx)?;
+        self.no_children(obj)?;
+        let mut p = Props::new(obj);
+        let depth = match p.int_opt("max_depth")? {
+            Some(d) if d >= -1 && d <= i32::MAX as i64 => Some(d as i32),
+            Some(d) => {
+                return Err(Fail::at(
+                    p.loc_of("max_depth"),
+                    format!("`max_depth` must be -1 (unbounded) or a non-negative integer, got {d}"),
+                ));
+            }
+            None => None,
+        };
+        p.finish()?;
+        if obj.kind != "path" {
+            self.warnings.push(format!(
+                "line {}: integrator type \"{}\" is not used: the command line chooses the estimator (only max_depth is read)",
+                obj.loc.line, obj.kind
+            ));
+        }
+        Ok(depth)
+    }
+}
+
+fn film_side(p: &mut Props, name: &'static str, default: u32) -> Res<u32> {
+    match p.int_opt(name)? {
+        None => Ok(default),
+        Some(v) if (1..=MAX_FILM_SIDE).contains(&v) => Ok(v as u32),
+        Some(v) => Err(Fail::at(p.loc_of(name), format!("film `{name}` must be in 1..={MAX_FILM_SIDE}, got {v}"))),
+    }
+}
+
+/// Emitted quantities must be non-negative.
+fn nonnegative(p: &Props, name: &str, c: Rgb) -> Res<Rgb> {
+    if c.is_valid_radiance() {
+        Ok(c)
+    } else {
+        Err(Fail::at(p.loc_of(name), format!("`{name}` must be non-negative, got ({}, {}, {})", c.r, c.g, c.b)))
+    }
+}

@@ -1,0 +1,205 @@
+//! BSDF plugins: `diffuse`, `conductor`, `roughconductor`, `dielectric`,
+//! `roughdielectric`, `twosided`, with Mitsuba 3's parameter names and defaults.
+
+use ember_core::bsdf::{Material, MicrofacetKind};
+use ember_core::geometry::MaterialId;
+use ember_core::spectrum::Rgb;
+
+use super::build::Ctx;
+use super::props::Props;
+use super::xml::Tag;
+use super::{Fail, Res};
+
+/// `twosided` chains (through `ref`) deeper than this are rejected.
+const MAX_BSDF_DEPTH: u32 = 8;
+
+const BSDF_TYPES: &str = "diffuse, conductor, roughconductor, dielectric, roughdielectric, twosided";
+
+/// Named conductors as Mitsuba 3.9.1's `scalar_rgb` variant resolves them
+/// (`shared/scenes/README.md`): (name, eta, k).
+const CONDUCTORS: [(&str, [f32; 3], [f32; 3]); 4] = [
+    ("Al", [1.6575, 0.880405, 0.521244], [9.22381, 6.2695, 4.837]),
+    ("Cu", [0.201005, 0.92375, 1.10222], [3.91326, 2.45305, 2.14209]),
+    ("Au", [0.143036, 0.375307, 1.44205], [3.983, 2.38556, 1.60336]),
+    ("Ag", [0.155276, 0.116728, 0.138388], [4.82835, 3.12222, 2.1469]),
+];
+
+/// Mitsuba's named indices of refraction (`include/mitsuba/render/ior.h`).
+const IORS: [(&str, f64); 23] = [
+    ("vacuum", 1.0),
+    ("helium", 1.000036),
+    ("hydrogen", 1.000132),
+    ("air", 1.000277),
+    ("carbon dioxide", 1.00045),
+    ("water", 1.3330),
+    ("acetone", 1.36),
+    ("ethanol", 1.361),
+    ("carbon tetrachloride", 1.461),
+    ("glycerol", 1.4729),
+    ("benzene", 1.501),
+    ("silicone oil", 1.52045),
+    ("bromine", 1.661),
+    ("water ice", 1.31),
+    ("fused quartz", 1.458),
+    ("pyrex", 1.470),
+    ("acrylic glass", 1.49),
+    ("polypropylene", 1.49),
+    ("bk7", 1.5046),
+    ("sodium chloride", 1.544),
+    ("amber", 1.55),
+    ("pet", 1.5750),
+    ("diamond", 2.419),
+];
+
+fn rgb(v: [f32; 3]) -> Rgb {
+    Rgb::new(v[0], v[1], v[2])
+}
+
+impl Ctx<'_> {
+    /// The material id of a `bsdf` object, created on first use and shared by every
+    /// shape that refers to the same object.
+    pub(crate) fn material(&mut self, idx: usize) -> Res<MaterialId> {
+        if let Some(&m) = self.materials.get(&idx) {
+            return Ok(m);
+        }
+        let m = self.bsdf(idx, 0)?;
+        let id = self.sb.add_material(m);
+        self.materials.insert(idx, id);
+        Ok(id)
+    }
+
+    /// Mitsuba's default for a shape without a BSDF: `diffuse` with reflectance 0.5.
+    pub(crate) fn default_material(&mut self) -> MaterialId {
+        *self.default_material.get_or_insert_with(|| self.sb.add_material(Material::diffuse(Rgb::splat(0.5))))
+    }
+
+    fn bsdf(&mut self, idx: usize, depth: u32) -> Res<Material> {
+        let obj = self.obj(idx)?;
+        self.mark(idx);
+        if depth > MAX_BSDF_DEPTH {
+            return Err(Fail::at(obj.loc, format!("`twosided` BSDFs nested more than {MAX_BSDF_DEPTH} deep")));
+        }
+        let mut p = Props::new(obj);
+        let m = match obj.kind.as_str() {
+            "diffuse" => {
+                self.no_children(obj)?;
+                Material::diffuse(p.color("reflectance", Rgb::splat(0.5))?)
+            }
+            "conductor" | "roughconductor" => {
+                self.no_children(obj)?;
+                let (eta, k) = conductor_ior(&mut p)?;
+                let spec = p.color("specular_reflectance", Rgb::ONE)?;
+                if obj.kind == "conductor" {
+                    Material::conductor(eta, k, spec)
+                } else {
+                    let (kind, alpha) = microfacet(&mut p)?;
+                    Material::rough_conductor(kind, alpha, eta, k, spec)
+                }
+            }
+            "dielectric" | "roughdielectric" => {
+                self.no_children(obj)?;
+                let int_ior = ior(&mut p, "int_ior", 1.5046)?;
+                let ext_ior = ior(&mut p, "ext_ior", 1.000277)?;
+                let refl = p.color("specular_reflectance", Rgb::ONE)?;
+                let trans = p.color("specular_transmittance", Rgb::ONE)?;
+                if obj.kind == "dielectric" {
+                    Material::dielectric(int_ior, ext_ior, refl, trans)
+                } else {
+                    let (kind, alpha) = microfacet(&mut p)?;
+                    Material::rough_dielectric(kind, alpha, int_ior, ext_ior, refl, trans)
+                }
+            }
+            "twosided" => {
+                self.check_children(obj, &[Tag::Bsdf])?;
+                let inner = match obj.children[..] {
+                    [ref c] => c.obj,
+                    [] => return Err(Fail::at(obj.loc, "`twosided` needs one nested <bsdf> (or <ref>)")),
+                    [_, ref second, ..] => {
+                        return Err(Fail::at(
+                            second.loc,
+                            "`twosided` with different front and back BSDFs is not supported: give one nested <bsdf>",
+                        ));
+                    }
+                };
+                let m = self.bsdf(inner, depth + 1)?;
+                if m.has_transmission() {
+                    return Err(Fail::at(obj.loc, "`twosided` cannot wrap a BSDF that transmits (dielectric): it is two-sided already"));
+                }
+                m.two_sided()
+            }
+            other => {
+                return Err(Fail::at(obj.loc, format!("unsupported bsdf type \"{other}\" (supported: {BSDF_TYPES})")));
+            }
+        };
+        p.finish()?;
+        Ok(m)
+    }
+}
+
+/// `material` (a name from [`CONDUCTORS`], or "none" = perfect mirror) or `eta` / `k`.
+fn conductor_ior(p: &mut Props) -> Res<(Rgb, Rgb)> {
+    let has_eta_k = p.has("eta") || p.has("k");
+    match p.string_opt("material")? {
+        Some(name) => {
+            if has_eta_k {
+                let loc = p.loc_of("material");
+                return Err(Fail::at(loc, "give either `material` or `eta`/`k`, not both (as Mitsuba)"));
+            }
+            if name == "none" {
+                return Ok((Rgb::ZERO, Rgb::ONE));
+            }
+            match CONDUCTORS.iter().find(|(n, _, _)| *n == name) {
+                Some((_, eta, k)) => Ok((rgb(*eta), rgb(*k))),
+                None => {
+                    let names: Vec<&str> = CONDUCTORS.iter().map(|c| c.0).collect();
+                    Err(Fail::at(
+                        p.loc_of("material"),
+                        format!("unknown conductor material \"{name}\" (supported: {}, none; or give `eta` and `k`)", names.join(", ")),
+                    ))
+                }
+            }
+        }
+        // Mitsuba's default material is "none": η = 0, k = 1, a perfect mirror.
+        None => Ok((p.color("eta", Rgb::ZERO)?, p.color("k", Rgb::ONE)?)),
+    }
+}
+
+/// `distribution` (beckmann, Mitsuba's default, or ggx) and `alpha` (default 0.1).
+fn microfacet(p: &mut Props) -> Res<(MicrofacetKind, f32)> {
+    let kind = match p.string_opt("distribution")?.map(str::to_ascii_lowercase).as_deref() {
+        None | Some("beckmann") => MicrofacetKind::Beckmann,
+        Some("ggx") => MicrofacetKind::Ggx,
+        Some(other) => {
+            return Err(Fail::at(p.loc_of("distribution"), format!("unknown distribution \"{other}\" (supported: beckmann, ggx)")));
+        }
+    };
+    let alpha = p.float("alpha", 0.1)?;
+    if !(alpha >= 0.0) {
+        return Err(Fail::at(p.loc_of("alpha"), format!("`alpha` must be non-negative, got {alpha}")));
+    }
+    Ok((kind, alpha as f32))
+}
+
+/// An index of refraction: a `float` or one of Mitsuba's names ([`IORS`]).
+fn ior(p: &mut Props, name: &'static str, default: f64) -> Res<f32> {
+    let v = if p.value_tag(name) == Some("string") {
+        let s = p.string_opt(name)?.unwrap_or_default();
+        let key = s.to_ascii_lowercase();
+        match IORS.iter().find(|(n, _)| *n == key) {
+            Some(&(_, v)) => v,
+            None => {
+                let names: Vec<&str> = IORS.iter().map(|i| i.0).collect();
+                return Err(Fail::at(
+                    p.loc_of(name),
+                    format!("unknown index of refraction \"{s}\" (a number or one of: {})", names.join(", ")),
+                ));
+            }
+        }
+    } else {
+        p.float(name, default)?
+    };
+    if !(v > 0.0) {
+        return Err(Fail::at(p.loc_of(name), format!("`{name}` must be positive, got {v}")));
+    }
+    Ok(v as f32)
+}

@@ -1,0 +1,253 @@
+//! Every rejected construct gives `file:line:col: message` naming what is supported.
+//! The scenes below start their own content on line 4 (after `<scene>` and the two
+//! lines of [`SENSOR`]).
+
+use std::path::Path;
+
+use super::tests::{SENSOR, suite_dir, temp_dir};
+use super::{LoadOptions, SceneFileError, load_scene};
+
+/// Write `<scene>` + sensor + `content` and load it, expecting an error.
+fn fail(test: &str, content: &str) -> SceneFileError {
+    fail_with(test, content, &[], &LoadOptions::default())
+}
+
+/// Like [`fail`], with extra files written into the scene's directory first.
+fn fail_with(test: &str, content: &str, files: &[(&str, &[u8])], options: &LoadOptions) -> SceneFileError {
+    let dir = temp_dir(test);
+    for (name, data) in files {
+        std::fs::write(dir.join(name), data).unwrap();
+    }
+    let path = dir.join("scene.xml");
+    std::fs::write(&path, format!("<scene version=\"3.0.0\">\n{SENSOR}\n{content}\n</scene>\n")).unwrap();
+    match load_scene(&path, options) {
+        Ok(_) => panic!("{test}: the scene loaded"),
+        Err(e) => e,
+    }
+}
+
+/// 1-based column of `at` in the `n`th line (1-based) of `content`, which starts on
+/// line 4 of the file.
+fn col(content: &str, line: u32, at: &str) -> u32 {
+    let text = content.lines().nth(line as usize - 4).expect("line exists");
+    text.find(at).map(|i| i as u32 + 1).unwrap_or_else(|| panic!("`{at}` not in `{text}`"))
+}
+
+/// The error is at `line:col` of its file and its text contains every needle.
+#[track_caller]
+fn check(e: &SceneFileError, line: u32, col: u32, needles: &[&str]) {
+    let text = e.to_string();
+    assert!(text.starts_with(&format!("{}:{line}:{col}: ", e.file.display())), "wrong position: {text}");
+    assert!(e.file.ends_with("scene.xml"), "{text}");
+    for n in needles {
+        assert!(text.contains(n), "`{n}` missing from: {text}");
+    }
+}
+
+#[test]
+fn unknown_plugins_name_the_supported_ones() {
+    let c = "  <shape type=\"torus\"/>";
+    let e = fail("plugin_shape", c);
+    check(&e, 4, col(c, 4, "<shape"), &["unsupported shape type \"torus\"", "obj, ply, rectangle, cube, sphere, disk"]);
+    let c = "<shape type=\"cube\">\n   <bsdf type=\"plastic\"/></shape>";
+    let e = fail("plugin_bsdf", c);
+    check(&e, 5, col(c, 5, "<bsdf"), &["unsupported bsdf type \"plastic\"", "roughdielectric, twosided"]);
+    let c = "<emitter type=\"envmap\"/>";
+    let e = fail("plugin_emitter", c);
+    check(&e, 4, col(c, 4, "<emitter"), &["unsupported emitter type \"envmap\"", "point, spot, directional, constant"]);
+    // A gaussian reconstruction filter is rejected.
+    let dir = temp_dir("plugin_rfilter2");
+    let path = dir.join("scene.xml");
+    std::fs::write(&path, "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" value=\"30\"/>\n<film type=\"hdrfilm\">\n  <rfilter type=\"gaussian\"/></film></sensor></scene>").unwrap();
+    check(&load_scene(&path, &LoadOptions::default()).unwrap_err(), 4, 3, &["unsupported rfilter type \"gaussian\"", "box"]);
+}
+
+#[test]
+fn unreferenced_properties_are_errors() {
+    let c = "<shape type=\"cube\"><bsdf type=\"diffuse\">\n\t<float name=\"roughness\" value=\"0.5\"/></bsdf></shape>";
+    let e = fail("unref", c);
+    check(&e, 5, col(c, 5, "<float"), &["unreferenced property `roughness`", "<bsdf type=\"diffuse\">", "accepts: reflectance"]);
+    let c = "<shape type=\"sphere\">\n<float name=\"radius\" value=\"1\"/>\n<float name=\"near_clip\" value=\"1\"/></shape>";
+    let e = fail("unref_shape", c);
+    check(&e, 6, col(c, 6, "<float"), &["unreferenced property `near_clip`", "to_world, flip_normals, center, radius"]);
+    let c = "<shape type=\"sphere\">\n<float name=\"radius\" value=\"1\"/>\n<float name=\"radius\" value=\"2\"/></shape>";
+    let e = fail("unref_dup", c);
+    check(&e, 6, col(c, 6, "<float"), &["property `radius` is given twice", "first at line 5"]);
+}
+
+#[test]
+fn missing_and_broken_mesh_files_are_errors() {
+    let c = "<shape type=\"obj\">\n  <string name=\"filename\" value=\"nothere.obj\"/></shape>";
+    let e = fail("missing", c);
+    check(&e, 5, col(c, 5, "<string"), &["cannot load the obj mesh", "nothere.obj"]);
+    let nan = b"v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n";
+    let e = fail_with(
+        "nan",
+        "<shape type=\"obj\">\n <string name=\"filename\" value=\"nan.obj\"/></shape>",
+        &[("nan.obj", nan)],
+        &LoadOptions::default(),
+    );
+    check(&e, 5, 2, &["nan.obj", "vertex 2 is not finite"]);
+    let ply = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\x00\x00";
+    let e = fail_with(
+        "ply",
+        "<shape type=\"ply\">\n <string name=\"filename\" value=\"t.ply\"/></shape>",
+        &[("t.ply", ply)],
+        &LoadOptions::default(),
+    );
+    check(&e, 5, 2, &["cannot load the ply mesh", "unexpected end of data"]);
+    let bad_index = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 x\n3 0 1 2\n";
+    let e = fail_with(
+        "ply_ascii",
+        "<shape type=\"ply\">\n <string name=\"filename\" value=\"t.ply\"/></shape>",
+        &[("t.ply", bad_index)],
+        &LoadOptions::default(),
+    );
+    check(&e, 5, 2, &["line 12: malformed number \"x\""]);
+}
+
+#[test]
+fn malformed_values_point_at_the_value() {
+    let c = "<shape type=\"sphere\">\n  <float name=\"radius\" value=\"1.2.3\"/></shape>";
+    let e = fail("number", c);
+    check(&e, 5, col(c, 5, "1.2.3"), &["malformed number \"1.2.3\""]);
+    let c = "<integrator type=\"path\"><integer name=\"max_depth\" value=\"2.5\"/></integrator>";
+    let e = fail("integer", c);
+    check(&e, 4, col(c, 4, "2.5"), &["malformed integer \"2.5\""]);
+    let c = "<shape type=\"sphere\"><float name=\"radius\" value=\"1e39\"/></shape>";
+    let e = fail("infinite", c);
+    check(&e, 4, col(c, 4, "1e39"), &["not finite"]);
+    let c = "<shape type=\"cube\"><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"1 2\"/></bsdf></shape>";
+    let e = fail("rgb", c);
+    check(&e, 4, col(c, 4, "1 2"), &["<rgb> needs 1 or 3 values"]);
+    let c = "<shape type=\"cube\"><boolean name=\"flip_normals\" value=\"yes\"/></shape>";
+    let e = fail("bool", c);
+    check(&e, 4, col(c, 4, "yes"), &["malformed boolean \"yes\""]);
+    let c = "<shape type=\"cube\"><transform name=\"to_world\"><matrix value=\"1 2 3\"/></transform></shape>";
+    let e = fail("matrix", c);
+    check(&e, 4, col(c, 4, "1 2 3"), &["<matrix> needs 16 values"]);
+}
+
+#[test]
+fn broken_references_and_wrong_tags_are_errors() {
+    let c = "<shape type=\"cube\">\n    <ref id=\"nope\"/></shape>";
+    let e = fail("ref", c);
+    check(&e, 5, col(c, 5, "nope"), &["unknown id \"nope\""]);
+    let c = "<shape type=\"cube\" id=\"a\"/>\n<shape type=\"cube\"><ref id=\"a\"/></shape>";
+    let e = fail("ref_kind", c);
+    check(&e, 5, col(c, 5, "<ref"), &["<shape type=\"cube\"> cannot contain <shape type=\"cube\">", "<bsdf>, <emitter>"]);
+    let c = "<shape type=\"sphere\">\n<rgb name=\"radius\" value=\"1\"/></shape>";
+    let e = fail("wrong_value_tag", c);
+    check(&e, 5, col(c, 5, "<rgb"), &["property `radius` of <shape type=\"sphere\"> must be a <float>, not <rgb>"]);
+    let c = "<shape type=\"cube\">\n  <texture type=\"bitmap\"/></shape>";
+    let e = fail("wrong_element", c);
+    check(&e, 5, col(c, 5, "<texture"), &["unsupported element <texture>", "float, integer"]);
+    let c = "<include filename=\"x.xml\"/>";
+    let e = fail("scene_element", c);
+    check(&e, 4, col(c, 4, "<include"), &["unsupported element <include>", "<scene> accepts"]);
+    // An integer property given as a float (this scene has its own sensor).
+    let dir = temp_dir("int_for_float");
+    let path = dir.join("scene.xml");
+    let c = "<film type=\"hdrfilm\"><float name=\"width\" value=\"3\"/></film>";
+    std::fs::write(
+        &path,
+        format!("<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" value=\"1\"/>\n\n{c}</sensor></scene>"),
+    )
+    .unwrap();
+    let e = load_scene(&path, &LoadOptions::default()).unwrap_err();
+    check(&e, 4, col(c, 4, "<float"), &["must be an <integer>, not <float>"]);
+    let c = "<shape type=\"cube\" kind=\"x\"/>";
+    let e = fail("attr", c);
+    check(&e, 4, col(c, 4, "kind="), &["unexpected attribute `kind`", "type, id, name"]);
+    let c = "<bsdf type=\"diffuse\" id=\"a\"/>\n<bsdf type=\"diffuse\" id=\"a\"/>";
+    let e = fail("dup_id", c);
+    check(&e, 5, col(c, 5, "a\"/>"), &["id \"a\" is already used at line 4"]);
+    let c = "<emitter type=\"area\"/>";
+    let e = fail("area_top", c);
+    check(&e, 4, col(c, 4, "<emitter"), &["must be nested in the <shape>"]);
+    let c = "<shape type=\"cube\"><emitter type=\"point\"/></shape>";
+    let e = fail("point_in_shape", c);
+    check(&e, 4, col(c, 4, "<emitter"), &["only `area` emitters can be nested"]);
+    let c = "<shape type=\"cube\"><bsdf type=\"twosided\"><bsdf type=\"dielectric\"/></bsdf></shape>";
+    let e = fail("twosided_glass", c);
+    check(&e, 4, col(c, 4, "<bsdf"), &["cannot wrap a BSDF that transmits"]);
+    let c = "<shape type=\"cube\"><bsdf type=\"diffuse\"/>\n<bsdf type=\"diffuse\"/></shape>";
+    let e = fail("two_bsdfs", c);
+    check(&e, 5, col(c, 5, "<bsdf"), &["takes at most one <bsdf>"]);
+    let c = "<shape type=\"sphere\"><transform name=\"to_world\"><scale x=\"2\"/></transform></shape>";
+    let e = fail("ellipsoid", c);
+    check(&e, 4, col(c, 4, "<shape"), &["ellipsoids are not supported"]);
+    let c = "<shape type=\"cube\"><bsdf type=\"conductor\"><string name=\"material\" value=\"Pt\"/></bsdf></shape>";
+    let e = fail("conductor", c);
+    check(&e, 4, col(c, 4, "<string"), &["unknown conductor material \"Pt\"", "Al, Cu, Au, Ag"]);
+    let c = "<shape type=\"cube\"><bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"phong\"/></bsdf></shape>";
+    let e = fail("distribution", c);
+    check(&e, 4, col(c, 4, "<string"), &["unknown distribution \"phong\"", "beckmann, ggx"]);
+}
+
+#[test]
+fn parameters_and_document_errors() {
+    let c = "<shape type=\"$what\"/>";
+    let e = fail("undefined", c);
+    check(&e, 4, col(c, 4, "$what"), &["undefined parameter `$what`"]);
+    let c = "<shape type=\"cube\">\n</bsdf>";
+    let e = fail("xml", c);
+    check(&e, 5, col(c, 5, "</bsdf"), &["malformed XML"]);
+    let dir = temp_dir("nosensor");
+    let path = dir.join("scene.xml");
+    std::fs::write(&path, "<scene version=\"3.0.0\"><shape type=\"cube\"/></scene>").unwrap();
+    let e = load_scene(&path, &LoadOptions::default()).unwrap_err();
+    assert_eq!((e.line, e.column), (None, None));
+    assert_eq!(e.to_string(), format!("{}: the scene has no <sensor> (a perspective camera is required)", path.display()));
+    std::fs::write(&path, "<scene><shape type=\"cube\"/></scene>").unwrap();
+    check(&load_scene(&path, &LoadOptions::default()).unwrap_err(), 1, 1, &["needs a `version` attribute"]);
+    std::fs::write(&path, "<scen version=\"3.0.0\"/>").unwrap();
+    check(&load_scene(&path, &LoadOptions::default()).unwrap_err(), 1, 1, &["root element is <scen>"]);
+    let e = load_scene(Path::new("/nonexistent/scene.xml"), &LoadOptions::default()).unwrap_err();
+    assert!(e.to_string().starts_with("/nonexistent/scene.xml: cannot read the scene file"), "{e}");
+    // A suite scene with a bad override.
+    let options = LoadOptions { defaults: vec![("resx".into(), "wide".into())], ..Default::default() };
+    let e = load_scene(&suite_dir().join("ajar/scene.xml"), &options).unwrap_err();
+    assert!(e.to_string().contains("malformed integer \"wide\""), "{e}");
+}
+
+#[test]
+fn garbage_never_panics() {
+    // A crude fuzz pass: every prefix of a real scene and byte-flipped variants load or
+    // fail cleanly.
+    let text = std::fs::read_to_string(suite_dir().join("veach-mis/scene.xml")).unwrap();
+    let dir = temp_dir("garbage");
+    let path = dir.join("scene.xml");
+    let bytes = text.as_bytes();
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    for i in 0..400 {
+        let mut b = bytes[..(i * 37) % bytes.len()].to_vec();
+        if i % 2 == 1 {
+            b = bytes.to_vec();
+            for _ in 0..4 {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                let at = (state as usize) % b.len();
+                b[at] = b"<>\"/=$0.-e ,x"[(state >> 32) as usize % 13];
+            }
+        }
+        std::fs::write(&path, &b).unwrap();
+        let _ = load_scene(&path, &LoadOptions::default());
+    }
+    // Deep nesting is refused, not a stack overflow.
+    let deep = format!("<scene version=\"3.0.0\">{}{}</scene>", "<bsdf type=\"twosided\">".repeat(100_000), "</bsdf>".repeat(100_000));
+    std::fs::write(&path, deep).unwrap();
+    let e = load_scene(&path, &LoadOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("nested more than"), "{e}");
+    for junk in [
+        &b"ply\nformat ascii 1.0\nelement vertex 18446744073709551615\nproperty float x\nend_header\n"[..],
+        b"ply\n",
+        b"",
+        b"f 1 2 3\nv 1 2",
+    ] {
+        let _ = super::ply::parse(junk);
+        std::fs::write(dir.join("j.obj"), junk).unwrap();
+        let _ = super::mesh::load_obj(&dir.join("j.obj"));
+    }
+}
