@@ -159,7 +159,7 @@ struct Spin;
 
 fn spin(seed: u32) -> Rgb {
     let mut x = seed as u64 | 1;
-    for _ in 0..2000 {
+    for _ in 0..600 {
         x ^= x << 13;
         x ^= x >> 7;
         x ^= x << 17;
@@ -191,12 +191,23 @@ impl PassRenderer for Spin {
     }
 }
 
-fn drive(r: &dyn PassRenderer, threads: usize, spp: u32) -> (f64, Film) {
+/// CPU seconds this process has used (user + system, all threads), from
+/// `/proc/self/stat` in 10 ms ticks; 0 where unavailable.
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let fields: Vec<&str> = stat.rsplit_once(')').map_or("", |(_, f)| f).split_whitespace().collect();
+    let tick = |i: usize| fields.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+    (tick(11) + tick(12)) / 100.0
+}
+
+/// One render through the driver: (wall seconds of the pass loop, CPU seconds, film).
+fn drive(r: &dyn PassRenderer, threads: usize, spp: u32) -> (f64, f64, Film) {
     let mut film = Film::new(r.width(), r.height());
     let config = DriverConfig { progress: false, ..DriverConfig::with_threads(threads) };
     let start = Instant::now();
+    let cpu = cpu_seconds();
     let s = driver::render(r, &mut film, Limits { spp, deadline: None }, config, start).expect("render");
-    (s.render_seconds, film)
+    (s.render_seconds, cpu_seconds() - cpu, film)
 }
 
 fn same_bits(a: &Film, b: &Film) -> bool {
@@ -253,14 +264,10 @@ fn scaling() {
          {SCALE_ROUNDS} rounds, medians; {cores} cores; load average before: {}",
         load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
     );
-    let mut header = format!("    {:<10}", "");
-    for &n in &counts {
-        header += &format!(" {:>9}", format!("{n} thr s"));
-    }
-    for &n in &counts[1..] {
-        header += &format!(" {:>9}", format!("x{n}"));
-    }
-    println!("{header}  {:>11} {:>10}  film bits across threads", "merge/pass", "Amdahl x2");
+    println!(
+        "    {:<6} {:>7} {:>9} {:>9} {:>10} {:>9}   {}",
+        "", "threads", "seconds", "speedup", "cores used", "CPU s", "speedup per round"
+    );
 
     let mut renderers: Vec<(&str, Box<dyn PassRenderer>)> = vec![("spin", Box::new(Spin))];
     for e in ["pt", "lt", "bdpt"] {
@@ -269,8 +276,9 @@ fn scaling() {
         renderers.push((e, Box::new(default_renderer(&a))));
     }
     for (name, r) in &renderers {
-        let mut secs: Vec<Vec<f64>> = vec![Vec::new(); counts.len()];
-        let mut speedups: Vec<Vec<f64>> = vec![Vec::new(); counts.len()];
+        // Per thread count, per round: wall seconds, CPU seconds.
+        let mut wall: Vec<Vec<f64>> = vec![Vec::new(); counts.len()];
+        let mut cpu: Vec<Vec<f64>> = vec![Vec::new(); counts.len()];
         let mut identical = true;
         let mut reference: Option<Film> = None;
         for round in 0..SCALE_ROUNDS {
@@ -278,34 +286,46 @@ fn scaling() {
             if round % 2 == 1 {
                 order.reverse();
             }
-            let mut t = vec![0.0; counts.len()];
             for k in order {
-                let (s, film) = drive(&**r, counts[k], SCALE_SPP);
-                t[k] = s;
+                let (s, c, film) = drive(&**r, counts[k], SCALE_SPP);
+                wall[k].push(s);
+                cpu[k].push(c);
                 match &reference {
                     None => reference = Some(film),
                     Some(f) => identical &= same_bits(f, &film),
                 }
             }
-            for k in 0..counts.len() {
-                secs[k].push(t[k]);
-                speedups[k].push(t[0] / t[k]);
-            }
         }
-        let t1 = median(secs[0].clone());
-        let mut line = format!("    {name:<10}");
-        for s in &secs {
-            line += &format!(" {:>9.3}", median(s.clone()));
+        for (k, &n) in counts.iter().enumerate() {
+            let speedups: Vec<f64> = (0..SCALE_ROUNDS).map(|i| wall[0][i] / wall[k][i]).collect();
+            let used: Vec<f64> = (0..SCALE_ROUNDS).map(|i| cpu[k][i] / wall[k][i]).collect();
+            let rounds = speedups.iter().map(|v| format!("{v:.2}")).collect::<Vec<_>>().join(" ");
+            println!(
+                "    {:<6} {:>7} {:>9.3} {:>9.2} {:>10.2} {:>9.2}   {}",
+                if k == 0 { *name } else { "" },
+                n,
+                median(wall[k].clone()),
+                median(speedups),
+                median(used),
+                median(cpu[k].clone()),
+                if k == 0 { String::new() } else { rounds },
+            );
         }
-        for s in &speedups[1..] {
-            line += &format!(" {:>9.2}", median(s.clone()));
-        }
+        // The merge alone, as a share of a 1-thread pass, and the speedups it allows.
         let (merge, splats) = merge_cost(&**r);
-        // Sequential fraction of a 1-thread pass, and the speedup it allows on 2 threads.
-        let f = (merge * SCALE_SPP as f64 / t1).min(1.0);
-        let amdahl = 1.0 / (f + (1.0 - f) / 2.0);
-        let bits = if identical { "identical" } else { "DIFFER" };
-        println!("{line}  {:>8.2} ms {:>10.2}  {bits} ({splats} splats/pass)", merge * 1e3, amdahl);
+        let f = (merge * SCALE_SPP as f64 / median(wall[0].clone())).min(1.0);
+        let bounds: Vec<String> =
+            counts[1..].iter().map(|&n| format!("{:.2} on {n}", 1.0 / (f + (1.0 - f) / n as f64))).collect();
+        println!(
+            "    {:<6} film bits across thread counts: {}; sequential merge {:.1} ms/pass ({} splats) = {:.1} % \
+             of a 1-thread pass, Amdahl bound {}",
+            "",
+            if identical { "identical" } else { "DIFFER" },
+            merge * 1e3,
+            splats,
+            100.0 * f,
+            bounds.join(", ")
+        );
     }
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     println!("    load average after: {}", load.split_whitespace().take(3).collect::<Vec<_>>().join(" "));

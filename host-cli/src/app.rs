@@ -9,7 +9,9 @@ use std::fmt;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use crate::cli::{Cli, Command, CompareArgs, DEFAULT_RESOLUTION, RenderArgs};
+use crate::cli::{Cli, Command, CompareArgs, ConvergenceArgs, DEFAULT_RESOLUTION, RenderArgs};
+use crate::convergence::{self, ConvergenceSetup, Reference};
+use crate::{estimators, suite};
 use crate::metrics::{self, ErrorMetrics};
 use crate::driver::{self, DriverConfig, DriverError, Limits, PassRenderer, RenderSummary};
 use crate::film::Film;
@@ -55,7 +57,40 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
             println!("mean ratio {:.6} (test / reference)", m.mean_ratio);
             Ok(())
         }
+        Command::Convergence(args) => run_convergence(args),
+        Command::Suite(args) => {
+            let threads = args.threads.map_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()), |n| n as usize);
+            let results = suite::run(args, threads).map_err(AppError::Estimator)?;
+            let command = std::env::args().collect::<Vec<_>>().join(" ");
+            let report = suite::report(args, threads, &results, &command);
+            std::fs::write(&args.output, &report).map_err(|e| AppError::Output(format!("{}: {e}", args.output.display())))?;
+            println!("{report}");
+            println!("wrote {}", args.output.display());
+            Ok(())
+        }
     }
+}
+
+/// `ember convergence`: error against time for one scene.
+fn run_convergence(args: &ConvergenceArgs) -> Result<(), AppError> {
+    let reference_path = args.reference.clone().unwrap_or_else(|| args.scene.with_file_name("reference.exr"));
+    let reference = Reference::load(&reference_path).map_err(AppError::Output)?;
+    let threads = args.threads.map_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()), |n| n as usize);
+    let setup = ConvergenceSetup { estimators: args.estimators.clone(), budget_seconds: args.budget, seeds: args.seeds, threads, max_depth: args.max_depth };
+    let prepare = || estimators::prepare_file(&args.scene, None, None, Vec::new());
+    let points = convergence::measure(&setup, &reference, &prepare, |c| {
+        println!("{:5} seed {} at {:7.2} s: relMSE {:.4e}  MAPE {:7.3} %  ({} passes)", c.estimator.name(), c.seed, c.elapsed_seconds, c.metrics.rel_mse, c.metrics.mape, c.passes);
+    })
+    .map_err(AppError::Estimator)?;
+    if let Some((rel, mape)) = reference.floor {
+        println!("reference noise floor: relMSE {rel:.4e}, MAPE {mape:.3} %");
+    }
+    let name = args.scene.parent().and_then(|p| p.file_name()).map_or("scene".to_string(), |n| n.to_string_lossy().into_owned());
+    let files = convergence::write_outputs(&args.output, &name, &name, &points, &args.estimators, &reference).map_err(AppError::Output)?;
+    for f in files {
+        println!("wrote {}", f.display());
+    }
+    Ok(())
 }
 
 /// `ember compare`: read both images, check their sizes, compute the metrics and

@@ -26,6 +26,67 @@ pub enum Command {
     Render(RenderArgs),
     /// Compare an EXR image with a reference: relMSE, MAPE, mean absolute error, ratio of means.
     Compare(CompareArgs),
+    /// Error against time: snapshots at 1, 2, 4, … seconds (scene loading included)
+    /// against a reference, averaged over seeds; writes a CSV and log-log plots.
+    Convergence(ConvergenceArgs),
+    /// Every estimator on every suite scene at equal time, threads and seeds; writes a
+    /// markdown table and the plots.
+    Suite(SuiteArgs),
+}
+
+/// Options of `ember convergence`.
+#[derive(Args, Debug, Clone, PartialEq)]
+pub struct ConvergenceArgs {
+    /// Mitsuba 3 XML scene file.
+    #[arg(value_name = "SCENE")]
+    pub scene: PathBuf,
+    /// Estimators to compare, comma separated.
+    #[arg(short, long, value_enum, value_delimiter = ',', default_values_t = [EstimatorArg::Pt, EstimatorArg::Bdpt])]
+    pub estimators: Vec<EstimatorArg>,
+    /// Wall-clock budget per estimator and seed, in seconds (preprocessing included).
+    #[arg(long, default_value_t = 16.0, value_name = "SECONDS")]
+    pub budget: f64,
+    /// Independent runs (seeds 0..N) averaged at each checkpoint.
+    #[arg(long, default_value_t = 2, value_name = "N")]
+    pub seeds: u32,
+    /// Reference EXR (default: reference.exr beside the scene file).
+    #[arg(long, value_name = "EXR")]
+    pub reference: Option<PathBuf>,
+    /// Render threads (default: every core).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<u32>,
+    /// Override the scene file's max_depth.
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    pub max_depth: Option<i32>,
+    /// Output folder for NAME.csv, NAME-relmse.svg and NAME-mape.svg.
+    #[arg(short, long, default_value = "convergence", value_name = "DIR")]
+    pub output: PathBuf,
+}
+
+/// Options of `ember suite`.
+#[derive(Args, Debug, Clone, PartialEq)]
+pub struct SuiteArgs {
+    /// Folder holding one folder per scene (scene.xml + reference.exr).
+    #[arg(long, default_value = "../shared/scenes", value_name = "DIR")]
+    pub scenes: PathBuf,
+    /// Only these scenes (folder names), comma separated; default all.
+    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+    pub only: Vec<String>,
+    /// Estimators, comma separated.
+    #[arg(short, long, value_enum, value_delimiter = ',', default_values_t = [EstimatorArg::Pt, EstimatorArg::Lt, EstimatorArg::Bdpt])]
+    pub estimators: Vec<EstimatorArg>,
+    /// Seconds per estimator, scene and seed (preprocessing included).
+    #[arg(long, default_value_t = 30.0, value_name = "SECONDS")]
+    pub budget: f64,
+    /// Seeds per estimator and scene.
+    #[arg(long, default_value_t = 2, value_name = "N")]
+    pub seeds: u32,
+    /// Render threads (default: every core).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<u32>,
+    /// The markdown report; plots and CSVs go to a folder of the same stem beside it.
+    #[arg(short, long, default_value = "docs/results.md", value_name = "FILE")]
+    pub output: PathBuf,
 }
 
 /// Options of `ember compare`.

@@ -15,3 +15,4 @@ pub mod image_io;
 pub mod metrics;
 pub mod mitsuba;
 pub mod plot;
+pub mod suite;

@@ -1,0 +1,95 @@
+//! `ember suite`: every estimator on every scene of the benchmark suite at equal time,
+//! threads, seeds and depth (each scene's own `max_depth`), with error-against-time
+//! plots per scene and one markdown table.
+//!
+//! The table gives, per scene and estimator, relMSE and MAPE at the end of the budget
+//! (seed-averaged), the passes reached, and the time to reach the MAPE target
+//! max(12 %, 2 × the reference's own MAPE floor) — "not reached" with the last value
+//! when the budget ends first. Losses are published as they come.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use crate::cli::{EstimatorArg, SuiteArgs};
+use crate::convergence::{self, Checkpoint, ConvergenceSetup, Reference};
+use crate::estimators;
+
+/// One scene's outcome.
+#[derive(Clone, Debug)]
+pub struct SceneResult {
+    pub name: String,
+    pub floor: Option<(f64, f64)>,
+    pub points: Vec<Checkpoint>,
+}
+
+/// The scenes to run: sub-folders with a scene.xml, sorted, filtered by `only`.
+pub fn scene_folders(dir: &Path, only: &[String]) -> Result<Vec<PathBuf>, String> {
+    let entries = std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let mut v: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.join("scene.xml").is_file())
+        .filter(|p| only.is_empty() || p.file_name().is_some_and(|n| only.iter().any(|o| n == o.as_str())))
+        .collect();
+    v.sort();
+    if v.is_empty() {
+        return Err(format!("no scene folders (with scene.xml) under {}", dir.display()));
+    }
+    Ok(v)
+}
+
+/// The MAPE target of the SPCBPT comparison: max(12 %, 2 × the reference's floor).
+pub fn mape_target(floor: Option<(f64, f64)>) -> f64 {
+    floor.map_or(12.0, |f| (2.0 * f.1).max(12.0))
+}
+
+/// Run the suite; progress lines go to stderr.
+pub fn run(args: &SuiteArgs, threads: usize) -> Result<Vec<SceneResult>, String> {
+    let plots_dir = args.output.with_extension("");
+    let mut results = Vec::new();
+    for folder in scene_folders(&args.scenes, &args.only)? {
+        let name = folder.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let reference = Reference::load(&folder.join("reference.exr"))?;
+        let setup = ConvergenceSetup { estimators: args.estimators.clone(), budget_seconds: args.budget, seeds: args.seeds, threads, max_depth: None };
+        let scene_file = folder.join("scene.xml");
+        let prepare = || estimators::prepare_file(&scene_file, None, None, Vec::new());
+        let points = convergence::measure(&setup, &reference, &prepare, |c| {
+            eprintln!("{name:12} {:5} seed {} at {:6.1} s: relMSE {:.4e}, MAPE {:6.2} % ({} passes)", c.estimator.name(), c.seed, c.elapsed_seconds, c.metrics.rel_mse, c.metrics.mape, c.passes);
+        })?;
+        convergence::write_outputs(&plots_dir, &name, &name, &points, &args.estimators, &reference)?;
+        results.push(SceneResult { name, floor: reference.floor, points });
+    }
+    Ok(results)
+}
+
+/// The markdown report.
+pub fn report(args: &SuiteArgs, threads: usize, results: &[SceneResult], command: &str) -> String {
+    let plots = args.output.with_extension("");
+    let plots_rel = plots.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let mut s = String::new();
+    let _ = writeln!(s, "# Results: equal-time comparison on the benchmark suite\n");
+    let _ = writeln!(s, "Reproduce with:\n\n    {command}\n");
+    let _ = writeln!(
+        s,
+        "Every estimator ran {} s per scene and seed ({} seeds, seed-averaged), on {threads} threads, scene loading and BVH build included, each scene at its own `max_depth`. relMSE and MAPE are against the Mitsuba 3 reference (definitions in `host-cli/src/metrics.rs`); *floor* is the reference's own noise (from its two halves). *t(MAPE target)* is the first checkpoint where the seed-averaged MAPE reached max(12 %, 2 × floor). Plots: `{plots_rel}/<scene>-relmse.svg`, `{plots_rel}/<scene>-mape.svg`; raw data: `{plots_rel}/<scene>.csv`.\n",
+        args.budget, args.seeds
+    );
+    let _ = writeln!(s, "| scene | estimator | relMSE | MAPE % | passes | t(MAPE target) |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|");
+    for r in results {
+        let target = mape_target(r.floor);
+        let floor = r.floor.map_or("n/a".to_string(), |f| format!("{:.2e} / {:.2} %", f.0, f.1));
+        let best_rel = args.estimators.iter().filter_map(|&e| final_point(&r.points, e).map(|p| p.1)).fold(f64::INFINITY, f64::min);
+        for &e in &args.estimators {
+            let Some((_, rel, mape)) = final_point(&r.points, e) else { continue };
+            let passes = r.points.iter().filter(|c| c.estimator == e).map(|c| c.passes).max().unwrap_or(0);
+            let reached = convergence::averaged(&r.points, e).into_iter().find(|p| p.2 <= target).map_or(format!("not reached ({mape:.1} %)"), |p| format!("{:.1} s", p.0));
+            let mark = if rel == best_rel { " **best**" } else { "" };
+            let _ = writeln!(s, "| {} (floor {floor}, target {target:.1} %) | {} | {rel:.3e}{mark} | {mape:.2} | {passes} | {reached} |", r.name, e.name());
+        }
+    }
+    s
+}
+
+fn final_point(points: &[Checkpoint], e: EstimatorArg) -> Option<(f64, f64, f64)> {
+    convergence::averaged(points, e).last().copied()
+}
