@@ -9,7 +9,6 @@
 //! reverse densities depend on the strategy, so they are recomputed here on copies.
 
 use super::vertex::{Vertex, VertexKind};
-use super::MAX_VERTICES;
 use crate::scene::Scene;
 
 /// pdf ratios treat 0 as 1 so Dirac vertices (density 0 both ways) pass through.
@@ -20,74 +19,87 @@ fn remap0(x: f32) -> f64 {
 
 /// Balance-heuristic weight of strategy (s, t). `sampled` replaces the light endpoint
 /// for s = 1 or the camera endpoint for t = 1 (both resampled at connection time).
+///
+/// Only the (up to) four vertices around the connection change their reverse density
+/// and Dirac flag for this strategy; they are held as overrides instead of copying the
+/// sub-paths, so a weight costs O(s + t) reads and a handful of density evaluations.
 pub fn mis_weight(scene: &Scene, light: &[Vertex], camera: &[Vertex], sampled: Option<&Vertex>, s: usize, t: usize) -> f32 {
     if s + t == 2 {
         return 1.0;
     }
-    // Copies we may modify: the light prefix (s) and camera prefix (t).
-    let mut lv: heapless::Vec<Vertex, MAX_VERTICES> = heapless::Vec::new();
-    let mut cv: heapless::Vec<Vertex, MAX_VERTICES> = heapless::Vec::new();
-    for v in &light[..s] {
-        let _ = lv.push(*v);
-    }
-    for v in &camera[..t] {
-        let _ = cv.push(*v);
-    }
-    if let Some(v) = sampled {
-        if s == 1 {
-            lv[0] = *v;
-        } else if t == 1 {
-            cv[0] = *v;
+    // The strategy's own endpoints.
+    let light_at = |i: usize| -> &Vertex {
+        match sampled {
+            Some(v) if s == 1 && i == 0 => v,
+            _ => &light[i],
         }
-    }
+    };
+    let camera_at = |i: usize| -> &Vertex {
+        match sampled {
+            Some(v) if t == 1 && i == 0 => v,
+            _ => &camera[i],
+        }
+    };
+    let qs = (s > 0).then(|| light_at(s - 1));
+    let qs_minus = (s > 1).then(|| light_at(s - 2));
+    let pt = (t > 0).then(|| camera_at(t - 1));
+    let pt_minus = (t > 1).then(|| camera_at(t - 2));
 
-    // Recompute the reverse densities around the connection.
-    if t > 0 {
-        let pt = cv[t - 1];
-        let pt_minus = if t > 1 { Some(cv[t - 2]) } else { None };
-        let qs = if s > 0 { Some(lv[s - 1]) } else { None };
-        let qs_minus = if s > 1 { Some(lv[s - 2]) } else { None };
+    // Reverse densities around the connection, recomputed for this strategy.
+    let mut pt_rev = 0.0;
+    let mut pt_minus_rev = 0.0;
+    let mut qs_rev = 0.0;
+    let mut qs_minus_rev = 0.0;
+    if let Some(pt) = pt {
         // pt's reverse density: from qs (connection), or as a light-path origin (s = 0).
-        cv[t - 1].pdf_rev = match (qs, pt_minus) {
-            (Some(q), _) => q.pdf(scene, qs_minus.as_ref(), &pt),
-            (None, Some(pm)) => pt.pdf_light_origin(scene, &pm),
+        pt_rev = match (qs, pt_minus) {
+            (Some(q), _) => q.pdf(scene, qs_minus, pt),
+            (None, Some(pm)) => pt.pdf_light_origin(scene, pm),
             (None, None) => 0.0,
         };
         if let Some(pm) = pt_minus {
-            cv[t - 2].pdf_rev = match qs {
-                Some(q) => pt.pdf(scene, Some(&q), &pm),
-                None => pt.pdf_light(scene, &pm),
+            pt_minus_rev = match qs {
+                Some(q) => pt.pdf(scene, Some(q), pm),
+                None => pt.pdf_light(scene, pm),
             };
         }
         if let Some(q) = qs {
-            lv[s - 1].pdf_rev = pt.pdf(scene, pt_minus.as_ref(), &q);
+            qs_rev = pt.pdf(scene, pt_minus, q);
             if let Some(qm) = qs_minus {
-                lv[s - 2].pdf_rev = q.pdf(scene, Some(&pt), &qm);
+                qs_minus_rev = q.pdf(scene, Some(pt), qm);
             }
         }
-        // The connection vertices are connected deterministically: never Dirac here.
-        cv[t - 1].delta = false;
     }
-    if s > 0 {
-        lv[s - 1].delta = false;
-    }
+    let cam_rev = |i: usize| match i {
+        _ if i + 1 == t => pt_rev,
+        _ if i + 2 == t => pt_minus_rev,
+        _ => camera_at(i).pdf_rev,
+    };
+    let light_rev = |i: usize| match i {
+        _ if i + 1 == s => qs_rev,
+        _ if i + 2 == s => qs_minus_rev,
+        _ => light_at(i).pdf_rev,
+    };
+    // The connection vertices are joined deterministically: never Dirac here.
+    let cam_delta = |i: usize| i + 1 != t && camera_at(i).delta;
+    let light_delta = |i: usize| i + 1 != s && light_at(i).delta;
 
     // Ratios are accumulated in f64: they span many magnitudes along long paths.
     let mut sum = 0.0f64;
     // Strategies with more light vertices: move camera vertices to the light side.
     let mut ri = 1.0f64;
     for i in (1..t).rev() {
-        ri *= remap0(cv[i].pdf_rev) / remap0(cv[i].pdf_fwd);
-        if !cv[i].delta && !cv[i - 1].delta {
+        ri *= remap0(cam_rev(i)) / remap0(camera_at(i).pdf_fwd);
+        if !cam_delta(i) && !cam_delta(i - 1) {
             sum += ri;
         }
     }
     // Strategies with fewer light vertices.
     ri = 1.0;
     for i in (0..s).rev() {
-        ri *= remap0(lv[i].pdf_rev) / remap0(lv[i].pdf_fwd);
-        let delta_before = if i > 0 { lv[i - 1].delta } else { is_delta_light(scene, &lv[0]) };
-        if !lv[i].delta && !delta_before {
+        ri *= remap0(light_rev(i)) / remap0(light_at(i).pdf_fwd);
+        let delta_before = if i > 0 { light_delta(i - 1) } else { is_delta_light(scene, light_at(0)) };
+        if !light_delta(i) && !delta_before {
             sum += ri;
         }
     }
