@@ -29,6 +29,9 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// Light selection proportional to power; `None` when the scene has no light.
     pub light_selection: Option<AliasTable>,
+    /// Indices of the infinite lights (environment, directional), so escaped rays visit
+    /// only these, and not at all when the scene has none.
+    pub infinite: Vec<LightId>,
     pub bounds: Bounds3,
 }
 
@@ -40,7 +43,7 @@ impl Scene {
     }
     /// The infinite lights (environment, directional), for rays that escape.
     pub fn infinite_lights(&self) -> impl Iterator<Item = (LightId, &Light)> {
-        self.lights.iter().enumerate().filter(|(_, l)| l.is_infinite()).map(|(i, l)| (i as LightId, l))
+        self.infinite.iter().map(|&i| (i, &self.lights[i as usize]))
     }
     /// Does any light emit from a surface a ray can hit (so s = 0 strategies exist)?
     pub fn has_area_lights(&self) -> bool {
@@ -241,7 +244,8 @@ impl SceneBuilder {
         }
         let power: Vec<f32> = self.lights.iter().map(|l| l.power()).collect();
         let light_selection = AliasTable::new(&power);
-        let scene = Scene { camera, materials: self.materials, lights: self.lights, light_selection, bounds };
+        let infinite = (0..self.lights.len() as LightId).filter(|&i| self.lights[i as usize].is_infinite()).collect();
+        let scene = Scene { camera, materials: self.materials, lights: self.lights, light_selection, infinite, bounds };
         Ok((scene, self.geometry, self.warnings))
     }
 }
