@@ -61,7 +61,8 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
         Command::Suite(args) => {
             let threads = args.threads.map_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()), |n| n as usize);
             let results = suite::run(args, threads).map_err(AppError::Estimator)?;
-            let command = std::env::args().collect::<Vec<_>>().join(" ");
+            // As a user would type it from the repository root.
+            let command = format!("cargo run --release -p ember-cli -- {}", std::env::args().skip(1).collect::<Vec<_>>().join(" "));
             let report = suite::report(args, threads, &results, &command);
             std::fs::write(&args.output, &report).map_err(|e| AppError::Output(format!("{}: {e}", args.output.display())))?;
             println!("{report}");
