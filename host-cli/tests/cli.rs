@@ -29,7 +29,7 @@ fn bad_input_exits_one_with_a_message() {
         (&["render", "--estimator", "mlt"], "mlt"),
         (&["render", "--max-depth", "-7"], "--max-depth"),
         (&["frobnicate"], "frobnicate"),
-        (&["render", "scene.xml"], "scene files are not supported yet"),
+        (&["render", "no-such-scene.xml"], "no-such-scene.xml"),
         (&["render", "-o", "picture.png"], ".exr"),
         (&["render", "-o", "/nonexistent-ember-dir/a.exr"], "does not exist"),
     ] {
