@@ -40,3 +40,31 @@ pub fn cornell_with_spheres(width: u32, height: u32) -> SceneBuilder {
     b.add_sphere(Vec3::new(0.4, 0.85, -0.2), 0.2, false, glass, None);
     b
 }
+
+/// A closed diffuse room [−1.5, 1.5] × [0, 2.5] × [−1.5, 1.5] with a 1 × 0.6 window in
+/// its back wall, lit only by a constant environment through the window (the suite's
+/// window_env, built here without the parser). Camera paths that escape end on an
+/// infinite light: BDPT's special cases for infinite vertices all occur.
+pub fn window_room(width: u32, height: u32) -> SceneBuilder {
+    let mut b = SceneBuilder::new();
+    b.set_camera(PerspectiveCamera::new(builtin::look_at(Vec3::new(0.5, 1.2, 1.3), Vec3::new(0.226, 1.131, 0.341), Vec3::Y), 60.0, FovAxis::Y, width, height));
+    let wall = b.add_material(Material::diffuse(Rgb::splat(0.73)).two_sided());
+    let rect = |sx: f32, sy: f32, rot: Mat4, t: Vec3| Mat4::from_translation(t) * rot * Mat4::from_scale(Vec3::new(sx, sy, 1.0));
+    let (rx, ry) = (core::f32::consts::FRAC_PI_2, core::f32::consts::FRAC_PI_2);
+    let walls = [
+        rect(1.5, 1.5, Mat4::from_rotation_x(-rx), Vec3::ZERO),                  // floor
+        rect(1.5, 1.5, Mat4::from_rotation_x(rx), Vec3::new(0.0, 2.5, 0.0)),     // ceiling
+        rect(1.5, 1.25, Mat4::from_rotation_y(ry), Vec3::new(-1.5, 1.25, 0.0)),  // left
+        rect(1.5, 1.25, Mat4::from_rotation_y(-ry), Vec3::new(1.5, 1.25, 0.0)),  // right
+        rect(1.5, 1.25, Mat4::from_rotation_y(2.0 * ry), Vec3::new(0.0, 1.25, 1.5)), // front
+        rect(0.5, 1.25, Mat4::IDENTITY, Vec3::new(-1.0, 1.25, -1.5)),            // back, left of the window
+        rect(0.5, 1.25, Mat4::IDENTITY, Vec3::new(1.0, 1.25, -1.5)),             // back, right
+        rect(0.5, 0.6, Mat4::IDENTITY, Vec3::new(0.0, 0.6, -1.5)),               // below the window
+        rect(0.5, 0.35, Mat4::IDENTITY, Vec3::new(0.0, 2.15, -1.5)),             // above the window
+    ];
+    for m in walls {
+        b.add_rectangle(m, false, wall, None);
+    }
+    b.add_light(ember_core::light::Light::constant_environment(Rgb::new(1.0, 1.1, 1.3)));
+    b
+}

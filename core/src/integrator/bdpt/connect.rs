@@ -85,7 +85,10 @@ pub fn connect<Q: RayQuery + ?Sized>(
         }
         let beta_l = ls.radiance / (ls.pdf.0 * chosen.pmf);
         let mut lv = if light_ref.is_infinite() {
-            Vertex::infinite(ls.p, beta_l, 0.0)
+            let mut v = Vertex::infinite(ls.p, beta_l, 0.0);
+            // A directional light is a Dirac in direction: no other strategy reaches it.
+            v.delta = light_ref.is_delta();
+            v
         } else {
             Vertex::light(id, ls.p, ls.n, beta_l, 0.0, light_ref.is_delta())
         };

@@ -102,6 +102,9 @@ fn random_walk<Q: RayQuery + ?Sized>(
             if mode == TransportMode::Radiance && scene.infinite_lights().next().is_some() {
                 let mut v = Vertex::infinite(prev.p + ray.dir, beta, 0.0);
                 v.pdf_fwd = prev.pdf(scene, n.checked_sub(2).map(|i| &path[i]), &v);
+                if n >= 2 {
+                    path[n - 2].pdf_rev = prev.pdf(scene, Some(&v), &path[n - 2]);
+                }
                 let _ = path.push(v);
             }
             return;
