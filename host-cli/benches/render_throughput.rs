@@ -16,13 +16,20 @@
 //!    default scene exactly as `ember render` builds it (512², unbounded depth, seed 0),
 //!    `SCALE_SPP` passes, for pt, lt and bdpt, with 1, 2 (and all, if more) threads.
 //!    Each round runs every thread count back to back, in alternating order, and the
-//!    speedup t₁ / tₙ is taken within the round; `SCALE_ROUNDS` rounds, medians
-//!    printed. The films of all thread counts are compared bit for bit. Two controls
-//!    frame the numbers: the same thread counts on pure arithmetic (what the machine
-//!    gives right now: other processes share its cores), and the time of the driver's
-//!    sequential per-pass merge measured alone (its Amdahl bound).
+//!    speedup t₁ / tₙ is taken within the round. The machine is shared, so each render
+//!    also reports the cores it actually got (process CPU seconds ÷ wall seconds, from
+//!    `/proc/self/stat`); a round counts as clean when every render got at least
+//!    `CLEAN_SHARE` of the cores it asked for. Rounds run until `SCALE_ROUNDS` are
+//!    clean (at most `SCALE_MAX_ROUNDS`); medians are over the clean rounds (over all,
+//!    flagged CONTENDED, when none was). The films of all thread counts are compared
+//!    bit for bit. Three controls frame the speedups: the same driver over pure
+//!    arithmetic (`spin`: what the machine gives right now), the driver's sequential
+//!    per-pass merge timed alone (its Amdahl bound), and a projection for free cores:
+//!    CPU seconds at n threads (parallel overhead included) spread over n cores, plus
+//!    the merge on one.
 //!
-//! Run: `cargo bench -p ember-cli --bench render_throughput` (about 2 minutes on 2 cores).
+//! Run: `cargo bench -p ember-cli --bench render_throughput` (1–2.5 minutes on 2 cores,
+//! longer while other processes load the machine).
 
 use std::cell::RefCell;
 use std::hint::black_box;
@@ -42,8 +49,13 @@ use ember_core::integrator::pt;
 const HOT_RES: u32 = 256;
 const HOT_PASSES: u32 = 4;
 const HOT_REPS: usize = 5;
-const SCALE_SPP: u32 = 2;
-const SCALE_ROUNDS: usize = 3;
+const SCALE_SPP: u32 = 1;
+const SCALE_ROUNDS: usize = 5;
+/// Rounds tried at most to collect `SCALE_ROUNDS` clean ones.
+const SCALE_MAX_ROUNDS: usize = 8;
+/// A round is clean when each render's process CPU ÷ wall time reaches this share of
+/// its thread count (other processes took little of the cores meanwhile).
+const CLEAN_SHARE: f64 = 0.85;
 
 /// `ember render` options, parsed as the binary parses them.
 fn args(extra: &[&str]) -> RenderArgs {
@@ -260,13 +272,13 @@ fn scaling() {
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     println!();
     println!(
-        "[3] driver scaling: default scene (512², unbounded depth, seed 0), {SCALE_SPP} passes, \
-         {SCALE_ROUNDS} rounds, medians; {cores} cores; load average before: {}",
+        "[3] driver scaling: default scene (512², unbounded depth, seed 0), {SCALE_SPP} pass(es) per render, \
+         medians over clean rounds; {cores} cores; load average before: {}",
         load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
     );
     println!(
         "    {:<6} {:>7} {:>9} {:>9} {:>10} {:>9}   {}",
-        "", "threads", "seconds", "speedup", "cores used", "CPU s", "speedup per round"
+        "", "threads", "seconds", "speedup", "cores used", "CPU s", "rounds / speedup per round"
     );
 
     let mut renderers: Vec<(&str, Box<dyn PassRenderer>)> = vec![("spin", Box::new(Spin))];
@@ -276,30 +288,57 @@ fn scaling() {
         renderers.push((e, Box::new(default_renderer(&a))));
     }
     for (name, r) in &renderers {
-        // Per thread count, per round: wall seconds, CPU seconds.
+        // Per thread count, per clean round: wall seconds, CPU seconds.
         let mut wall: Vec<Vec<f64>> = vec![Vec::new(); counts.len()];
         let mut cpu: Vec<Vec<f64>> = vec![Vec::new(); counts.len()];
+        let mut all: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
         let mut identical = true;
         let mut reference: Option<Film> = None;
-        for round in 0..SCALE_ROUNDS {
+        let mut attempts = 0;
+        while wall[0].len() < SCALE_ROUNDS && attempts < SCALE_MAX_ROUNDS {
             let mut order: Vec<usize> = (0..counts.len()).collect();
-            if round % 2 == 1 {
+            if attempts % 2 == 1 {
                 order.reverse();
             }
+            attempts += 1;
+            let (mut w, mut c) = (vec![0.0; counts.len()], vec![0.0; counts.len()]);
             for k in order {
-                let (s, c, film) = drive(&**r, counts[k], SCALE_SPP);
-                wall[k].push(s);
-                cpu[k].push(c);
+                let (s, used, film) = drive(&**r, counts[k], SCALE_SPP);
+                (w[k], c[k]) = (s, used);
                 match &reference {
                     None => reference = Some(film),
                     Some(f) => identical &= same_bits(f, &film),
                 }
             }
+            // Clean: every render got nearly all the cores it asked for.
+            if counts.iter().enumerate().all(|(k, &n)| c[k] / w[k] >= CLEAN_SHARE * n as f64) {
+                for k in 0..counts.len() {
+                    wall[k].push(w[k]);
+                    cpu[k].push(c[k]);
+                }
+            }
+            all.push((w, c));
         }
+        let clean = wall[0].len();
+        if clean == 0 {
+            // No clean round: report them all, flagged.
+            for (w, c) in &all {
+                for k in 0..counts.len() {
+                    wall[k].push(w[k]);
+                    cpu[k].push(c[k]);
+                }
+            }
+        }
+        let rounds = wall[0].len();
         for (k, &n) in counts.iter().enumerate() {
-            let speedups: Vec<f64> = (0..SCALE_ROUNDS).map(|i| wall[0][i] / wall[k][i]).collect();
-            let used: Vec<f64> = (0..SCALE_ROUNDS).map(|i| cpu[k][i] / wall[k][i]).collect();
-            let rounds = speedups.iter().map(|v| format!("{v:.2}")).collect::<Vec<_>>().join(" ");
+            let speedups: Vec<f64> = (0..rounds).map(|i| wall[0][i] / wall[k][i]).collect();
+            let used: Vec<f64> = (0..rounds).map(|i| cpu[k][i] / wall[k][i]).collect();
+            let per_round = speedups.iter().map(|v| format!("{v:.2}")).collect::<Vec<_>>().join(" ");
+            let note = match (k, clean) {
+                (0, 0) => format!("CONTENDED: no clean round in {attempts}"),
+                (0, _) => format!("{clean} clean of {attempts} rounds"),
+                _ => per_round,
+            };
             println!(
                 "    {:<6} {:>7} {:>9.3} {:>9.2} {:>10.2} {:>9.2}   {}",
                 if k == 0 { *name } else { "" },
@@ -308,23 +347,36 @@ fn scaling() {
                 median(speedups),
                 median(used),
                 median(cpu[k].clone()),
-                if k == 0 { String::new() } else { rounds },
+                note,
             );
         }
         // The merge alone, as a share of a 1-thread pass, and the speedups it allows.
         let (merge, splats) = merge_cost(&**r);
         let f = (merge * SCALE_SPP as f64 / median(wall[0].clone())).min(1.0);
         let bounds: Vec<String> =
-            counts[1..].iter().map(|&n| format!("{:.2} on {n}", 1.0 / (f + (1.0 - f) / n as f64))).collect();
+            counts[1..].iter().map(|&n| format!("{:.2}", 1.0 / (f + (1.0 - f) / n as f64))).collect();
+        // What n free cores would give: the CPU work measured at n threads (parallel
+        // overhead included) spread over n cores, plus the merge on one.
+        let serial = merge * SCALE_SPP as f64;
+        let cpu1 = median(cpu[0].clone());
+        let projected: Vec<String> = counts[1..]
+            .iter()
+            .enumerate()
+            .map(|(k, &n)| {
+                let cpu_n = median(cpu[k + 1].clone());
+                format!("{:.2}", cpu1 / ((cpu_n - serial).max(0.0) / n as f64 + serial))
+            })
+            .collect();
         println!(
-            "    {:<6} film bits across thread counts: {}; sequential merge {:.1} ms/pass ({} splats) = {:.1} % \
-             of a 1-thread pass, Amdahl bound {}",
+            "    {:<6} film bits across thread counts: {}; merge {:.1} ms/pass ({} splats) = {:.1} % of a \
+             1-thread pass; Amdahl bound {}; projected on free cores {}",
             "",
             if identical { "identical" } else { "DIFFER" },
             merge * 1e3,
             splats,
             100.0 * f,
-            bounds.join(", ")
+            bounds.join(" / "),
+            projected.join(" / ")
         );
     }
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
