@@ -7,7 +7,8 @@
 //!
 //! Injected-bug checks (each done once, reverted): dropping the |cos θ| of the light-path
 //! origin in `lt` (β₀ = Le / pdfs) made LT read 3.00 for 2 (z ≈ 28); omitting the 1/q
-//! Russian-roulette compensation in `pt` made PT read 1.90 (z ≈ −139).
+//! Russian-roulette compensation (then inline in `pt`, now `survives_roulette`) made PT
+//! read 1.90 (z ≈ −139).
 
 use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_tests::render::{Estimator, render_pass};

@@ -10,7 +10,7 @@
 
 use core::ops::Range;
 
-use super::{Counters, RenderParams, Splat, SurfacePoint, rr_survival};
+use super::{Counters, RenderParams, Splat, SurfacePoint, survives_roulette};
 use crate::bsdf::TransportMode;
 use crate::geometry::{RayQuery, spawn_ray_to};
 use crate::math::Vec3;
@@ -98,12 +98,8 @@ fn trace_one<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderPar
             break;
         }
         segments += 1;
-        let q = rr_survival(params, segments, beta);
-        if q < 1.0 {
-            if rng.next_f32() >= q {
-                break;
-            }
-            beta /= q;
+        if !survives_roulette(params, segments, &mut beta, rng) {
+            break;
         }
         ray = sp.spawn(wi);
     }

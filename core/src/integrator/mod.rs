@@ -117,13 +117,22 @@ impl Counters {
     }
 }
 
-/// Russian roulette survival probability for throughput `beta` after `segments`
-/// segments (Mitsuba's rule: min(max component, 0.95) from `rr_depth` on).
+/// Russian roulette after `segments` segments (Mitsuba's rule: survive with probability
+/// q = min(max component of β, 0.95) from `rr_depth` on). Returns false when the path
+/// ends; a surviving β is divided by q, which keeps the estimate unbiased. Draws a
+/// random number only when q < 1.
 #[inline]
-pub fn rr_survival(params: &RenderParams, segments: u32, beta: Rgb) -> f32 {
+pub fn survives_roulette(params: &RenderParams, segments: u32, beta: &mut Rgb, rng: &mut crate::rng::SampleStream) -> bool {
     if segments < params.rr_depth {
-        1.0
-    } else {
-        beta.max_component().min(0.95)
+        return true;
     }
+    let q = beta.max_component().min(0.95);
+    if q >= 1.0 {
+        return true;
+    }
+    if !(q > 0.0) || rng.next_f32() >= q {
+        return false;
+    }
+    *beta /= q;
+    true
 }

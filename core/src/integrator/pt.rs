@@ -11,7 +11,7 @@
 
 use core::ops::Range;
 
-use super::{Counters, RenderParams, SurfacePoint, rr_survival};
+use super::{Counters, RenderParams, SurfacePoint, survives_roulette};
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, RayQuery};
 use crate::math::{Vec2, Vec3};
@@ -106,12 +106,8 @@ pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Render
             break;
         }
         segments += 1;
-        let q = rr_survival(params, segments, beta);
-        if q < 1.0 {
-            if rng.next_f32() >= q {
-                break;
-            }
-            beta /= q;
+        if !survives_roulette(params, segments, &mut beta, rng) {
+            break;
         }
         prev = Some(PrevBounce { p: hit.p, bsdf_pdf: bs.pdf.0, is_delta: bs.is_delta });
         ray = sp.spawn(wi);

@@ -6,7 +6,7 @@ use super::vertex::{Vertex, VertexKind, infinite_light_density};
 use super::MAX_VERTICES;
 use crate::bsdf::{TransportMode, shading_normal_correction};
 use crate::geometry::{Ray, RayQuery, spawn_ray};
-use crate::integrator::{Counters, RenderParams, rr_survival};
+use crate::integrator::{Counters, RenderParams, survives_roulette};
 use crate::math::{Frame, Vec2, Vec3};
 use crate::rng::SampleStream;
 use crate::scene::Scene;
@@ -148,12 +148,8 @@ fn random_walk<Q: RayQuery + ?Sized>(
         if bs.is_delta {
             path[n].delta = true;
         }
-        let q = rr_survival(params, (n + 1) as u32, beta);
-        if q < 1.0 {
-            if rng.next_f32() >= q {
-                return;
-            }
-            beta /= q;
+        if !survives_roulette(params, (n + 1) as u32, &mut beta, rng) {
+            return;
         }
         ray = spawn_ray(hit.p, hit.ng, wi);
     }
