@@ -22,24 +22,28 @@
 //!    `CLEAN_SHARE` of the cores it asked for. Rounds run until `SCALE_ROUNDS` are
 //!    clean (at most `SCALE_MAX_ROUNDS`); medians are over the clean rounds (over all,
 //!    flagged CONTENDED, when none was). The films of all thread counts are compared
-//!    bit for bit. Three controls frame the speedups: the same driver over pure
-//!    arithmetic (`spin`: what the machine gives right now), the driver's sequential
-//!    per-pass merge timed alone (its Amdahl bound), and a projection for free cores:
-//!    CPU seconds at n threads (parallel overhead included) spread over n cores, plus
-//!    the merge on one.
+//!    bit for bit. Every work item (chunk) the driver hands out is logged with its
+//!    worker and times, giving the end-of-pass idle time ("tail idle": workers waiting
+//!    for a pass's last chunk, as a share of worker time, and the longest wait), a
+//!    number that other processes on the machine hardly move. Two controls frame the
+//!    speedups: the same driver over pure arithmetic (`spin`: what the machine gives
+//!    right now), and the driver's sequential per-pass merge timed alone (the Amdahl
+//!    bound it sets).
 //!
 //! Run: `cargo bench -p ember-cli --bench render_throughput` (1–2.5 minutes on 2 cores,
 //! longer while other processes load the machine).
 
 use std::cell::RefCell;
 use std::hint::black_box;
+use std::ops::Range;
+use std::sync::Mutex;
 use std::time::Instant;
 
 use clap::Parser;
 
 use ember_cli::accel::Accel;
 use ember_cli::cli::{Cli, Command, RenderArgs};
-use ember_cli::driver::{self, DriverConfig, Limits, PassRenderer, Splat};
+use ember_cli::driver::{self, DriverConfig, Limits, PassRenderer, PassStats, Splat};
 use ember_cli::estimators::{CoreRenderer, prepare_builtin};
 use ember_cli::film::Film;
 use ember_core::Rgb;
@@ -186,17 +190,17 @@ impl PassRenderer for Spin {
     fn height(&self) -> u32 {
         512
     }
-    fn camera_pass(&self, _: u32, pixels: std::ops::Range<u32>, out: &mut [Rgb], _: &mut dyn FnMut(Splat)) -> driver::PassStats {
+    fn camera_pass(&self, _: u32, pixels: Range<u32>, out: &mut [Rgb], _: &mut dyn FnMut(Splat)) -> PassStats {
         for (o, i) in out.iter_mut().zip(pixels) {
             *o = spin(i);
         }
-        driver::PassStats::default()
+        PassStats::default()
     }
     fn light_paths_per_pass(&self) -> u32 {
         0
     }
-    fn light_pass(&self, _: u32, _: std::ops::Range<u32>, _: &mut dyn FnMut(Splat)) -> driver::PassStats {
-        driver::PassStats::default()
+    fn light_pass(&self, _: u32, _: Range<u32>, _: &mut dyn FnMut(Splat)) -> PassStats {
+        PassStats::default()
     }
     fn splat_scale(&self) -> f64 {
         1.0
@@ -212,14 +216,93 @@ fn cpu_seconds() -> f64 {
     (tick(11) + tick(12)) / 100.0
 }
 
-/// One render through the driver: (wall seconds of the pass loop, CPU seconds, film).
-fn drive(r: &dyn PassRenderer, threads: usize, spp: u32) -> (f64, f64, Film) {
+/// Logs every work item the driver hands out: (pass, worker, start, end) in seconds.
+struct Logged<'a> {
+    inner: &'a dyn PassRenderer,
+    t0: Instant,
+    items: Mutex<Vec<(u32, usize, f64, f64)>>,
+}
+
+impl Logged<'_> {
+    fn log(&self, pass: u32, start: Instant) {
+        let worker = rayon::current_thread_index().unwrap_or(0);
+        let (a, b) = ((start - self.t0).as_secs_f64(), self.t0.elapsed().as_secs_f64());
+        self.items.lock().map(|mut v| v.push((pass, worker, a, b))).ok();
+    }
+
+    /// Worker time lost at the ends of passes: for each pass, every worker's wait from its
+    /// last item to the pass's last item (while the driver still has work in flight),
+    /// as a share of `threads` × the passes' spans; and the longest such wait (seconds).
+    fn tail_idle(&self, threads: usize, passes: u32) -> (f64, f64) {
+        let items = self.items.lock().map(|v| v.clone()).unwrap_or_default();
+        let (mut idle, mut span, mut worst) = (0.0, 0.0, 0.0f64);
+        for pass in 0..passes {
+            let of_pass = || items.iter().filter(move |e| e.0 == pass);
+            let start = of_pass().map(|e| e.2).fold(f64::INFINITY, f64::min);
+            let end = of_pass().map(|e| e.3).fold(f64::NEG_INFINITY, f64::max);
+            if end.is_nan() || end <= start {
+                continue;
+            }
+            span += end - start;
+            for w in 0..threads {
+                let wait = end - of_pass().filter(|e| e.1 == w).map(|e| e.3).fold(start, f64::max);
+                idle += wait;
+                worst = worst.max(wait);
+            }
+        }
+        (if span > 0.0 { idle / (threads as f64 * span) } else { 0.0 }, worst)
+    }
+}
+
+impl PassRenderer for Logged<'_> {
+    fn width(&self) -> u32 {
+        self.inner.width()
+    }
+    fn height(&self) -> u32 {
+        self.inner.height()
+    }
+    fn camera_pass(&self, pass: u32, pixels: Range<u32>, out: &mut [Rgb], splat: &mut dyn FnMut(Splat)) -> PassStats {
+        let t = Instant::now();
+        let stats = self.inner.camera_pass(pass, pixels, out, splat);
+        self.log(pass, t);
+        stats
+    }
+    fn light_paths_per_pass(&self) -> u32 {
+        self.inner.light_paths_per_pass()
+    }
+    fn light_pass(&self, pass: u32, paths: Range<u32>, splat: &mut dyn FnMut(Splat)) -> PassStats {
+        let t = Instant::now();
+        let stats = self.inner.light_pass(pass, paths, splat);
+        self.log(pass, t);
+        stats
+    }
+    fn splat_scale(&self) -> f64 {
+        self.inner.splat_scale()
+    }
+}
+
+/// One render through the driver.
+#[derive(Clone, Copy, Debug, Default)]
+struct Run {
+    /// Wall seconds of the pass loop.
+    wall: f64,
+    /// Process CPU seconds meanwhile.
+    cpu: f64,
+    /// End-of-pass idle share and longest wait (seconds), see [`Logged::tail_idle`].
+    idle: f64,
+    worst_wait: f64,
+}
+
+fn drive(r: &dyn PassRenderer, threads: usize, spp: u32) -> (Run, Film) {
+    let logged = Logged { inner: r, t0: Instant::now(), items: Mutex::new(Vec::new()) };
     let mut film = Film::new(r.width(), r.height());
     let config = DriverConfig { progress: false, ..DriverConfig::with_threads(threads) };
     let start = Instant::now();
     let cpu = cpu_seconds();
-    let s = driver::render(r, &mut film, Limits { spp, deadline: None }, config, start).expect("render");
-    (s.render_seconds, cpu_seconds() - cpu, film)
+    let s = driver::render(&logged, &mut film, Limits { spp, deadline: None }, config, start).expect("render");
+    let cpu = cpu_seconds() - cpu;
+    let (idle, worst_wait) = logged.tail_idle(threads, spp);
+    (Run { wall: s.render_seconds, cpu, idle, worst_wait }, film)
 }
 
 fn same_bits(a: &Film, b: &Film) -> bool {
@@ -277,8 +360,8 @@ fn scaling() {
         load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
     );
     println!(
-        "    {:<6} {:>7} {:>9} {:>9} {:>10} {:>9}   {}",
-        "", "threads", "seconds", "speedup", "cores used", "CPU s", "rounds / speedup per round"
+        "    {:<6} {:>7} {:>8} {:>8} {:>6} {:>7} {:>15}   rounds / speedup per round",
+        "", "threads", "seconds", "speedup", "cores", "CPU s", "tail idle"
     );
 
     let mut renderers: Vec<(&str, Box<dyn PassRenderer>)> = vec![("spin", Box::new(Spin))];
@@ -288,95 +371,64 @@ fn scaling() {
         renderers.push((e, Box::new(default_renderer(&a))));
     }
     for (name, r) in &renderers {
-        // Per thread count, per clean round: wall seconds, CPU seconds.
-        let mut wall: Vec<Vec<f64>> = vec![Vec::new(); counts.len()];
-        let mut cpu: Vec<Vec<f64>> = vec![Vec::new(); counts.len()];
-        let mut all: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
+        // Per round, per thread count.
+        let (mut clean, mut all): (Vec<Vec<Run>>, Vec<Vec<Run>>) = (Vec::new(), Vec::new());
         let mut identical = true;
         let mut reference: Option<Film> = None;
-        let mut attempts = 0;
-        while wall[0].len() < SCALE_ROUNDS && attempts < SCALE_MAX_ROUNDS {
+        while clean.len() < SCALE_ROUNDS && all.len() < SCALE_MAX_ROUNDS {
             let mut order: Vec<usize> = (0..counts.len()).collect();
-            if attempts % 2 == 1 {
+            if all.len() % 2 == 1 {
                 order.reverse();
             }
-            attempts += 1;
-            let (mut w, mut c) = (vec![0.0; counts.len()], vec![0.0; counts.len()]);
+            let mut round = vec![Run::default(); counts.len()];
             for k in order {
-                let (s, used, film) = drive(&**r, counts[k], SCALE_SPP);
-                (w[k], c[k]) = (s, used);
+                let (run, film) = drive(&**r, counts[k], SCALE_SPP);
+                round[k] = run;
                 match &reference {
                     None => reference = Some(film),
                     Some(f) => identical &= same_bits(f, &film),
                 }
             }
             // Clean: every render got nearly all the cores it asked for.
-            if counts.iter().enumerate().all(|(k, &n)| c[k] / w[k] >= CLEAN_SHARE * n as f64) {
-                for k in 0..counts.len() {
-                    wall[k].push(w[k]);
-                    cpu[k].push(c[k]);
-                }
+            if counts.iter().zip(&round).all(|(&n, run)| run.cpu / run.wall >= CLEAN_SHARE * n as f64) {
+                clean.push(round.clone());
             }
-            all.push((w, c));
+            all.push(round);
         }
-        let clean = wall[0].len();
-        if clean == 0 {
-            // No clean round: report them all, flagged.
-            for (w, c) in &all {
-                for k in 0..counts.len() {
-                    wall[k].push(w[k]);
-                    cpu[k].push(c[k]);
-                }
-            }
-        }
-        let rounds = wall[0].len();
+        let (rounds, note) = match clean.len() {
+            0 => (&all, format!("CONTENDED: no clean round in {}", all.len())),
+            c => (&clean, format!("{c} clean of {} rounds", all.len())),
+        };
+        let of = |f: &dyn Fn(&[Run]) -> f64| median(rounds.iter().map(|r| f(r)).collect());
         for (k, &n) in counts.iter().enumerate() {
-            let speedups: Vec<f64> = (0..rounds).map(|i| wall[0][i] / wall[k][i]).collect();
-            let used: Vec<f64> = (0..rounds).map(|i| cpu[k][i] / wall[k][i]).collect();
-            let per_round = speedups.iter().map(|v| format!("{v:.2}")).collect::<Vec<_>>().join(" ");
-            let note = match (k, clean) {
-                (0, 0) => format!("CONTENDED: no clean round in {attempts}"),
-                (0, _) => format!("{clean} clean of {attempts} rounds"),
-                _ => per_round,
-            };
+            let per_round: Vec<String> = rounds.iter().map(|r| format!("{:.2}", r[0].wall / r[k].wall)).collect();
+            let idle = format!("{:.1} % {:>3.0} ms", 100.0 * of(&|r| r[k].idle), 1e3 * of(&|r| r[k].worst_wait));
             println!(
-                "    {:<6} {:>7} {:>9.3} {:>9.2} {:>10.2} {:>9.2}   {}",
+                "    {:<6} {:>7} {:>8.3} {:>8.2} {:>6.2} {:>7.2} {:>15}   {}",
                 if k == 0 { *name } else { "" },
                 n,
-                median(wall[k].clone()),
-                median(speedups),
-                median(used),
-                median(cpu[k].clone()),
-                note,
+                of(&|r| r[k].wall),
+                of(&|r| r[0].wall / r[k].wall),
+                of(&|r| r[k].cpu / r[k].wall),
+                of(&|r| r[k].cpu),
+                if k == 0 { String::new() } else { idle },
+                if k == 0 { note.clone() } else { per_round.join(" ") },
             );
         }
         // The merge alone, as a share of a 1-thread pass, and the speedups it allows.
         let (merge, splats) = merge_cost(&**r);
-        let f = (merge * SCALE_SPP as f64 / median(wall[0].clone())).min(1.0);
+        let f = (merge * SCALE_SPP as f64 / of(&|r| r[0].wall)).min(1.0);
         let bounds: Vec<String> =
             counts[1..].iter().map(|&n| format!("{:.2}", 1.0 / (f + (1.0 - f) / n as f64))).collect();
-        // What n free cores would give: the CPU work measured at n threads (parallel
-        // overhead included) spread over n cores, plus the merge on one.
-        let serial = merge * SCALE_SPP as f64;
-        let cpu1 = median(cpu[0].clone());
-        let projected: Vec<String> = counts[1..]
-            .iter()
-            .enumerate()
-            .map(|(k, &n)| {
-                let cpu_n = median(cpu[k + 1].clone());
-                format!("{:.2}", cpu1 / ((cpu_n - serial).max(0.0) / n as f64 + serial))
-            })
-            .collect();
         println!(
             "    {:<6} film bits across thread counts: {}; merge {:.1} ms/pass ({} splats) = {:.1} % of a \
-             1-thread pass; Amdahl bound {}; projected on free cores {}",
+             1-thread pass; Amdahl bound {}",
             "",
             if identical { "identical" } else { "DIFFER" },
             merge * 1e3,
             splats,
             100.0 * f,
-            bounds.join(" / "),
-            projected.join(" / ")
+            bounds.join(" / ")
         );
     }
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
