@@ -8,3 +8,4 @@ pub mod tracer;
 pub mod scenes;
 pub mod render;
 pub mod reference;
+pub mod mmis_1d;

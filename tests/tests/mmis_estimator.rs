@@ -18,75 +18,12 @@
 use ember_core::mmis::{Mmis, Pair, Technique};
 use ember_core::rng::{SampleStream, Stream};
 use ember_tests::chi2::sidak;
+use ember_tests::mmis_1d::{Tech, bump, tri_pdf};
 use ember_tests::stats::{MeanVar, normal_two_sided_p};
 use std::f64::consts::PI;
 
 // ---------------------------------------------------------------------------------------
-// 1-D densities and techniques.
-
-/// Symmetric triangle density on [c − h, c + h].
-fn tri_pdf(x: f64, c: f64, h: f64) -> f64 {
-    ((h - (x - c).abs()) / (h * h)).max(0.0)
-}
-
-/// Inverse-CDF sample of `tri_pdf(·, c, h)`.
-fn tri_sample(u: f64, c: f64, h: f64) -> f64 {
-    if u < 0.5 { c - h + h * (2.0 * u).sqrt() } else { c + h - h * (2.0 * (1.0 - u)).sqrt() }
-}
-
-/// Raised-cosine bump of half-width w centred at c, integrating to one.
-fn bump(x: f64, c: f64, w: f64) -> f64 {
-    if (x - c).abs() < w { (1.0 + (PI * (x - c) / w).cos()) / (2.0 * w) } else { 0.0 }
-}
-
-/// The test techniques on x ∈ [0, 1] (supports chosen inside [0, 1]: no truncation).
-#[derive(Clone, Copy, Debug)]
-enum Tech {
-    /// Classical: `(1 − eps)·tri(x; c, h) + eps` (uniform defensive part).
-    Classical { c: f64, h: f64, eps: f64 },
-    /// Marginal: `t ~ tri(c, w)`, then `x | t ~ (1 − eps)·tri(x; t, h) + eps`.
-    /// With eps = 0 it covers only [c − w − h, c + w + h].
-    Marginal { c: f64, w: f64, h: f64, eps: f64 },
-    /// Marginal, defensive: `t ~ U[0, 1)`, then x uniform or (½ each) `x = frac(t + s)`
-    /// with `s ~ tri(0, ½)`: the conditional is ½ + ½·(wrapped triangle) ≥ ½, the
-    /// marginal uniform.
-    Wrapped,
-}
-
-impl Technique<f64, f64> for Tech {
-    fn pdf(&self, x: &f64, t: &f64) -> f64 {
-        match *self {
-            Tech::Classical { c, h, eps } => (1.0 - eps) * tri_pdf(*x, c, h) + eps,
-            Tech::Marginal { h, eps, .. } => (1.0 - eps) * tri_pdf(*x, *t, h) + eps,
-            Tech::Wrapped => {
-                let d = (x - t).rem_euclid(1.0);
-                0.5 + 0.5 * tri_pdf(d.min(1.0 - d), 0.0, 0.5)
-            }
-        }
-    }
-    fn is_classical(&self) -> bool {
-        matches!(self, Tech::Classical { .. })
-    }
-}
-
-impl Tech {
-    /// One technique-sample pair (t, x); t = 0 for the classical technique.
-    fn draw(&self, rng: &mut SampleStream) -> Pair<f64, f64> {
-        let (u0, u1, u2) = (rng.next_f64(), rng.next_f64(), rng.next_f64());
-        match *self {
-            Tech::Classical { c, h, eps } => {
-                Pair { t: 0.0, x: if u0 < eps { u1 } else { tri_sample(u1, c, h) } }
-            }
-            Tech::Marginal { c, w, h, eps } => {
-                let t = tri_sample(u0, c, w);
-                Pair { t, x: if u1 < eps { u2 } else { tri_sample(u2, t, h) } }
-            }
-            Tech::Wrapped => {
-                Pair { t: u0, x: if u1 < 0.5 { u2 } else { (u0 + tri_sample(u2, 0.0, 0.5)).rem_euclid(1.0) } }
-            }
-        }
-    }
-}
+// Techniques and integrands (the 1-D family lives in `ember_tests::mmis_1d`).
 
 const LEFT: Tech = Tech::Classical { c: 0.25, h: 0.22, eps: 0.15 };
 const RIGHT_CLASSICAL: Tech = Tech::Classical { c: 0.72, h: 0.2, eps: 0.3 };
