@@ -46,3 +46,21 @@ pub fn render_pass<Q: RayQuery>(est: Estimator, scene: &Scene, tracer: &Q, param
     }
     (img, counters)
 }
+
+/// Per-channel means over square `block`×`block` pixel blocks of a `width`-wide image,
+/// blocks in row-major order (the comparisons between estimators and references).
+pub fn block_means(img: &[[f64; 3]], width: usize, block: usize) -> Vec<[f64; 3]> {
+    let height = img.len() / width.max(1);
+    let (bx, by) = (width / block, height / block);
+    let mut sums = vec![[0.0f64; 3]; bx * by];
+    for (i, px) in img.iter().enumerate() {
+        let (x, y) = (i % width, i / width);
+        if x / block < bx && y / block < by {
+            let s = &mut sums[(y / block) * bx + x / block];
+            for c in 0..3 {
+                s[c] += px[c] / (block * block) as f64;
+            }
+        }
+    }
+    sums
+}

@@ -87,6 +87,20 @@ pub fn normal_two_sided_p(z: f64) -> f64 {
     gamma_q(0.5, 0.5 * z * z)
 }
 
+/// Unpolarised dielectric Fresnel reflectance in f64 (an oracle independent of the
+/// library's `bsdf::fresnel`): `eta` = η_t/η_i for cos_i ≥ 0, inverted from inside.
+pub fn fresnel_f64(cos_i: f64, eta: f64) -> f64 {
+    let (eta, ci) = if cos_i >= 0.0 { (eta, cos_i) } else { (1.0 / eta, -cos_i) };
+    let sin2_t = (1.0 - ci * ci) / (eta * eta);
+    if sin2_t >= 1.0 {
+        return 1.0;
+    }
+    let ct = (1.0 - sin2_t).sqrt();
+    let rs = (ci - eta * ct) / (ci + eta * ct);
+    let rp = (eta * ci - ct) / (eta * ci + ct);
+    0.5 * (rs * rs + rp * rp)
+}
+
 /// Running mean and variance in f64 (Welford).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct MeanVar {

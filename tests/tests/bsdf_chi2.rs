@@ -26,6 +26,7 @@ use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
 use ember_core::math::Vec3;
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::spectrum::Rgb;
+use ember_tests::stats::fresnel_f64;
 use ember_tests::chi2::{Chi2Config, SphereBinning, chi2_sphere, sidak};
 use ember_tests::stats::normal_two_sided_p;
 
@@ -279,19 +280,6 @@ fn dirac_lobe_test(name: &str, material: Material, wo: Vec3, eta: f32, expected_
     };
     println!("{name}: reflected {p_hat:.5}, expected F = {expected_r:.5}, p = {p:.3}");
     assert!(p >= significance, "{name}: reflection frequency {p_hat} vs F = {expected_r}, p = {p:e}");
-}
-
-/// Unpolarised dielectric Fresnel reflectance in f64 (independent of the library's).
-fn fresnel_f64(cos_i: f64, eta: f64) -> f64 {
-    let (eta, ci) = if cos_i >= 0.0 { (eta, cos_i) } else { (1.0 / eta, -cos_i) };
-    let sin2_t = (1.0 - ci * ci) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return 1.0;
-    }
-    let ct = (1.0 - sin2_t).sqrt();
-    let rs = (ci - eta * ct) / (ci + eta * ct);
-    let rp = (eta * ci - ct) / (eta * ci + ct);
-    0.5 * (rs * rs + rp * rp)
 }
 
 #[test]

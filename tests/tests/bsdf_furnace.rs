@@ -44,6 +44,7 @@ use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
 use ember_core::math::Vec3;
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::spectrum::Rgb;
+use ember_tests::stats::fresnel_f64;
 use ember_tests::chi2::sidak;
 use ember_tests::stats::{MeanVar, normal_two_sided_p};
 use glam::Vec2;
@@ -265,17 +266,4 @@ fn furnace_smooth_and_diffuse() {
         println!("smooth dielectric Radiance θ={deg}° inside={inside}: ρ = {:.4} ± {:.4}, expected {expected:.4}, p = {p:.3}", rho.mean(), rho.std_error());
         assert!(p >= significance, "Radiance-mode glass θ={deg}° inside={inside}: {} vs {expected} (p = {p:e})", rho.mean());
     }
-}
-
-/// Unpolarised dielectric Fresnel reflectance in f64 (independent of the library's).
-fn fresnel_f64(cos_i: f64, eta: f64) -> f64 {
-    let (eta, ci) = if cos_i >= 0.0 { (eta, cos_i) } else { (1.0 / eta, -cos_i) };
-    let sin2_t = (1.0 - ci * ci) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return 1.0;
-    }
-    let ct = (1.0 - sin2_t).sqrt();
-    let rs = (ci - eta * ct) / (ci + eta * ct);
-    let rp = (eta * ci - ct) / (eta * ci + ct);
-    0.5 * (rs * rs + rp * rp)
 }

@@ -11,7 +11,7 @@
 
 use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
-use ember_tests::render::{Estimator, render_pass};
+use ember_tests::render::{Estimator, block_means, render_pass};
 use ember_tests::scenes::cornell;
 use ember_tests::stats::{MeanVar, normal_two_sided_p};
 use ember_tests::tracer::BruteForce;
@@ -28,14 +28,7 @@ fn block_stats(est: Estimator, passes: u32) -> Vec<[MeanVar; 3]> {
     for pass in 0..passes {
         let (img, counters) = render_pass(est, &scene, &tracer, &params, pass);
         assert_eq!(counters.discarded, 0, "{est:?}: non-finite samples");
-        let mut sums = vec![[0.0f64; 3]; BLOCKS];
-        for (i, px) in img.iter().enumerate() {
-            let (x, y) = (i as u32 % RES, i as u32 / RES);
-            let b = ((y / BLOCK) * (RES / BLOCK) + x / BLOCK) as usize;
-            for c in 0..3 {
-                sums[b][c] += px[c] / (BLOCK * BLOCK) as f64;
-            }
-        }
+        let sums = block_means(&img, RES as usize, BLOCK as usize);
         for (s, sum) in stats.iter_mut().zip(&sums) {
             for c in 0..3 {
                 s[c].push(sum[c]);
@@ -88,13 +81,8 @@ fn pt_and_bdpt_agree_on_an_environment_through_a_window() {
         for pass in 0..passes {
             let (img, counters) = render_pass(est, &scene, &tracer, &params, pass);
             assert_eq!(counters.discarded, 0);
-            let mut sums = [0.0f64; 12];
-            for (i, px) in img.iter().enumerate() {
-                let (x, y) = (i % 16, i / 16);
-                sums[(y / B) * 4 + x / B] += px[0] / (B * B) as f64;
-            }
-            for (s, v) in stats[k].iter_mut().zip(sums) {
-                s.push(v);
+            for (s, v) in stats[k].iter_mut().zip(block_means(&img, 16, B)) {
+                s.push(v[0]);
             }
         }
     }

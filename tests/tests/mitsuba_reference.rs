@@ -15,7 +15,7 @@
 use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
 use ember_tests::reference::{read_exr, scenes_dir};
-use ember_tests::render::{Estimator, render_pass};
+use ember_tests::render::{Estimator, block_means, render_pass};
 use ember_tests::scenes::cornell;
 use ember_tests::stats::{MeanVar, normal_two_sided_p};
 use ember_tests::tracer::BruteForce;
@@ -38,15 +38,7 @@ fn path_tracer_matches_mitsuba_on_the_cornell_box() {
     let mut stats = vec![[MeanVar::default(); 3]; nb * nb];
     for pass in 0..256 {
         let (img, _) = render_pass(Estimator::Pt, &scene, &tracer, &params, pass);
-        let mut sums = vec![[0.0f64; 3]; nb * nb];
-        for (i, px) in img.iter().enumerate() {
-            let (x, y) = (i % RES as usize, i / RES as usize);
-            let b = (y / BLOCK as usize) * nb + x / BLOCK as usize;
-            for c in 0..3 {
-                sums[b][c] += px[c] / (BLOCK * BLOCK) as f64;
-            }
-        }
-        for (s, v) in stats.iter_mut().zip(&sums) {
+        for (s, v) in stats.iter_mut().zip(&block_means(&img, RES as usize, BLOCK as usize)) {
             for c in 0..3 {
                 s[c].push(v[c]);
             }
