@@ -54,6 +54,17 @@ pub struct CameraSample {
     pub pdf: SolidAnglePdf,
 }
 
+impl PerspectiveCamera {
+    /// Importance arriving at the connected point per unit projected area there,
+    /// W_e |cos θ_c| / d²: what a light-path vertex multiplies its throughput by when it
+    /// connects to the pinhole (the pinhole's counterpart of a delta light's I / d²).
+    #[inline]
+    pub fn arriving_importance(&self, cs: &CameraSample) -> f32 {
+        let cos_c = self.forward().dot(-cs.wi).abs();
+        cs.importance * cos_c / (cs.dist * cs.dist)
+    }
+}
+
 /// Pinhole perspective camera (Mitsuba 3 `perspective`, no near/far clipping).
 #[derive(Clone, Copy, Debug)]
 pub struct PerspectiveCamera {

@@ -59,7 +59,7 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
         }
         Command::Convergence(args) => run_convergence(args),
         Command::Suite(args) => {
-            let threads = args.threads.map_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()), |n| n as usize);
+            let threads = crate::cli::thread_count(args.threads);
             let results = suite::run(args, threads).map_err(AppError::Estimator)?;
             // As a user would type it from the repository root.
             let command = format!("cargo run --release -p ember-cli -- {}", std::env::args().skip(1).collect::<Vec<_>>().join(" "));
@@ -76,7 +76,7 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
 fn run_convergence(args: &ConvergenceArgs) -> Result<(), AppError> {
     let reference_path = args.reference.clone().unwrap_or_else(|| args.scene.with_file_name("reference.exr"));
     let reference = Reference::load(&reference_path).map_err(AppError::Output)?;
-    let threads = args.threads.map_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()), |n| n as usize);
+    let threads = crate::cli::thread_count(args.threads);
     let setup = ConvergenceSetup { estimators: args.estimators.clone(), budget_seconds: args.budget, seeds: args.seeds, threads, max_depth: args.max_depth };
     let prepare = || estimators::prepare_file(&args.scene, None, None, Vec::new());
     let points = convergence::measure(&setup, &reference, &prepare, |c| {

@@ -195,6 +195,14 @@ fn parse_exposure(s: &str) -> Result<f32, String> {
     if v.is_finite() && v.abs() <= 64.0 { Ok(v) } else { Err(format!("exposure must lie in [-64, 64] stops, got {s}")) }
 }
 
+/// `--threads N` where given, else every core.
+pub fn thread_count(option: Option<u32>) -> usize {
+    match option {
+        Some(n) => n as usize,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    }
+}
+
 impl RenderArgs {
     /// Maximum passes: `--spp`, else unlimited under `--time`, else [`DEFAULT_SPP`].
     pub fn spp_limit(&self) -> u32 {
@@ -207,10 +215,7 @@ impl RenderArgs {
 
     /// Render threads: `--threads`, else every core.
     pub fn thread_count(&self) -> usize {
-        match self.threads {
-            Some(n) => n as usize,
-            None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-        }
+        thread_count(self.threads)
     }
 
     /// Resolution: the options where given, `default` (the scene's film) otherwise.

@@ -46,10 +46,10 @@ fn trace_one<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderPar
         if let Some(cs) = scene.camera.sample_wi(es.p) {
             let le = light.radiance(es.p, es.n, cs.wi);
             let cos_light = if es.n == Vec3::ZERO { 1.0 } else { es.n.dot(cs.wi).abs() };
-            let value = le * (cos_light * camera_factor(scene, &cs) / pdf_pos);
+            let value = le * (cos_light * scene.camera.arriving_importance(&cs) / pdf_pos);
             if !value.is_black() {
                 counters.rays += 1;
-                if !tracer.occluded(&spawn_ray_to(es.p, es.n, cs_origin(scene), Vec3::ZERO)) {
+                if !tracer.occluded(&spawn_ray_to(es.p, es.n, scene.camera.position(), Vec3::ZERO)) {
                     splat(Splat { film: cs.film, value: counters.sanitize(value) });
                 }
             }
@@ -72,10 +72,10 @@ fn trace_one<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderPar
         if !material.is_delta() && params.max_depth.allows(segments + 1) {
             if let Some(cs) = scene.camera.sample_wi(hit.p) {
                 let f = sp.f_cos(scene, cs.wi, TransportMode::Importance);
-                let value = beta * f * camera_factor(scene, &cs);
+                let value = beta * f * scene.camera.arriving_importance(&cs);
                 if !value.is_black() {
                     counters.rays += 1;
-                    if !tracer.occluded(&sp.spawn_to(cs_origin(scene), Vec3::ZERO)) {
+                    if !tracer.occluded(&sp.spawn_to(scene.camera.position(), Vec3::ZERO)) {
                         splat(Splat { film: cs.film, value: counters.sanitize(value) });
                     }
                 }
@@ -103,17 +103,4 @@ fn trace_one<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderPar
         }
         ray = sp.spawn(wi);
     }
-}
-
-/// W_e |cos θ_c| / d² of a connection to the pinhole: the importance arriving at the
-/// connected point per unit projected area there.
-#[inline]
-fn camera_factor(scene: &Scene, cs: &crate::camera::CameraSample) -> f32 {
-    let cos_c = scene.camera.forward().dot(-cs.wi).abs();
-    cs.importance * cos_c / (cs.dist * cs.dist)
-}
-
-#[inline]
-fn cs_origin(scene: &Scene) -> Vec3 {
-    scene.camera.position()
 }

@@ -63,7 +63,7 @@ pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Render
                 if le.is_black() {
                     continue;
                 }
-                let w = emission_weight(scene, params, prev, || scene.light_pmf(id) * light.pdf_li(prev_p(prev), ray.dir, Vec3::ZERO, Vec3::ZERO).0);
+                let w = emission_weight(params, prev, || scene.light_pmf(id) * light.pdf_li(prev_p(prev), ray.dir, Vec3::ZERO, Vec3::ZERO).0);
                 l += beta * le * w;
             }
             break;
@@ -75,7 +75,7 @@ pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Render
             let light = &scene.lights[id as usize];
             let le = light.radiance(hit.p, hit.ng, -ray.dir);
             if !le.is_black() {
-                let w = emission_weight(scene, params, prev, || scene.light_pmf(id) * light.pdf_li(prev_p(prev), ray.dir, hit.p, hit.ng).0);
+                let w = emission_weight(params, prev, || scene.light_pmf(id) * light.pdf_li(prev_p(prev), ray.dir, hit.p, hit.ng).0);
                 l += beta * le * w;
             }
         }
@@ -122,7 +122,7 @@ fn prev_p(prev: Option<PrevBounce>) -> Vec3 {
 
 /// MIS weight of emission reached by the BSDF-sampled segment from `prev`.
 #[inline]
-fn emission_weight(_scene: &Scene, params: &RenderParams, prev: Option<PrevBounce>, light_pdf: impl FnOnce() -> f32) -> f32 {
+fn emission_weight(params: &RenderParams, prev: Option<PrevBounce>, light_pdf: impl FnOnce() -> f32) -> f32 {
     match prev {
         None => 1.0,
         Some(p) if p.is_delta => 1.0,

@@ -56,8 +56,7 @@ pub fn connect<Q: RayQuery + ?Sized>(
         }
         let cs = scene.camera.sample_wi(qs.p)?;
         // Importance arriving at qs per unit projected area: W_e |cos θ_c| / d².
-        let cos_c = scene.camera.forward().dot(-cs.wi).abs();
-        let cam = Vertex::camera(scene.camera.position(), Rgb::splat(cs.importance * cos_c / (cs.dist * cs.dist)));
+        let cam = Vertex::camera(scene.camera.position(), Rgb::splat(scene.camera.arriving_importance(&cs)));
         let v = qs.beta * qs.f(scene, &cam, TransportMode::Importance) * cam.beta * cs.wi.dot(qs.frame.n).abs();
         if v.is_black() {
             return None;
