@@ -2,7 +2,9 @@
 //! wall-clock seconds, preprocessing included.
 //!
 //! For each estimator and seed the clock starts before the scene is loaded; the film is
-//! snapshotted at doubling checkpoints (1, 2, 4, … s up to the budget). The deadline is
+//! snapshotted at checkpoints spaced by a factor √2 (1, 1.41, 2, 2.83, … s up to the
+//! budget), fine enough that a time to reach an error target is read to within ±20 %
+//! before interpolation ([`time_to_reach`] interpolates log-log between checkpoints). The deadline is
 //! checked between passes, so a snapshot lands when the pass running at its checkpoint
 //! ends: the CSV records the actual elapsed seconds, and the plot uses them. relMSE and
 //! MAPE (see [`crate::metrics`]) are averaged over seeds at each checkpoint.
@@ -70,16 +72,39 @@ impl Reference {
     }
 }
 
-/// Doubling checkpoints 1, 2, 4, … up to and including the budget.
+/// Checkpoints 2^(k/2) s, k = 0, 1, 2, …, below the budget, then the budget itself.
 pub fn checkpoints(budget: f64) -> Vec<f64> {
     let mut v = Vec::new();
-    let mut t = 1.0;
-    while t < budget {
+    let mut k = 0;
+    loop {
+        let t = 2f64.powf(k as f64 / 2.0);
+        if t >= budget * (1.0 - 1e-9) {
+            break;
+        }
         v.push(t);
-        t *= 2.0;
+        k += 1;
     }
     v.push(budget.max(f64::MIN_POSITIVE));
     v
+}
+
+/// The first time an error curve (seconds, error) reaches `target`, interpolated
+/// log-log between the last checkpoint above and the first at or below it (errors of
+/// unbiased estimators fall as a power of time, so the log-log segment is the natural
+/// model); `None` when the curve never reaches it. A curve at or below the target from
+/// its first checkpoint reports that checkpoint's time.
+pub fn time_to_reach(curve: &[(f64, f64)], target: f64) -> Option<f64> {
+    let i = curve.iter().position(|p| p.1 <= target)?;
+    let (t1, e1) = curve[i];
+    if i == 0 {
+        return Some(t1);
+    }
+    let (t0, e0) = curve[i - 1];
+    if !(e0 > 0.0 && e1 > 0.0 && t0 > 0.0 && t1 > t0) || e1 >= e0 {
+        return Some(t1);
+    }
+    let f = (target.ln() - e0.ln()) / (e1.ln() - e0.ln());
+    Some((t0.ln() + f.clamp(0.0, 1.0) * (t1.ln() - t0.ln())).exp())
 }
 
 /// Run every estimator and seed; `prepare` loads the scene (timed as preprocessing).
@@ -186,9 +211,23 @@ mod tests {
     use super::*;
 
     #[test]
-    fn checkpoints_double_up_to_the_budget() {
-        assert_eq!(checkpoints(10.0), vec![1.0, 2.0, 4.0, 8.0, 10.0]);
-        assert_eq!(checkpoints(8.0), vec![1.0, 2.0, 4.0, 8.0]);
+    fn checkpoints_grow_by_root_two_up_to_the_budget() {
+        let c = checkpoints(4.0);
+        assert_eq!(c.len(), 5);
+        for (got, want) in c.iter().zip([1.0, 2f64.sqrt(), 2.0, 8f64.sqrt(), 4.0]) {
+            assert!((got - want).abs() < 1e-12, "{c:?}");
+        }
+        assert_eq!(checkpoints(3.0).last(), Some(&3.0));
         assert_eq!(checkpoints(0.5), vec![0.5]);
+    }
+
+    #[test]
+    fn time_to_reach_interpolates_a_power_law_exactly() {
+        // error = 10 / t: reaches 3 at t = 10/3, between the checkpoints 2 and 4.
+        let curve: Vec<(f64, f64)> = [1.0, 2.0, 4.0, 8.0].iter().map(|&t| (t, 10.0 / t)).collect();
+        let t = time_to_reach(&curve, 3.0).unwrap();
+        assert!((t - 10.0 / 3.0).abs() < 1e-9, "{t}");
+        assert_eq!(time_to_reach(&curve, 20.0), Some(1.0));
+        assert_eq!(time_to_reach(&curve, 1.0), None);
     }
 }
