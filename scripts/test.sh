@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The project's test command (README). Installs what it needs, then builds and runs
-# every test with optimisation. Takes about 10-15 minutes on 2 cores from cold.
+# every test with optimisation, then the browser test (host-wasm) and the fuzz targets.
+# Takes about 15 minutes on 2 cores from cold.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -15,3 +16,9 @@ cargo build --release -p ember-core --target x86_64-unknown-none
 
 step "workspace tests (optimised)"
 cargo test --release --workspace
+
+step "the renderer in a real browser (host-wasm, headless chromium)"
+scripts/test-browser.sh
+
+step "fuzz targets: committed seeds replayed, then 30 s of fuzzing each"
+scripts/test-fuzz.sh

@@ -25,6 +25,7 @@ pub mod mmis;
 pub mod integrator;
 pub mod rng;
 pub mod scene;
+pub mod spcbpt;
 pub mod shapes;
 pub mod spectrum;
 pub mod warp;

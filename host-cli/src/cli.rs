@@ -115,6 +115,12 @@ pub enum EstimatorArg {
     Lt,
     /// Bidirectional path tracing with multiple importance sampling (Veach 1997).
     Bdpt,
+    /// Light-vertex-cache BDPT: M light paths per pass into a cache, N uniform
+    /// connections per camera vertex (Davidovič et al. 2014).
+    Lvcbpt,
+    /// Subspace-based probabilistic connections (Su, Li, Wang 2022): Γ-guided
+    /// connections to cached light vertices, Γ trained by Adam before rendering.
+    Spcbpt,
 }
 
 impl EstimatorArg {
@@ -124,6 +130,8 @@ impl EstimatorArg {
             Self::Pt => "pt",
             Self::Lt => "lt",
             Self::Bdpt => "bdpt",
+            Self::Lvcbpt => "lvcbpt",
+            Self::Spcbpt => "spcbpt",
         }
     }
 }
@@ -135,9 +143,17 @@ pub struct RenderArgs {
     #[arg(value_name = "SCENE")]
     pub scene: Option<PathBuf>,
 
+    /// Render a built-in scene instead of a file: `cornell-box` (the default without a
+    /// SCENE) or `glass-spheres` (caustics through a glass and a mirror sphere).
+    #[arg(long, value_name = "NAME", conflicts_with = "scene", value_parser = ["cornell-box", "glass-spheres"])]
+    pub builtin: Option<String>,
+
     /// Light-transport algorithm.
     #[arg(short, long, value_enum, default_value_t = EstimatorArg::Pt)]
     pub estimator: EstimatorArg,
+
+    #[command(flatten)]
+    pub cache: CacheArgs,
 
     /// Samples per pixel (passes). Defaults to 16, or to unlimited when --time is given.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
@@ -183,6 +199,71 @@ pub struct RenderArgs {
     #[arg(long, value_name = "STOPS", default_value_t = 0.0, allow_negative_numbers = true,
           value_parser = parse_exposure)]
     pub exposure: f32,
+}
+
+/// Options of the cache-based estimators (LVCBPT, SPCBPT), with the SPCBPT paper's
+/// defaults. Scaling rule for small images: the paper renders about 1280×720 with
+/// M = 100 000 light paths per pass and |D| = 1 000 000 dataset paths; here M defaults
+/// to min(100 000, W·H) (the light paths per pixel sample never exceed one, as in BDPT),
+/// |D| to min(1 000 000, W·H) and M' (paths estimating Q) to min(2 000 000, 2·W·H).
+#[derive(Args, Debug, Clone, PartialEq)]
+#[command(next_help_heading = "LVCBPT / SPCBPT")]
+pub struct CacheArgs {
+    /// Light paths per pass, M [default: min(100000, W·H)].
+    #[arg(long, value_name = "M", value_parser = clap::value_parser!(u32).range(1..))]
+    pub light_paths: Option<u32>,
+    /// Connections per camera vertex, N.
+    #[arg(long, value_name = "N", default_value_t = 3)]
+    pub connections: u32,
+    /// SPCBPT: training paths, |D| [default: min(1000000, W·H)].
+    #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..))]
+    pub dataset: Option<u32>,
+    /// SPCBPT: subspaces per side, N_S (about 20 % of the light ones go to light-source bins).
+    #[arg(long, value_name = "N", default_value_t = 1000, value_parser = clap::value_parser!(u32).range(2..))]
+    pub subspaces: u32,
+    /// SPCBPT: Adam learning rate α (the paper's 0.1: measured 4-40x less excess loss than
+    /// the public code's 0.01-0.02 within the paper's step budget, docs/spcbpt-training.md).
+    #[arg(long, value_name = "ALPHA", default_value_t = 0.1)]
+    pub learning_rate: f32,
+    /// SPCBPT: Adam mini-batch size.
+    #[arg(long, value_name = "PATHS", default_value_t = 10_000)]
+    pub batch: usize,
+    /// SPCBPT: training epochs.
+    #[arg(long, value_name = "N", default_value_t = 2)]
+    pub epochs: u32,
+    /// SPCBPT: weight of the uniform distribution mixed into Γ.
+    #[arg(long, value_name = "M", default_value_t = 0.1)]
+    pub mixture: f32,
+    /// SPCBPT: light vertices retained per subspace across passes, M0.
+    #[arg(long, value_name = "M0", default_value_t = 200)]
+    pub reuse: u32,
+    /// SPCBPT: weight of the normal/direction terms in the classification distance, k_d.
+    #[arg(long, value_name = "K", default_value_t = 0.05)]
+    pub k_d: f32,
+    /// SPCBPT: light paths estimating Q per light subspace, M' [default: min(2000000, 2·W·H)].
+    #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..))]
+    pub q_paths: Option<u32>,
+}
+
+impl Default for CacheArgs {
+    fn default() -> Self {
+        Self { light_paths: None, connections: 3, dataset: None, subspaces: 1000, learning_rate: 0.1, batch: 10_000, epochs: 2, mixture: 0.1, reuse: 200, k_d: 0.05, q_paths: None }
+    }
+}
+
+impl CacheArgs {
+    /// M for a film of `pixels` pixels.
+    pub fn light_paths_for(&self, pixels: u32) -> u32 {
+        self.light_paths.unwrap_or(pixels.clamp(1, 100_000))
+    }
+    /// |D| for a film of `pixels` pixels.
+    pub fn dataset_for(&self, pixels: u32) -> u32 {
+        self.dataset.unwrap_or(pixels.clamp(1, 1_000_000))
+    }
+    /// M' for a film of `pixels` pixels.
+    pub fn q_paths_for(&self, pixels: u32) -> u32 {
+        self.q_paths.unwrap_or(pixels.saturating_mul(2).clamp(1, 2_000_000))
+    }
 }
 
 fn parse_seconds(s: &str) -> Result<f64, String> {

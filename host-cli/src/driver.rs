@@ -65,6 +65,14 @@ pub trait PassRenderer: Sync {
     /// (e.g. 1/M for M light paths per pass; 1/(W·H) for BDPT whose camera_pass traces
     /// one light path per pixel).
     fn splat_scale(&self) -> f64;
+    /// Work that must finish before pass `pass`'s camera and light work starts (the
+    /// light paths and vertex caches of LVCBPT and SPCBPT). Runs inside the render thread
+    /// pool, so it may use rayon; its splats are merged with the pass's, scaled by
+    /// `splat_scale`, in the order they were emitted (which must not depend on the thread
+    /// count). State it builds lives behind interior mutability. Default: nothing.
+    fn prepare_pass(&self, _pass: u32, _splat: &mut dyn FnMut(Splat)) -> PassStats {
+        PassStats::default()
+    }
 }
 
 /// When to stop.
@@ -163,6 +171,7 @@ pub fn render<R: PassRenderer + ?Sized>(
     let mut camera_splats: Vec<Vec<Splat>> = vec![Vec::new(); pixels.div_ceil(pixel_chunk)];
     let light_paths = renderer.light_paths_per_pass() as usize;
     let mut light_splats: Vec<Vec<Splat>> = vec![Vec::new(); light_paths.div_ceil(light_chunk)];
+    let mut prepare_splats: Vec<Splat> = Vec::new();
 
     let progress = Progress::new(config.progress, limits, program_start);
     let loop_start = Instant::now();
@@ -208,13 +217,15 @@ pub fn render<R: PassRenderer + ?Sized>(
                 })
                 .reduce(PassStats::default, |a, b| a + b)
         };
+        prepare_splats.clear();
+        stats = stats + pool.install(|| renderer.prepare_pass(pass, &mut |s| prepare_splats.push(s)));
         let (cam, light) = pool.install(|| rayon::join(camera_work, light_work));
         stats = stats + cam + light;
 
         // Merge on this thread in a fixed order.
         film.add_camera_samples(0..pixels as u32, &camera_out);
         let scale = renderer.splat_scale();
-        for s in camera_splats.iter().chain(&light_splats) {
+        for s in std::iter::once(&prepare_splats).chain(&camera_splats).chain(&light_splats) {
             film.add_splats(s, scale);
         }
         film.end_pass();

@@ -10,7 +10,8 @@ use ember_core::Rgb;
 
 use crate::accel::Accel;
 use crate::app::{Built, builtin_resolution};
-use crate::cli::{EstimatorArg, RenderArgs};
+use crate::cached::{LvcbptHost, SpcbptHost};
+use crate::cli::{CacheArgs, EstimatorArg, RenderArgs};
 use crate::driver::{PassRenderer, PassStats, Splat};
 use crate::mitsuba;
 
@@ -27,11 +28,17 @@ pub struct PreparedScene {
     pub warnings: Vec<String>,
 }
 
-/// Build the built-in Cornell box at the requested resolution.
+/// Build the built-in scene `--builtin` names (the Cornell box by default) at the requested resolution.
 pub fn prepare_builtin(args: &RenderArgs) -> Result<PreparedScene, String> {
     let (w, h) = builtin_resolution(args);
-    let (scene, geometry, warnings) = builtin::cornell_box(w, h).build().map_err(|e| format!("built-in scene: {e}"))?;
-    Ok(finish("built-in Cornell box".into(), scene, &geometry, warnings, None, None, Vec::new()))
+    let (name, builder) = match args.builtin.as_deref() {
+        Some(ember_core::scene::builtin_glass::GLASS_SPHERES) => {
+            ("built-in glass-spheres", ember_core::scene::builtin_glass::glass_spheres(w, h))
+        }
+        _ => ("built-in Cornell box", builtin::cornell_box(w, h)),
+    };
+    let (scene, geometry, warnings) = builder.build().map_err(|e| format!("built-in scene: {e}"))?;
+    Ok(finish(name.into(), scene, &geometry, warnings, None, None, Vec::new()))
 }
 
 /// Load a Mitsuba 3 XML scene; `width`/`height` override the file's film.
@@ -69,14 +76,32 @@ pub struct CoreRenderer {
     pub prepared: PreparedScene,
     pub estimator: EstimatorArg,
     pub params: RenderParams,
+    /// LVCBPT's per-pass state (built in `new`).
+    pub lvcbpt: Option<LvcbptHost>,
+    /// SPCBPT's model and per-pass state (preprocessing runs in `new`).
+    pub spcbpt: Option<SpcbptHost>,
 }
 
 impl CoreRenderer {
     pub fn new(prepared: PreparedScene, estimator: EstimatorArg, max_depth: i32, seed: u64) -> Self {
+        Self::with_options(prepared, estimator, max_depth, seed, &CacheArgs::default())
+    }
+
+    /// [`Self::new`] with the cache-based estimators' options; their preprocessing runs
+    /// here (on the global rayon pool), so a clock started before counts it.
+    pub fn with_options(prepared: PreparedScene, estimator: EstimatorArg, max_depth: i32, seed: u64, cache: &CacheArgs) -> Self {
         // PT combines its two techniques with the power heuristic (as Mitsuba does);
         // BDPT's weights are the balance heuristic by construction.
         let params = RenderParams { max_depth: MaxDepth(max_depth), seed, heuristic: Heuristic::Power, ..RenderParams::default() };
-        Self { prepared, estimator, params }
+        let lvcbpt = match estimator {
+            EstimatorArg::Lvcbpt => Some(LvcbptHost::new(&prepared.scene, &prepared.accel, &params, cache)),
+            _ => None,
+        };
+        let spcbpt = match estimator {
+            EstimatorArg::Spcbpt => Some(SpcbptHost::new(&prepared.scene, &prepared.accel, &params, cache)),
+            _ => None,
+        };
+        Self { prepared, estimator, params, lvcbpt, spcbpt }
     }
     fn pixels(&self) -> u32 {
         self.width() * self.height()
@@ -100,6 +125,14 @@ impl PassRenderer for CoreRenderer {
         match self.estimator {
             EstimatorArg::Pt => stats(pt::render_pixels(scene, accel, &self.params, pass, pixels, out), n),
             EstimatorArg::Bdpt => stats(bdpt::render_pixels(scene, accel, &self.params, pass, pixels, out, splat), n),
+            EstimatorArg::Lvcbpt | EstimatorArg::Spcbpt => match (&self.lvcbpt, &self.spcbpt) {
+                (Some(l), _) => l.camera_pass(scene, accel, &self.params, pass, pixels, out),
+                (_, Some(s)) => s.camera_pass(scene, accel, &self.params, pass, pixels, out),
+                _ => {
+                    out.fill(Rgb::ZERO);
+                    PassStats::default()
+                }
+            },
             // Light tracing has no camera-side work: its image is all splats.
             EstimatorArg::Lt => {
                 out.fill(Rgb::ZERO);
@@ -122,7 +155,22 @@ impl PassRenderer for CoreRenderer {
             _ => PassStats::default(),
         }
     }
+    fn prepare_pass(&self, pass: u32, splat: &mut dyn FnMut(Splat)) -> PassStats {
+        let (scene, accel) = (&self.prepared.scene, &self.prepared.accel);
+        match (&self.lvcbpt, &self.spcbpt) {
+            (Some(l), _) => l.prepare_pass(scene, accel, &self.params, pass, splat),
+            (_, Some(s)) => s.prepare_pass(scene, accel, &self.params, pass, splat),
+            _ => PassStats::default(),
+        }
+    }
     fn splat_scale(&self) -> f64 {
+        if let Some(l) = &self.lvcbpt {
+            // LVCBPT's splats come from its M light paths.
+            return 1.0 / l.light_paths.max(1) as f64;
+        }
+        if let Some(s) = &self.spcbpt {
+            return 1.0 / s.light_paths.max(1) as f64;
+        }
         // LT traces W·H light paths per pass; BDPT traces one per pixel sample.
         1.0 / self.pixels() as f64
     }
@@ -146,5 +194,15 @@ pub fn make_core_renderer(args: &RenderArgs) -> Result<CoreRenderer, String> {
         eprintln!("warning: {w}");
     }
     let max_depth = args.max_depth.or(prepared.max_depth).unwrap_or(-1);
-    Ok(CoreRenderer::new(prepared, args.estimator, max_depth, args.seed))
+    let r = CoreRenderer::with_options(prepared, args.estimator, max_depth, args.seed, &args.cache);
+    if let Some(l) = &r.lvcbpt {
+        eprintln!("lvcbpt     M = {} light paths/pass, N = {}, counts: light tracing {:.4}, connection {:.4}", l.light_paths, l.connections, l.counts.light_tracing, l.counts.connection);
+    }
+    if let Some(s) = &r.spcbpt {
+        let rep = &s.report;
+        eprintln!("spcbpt     preprocessing {:.2} s ({}); {} eye × {} light subspaces", rep.seconds, rep.phases.iter().map(|(n, t)| format!("{n} {t:.2} s")).collect::<Vec<_>>().join(", "), rep.n_eye, rep.n_light);
+        eprintln!("spcbpt     losses per epoch {:?}", rep.losses);
+        eprintln!("spcbpt     memory: D {:.1} MiB ({} paths, freed after training), trees {:.1} KiB, Γ {:.1} KiB", rep.dataset_bytes as f64 / 1048576.0, rep.dataset_paths, rep.tree_bytes as f64 / 1024.0, rep.gamma_bytes as f64 / 1024.0);
+    }
+    Ok(r)
 }

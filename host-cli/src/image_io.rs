@@ -89,16 +89,45 @@ pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[[f32; 3]]) -> R
 /// Read the first layer with R, G and B channels of an EXR file as f32 (alpha, if any,
 /// is dropped; half and uint channels are converted).
 pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
-    let image = exr::prelude::read_first_rgba_layer_from_file(
-        path,
-        |size, _| (size.width(), vec![[0.0f32; 3]; size.width() * size.height()]),
-        |(w, px): &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            px[pos.y() * *w + pos.x()] = [r, g, b];
-        },
-    )
-    .map_err(|e| ImageError::new(path, ImageErrorKind::Exr(e)))?;
+    let file = File::open(path).map_err(|e| ImageError::new(path, ImageErrorKind::Exr(e.into())))?;
+    decode_exr(std::io::BufReader::new(file)).map_err(|e| ImageError::new(path, ImageErrorKind::Exr(e)))
+}
+
+/// [`read_exr`] on bytes already in memory (the fuzz target's entry point); errors name
+/// the file `<memory>`. Never panics on malformed input.
+pub fn read_exr_from_bytes(bytes: &[u8]) -> Result<RgbImage, ImageError> {
+    decode_exr(std::io::Cursor::new(bytes)).map_err(|e| ImageError::new(Path::new("<memory>"), ImageErrorKind::Exr(e)))
+}
+
+/// The most pixels an EXR may declare (256 Mpixel, 3 GiB as f32 RGB): a corrupt or
+/// hostile header must not make the reader allocate without bound.
+const MAX_EXR_PIXELS: usize = 1 << 28;
+
+fn decode_exr(reader: impl std::io::Read + std::io::Seek) -> Result<RgbImage, exr::error::Error> {
+    use exr::prelude::*;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |size, _| {
+                // Reading stops at the first pixel of an oversized image (see below).
+                let n = size.width().checked_mul(size.height()).filter(|&n| n <= MAX_EXR_PIXELS).unwrap_or(0);
+                (size.width(), vec![[0.0f32; 3]; n])
+            },
+            |(w, px): &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                if let Some(p) = px.get_mut(pos.y() * *w + pos.x()) {
+                    *p = [r, g, b];
+                }
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(reader)?;
     let size = image.layer_data.size;
     let (_, pixels) = image.layer_data.channel_data.pixels;
+    if pixels.len() != size.width() * size.height() {
+        return Err(exr::error::Error::NotSupported("images larger than 2^28 pixels".into()));
+    }
     Ok(RgbImage { width: size.width() as u32, height: size.height() as u32, pixels })
 }
 
@@ -185,5 +214,27 @@ mod tests {
         assert!(e.to_string().contains("y.exr"), "{e}");
         let e = write_exr(Path::new("z.exr"), 2, 2, &[[0.0; 3]]).unwrap_err();
         assert!(matches!(e.kind, ImageErrorKind::Size { .. }) && e.to_string().contains("z.exr"));
+    }
+
+    /// The fuzz target's seeds (hand-written uncompressed EXRs, float and half) decode;
+    /// every truncation of them is an error, never a panic; a header declaring 2³² pixels
+    /// is refused before anything that size is allocated.
+    #[test]
+    fn in_memory_reader_decodes_seeds_and_rejects_damage() {
+        let seeds = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/seeds/exr_reader");
+        let float = std::fs::read(seeds.join("float_2x2.exr")).unwrap();
+        let img = read_exr_from_bytes(&float).unwrap();
+        assert_eq!((img.width, img.height), (2, 2));
+        assert_eq!(img.pixels[1], [1.5 + 2.0, 1.5 + 1.0, 1.5]); // channels stored B, G, R
+        let half = std::fs::read(seeds.join("half_3x2.exr")).unwrap();
+        assert_eq!(read_exr_from_bytes(&half).unwrap().pixels.len(), 6);
+        for n in 0..float.len() {
+            assert!(read_exr_from_bytes(&float[..n]).is_err(), "truncated to {n} bytes");
+        }
+        // dataWindow (0, 0)–(65535, 65535): patch the box2i of the float seed.
+        let at = float.windows(10).position(|w| w == b"dataWindow").unwrap() + b"dataWindow\0box2i\0".len() + 4;
+        let mut huge = float.clone();
+        huge[at + 8..at + 16].copy_from_slice(&[0xff, 0xff, 0, 0, 0xff, 0xff, 0, 0]);
+        assert!(read_exr_from_bytes(&huge).is_err());
     }
 }

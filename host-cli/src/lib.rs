@@ -6,6 +6,7 @@
 
 pub mod accel;
 pub mod app;
+pub mod cached;
 pub mod cli;
 pub mod convergence;
 pub mod driver;

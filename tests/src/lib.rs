@@ -9,3 +9,4 @@ pub mod scenes;
 pub mod render;
 pub mod reference;
 pub mod mmis_1d;
+pub mod cached;

@@ -106,10 +106,16 @@ pub struct Material {
     two_sided: bool,
 }
 
-/// η_int/η_ext, with invalid input (non-positive, non-finite) read as index-matched.
+/// Relative indices are clamped to [1/`MAX_RELATIVE_IOR`, `MAX_RELATIVE_IOR`]: far
+/// beyond any material (diamond/air is 2.4), and it keeps η², 1/η² and the refraction
+/// Jacobians finite (fuzzing found a NaN density at η = 2.6e-42).
+const MAX_RELATIVE_IOR: f32 = 1e3;
+
+/// η_int/η_ext, with invalid input (non-positive, non-finite) read as index-matched,
+/// and extreme ratios clamped (see [`MAX_RELATIVE_IOR`]).
 fn relative_ior(int_ior: f32, ext_ior: f32) -> f32 {
     let eta = int_ior / ext_ior;
-    if eta > 0.0 && eta.is_finite() { eta } else { 1.0 }
+    if eta > 0.0 && eta.is_finite() { eta.clamp(1.0 / MAX_RELATIVE_IOR, MAX_RELATIVE_IOR) } else { 1.0 }
 }
 
 /// Mirror a direction through the surface plane (Mitsuba's `twosided` flips z only).
@@ -201,24 +207,27 @@ impl Material {
     }
 
     fn eval_front(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
-        match &self.kind {
+        let f = match &self.kind {
             Kind::Diffuse(b) => b.eval(wo, wi),
             Kind::RoughConductor(b) => b.eval(wo, wi),
             Kind::RoughDielectric(b) => b.eval(wo, wi, mode),
             Kind::Conductor(_) | Kind::Dielectric(_) => Rgb::ZERO,
-        }
+        };
+        if f.is_finite() { f } else { Rgb::ZERO }
     }
 
     /// Solid-angle density with which [`Self::sample`] draws `wi` given `wo` (continuous
     /// lobes; 0 for Dirac materials). Independent of the mode.
     pub fn pdf(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> SolidAnglePdf {
         let (wo, wi) = if self.mirrored(wo) { (flip_z(wo), flip_z(wi)) } else { (wo, wi) };
-        match &self.kind {
+        let pdf = match &self.kind {
             Kind::Diffuse(b) => b.pdf(wo, wi),
             Kind::RoughConductor(b) => b.pdf(wo, wi),
             Kind::RoughDielectric(b) => b.pdf(wo, wi),
             Kind::Conductor(_) | Kind::Dielectric(_) => SolidAnglePdf::ZERO,
-        }
+        };
+        // Denormal cosines can overflow the Jacobians (found by fuzzing): no density.
+        if pdf.value().is_finite() && pdf.value() >= 0.0 { pdf } else { SolidAnglePdf::ZERO }
     }
 
     /// Density of sampling `wo` given `wi`: `pdf(wi, wo)`.
@@ -239,16 +248,20 @@ impl Material {
     }
 
     fn sample_front(&self, wo: Vec3, u_lobe: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
-        if !(wo.z != 0.0 && wo.is_finite()) {
+        // Denormal cos θo counts as grazing: Dirac values f = R/|cos θi| overflow there
+        // (found by fuzzing).
+        if !(wo.z.abs() >= f32::MIN_POSITIVE && wo.is_finite()) {
             return None;
         }
-        match &self.kind {
+        let s = match &self.kind {
             Kind::Diffuse(b) => b.sample(wo, u),
             Kind::Conductor(b) => b.sample(wo),
             Kind::RoughConductor(b) => b.sample(wo, u),
             Kind::Dielectric(b) => b.sample(wo, u_lobe, mode),
             Kind::RoughDielectric(b) => b.sample(wo, u_lobe, u, mode),
-        }
+        }?;
+        // No sample rather than a non-finite one.
+        (s.f.is_finite() && s.pdf.value().is_finite() && s.pdf_rev.value().is_finite()).then_some(s)
     }
 
     /// Every lobe is a Dirac distribution (smooth conductor, smooth dielectric).

@@ -86,7 +86,8 @@ impl RoughDielectric {
         let f = fresnel::dielectric(c.dot_o, self.eta).f;
         let g = self.distr.g1(wo, c.m) * self.distr.g1(wi, c.m);
         let cos_oi = (wo.z * wi.z).abs();
-        if c.reflect {
+        // Denormal cosines underflow cos_oi to 0: no finite value (as in the rough conductor).
+        let value = if c.reflect {
             self.specular_reflectance * (f * d * g / (4.0 * cos_oi))
         } else {
             let denom = c.dot_o + c.eta * c.dot_i;
@@ -96,7 +97,8 @@ impl RoughDielectric {
             };
             let v = scale * (1.0 - f) * d * g * c.eta * c.eta * (c.dot_o * c.dot_i).abs() / (cos_oi * denom * denom);
             self.specular_transmittance * v
-        }
+        };
+        if value.is_finite() { value } else { Rgb::ZERO }
     }
 
     /// Density of [`Self::sample`] (module docs).
@@ -110,7 +112,8 @@ impl RoughDielectric {
         }
         let f = fresnel::dielectric(c.dot_o, self.eta).f;
         let p = if c.reflect {
-            p_m * f / (4.0 * c.dot_i.abs())
+            // |wo·m| = |wi·m| for reflection; wo·m cancels the VNDF's (see rough_conductor.rs).
+            p_m * f / (4.0 * c.dot_o.abs())
         } else {
             let denom = c.dot_o + c.eta * c.dot_i;
             p_m * (1.0 - f) * c.eta * c.eta * c.dot_i.abs() / (denom * denom)

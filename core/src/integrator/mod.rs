@@ -12,7 +12,9 @@
 
 pub mod bdpt;
 pub mod lt;
+pub mod lvcbpt;
 pub mod pt;
+pub mod spcbpt;
 mod surface;
 
 pub use surface::SurfacePoint;

@@ -36,12 +36,17 @@ pub(super) struct PointLight {
 impl PointLight {
     pub(super) fn sample_li(&self, p_ref: Vec3) -> Option<LightSample> {
         let (wi, dist, dist2) = toward(self.position, p_ref)?;
+        let radiance = self.intensity / dist2;
+        // A reference point (almost) on the light: 1/d² overflows (found by fuzzing).
+        if !radiance.is_finite() {
+            return None;
+        }
         Some(LightSample {
             wi,
             dist,
             p: self.position,
             n: Vec3::ZERO,
-            radiance: self.intensity / dist2,
+            radiance,
             pdf: SolidAnglePdf(1.0),
             is_delta: true,
         })
@@ -120,12 +125,16 @@ impl SpotLight {
     pub(super) fn sample_li(&self, p_ref: Vec3) -> Option<LightSample> {
         let (wi, dist, dist2) = toward(self.position, p_ref)?;
         let falloff = self.falloff(self.frame.to_local(-wi));
+        let radiance = self.intensity * (falloff / dist2);
+        if !radiance.is_finite() {
+            return None;
+        }
         Some(LightSample {
             wi,
             dist,
             p: self.position,
             n: Vec3::ZERO,
-            radiance: self.intensity * (falloff / dist2),
+            radiance,
             pdf: SolidAnglePdf(1.0),
             is_delta: true,
         })

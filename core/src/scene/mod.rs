@@ -9,6 +9,7 @@
 //! here, once, at setup.
 
 pub mod builtin;
+pub mod builtin_glass;
 
 use alloc::vec::Vec;
 

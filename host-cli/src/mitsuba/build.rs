@@ -37,6 +37,25 @@ pub(crate) struct Ctx<'a> {
     pub default_material: Option<MaterialId>,
     /// Objects that were instantiated (to warn about unused declarations).
     pub used: Vec<bool>,
+    /// World → render frame: the translation by minus the camera position, composed in
+    /// f64 with every `to_world` before anything is rounded to f32 (see
+    /// [`camera_centred_frame`]).
+    pub render_frame: DMat4,
+}
+
+/// The camera-centred render frame (pbrt-v4's "camera-world" space): a translation by
+/// minus the sensor's position, so that f32 positions keep their precision near the
+/// camera however far the scene sits from the world origin. A scene translated by 1e5
+/// would otherwise lose everything below f32's ulp there (~0.008), e.g. the Cornell box's
+/// light gap. Lights and geometry are translation-invariant, so the image is unchanged.
+/// Identity when the file has no sensor (the error is reported later).
+fn camera_centred_frame(parsed: &Parsed) -> DMat4 {
+    let sensor = parsed.top.iter().filter_map(|&i| parsed.objs.get(i)).find(|o| o.tag == Tag::Sensor);
+    let origin = sensor.and_then(|o| Props::new(o).transform_opt("to_world").ok().flatten()).map(|m| m.transform_point3(DVec3::ZERO));
+    match origin {
+        Some(o) if o.is_finite() => DMat4::from_translation(-o),
+        _ => DMat4::IDENTITY,
+    }
 }
 
 /// What the sensor gives besides the camera transform.
@@ -58,6 +77,7 @@ pub(crate) fn instantiate(parsed: Parsed, base_dir: &Path, options: &LoadOptions
         materials: HashMap::new(),
         default_material: None,
         used: vec![false; parsed.objs.len()],
+        render_frame: camera_centred_frame(&parsed),
     };
     let mut sensor: Option<(SensorSpec, Loc)> = None;
     let mut integrator: Option<(Option<i32>, Loc)> = None;
@@ -97,7 +117,8 @@ pub(crate) fn instantiate(parsed: Parsed, base_dir: &Path, options: &LoadOptions
     let height = override_side(options.height, spec.height, "height")?;
     let camera = PerspectiveCamera::new(spec.to_world.as_mat4(), spec.fov, spec.fov_axis, width, height);
     ctx.sb.set_camera(camera);
-    Ok(LoadedScene { builder: ctx.sb, max_depth: integrator.and_then(|(d, _)| d), spp: spec.spp, width, height, warnings: ctx.warnings })
+    let world_origin = -ctx.render_frame.w_axis.truncate();
+    Ok(LoadedScene { builder: ctx.sb, max_depth: integrator.and_then(|(d, _)| d), spp: spec.spp, width, height, warnings: ctx.warnings, world_origin })
 }
 
 fn override_side(option: Option<u32>, file: u32, what: &str) -> Res<u32> {
@@ -190,10 +211,10 @@ impl<'a> Ctx<'a> {
                 };
                 let intensity = p.color("intensity", Rgb::ONE)?;
                 let intensity = nonnegative(&p, "intensity", intensity)?;
-                Light::point(position.as_vec3(), intensity)
+                Light::point(self.render_frame.transform_point3(position).as_vec3(), intensity)
             }
             "spot" => {
-                let m = p.transform("to_world")?;
+                let m = self.render_frame * p.transform("to_world")?;
                 let direction = m.transform_vector3(DVec3::Z);
                 if !(direction.length() > 0.0) {
                     return Err(Fail::at(p.loc_of("to_world"), "the spot light's `to_world` is singular"));
@@ -275,7 +296,7 @@ impl<'a> Ctx<'a> {
                 ));
             }
         };
-        let to_world = p.transform("to_world")?;
+        let to_world = self.render_frame * p.transform("to_world")?;
         match transform::similarity_scale(&to_world, 1e-3) {
             Some(s) if (s - 1.0).abs() <= 1e-3 => {}
             _ => {

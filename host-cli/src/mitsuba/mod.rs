@@ -71,6 +71,11 @@ pub struct LoadedScene {
     pub height: u32,
     /// Things accepted but not modelled, dropped geometry, unused declarations.
     pub warnings: Vec<String>,
+    /// The sensor's position in the file's world frame. The builder holds the scene
+    /// camera-centred (every transform composed in f64 with the translation by minus
+    /// this, then rounded to f32), so a point `p` of the file is at `p - world_origin`
+    /// in the builder. Zero when the camera sits at the origin.
+    pub world_origin: glam::DVec3,
 }
 
 /// Caller-side overrides.
@@ -151,6 +156,19 @@ pub fn load_scene(path: &Path, options: &LoadOptions) -> Result<LoadedScene, Sce
         .map_err(|e| wrap(Fail::nowhere(format!("the scene file is not valid UTF-8 (byte {})", e.utf8_error().valid_up_to()))))?;
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     load_str(&text, &base_dir, options).map_err(wrap)
+}
+
+/// [`load_scene`] on text already in memory (no file is read except the meshes it
+/// names, relative to `file`'s directory); errors name `file`. The entry point for
+/// callers that hold the XML as a string, and for the parser's fuzz target.
+pub fn load_scene_from_str(text: &str, file: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneFileError> {
+    let base_dir = file.parent().map(Path::to_path_buf).unwrap_or_default();
+    load_str(text, &base_dir, options).map_err(|f| SceneFileError {
+        file: file.to_path_buf(),
+        line: f.loc.map(|l| l.line),
+        column: f.loc.map(|l| l.col),
+        message: f.message,
+    })
 }
 
 /// [`load_scene`] on text already read; relative mesh paths resolve against `base_dir`.

@@ -57,7 +57,7 @@ impl Ctx<'_> {
 
         // Read every property first, so an unreferenced one is reported before any work.
         let mut p = Props::new(obj);
-        let to_world = p.transform("to_world")?;
+        let to_world = self.render_frame * p.transform("to_world")?;
         let flip = p.bool("flip_normals", false)?;
         let geometry = match obj.kind.as_str() {
             "rectangle" => Geometry::Rectangle,

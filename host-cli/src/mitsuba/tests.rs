@@ -111,13 +111,15 @@ fn suite_scenes_have_the_expected_contents() {
 #[test]
 fn cornell_box_from_xml_equals_the_builtin_one() {
     let loaded = load_scene(&suite_dir().join("cornell-box/scene.xml"), &LoadOptions::default()).unwrap();
+    // The loader builds camera-centred; shift back to the file's world frame.
+    let origin = loaded.world_origin.as_vec3();
     let (xml, xml_geo) = build(loaded);
     let (builtin, builtin_geo, _) = builtin::cornell_box(256, 256).build().unwrap();
     assert_eq!(xml_geo.triangles.len(), builtin_geo.triangles.len());
     assert_eq!(xml.lights.len(), builtin.lights.len());
     // Match triangles as sets: same vertices (same cyclic order, so same winding) within
     // 1e-5, same material, same emission.
-    let close = |a: &Triangle, b: &Triangle| (0..3).any(|r| (0..3).all(|i| (a.p[i] - b.p[(i + r) % 3]).abs().max_element() < 1e-5));
+    let close = |a: &Triangle, b: &Triangle| (0..3).any(|r| (0..3).all(|i| (a.p[i] - (b.p[(i + r) % 3] + origin)).abs().max_element() < 1e-5));
     let mut unmatched: Vec<&Triangle> = xml_geo.triangles.iter().collect();
     for t in &builtin_geo.triangles {
         let pos = unmatched.iter().position(|u| close(t, u)).unwrap_or_else(|| panic!("builtin triangle {t:?} not in the XML scene"));
@@ -133,7 +135,7 @@ fn cornell_box_from_xml_equals_the_builtin_one() {
     // Same camera: same rays through the same pixels.
     for film in [glam::Vec2::new(0.5, 0.5), glam::Vec2::new(200.25, 17.0), glam::Vec2::new(255.9, 255.9)] {
         let (a, b) = (builtin.camera.generate_ray(film), xml.camera.generate_ray(film));
-        assert!((a.origin - b.origin).length() < 1e-6 && (a.dir - b.dir).length() < 1e-6, "{a:?} vs {b:?}");
+        assert!((a.origin - (b.origin + origin)).length() < 1e-6 && (a.dir - b.dir).length() < 1e-6, "{a:?} vs {b:?}");
     }
 }
 
@@ -168,9 +170,15 @@ fn lookat_camera_follows_mitsuba() {
         <emitter type="point"><point name="position" x="0" y="3" z="0"/></emitter>
         <shape type="cube"/></scene>"#;
     std::fs::write(dir.join("s.xml"), text).unwrap();
-    let (scene, _) = build(load_scene(&dir.join("s.xml"), &LoadOptions::default()).unwrap());
+    let loaded = load_scene(&dir.join("s.xml"), &LoadOptions::default()).unwrap();
+    // Built camera-centred: the camera sits at the render frame's origin, the file's
+    // world origin at −(0, 0, 5), and the point light with it.
+    assert!((loaded.world_origin - glam::DVec3::new(0.0, 0.0, 5.0)).length() < 1e-12, "{:?}", loaded.world_origin);
+    let (scene, _) = build(loaded);
     let cam = &scene.camera;
-    assert!((cam.position() - Vec3::new(0.0, 0.0, 5.0)).length() < 1e-6);
+    assert!(cam.position().length() < 1e-6, "{:?}", cam.position());
+    let light = scene.lights[0].sample_li(Vec3::new(0.0, 3.0, -4.0), glam::Vec2::ZERO).unwrap();
+    assert!((light.p - Vec3::new(0.0, 3.0, -5.0)).length() < 1e-6 && (light.wi + Vec3::Z).length() < 1e-5, "{light:?}");
     assert!((cam.forward() - Vec3::NEG_Z).length() < 1e-6);
     // Camera +x is cross(up, forward) = world −x, and it is the image's left.
     let left = cam.generate_ray(glam::Vec2::new(0.0, 2.0)).dir;
@@ -396,5 +404,29 @@ fn accepted_but_unmodelled_things_warn() {
     let w = loaded.warnings.join("\n");
     for needle in ["volpath", "stratified", "png", "gaussian", "never"] {
         assert!(w.contains(needle), "no warning about {needle}: {w}");
+    }
+}
+
+/// Camera-centred frame at load (issue 8): the Cornell box translated by (1e5, −5e4,
+/// 2.5e4), camera included, loads to the same f32 triangles as the untranslated file
+/// (within 1e-5; the light's 0.02 gap below the ceiling survives), because transforms
+/// are composed with the translation by minus the camera position in f64 before rounding.
+/// Without the frame, f32 world coordinates at 1e5 are 0.0078 apart.
+#[test]
+fn far_translated_scene_loads_camera_centred_without_losing_precision() {
+    let path = suite_dir().join("cornell-box/scene.xml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let shifted = text.replace("</transform>", "<translate x=\"100000\" y=\"-50000\" z=\"25000\"/></transform>");
+    assert!(shifted.len() > text.len());
+    let near = crate::mitsuba::load_scene_from_str(&text, &path, &LoadOptions::default()).unwrap();
+    let far = crate::mitsuba::load_scene_from_str(&shifted, &path, &LoadOptions::default()).unwrap();
+    assert!((far.world_origin - near.world_origin - glam::DVec3::new(1e5, -5e4, 2.5e4)).length() < 1e-9, "{:?}", far.world_origin);
+    let (_, a) = build(near);
+    let (_, b) = build(far);
+    assert_eq!(a.triangles.len(), b.triangles.len());
+    for (s, t) in a.triangles.iter().zip(&b.triangles) {
+        for i in 0..3 {
+            assert!((s.p[i] - t.p[i]).abs().max_element() < 1e-5, "{:?} vs {:?}", s.p, t.p);
+        }
     }
 }

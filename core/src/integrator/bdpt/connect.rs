@@ -1,7 +1,7 @@
 //! Evaluation of one (s, t) strategy: join the first s light vertices and the first t
 //! camera vertices (pbrt-v3's `ConnectBDPT`).
 
-use super::mis::mis_weight;
+use super::mis::mis_weight_counted;
 use super::vertex::{Vertex, VertexKind};
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, RayQuery, spawn_ray_to};
@@ -33,6 +33,24 @@ pub fn connect<Q: RayQuery + ?Sized>(
     u_light: f32,
     u_point: Vec2,
     counters: &mut Counters,
+) -> Option<Connection> {
+    connect_counted(scene, tracer, light, camera, s, t, u_light, u_point, counters, &|_, _| 1.0)
+}
+
+/// [`connect`] with per-strategy sample counts in the MIS weight (see
+/// [`super::mis::mis_weight_counted`]); the returned value is weighted but not divided by
+/// the strategy's own count, which the caller applies with its selection probability.
+pub fn connect_counted<Q: RayQuery + ?Sized, C: Fn(usize, usize) -> f64>(
+    scene: &Scene,
+    tracer: &Q,
+    light: &[Vertex],
+    camera: &[Vertex],
+    s: usize,
+    t: usize,
+    u_light: f32,
+    u_point: Vec2,
+    counters: &mut Counters,
+    count: &C,
 ) -> Option<Connection> {
     // An escaped camera path can only be used as is (s = 0).
     if t > 1 && s != 0 && camera[t - 1].kind == VertexKind::InfiniteLight {
@@ -129,7 +147,7 @@ pub fn connect<Q: RayQuery + ?Sized>(
     if value.is_black() {
         return None;
     }
-    let weight = mis_weight(scene, light, camera, sampled.as_ref(), s, t);
+    let weight = mis_weight_counted(scene, light, camera, sampled.as_ref(), s, t, count);
     Some(Connection { value: value * weight, film, weight, sampled })
 }
 

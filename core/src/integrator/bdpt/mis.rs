@@ -24,9 +24,31 @@ fn remap0(x: f32) -> f64 {
 /// and Dirac flag for this strategy; they are held as overrides instead of copying the
 /// sub-paths, so a weight costs O(s + t) reads and a handful of density evaluations.
 pub fn mis_weight(scene: &Scene, light: &[Vertex], camera: &[Vertex], sampled: Option<&Vertex>, s: usize, t: usize) -> f32 {
+    mis_weight_counted(scene, light, camera, sampled, s, t, &|_, _| 1.0)
+}
+
+/// [`mis_weight`] for estimators whose strategies have different sample counts
+/// (LVCBPT, SPCBPT): `count(s', t')` is the number of samples strategy (s', t') takes per
+/// camera sample, and w_{s,t} = n_{s,t} p_{s,t} / Σ n_i p_i. With every count 1 (BDPT)
+/// each ratio is multiplied by exactly 1.0, so BDPT's weights are unchanged bit for bit.
+pub fn mis_weight_counted<C: Fn(usize, usize) -> f64>(scene: &Scene, light: &[Vertex], camera: &[Vertex], sampled: Option<&Vertex>, s: usize, t: usize, count: &C) -> f32 {
     if s + t == 2 {
         return 1.0;
     }
+    let own = count(s, t);
+    if !(own > 0.0) {
+        return 0.0;
+    }
+    let mut sum = 0.0f64;
+    for_each_strategy_ratio(scene, light, camera, sampled, s, t, &mut |s2, t2, ratio| sum += ratio * (count(s2, t2) / own));
+    let w = (1.0 / (1.0 + sum)) as f32;
+    if w.is_finite() { w } else { 0.0 }
+}
+
+/// Visit every OTHER strategy (s', t') able to produce the path of strategy (s, t) with
+/// the density ratio p_{s'} / p_{s,t} (f64), by the walk of [`mis_weight`]. SPCBPT's
+/// training set reads the ratios one by one (its Γ-dependent counts are path-dependent).
+pub fn for_each_strategy_ratio<V: FnMut(usize, usize, f64)>(scene: &Scene, light: &[Vertex], camera: &[Vertex], sampled: Option<&Vertex>, s: usize, t: usize, visit: &mut V) {
     // The strategy's own endpoints.
     let light_at = |i: usize| -> &Vertex {
         match sampled {
@@ -85,13 +107,12 @@ pub fn mis_weight(scene: &Scene, light: &[Vertex], camera: &[Vertex], sampled: O
     let light_delta = |i: usize| i + 1 != s && light_at(i).delta;
 
     // Ratios are accumulated in f64: they span many magnitudes along long paths.
-    let mut sum = 0.0f64;
     // Strategies with more light vertices: move camera vertices to the light side.
     let mut ri = 1.0f64;
     for i in (1..t).rev() {
         ri *= remap0(cam_rev(i)) / remap0(camera_at(i).pdf_fwd);
         if !cam_delta(i) && !cam_delta(i - 1) {
-            sum += ri;
+            visit(s + t - i, i, ri);
         }
     }
     // Strategies with fewer light vertices.
@@ -100,11 +121,9 @@ pub fn mis_weight(scene: &Scene, light: &[Vertex], camera: &[Vertex], sampled: O
         ri *= remap0(light_rev(i)) / remap0(light_at(i).pdf_fwd);
         let delta_before = if i > 0 { light_delta(i - 1) } else { is_delta_light(scene, light_at(0)) };
         if !light_delta(i) && !delta_before {
-            sum += ri;
+            visit(i, s + t - i, ri);
         }
     }
-    let w = (1.0 / (1.0 + sum)) as f32;
-    if w.is_finite() { w } else { 0.0 }
 }
 
 fn is_delta_light(scene: &Scene, v: &Vertex) -> bool {

@@ -1,0 +1,516 @@
+//! SPCBPT: subspace-based probabilistic connections (Su, Li, Wang 2022), on top of the
+//! LVCBPT iteration ([`super::lvcbpt`]).
+//!
+//! Eye and light sub-paths are classified by their end vertices into subspaces
+//! (κ_E, κ_L: nearest of contribution-sampled centroids under the distance of eq. 18,
+//! fitted by decision trees, [`crate::spcbpt`]). Per iteration M light paths are traced
+//! and their cacheable vertices (index ≥ 1, non-Dirac surfaces) are bucketed by κ_L.
+//! Each camera vertex z (t ≥ 2) makes N connections by two-stage sampling (section 6.1):
+//! 1. a light subspace l with probability Γ'(l | κ_E(z)), where Γ' is the trained
+//!    Γ(· | e) restricted to the subspaces NON-EMPTY in this iteration and renormalised
+//!    (an empty subspace can produce nothing; dividing by the unrestricted Γ while
+//!    sampling the restricted one is the public code's error);
+//! 2. a vertex y of subspace l with probability P_r(y) = f_y/p_y / S_l, S_l the sum of
+//!    f/p (RGB sum of the sub-path throughput β) over the subspace's vertices.
+//! The resampled estimate of the connection is f(ȲZ̄) / (p(Z̄) p(Ȳ) · N · M · Γ' · P_r):
+//! BOTH sub-path pdfs (eq. 10 as printed omits p(Ȳ)); β of each sub-path already holds
+//! its f/p, so the code divides the joined value by N·M·Γ'·P_r.
+//!
+//! MIS (eqs. 11, 12) uses the trained Γ(l | e) itself, NOT the pass's restricted Γ':
+//! the weights must be a deterministic function of the path. Which subspaces are empty
+//! depends on the pass's light paths, and a connected light vertex always makes its own
+//! subspace non-empty while the camera-side strategies of the same path see a random
+//! occupancy; with Γ' in the counts the weights of a path sum to one only per pass, not
+//! in expectation, and the image is biased (measured: +21 % on the Cornell box with
+//! M = 32 light paths over 128 subspaces, `tests/tests/spcbpt_agreement.rs`). The
+//! connection ESTIMATE divides by the true (restricted, renormalised) stage-1 pmf, so it
+//! stays exact, and an empty subspace is never sampled: no energy is lost.
+//!
+//! MIS counts: the balance heuristic over strategies with counts per camera
+//! sample: s = 0 and s = 1 (fresh next-event estimation, as in BDPT and LVCBPT: the
+//! light-source vertices are not cached, so the paper's light-source bins are not used
+//! here) count 1; t = 1 (light tracing) M/(W·H); a Γ-connection of split s' counts
+//! N · Γ(κ_L(x_{s'−1}) | κ_E(x_{s'})) · W(x₀…x_{s'−1}) / Q(κ_L), the paper's
+//! expected-value form of M·p(Ȳ)·Γ·P_r with S_l ≈ M·Q_l (eq. 19) and W the light
+//! prefix's f/p. W is recomputed for every split from the path itself ([`light_prefix_weights`];
+//! Dirac vertices count 1, no Russian roulette) so that all strategies of one path
+//! see the same counts and the weights sum to one exactly. Ratios of the sub-path
+//! densities come from BDPT's O(n) walk ([`bdpt::mis::mis_weight_counted`]); the count
+//! table of a path costs O(n) density evaluations and tree look-ups.
+//!
+//! Cross-iteration reuse (section 7.4, [`Retained`]): with M0 > 0 each light subspace k
+//! keeps a FIFO of the last M0 of its cacheable vertices (with their light prefixes:
+//! the scene is static, so prefixes of older passes stay valid) and stage 2 samples from
+//! the retained set. Let M_k(j) be the number of vertices generated in k over passes
+//! 1..j (retained or not) and M_r,k the number retained. The light paths are iid, so
+//! their order is exchangeable and each generated vertex is retained with probability
+//! M_r,k / M_k(j); hence Σ_{y retained} g(y) · M_k(j)/M_r,k estimates Σ_{y generated} g(y)
+//! without bias, and that sum over j·M paths estimates j·M times the per-path
+//! expectation. A connection to y thus divides by
+//! N · j·M · (M_r,k / M_k(j)) · Γ'(k | e) · P_r(y | k)   (`PassCache::effective_paths`
+//! holds j·M·M_r,k/M_k(j); without reuse it is M). The paper's eq. 20 carries an extra
+//! M_r inside the sum, inconsistent with its own retention probability M_r/M. The MIS
+//! counts do not change: S_k over the retained set ≈ (M_r,k/M_k(j))·j·M·Q_k, so
+//! j·M·(M_r/M_k)·p(Ȳ)·N·Γ·W/S_k ≈ N·Γ·W/Q_k as before.
+
+pub mod prepare;
+
+use alloc::boxed::Box;
+use alloc::collections::VecDeque;
+use alloc::vec::Vec;
+use core::ops::Range;
+
+use super::bdpt::{self, Vertex, VertexKind, camera_subpath, connect_counted};
+use super::lvcbpt::{CacheEntry, LightPaths, is_cacheable, trace_light_subpath};
+use super::{Counters, RenderParams, Splat};
+use crate::alias::AliasTable;
+use crate::bsdf::TransportMode;
+use crate::geometry::RayQuery;
+use crate::math::{Vec2, Vec3};
+use crate::rng::{SampleStream, Stream};
+use crate::scene::Scene;
+use crate::spcbpt::{DecisionTree, SubpathFeature, SubspaceMatrix};
+use crate::spectrum::Rgb;
+
+/// Vertices of a full path (light end first), bounded like BDPT's sub-paths.
+pub type FullPath = heapless::Vec<Vertex, { 2 * bdpt::MAX_VERTICES }>;
+
+/// κ_E and κ_L.
+#[derive(Clone, Debug)]
+pub struct Classifier {
+    pub eye: DecisionTree,
+    pub light: DecisionTree,
+    pub n_eye: u32,
+    pub n_light: u32,
+}
+
+/// Feature of vertex `v` as a sub-path end whose previous vertex is at `prev`.
+#[inline]
+pub fn feature(v: &Vertex, prev: Vec3) -> SubpathFeature {
+    SubpathFeature::new(v.p, v.frame.n, (prev - v.p).normalize_or_zero())
+}
+
+impl Classifier {
+    #[inline]
+    pub fn eye_of(&self, z: &Vertex, prev: Vec3) -> u32 {
+        self.eye.classify(&feature(z, prev)).min(self.n_eye.saturating_sub(1))
+    }
+    #[inline]
+    pub fn light_of(&self, y: &Vertex, prev: Vec3) -> u32 {
+        self.light.classify(&feature(y, prev)).min(self.n_light.saturating_sub(1))
+    }
+    pub fn size_bytes(&self) -> usize {
+        self.eye.size_bytes() + self.light.size_bytes()
+    }
+}
+
+/// Everything preprocessing produces: κ, Q per light subspace, Γ.
+#[derive(Clone, Debug)]
+pub struct Model {
+    pub classifier: Classifier,
+    /// Q_l: expected Σ f/p of subspace l's vertices per light path (eq. 19).
+    pub q: Vec<f32>,
+    pub gamma: SubspaceMatrix,
+    /// N.
+    pub connections: u32,
+}
+
+/// Scalar of a radiometric value (the RGB sum, as the paper's code).
+#[inline]
+pub fn scalar(c: Rgb) -> f32 {
+    c.sum()
+}
+
+/// W(x₀…x_{k−1}) for k = 0..=n (index k = number of light vertices): the light prefix's
+/// f/p as a deterministic function of the path (Dirac vertices count 1, no roulette).
+/// Entries 0 and 1 are unused (0).
+pub fn light_prefix_weights(scene: &Scene, x: &[Vertex], out: &mut [f32]) {
+    let n = x.len().min(out.len().saturating_sub(1));
+    out.iter_mut().for_each(|w| *w = 0.0);
+    if n < 2 {
+        return;
+    }
+    let (x0, x1) = (&x[0], &x[1]);
+    let origin = x0.pdf_light_origin(scene, x1) * x0.pdf_light(scene, x1);
+    let mut w = if origin > 0.0 { x0.le(scene, x1) * (geometry(x0, x1) / origin) } else { Rgb::ZERO };
+    out[2] = finite(scalar(w));
+    for k in 1..n - 1 {
+        let (prev, v, next) = (&x[k - 1], &x[k], &x[k + 1]);
+        if v.kind != VertexKind::Surface {
+            break;
+        }
+        if !scene.materials[v.material as usize].is_delta() {
+            let mut turned = *v;
+            turned.wo = (prev.p - v.p).normalize_or_zero();
+            let pdf = turned.pdf(scene, Some(prev), next);
+            w = if pdf > 0.0 { w * turned.f(scene, next, TransportMode::Importance) * (geometry(v, next) / pdf) } else { Rgb::ZERO };
+        }
+        out[k + 2] = finite(scalar(w));
+    }
+}
+
+#[inline]
+fn finite(x: f32) -> f32 {
+    if x.is_finite() && x > 0.0 { x } else { 0.0 }
+}
+
+/// |cos| |cos| / d² with shading normals (what β carries along a segment).
+fn geometry(a: &Vertex, b: &Vertex) -> f32 {
+    let d = b.p - a.p;
+    let d2 = d.length_squared();
+    if !(d2 > 0.0) {
+        return 0.0;
+    }
+    let w = d / crate::math::sqrt(d2);
+    let ca = if a.is_on_surface() { a.frame.n.dot(w).abs() } else { 1.0 };
+    let cb = if b.is_on_surface() { b.ng.dot(w).abs() } else { 1.0 };
+    ca * cb / d2
+}
+
+/// Cross-iteration reuse state (section 7.4): per light subspace a FIFO of at most
+/// `capacity` (M0) light prefixes ending at a cacheable vertex, and the number of
+/// vertices ever generated in the subspace. Updated once per pass, in subspace order and
+/// in path order within a subspace (deterministic, independent of the thread count).
+#[derive(Debug, Default)]
+pub struct Retained {
+    /// M0; 0 disables reuse.
+    pub capacity: u32,
+    pub fifos: Vec<VecDeque<Box<[Vertex]>>>,
+    /// M_k(j): vertices generated in subspace k over the passes so far.
+    pub generated: Vec<u64>,
+    /// j: passes folded in so far.
+    pub passes: u32,
+}
+
+impl Retained {
+    pub fn new(capacity: u32) -> Self {
+        Self { capacity, ..Self::default() }
+    }
+    #[inline]
+    pub fn enabled(&self) -> bool {
+        self.capacity > 0
+    }
+    pub fn size_bytes(&self) -> usize {
+        let prefixes: usize = self.fifos.iter().map(|f| f.capacity() * core::mem::size_of::<Box<[Vertex]>>() + f.iter().map(|p| p.len() * core::mem::size_of::<Vertex>()).sum::<usize>()).sum();
+        prefixes + self.fifos.capacity() * core::mem::size_of::<VecDeque<Box<[Vertex]>>>() + self.generated.capacity() * 8
+    }
+    /// Fold in one pass whose cacheable vertices are `entries[start[k]..start[k+1]]` for
+    /// subspace k (prefixes in `paths`).
+    fn push_pass(&mut self, paths: &LightPaths, entries: &[CacheEntry], start: &[u32]) {
+        let n = start.len().saturating_sub(1);
+        if self.fifos.len() != n {
+            self.fifos = (0..n).map(|_| VecDeque::new()).collect();
+            self.generated = alloc::vec![0; n];
+        }
+        let cap = self.capacity as usize;
+        for k in 0..n {
+            let bucket = &entries[start[k] as usize..start[k + 1] as usize];
+            self.generated[k] += bucket.len() as u64;
+            // Only the last `cap` of this pass can survive.
+            let skip = bucket.len().saturating_sub(cap);
+            let fifo = &mut self.fifos[k];
+            for e in &bucket[skip..] {
+                if fifo.len() == cap {
+                    fifo.pop_front();
+                }
+                fifo.push_back(Box::from(e.subpath(paths)));
+            }
+        }
+        self.passes += 1;
+    }
+}
+
+/// One iteration's light vertices, bucketed by light subspace, with the tables of the
+/// two sampling stages (and, with reuse, the retained vertices of earlier iterations).
+#[derive(Debug, Default)]
+pub struct PassCache {
+    pub paths: LightPaths,
+    /// Cache entries grouped by subspace: subspace l holds `entries[start[l]..start[l+1]]`.
+    pub entries: Vec<CacheEntry>,
+    pub start: Vec<u32>,
+    /// Stage 2 per subspace (None: empty).
+    pub vertex_tables: Vec<Option<AliasTable>>,
+    /// Stage 1 per eye subspace: Γ(· | e) restricted to non-empty subspaces.
+    pub gamma_tables: Vec<Option<AliasTable>>,
+    /// Σ over non-empty l of Γ(l | e), per eye subspace (the renormalisation of Γ').
+    pub gamma_norm: Vec<f32>,
+    /// Cross-iteration reuse; when enabled, stage 2 samples `retained.fifos[l]`.
+    pub retained: Retained,
+    /// Per subspace, the number of light paths a connection's estimate divides by:
+    /// j·M·M_r,k/M_k(j) with reuse, M without.
+    pub effective_paths: Vec<f64>,
+}
+
+impl PassCache {
+    /// An empty cache retaining `reuse` (M0) vertices per subspace across passes
+    /// (0: every pass uses only its own light paths).
+    pub fn with_reuse(reuse: u32) -> Self {
+        Self { retained: Retained::new(reuse), ..Self::default() }
+    }
+    /// Light prefix (y₀…y_{s−1}) of stage-2 candidate `index` of subspace `l`.
+    #[inline]
+    pub fn candidate(&self, l: usize, index: usize) -> Option<&[Vertex]> {
+        if self.retained.enabled() {
+            self.retained.fifos.get(l)?.get(index).map(|p| &p[..])
+        } else {
+            let entry = self.entries.get(*self.start.get(l)? as usize + index)?;
+            Some(entry.subpath(&self.paths))
+        }
+    }
+    #[inline]
+    pub fn is_empty_subspace(&self, l: u32) -> bool {
+        self.vertex_tables.get(l as usize).is_none_or(|t| t.is_none())
+    }
+    /// Γ'(l | e): 0 for subspaces empty this iteration.
+    #[inline]
+    pub fn restricted_gamma(&self, model: &Model, l: u32, e: u32) -> f32 {
+        let norm = self.gamma_norm.get(e as usize).copied().unwrap_or(0.0);
+        if self.is_empty_subspace(l) || !(norm > 0.0) { 0.0 } else { model.gamma.get(l, e) / norm }
+    }
+    pub fn size_bytes(&self) -> usize {
+        let tables = |t: &Vec<Option<AliasTable>>| t.iter().map(|a| a.as_ref().map_or(0, |a| a.len() * 12)).sum::<usize>() + t.capacity() * core::mem::size_of::<Option<AliasTable>>();
+        self.paths.size_bytes() + self.entries.capacity() * 8 + self.start.capacity() * 4 + tables(&self.vertex_tables) + tables(&self.gamma_tables) + self.gamma_norm.capacity() * 4 + self.retained.size_bytes() + self.effective_paths.capacity() * 8
+    }
+}
+
+/// Trace light paths `paths` of pass `pass` into `out` (appended; no splats yet: their
+/// weights need the iteration's non-empty subspaces).
+pub fn trace_light_paths<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, pass: u32, paths: Range<u32>, out: &mut LightPaths) -> Counters {
+    let mut counters = Counters::default();
+    for index in paths {
+        let light = trace_light_subpath(scene, tracer, params, Stream::Light, index, pass, &mut counters);
+        out.starts.push(out.vertices.len() as u32);
+        out.vertices.extend_from_slice(&light);
+    }
+    counters
+}
+
+/// Bucket the cacheable vertices of `cache.paths` by κ_L and build the stage-2 tables.
+pub fn build_buckets(scene: &Scene, model: &Model, cache: &mut PassCache) {
+    let n_light = model.classifier.n_light as usize;
+    let mut labelled: Vec<(u32, CacheEntry)> = Vec::new();
+    for i in 0..cache.paths.len() {
+        let start = cache.paths.starts[i];
+        let path = cache.paths.path(i);
+        for k in 1..path.len() {
+            if is_cacheable(scene, &path[k]) {
+                let l = model.classifier.light_of(&path[k], path[k - 1].p);
+                labelled.push((l, CacheEntry { start, s: k as u32 + 1 }));
+            }
+        }
+    }
+    // Stable counting sort by subspace.
+    cache.start.clear();
+    cache.start.resize(n_light + 1, 0);
+    for (l, _) in &labelled {
+        cache.start[*l as usize + 1] += 1;
+    }
+    for l in 0..n_light {
+        cache.start[l + 1] += cache.start[l];
+    }
+    let mut fill = cache.start.clone();
+    cache.entries.clear();
+    cache.entries.resize(labelled.len(), CacheEntry { start: 0, s: 0 });
+    for (l, e) in labelled {
+        cache.entries[fill[l as usize] as usize] = e;
+        fill[l as usize] += 1;
+    }
+    cache.vertex_tables.clear();
+    cache.effective_paths.clear();
+    let light_paths = cache.paths.len() as f64;
+    let mut weights: Vec<f32> = Vec::new();
+    let end_weight = |p: &[Vertex]| p.last().map_or(0.0, |v| finite(scalar(v.beta)));
+    if cache.retained.enabled() {
+        cache.retained.push_pass(&cache.paths, &cache.entries, &cache.start);
+        let r = &cache.retained;
+        for l in 0..n_light {
+            weights.clear();
+            weights.extend(r.fifos[l].iter().map(|p| end_weight(p)));
+            cache.vertex_tables.push(AliasTable::new(&weights));
+            let (kept, generated) = (r.fifos[l].len() as f64, r.generated[l] as f64);
+            cache.effective_paths.push(if kept > 0.0 { r.passes as f64 * light_paths * kept / generated } else { 0.0 });
+        }
+    } else {
+        for l in 0..n_light {
+            let bucket = &cache.entries[cache.start[l] as usize..cache.start[l + 1] as usize];
+            weights.clear();
+            weights.extend(bucket.iter().map(|e| end_weight(e.subpath(&cache.paths))));
+            cache.vertex_tables.push(AliasTable::new(&weights));
+            cache.effective_paths.push(light_paths);
+        }
+    }
+}
+
+/// Stage-1 tables for eye subspaces `eyes` into `tables` / `norms` (one slot each).
+pub fn build_gamma_tables(model: &Model, cache: &PassCache, eyes: Range<u32>, tables: &mut [Option<AliasTable>], norms: &mut [f32]) {
+    let mut weights: Vec<f32> = Vec::new();
+    for ((e, table), norm) in eyes.zip(tables.iter_mut()).zip(norms.iter_mut()) {
+        weights.clear();
+        weights.extend(model.gamma.column(e).iter().enumerate().map(|(l, &g)| if cache.is_empty_subspace(l as u32) { 0.0 } else { g }));
+        *norm = weights.iter().map(|&w| w as f64).sum::<f64>() as f32;
+        *table = AliasTable::new(&weights);
+    }
+}
+
+/// Sample counts n_{s'} of every split of full path `x` (s' = 0..=n), into `out`.
+pub fn path_counts(scene: &Scene, model: &Model, light_tracing: f64, x: &[Vertex], out: &mut [f64]) {
+    let n = x.len();
+    let mut w = [0.0f32; 2 * bdpt::MAX_VERTICES + 1];
+    light_prefix_weights(scene, x, &mut w);
+    for s in 0..=n.min(out.len() - 1) {
+        let t = n - s;
+        out[s] = if t == 1 {
+            light_tracing
+        } else if s <= 1 || t == 0 {
+            1.0
+        } else {
+            let (y, z) = (&x[s - 1], &x[s]);
+            if y.kind != VertexKind::Surface || z.kind != VertexKind::Surface {
+                0.0
+            } else {
+                let l = model.classifier.light_of(y, x[s - 2].p);
+                let e = model.classifier.eye_of(z, x[s + 1].p);
+                let q = model.q.get(l as usize).copied().unwrap_or(0.0);
+                if q > 0.0 { model.connections as f64 * model.gamma.get(l, e) as f64 * w[s] as f64 / q as f64 } else { 0.0 }
+            }
+        };
+    }
+}
+
+/// Join sub-paths into a full path, light end first (`sampled` replaces an endpoint).
+pub fn join(light: &[Vertex], camera: &[Vertex], sampled: Option<Vertex>, s: usize, t: usize) -> FullPath {
+    let mut x = FullPath::new();
+    for i in 0..s {
+        let v = match sampled {
+            Some(v) if s == 1 && i == 0 => Some(v),
+            _ => light.get(i).copied(),
+        };
+        if let Some(v) = v {
+            let _ = x.push(v);
+        }
+    }
+    for i in (0..t).rev() {
+        let v = match sampled {
+            Some(v) if t == 1 && i == 0 => Some(v),
+            _ => camera.get(i).copied(),
+        };
+        if let Some(v) = v {
+            let _ = x.push(v);
+        }
+    }
+    x
+}
+
+/// Evaluate strategy (s, t) with SPCBPT's path-dependent counts: connect once with unit
+/// counts to get the unweighted value and the resampled endpoint, then weigh.
+fn weighted<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model: &Model, light_tracing: f64, light: &[Vertex], camera: &[Vertex], s: usize, t: usize, u_light: f32, u_point: Vec2, counters: &mut Counters) -> Option<(Rgb, Option<Vec2>, f32)> {
+    strategy(scene, tracer, model, light_tracing, light, camera, s, t, u_light, u_point, counters).map(|c| (c.value, c.film, c.weight))
+}
+
+/// Strategy (s, t) with SPCBPT's MIS weight (`value` weighted, not divided by any
+/// selection probability); `sampled` is the resampled endpoint (s = 1 or t = 1).
+#[allow(clippy::too_many_arguments)]
+pub fn strategy<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model: &Model, light_tracing: f64, light: &[Vertex], camera: &[Vertex], s: usize, t: usize, u_light: f32, u_point: Vec2, counters: &mut Counters) -> Option<bdpt::Connection> {
+    if s != 1 && t != 1 {
+        // No endpoint is sampled: the full path is known before connecting, so one
+        // connection computes the weight with the path's counts, evaluated lazily (only
+        // once the connection is known to carry light: an occluded or black connection
+        // costs no count table; one MIS walk instead of two).
+        let table = core::cell::OnceCell::new();
+        let count = |s2: usize, _t2: usize| {
+            let counts = table.get_or_init(|| {
+                let x = join(light, camera, None, s, t);
+                let mut counts = [0.0f64; 2 * bdpt::MAX_VERTICES + 1];
+                path_counts(scene, model, light_tracing, &x, &mut counts);
+                counts
+            });
+            counts.get(s2).copied().unwrap_or(0.0)
+        };
+        return connect_counted(scene, tracer, light, camera, s, t, u_light, u_point, counters, &count);
+    }
+    // A sampled endpoint (s = 1 or t = 1) is only known after connecting: first the
+    // unweighted contribution (counts all 1 only affect `weight`), then the weight.
+    let c = connect_counted(scene, tracer, light, camera, s, t, u_light, u_point, counters, &|_, _| 1.0)?;
+    let unweighted = if c.weight > 0.0 { c.value / c.weight } else { return None };
+    let x = join(light, camera, c.sampled, s, t);
+    let mut counts = [0.0f64; 2 * bdpt::MAX_VERTICES + 1];
+    path_counts(scene, model, light_tracing, &x, &mut counts);
+    let count = |s2: usize, _t2: usize| counts[s2];
+    let weight = bdpt::mis::mis_weight_counted(scene, light, camera, c.sampled.as_ref(), s, t, &count);
+    Some(bdpt::Connection { value: unweighted * weight, film: c.film, weight, sampled: c.sampled })
+}
+
+/// Splat the t = 1 strategies of light paths `paths` (indices into `cache.paths`) to
+/// `splat`; the host scales by 1/M.
+pub fn splat_light_paths<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, model: &Model, cache: &PassCache, light_tracing: f64, paths: Range<u32>, splat: &mut dyn FnMut(Splat)) -> Counters {
+    let mut counters = Counters::default();
+    for i in paths {
+        let light = cache.paths.path(i as usize);
+        for s in 2..=light.len() {
+            if !params.max_depth.allows(s as u32) {
+                break;
+            }
+            if let Some((value, Some(film), _)) = weighted(scene, tracer, model, light_tracing, &light[..s], &[], s, 1, 0.0, Vec2::ZERO, &mut counters) {
+                splat(Splat { film, value: counters.sanitize(value) });
+            }
+        }
+    }
+    counters
+}
+
+/// One SPCBPT sample for each pixel of `pixels` into `out` (t ≥ 2 strategies).
+pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, model: &Model, cache: &PassCache, light_paths: u32, pass: u32, pixels: Range<u32>, out: &mut [Rgb]) -> Counters {
+    let mut counters = Counters::default();
+    let width = scene.camera.width().max(1);
+    let n_pixels = width * scene.camera.height().max(1);
+    let light_tracing = light_paths as f64 / n_pixels as f64;
+    let (max_camera, _) = bdpt::vertex_budgets(params);
+    for (slot, pixel) in out.iter_mut().zip(pixels) {
+        let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
+        let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
+        let camera = camera_subpath(scene, tracer, params, film, max_camera, &mut rng, &mut counters);
+        let mut aux = SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, 0);
+        let mut l = Rgb::ZERO;
+        for t in 2..=camera.len() {
+            if !params.max_depth.allows(t as u32 - 1) {
+                break;
+            }
+            for s in 0..=1usize {
+                let (u_light, u_point) = (aux.next_f32(), aux.next_2d());
+                if s == 1 && !params.max_depth.allows(t as u32) {
+                    continue;
+                }
+                if let Some((v, _, _)) = weighted(scene, tracer, model, light_tracing, &[], &camera[..t], s, t, u_light, u_point, &mut counters) {
+                    l += counters.sanitize(v);
+                }
+            }
+            let z = &camera[t - 1];
+            if z.kind != VertexKind::Surface || !z.is_connectible(scene) {
+                continue;
+            }
+            let e = model.classifier.eye_of(z, camera[t - 2].p);
+            let Some(Some(stage1)) = cache.gamma_tables.get(e as usize) else { continue };
+            for _ in 0..model.connections {
+                let (u1, u2) = (aux.next_f32(), aux.next_f32());
+                let pick = stage1.sample(u1);
+                let Some(Some(stage2)) = cache.vertex_tables.get(pick.index) else { continue };
+                let chosen = stage2.sample(u2);
+                let Some(light) = cache.candidate(pick.index, chosen.index) else { continue };
+                let s = light.len();
+                if !params.max_depth.allows((s + t - 1) as u32) {
+                    continue;
+                }
+                let paths = cache.effective_paths.get(pick.index).copied().unwrap_or(0.0) as f32;
+                let probability = model.connections as f32 * paths * pick.pmf * chosen.pmf;
+                if !(probability > 0.0) {
+                    continue;
+                }
+                if let Some((v, _, _)) = weighted(scene, tracer, model, light_tracing, light, &camera[..t], s, t, 0.0, Vec2::ZERO, &mut counters) {
+                    l += counters.sanitize(v / probability);
+                }
+            }
+        }
+        *slot = l;
+    }
+    counters
+}

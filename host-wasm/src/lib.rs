@@ -1,0 +1,294 @@
+//! ember in the browser: the core's estimators (`ember_core::integrator::{pt, lt, bdpt}`)
+//! over an obvhs BVH2 ([`accel`]), compiled to `wasm32-unknown-unknown` and driven by a
+//! static page (`host-wasm/www/`) through plain C exports. No wasm-bindgen, no imports:
+//! the module needs nothing from JavaScript, and JavaScript reads the results straight
+//! out of the module's linear memory.
+//!
+//! # Protocol (one module instance per Web Worker)
+//! 1. `ember_setup(scene, estimator, width, height, max_depth, seed_hi, seed_lo)` builds
+//!    the scene and the BVH; 0 on success, a negative [`SetupError`] code otherwise.
+//! 2. Each pass, `ember_render(pass, pixel_start, pixel_end, path_start, path_end)` renders
+//!    the camera samples of pixels `pixel_start..pixel_end` (PT, BDPT) and the light
+//!    paths `path_start..path_end` (LT; `ember_light_paths_per_pass` of them per pass):
+//!    * camera values, 3 × f32 per pixel of the band, at `ember_camera_ptr()`; values
+//!      that are not valid radiance (NaN, ∞, negative) are written as 0 and counted, as
+//!      the CLI's film discards them;
+//!    * the splats of the call (LT's light paths, BDPT's t = 1 strategy), already scaled
+//!      by 1 / (W·H) like the CLI's `splat_scale`, summed into a full W × H × 3 f64 film at
+//!      `ember_splat_ptr()` (zeroed at the start of every call; `ember_splat_count()`
+//!      tells whether there is anything to send).
+//!
+//!    The page adds the camera bands and every worker's splat film into one f64 sum per
+//!    pixel and divides by the pass count: exactly the CLI's `Film`, up to the order of
+//!    the f64 additions of splats.
+//!
+//! Random numbers derive from (seed, pixel or path index, pass) only
+//! (`SampleStream::for_sample`), so how the page cuts the image into bands, and how
+//! many workers it runs, changes nothing but summation order.
+
+pub mod accel;
+#[cfg(not(target_arch = "wasm32"))]
+pub mod compare;
+#[cfg(test)]
+mod tests;
+
+use core::cell::RefCell;
+
+use ember_core::Rgb;
+use ember_core::integrator::{Counters, Heuristic, MaxDepth, RenderParams, Splat, bdpt, lt, pt};
+use ember_core::scene::{Scene, SceneBuilder, builtin, builtin_glass};
+
+pub use accel::WasmAccel;
+
+/// The built-in scenes the page offers, by the index it passes to `ember_setup`.
+pub const SCENES: [&str; 2] = ["cornell-box", builtin_glass::GLASS_SPHERES];
+
+/// The scene builder for a [`SCENES`] index.
+pub fn builtin_scene(index: u32, width: u32, height: u32) -> Option<SceneBuilder> {
+    match index {
+        0 => Some(builtin::cornell_box(width, height)),
+        1 => Some(builtin_glass::glass_spheres(width, height)),
+        _ => None,
+    }
+}
+
+/// The estimators, by the index the page passes to `ember_setup`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Estimator {
+    Pt = 0,
+    Lt = 1,
+    Bdpt = 2,
+}
+
+impl Estimator {
+    pub fn from_index(i: u32) -> Option<Self> {
+        match i {
+            0 => Some(Self::Pt),
+            1 => Some(Self::Lt),
+            2 => Some(Self::Bdpt),
+            _ => None,
+        }
+    }
+}
+
+/// Why `ember_setup` failed (returned negated).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SetupError {
+    UnknownScene = 1,
+    UnknownEstimator = 2,
+    /// Width or height zero, or more than 4096.
+    BadResolution = 3,
+    /// The scene builder rejected the scene.
+    SceneBuild = 4,
+}
+
+/// Why `ember_render` failed (returned negated).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RenderError {
+    NotSetUp = 1,
+    /// A pixel or path range outside the image / the pass's light paths.
+    BadRange = 2,
+}
+
+/// A scene, its ray queries, the estimator and the output buffers of the last call.
+#[derive(Debug)]
+pub struct Renderer {
+    pub scene: Scene,
+    pub accel: WasmAccel,
+    pub estimator: Estimator,
+    pub params: RenderParams,
+    camera: Vec<Rgb>,
+    camera_out: Vec<f32>,
+    splats: Vec<f64>,
+    splat_count: u32,
+    pub last: Counters,
+    pub discarded: u64,
+}
+
+impl Renderer {
+    /// Build a built-in scene; `max_depth` −1 is unbounded (the CLI's default).
+    pub fn new(scene: u32, estimator: u32, width: u32, height: u32, max_depth: i32, seed: u64) -> Result<Self, SetupError> {
+        let estimator = Estimator::from_index(estimator).ok_or(SetupError::UnknownEstimator)?;
+        if width == 0 || height == 0 || width > 4096 || height > 4096 {
+            return Err(SetupError::BadResolution);
+        }
+        let builder = builtin_scene(scene, width, height).ok_or(SetupError::UnknownScene)?;
+        let (scene, geometry, _warnings) = builder.build().map_err(|_| SetupError::SceneBuild)?;
+        let accel = WasmAccel::new(&geometry);
+        // As the CLI: PT with the power heuristic; BDPT's weights are balance by construction.
+        let params = RenderParams { max_depth: MaxDepth(max_depth), seed, heuristic: Heuristic::Power, ..RenderParams::default() };
+        let pixels = width as usize * height as usize;
+        Ok(Self {
+            scene,
+            accel,
+            estimator,
+            params,
+            camera: Vec::new(),
+            camera_out: Vec::new(),
+            splats: vec![0.0; 3 * pixels],
+            splat_count: 0,
+            last: Counters::default(),
+            discarded: 0,
+        })
+    }
+
+    pub fn width(&self) -> u32 {
+        self.scene.camera.width()
+    }
+
+    pub fn height(&self) -> u32 {
+        self.scene.camera.height()
+    }
+
+    fn pixels(&self) -> u32 {
+        self.width() * self.height()
+    }
+
+    /// Light paths per pass: W·H for LT (as the CLI), none otherwise.
+    pub fn light_paths_per_pass(&self) -> u32 {
+        if self.estimator == Estimator::Lt { self.pixels() } else { 0 }
+    }
+
+    /// Render one pass's share; see the crate documentation.
+    pub fn render(&mut self, pass: u32, pixels: core::ops::Range<u32>, paths: core::ops::Range<u32>) -> Result<(), RenderError> {
+        if pixels.start > pixels.end || pixels.end > self.pixels() || paths.start > paths.end || paths.end > self.light_paths_per_pass() {
+            return Err(RenderError::BadRange);
+        }
+        self.splats.fill(0.0);
+        self.splat_count = 0;
+        self.camera.clear();
+        self.camera.resize(pixels.len(), Rgb::ZERO);
+        let (width, height) = (self.width(), self.height());
+        let scale = 1.0 / self.pixels() as f64;
+        let (film, count, discarded) = (&mut self.splats, &mut self.splat_count, &mut self.discarded);
+        let mut splat = |s: Splat| {
+            if !s.value.is_valid_radiance() || !s.film.is_finite() {
+                *discarded += 1;
+                return;
+            }
+            let (x, y) = (s.film.x.floor(), s.film.y.floor());
+            if x < 0.0 || y < 0.0 || x >= width as f32 || y >= height as f32 {
+                return;
+            }
+            let i = 3 * (y as usize * width as usize + x as usize);
+            film[i] += s.value.r as f64 * scale;
+            film[i + 1] += s.value.g as f64 * scale;
+            film[i + 2] += s.value.b as f64 * scale;
+            *count += 1;
+        };
+        let (scene, accel, params) = (&self.scene, &self.accel, &self.params);
+        self.last = match self.estimator {
+            Estimator::Pt => pt::render_pixels(scene, accel, params, pass, pixels, &mut self.camera),
+            Estimator::Bdpt => bdpt::render_pixels(scene, accel, params, pass, pixels, &mut self.camera, &mut splat),
+            Estimator::Lt => lt::trace_paths(scene, accel, params, pass, paths, &mut splat),
+        };
+        self.camera_out.clear();
+        for v in &self.camera {
+            if v.is_valid_radiance() {
+                self.camera_out.extend_from_slice(&[v.r, v.g, v.b]);
+            } else {
+                self.discarded += 1;
+                self.camera_out.extend_from_slice(&[0.0; 3]);
+            }
+        }
+        Ok(())
+    }
+
+    /// Camera values of the last call, 3 × f32 per pixel of its band.
+    pub fn camera_values(&self) -> &[f32] {
+        &self.camera_out
+    }
+
+    /// Scaled splats of the last call, 3 × f64 per pixel of the whole film.
+    pub fn splat_film(&self) -> &[f64] {
+        &self.splats
+    }
+}
+
+thread_local! {
+    /// The module's one renderer (wasm32 is single-threaded; one instance per worker).
+    static RENDERER: RefCell<Option<Renderer>> = const { RefCell::new(None) };
+}
+
+fn with_renderer<T>(default: T, f: impl FnOnce(&mut Renderer) -> T) -> T {
+    RENDERER.with_borrow_mut(|r| r.as_mut().map_or(default, f))
+}
+
+// The exports below need `#[unsafe(no_mangle)]` so the page can call them by name; the
+// attribute is the only unsafe thing in this crate (it trusts no other symbol has the
+// same name, and every name carries the `ember_` prefix).
+
+/// Build scene `scene` ([`SCENES`]) for estimator `estimator` (0 pt, 1 lt, 2 bdpt);
+/// 0 on success, −[`SetupError`] otherwise.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_setup(scene: u32, estimator: u32, width: u32, height: u32, max_depth: i32, seed_hi: u32, seed_lo: u32) -> i32 {
+    let seed = (u64::from(seed_hi) << 32) | u64::from(seed_lo);
+    match Renderer::new(scene, estimator, width, height, max_depth, seed) {
+        Ok(r) => {
+            RENDERER.with_borrow_mut(|slot| *slot = Some(r));
+            0
+        }
+        Err(e) => -(e as i32),
+    }
+}
+
+/// Light paths per pass (W·H for LT, 0 otherwise); 0 before setup.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_light_paths_per_pass() -> u32 {
+    with_renderer(0, |r| r.light_paths_per_pass())
+}
+
+/// Number of triangles in the ray-query structure (for the page's status line).
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_triangle_count() -> u32 {
+    with_renderer(0, |r| r.accel.triangle_count() as u32)
+}
+
+/// Render pass `pass` for pixels `pixel_start..pixel_end` and light paths
+/// `path_start..path_end`; 0 on success, −[`RenderError`] otherwise.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_render(pass: u32, pixel_start: u32, pixel_end: u32, path_start: u32, path_end: u32) -> i32 {
+    with_renderer(-(RenderError::NotSetUp as i32), |r| match r.render(pass, pixel_start..pixel_end, path_start..path_end) {
+        Ok(()) => 0,
+        Err(e) => -(e as i32),
+    })
+}
+
+/// Address of the last call's camera values (3 × f32 per band pixel).
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_camera_ptr() -> usize {
+    with_renderer(0, |r| r.camera_values().as_ptr() as usize)
+}
+
+/// Address of the last call's splat film (3 × f64 per pixel, W·H pixels).
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_splat_ptr() -> usize {
+    with_renderer(0, |r| r.splat_film().as_ptr() as usize)
+}
+
+/// Splats that landed on the film in the last call.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_splat_count() -> u32 {
+    with_renderer(0, |r| r.splat_count)
+}
+
+/// Rays traced in the last call (f64: exact up to 2⁵³).
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_last_rays() -> f64 {
+    with_renderer(0.0, |r| r.last.rays as f64)
+}
+
+/// Samples discarded as invalid radiance since setup.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_discarded() -> f64 {
+    with_renderer(0.0, |r| r.discarded as f64)
+}

@@ -1,0 +1,200 @@
+//! SPCBPT's MIS weights (path-dependent counts: N·Γ(κ_L|κ_E)·W/Q for the Γ-connections,
+//! 1 for s ≤ 1, M/(W·H) for t = 1) against an f64 brute force, and their sum over all
+//! strategies able to produce one path.
+//!
+//! The brute force is `lvcbpt_mis.rs`'s (primitive densities only) with each strategy's
+//! density product multiplied by the count `path_counts` gives for that split. Checked
+//! on the Cornell box with a rough gold and a smooth glass sphere with a trained model:
+//! (1) every weight `spcbpt::strategy` applies equals the brute force within 1e-5;
+//! (2) re-splitting one full path at every split, the recursive weights (counts from the
+//!     joined path of each split) sum to 1 within 1e-5 — which holds only if the counts
+//!     are a function of the path alone, not of how it was sampled.
+//! Injected-bug checks (each done once, reverted): indexing the count table by t′
+//! instead of s′ in `spcbpt::strategy` fails (1) ((1, 2): 0.670 vs 0.934).
+//! Not caught: taking W from the stored β of x_{s′−1} instead of
+//! `light_prefix_weights` — (2) rebuilds every split from copies of the same vertices,
+//! so their β agree; the end-to-end test (`spcbpt_agreement.rs`) is what guards that
+//! the counts do not depend on how a path was sampled (it fails on this bug at z = −25.4).
+
+use ember_core::bsdf::TransportMode;
+use ember_core::integrator::bdpt::mis::mis_weight_counted;
+use ember_core::integrator::bdpt::{Vertex, VertexKind, camera_subpath, light_subpath};
+use ember_core::integrator::spcbpt::{self, join, path_counts};
+use ember_core::integrator::{Counters, MaxDepth, RenderParams};
+use ember_core::math::Frame;
+use ember_core::rng::{SampleStream, Stream};
+use ember_core::scene::Scene;
+use ember_tests::cached::spcbpt_model;
+use ember_tests::scenes::cornell_with_spheres;
+use ember_tests::tracer::BruteForce;
+use glam::{Vec2, Vec3};
+
+/// Density (f64, per unit area at `to`) of sampling `to` from `from`, which was reached
+/// from `prev` (None for endpoints). Independent of the BDPT vertex code.
+fn area_density(scene: &Scene, prev: Option<&Vertex>, from: &Vertex, to: &Vertex) -> f64 {
+    let d = to.p - from.p;
+    let d2 = d.length_squared() as f64;
+    let w = d.normalize();
+    let cos_to = if to.ng == Vec3::ZERO { 1.0 } else { to.ng.dot(w).abs() as f64 };
+    let solid_angle = match from.kind {
+        VertexKind::Camera => scene.camera.pdf_dir(w).0 as f64,
+        VertexKind::Light(id) => scene.lights[id as usize].pdf_le(from.p, from.ng, w).1.0 as f64,
+        VertexKind::Surface if prev.is_none() => {
+            // A surface emitter as the light-path origin.
+            let id = from.emitter.expect("light origin must emit");
+            scene.lights[id as usize].pdf_le(from.p, from.ng, w).1.0 as f64
+        }
+        VertexKind::Surface => {
+            let m = &scene.materials[from.material as usize];
+            if m.is_delta() {
+                return 1.0; // Dirac: the same symbolic factor for every strategy.
+            }
+            let frame = Frame::from_normal(from.frame.n);
+            let wp = (prev.unwrap().p - from.p).normalize();
+            m.pdf(frame.to_local(wp), frame.to_local(w), TransportMode::Radiance).0 as f64
+        }
+        VertexKind::InfiniteLight => unreachable!("no infinite lights in this scene"),
+    };
+    solid_angle * cos_to / d2
+}
+
+fn origin_density(scene: &Scene, x0: &Vertex) -> f64 {
+    let id = match x0.kind {
+        VertexKind::Light(id) => id,
+        _ => x0.emitter.expect("x0 emits"),
+    };
+    let light = &scene.lights[id as usize];
+    let pos = if light.is_delta() { 1.0 } else { light.pdf_le(x0.p, x0.ng, x0.ng).0.0 as f64 };
+    scene.light_pmf(id) as f64 * pos
+}
+
+fn is_delta_surface(scene: &Scene, v: &Vertex) -> bool {
+    v.kind == VertexKind::Surface && scene.materials[v.material as usize].is_delta()
+}
+
+/// Brute-force balance weights n_s p_s / Σ n_i p_i of every strategy for full path `x`
+/// (light end first), with the counts n_s of `counts[s]`.
+pub fn brute_force_weights(scene: &Scene, x: &[Vertex], counts: &[f64]) -> Vec<Option<f64>> {
+    let n = x.len();
+    let mut p = vec![None; n + 1];
+    if n == 2 {
+        p[0] = Some(1.0);
+        return p;
+    }
+    for s in 0..n {
+        let t = n - s;
+        // Can strategy (s, t) connect x_{s−1} with x_s?
+        let possible = if s == 0 {
+            x[0].kind != VertexKind::Camera && x[0].emitter.is_some()
+        } else {
+            !is_delta_surface(scene, &x[s - 1]) && !is_delta_surface(scene, &x[s])
+        };
+        if !possible || t == 0 {
+            continue;
+        }
+        let mut prod = 1.0f64;
+        for i in 0..s {
+            prod *= match i {
+                0 => origin_density(scene, &x[0]),
+                1 => area_density(scene, None, &x[0], &x[1]),
+                _ => area_density(scene, Some(&x[i - 2]), &x[i - 1], &x[i]),
+            };
+        }
+        for j in 0..t {
+            let k = n - 1 - j;
+            prod *= match j {
+                0 => 1.0,
+                1 => area_density(scene, None, &x[n - 1], &x[k]),
+                _ => area_density(scene, Some(&x[k + 2]), &x[k + 1], &x[k]),
+            };
+        }
+        p[s] = Some(prod * counts[s]);
+    }
+    let total: f64 = p.iter().flatten().sum();
+    p.iter().map(|v| v.map(|v| v / total)).collect()
+}
+
+const LIGHT_TRACING: f64 = 0.37;
+
+#[test]
+fn spcbpt_weights_equal_brute_force_and_sum_to_one() {
+    let (scene, geometry, _) = cornell_with_spheres(24, 24).build().expect("scene");
+    let tracer = BruteForce::new(geometry);
+    let params = RenderParams { max_depth: MaxDepth(8), seed: 9, ..RenderParams::default() };
+    let (model, _) = spcbpt_model(&scene, &tracer, &params, 32, 3000, 3000, 200, 0.1);
+    let (mut checked, mut worst) = (0usize, 0.0f64);
+    let (mut paths, mut worst_sum) = (0usize, 0.0f64);
+    for i in 0..1500u32 {
+        let mut counters = Counters::default();
+        let mut rng = SampleStream::for_sample(4, Stream::Camera, i, 0, 0);
+        let film = rng.next_2d() * Vec2::splat(24.0);
+        let cam = camera_subpath(&scene, &tracer, &params, film, 9, &mut rng, &mut counters);
+        let mut lrng = SampleStream::for_sample(4, Stream::Light, i, 0, 0);
+        let light = light_subpath(&scene, &tracer, &params, 8, &mut lrng, &mut counters);
+        for t in 1..=cam.len() {
+            for s in 0..=light.len() {
+                if (s == 1 && t == 1) || s + t < 3 || s + t > 9 {
+                    continue;
+                }
+                let Some(c) = spcbpt::strategy(&scene, &tracer, &model, LIGHT_TRACING, &light[..s], &cam[..t], s, t, lrng.next_f32(), lrng.next_2d(), &mut counters) else { continue };
+                let x = join(&light, &cam, c.sampled, s, t);
+                if x.last().unwrap().kind == VertexKind::InfiniteLight {
+                    continue;
+                }
+                let mut counts = [0.0f64; 70];
+                path_counts(&scene, &model, LIGHT_TRACING, &x, &mut counts);
+                let bf = brute_force_weights(&scene, &x, &counts);
+                let expected = bf[s].expect("a strategy that produced a path must be possible");
+                let diff = (expected - c.weight as f64).abs();
+                worst = worst.max(diff);
+                assert!(diff <= 1e-5, "(s, t) = ({s}, {t}): recursive {} vs brute force {expected}; all {bf:?}", c.weight);
+                checked += 1;
+                // (2) for exact joins (s, t ≥ 2): every split of the same path.
+                if s >= 2 && t >= 2 {
+                    let n = x.len();
+                    let mut sum = 0.0f64;
+                    for s2 in 0..n {
+                        let t2 = n - s2;
+                        let possible = if s2 == 0 { x[0].emitter.is_some() } else { !is_delta_surface(&scene, &x[s2 - 1]) && !is_delta_surface(&scene, &x[s2]) };
+                        if !possible || (s2 == 1 && t2 == 1) {
+                            continue;
+                        }
+                        let (l, cm) = split(&scene, &x, s2);
+                        let joined = join(&l, &cm, None, s2, t2);
+                        let mut c2 = [0.0f64; 70];
+                        path_counts(&scene, &model, LIGHT_TRACING, &joined, &mut c2);
+                        sum += mis_weight_counted(&scene, &l, &cm, None, s2, t2, &|a: usize, _b: usize| c2[a]) as f64;
+                    }
+                    worst_sum = worst_sum.max((sum - 1.0).abs());
+                    assert!((sum - 1.0).abs() <= 1e-5, "weights of a {n}-vertex path sum to {sum}");
+                    paths += 1;
+                }
+            }
+        }
+    }
+    println!("checked {checked} weights (worst |Δw| = {worst:e}), {paths} paths summed (worst |Σw − 1| = {worst_sum:e})");
+    assert!(checked > 3000 && paths > 500, "too few: {checked} weights, {paths} paths");
+}
+
+/// The sub-paths strategy (s, n − s) would have generated for full path `x`, with their
+/// densities filled in as the random walk fills them.
+fn split(scene: &Scene, x: &[Vertex], s: usize) -> (Vec<Vertex>, Vec<Vertex>) {
+    let mut light: Vec<Vertex> = x[..s].to_vec();
+    let mut cam: Vec<Vertex> = x[s..].iter().rev().copied().collect();
+    for path in [&mut light, &mut cam] {
+        for i in 0..path.len() {
+            path[i].pdf_rev = 0.0;
+            path[i].pdf_fwd = match i {
+                0 if path[0].kind == VertexKind::Camera => 0.0,
+                0 => path.get(1).or(x.get(1)).map_or(0.0, |next| path[0].pdf_light_origin(scene, next)),
+                1 => path[0].pdf(scene, None, &path[1]),
+                _ => path[i - 1].pdf(scene, Some(&path[i - 2]), &path[i]),
+            };
+            if i + 2 < path.len() {
+                path[i].pdf_rev = path[i + 1].pdf(scene, Some(&path[i + 2]), &path[i]);
+            }
+        }
+    }
+    (light, cam)
+}
+
