@@ -10,7 +10,9 @@
 //!     joined path of each split) sum to 1 within 1e-5 — which holds only if the counts
 //!     are a function of the path alone, not of how it was sampled.
 //! Injected-bug checks (each done once, reverted): indexing the count table by t′
-//! instead of s′ in `spcbpt::strategy` fails (1) ((1, 2): 0.670 vs 0.934).
+//! instead of s′ in `spcbpt::strategy` fails (1) ((1, 2): 0.670 vs 0.934); reading
+//! the camera-label memo at the wrong camera index (`n − j` instead of `n − 1 − j` for
+//! κ_E in `path_counts_labelled`) fails (1) ((6, 2): 0.0411 vs 0.0277).
 //! Not caught: taking W from the stored β of x_{s′−1} instead of
 //! `light_prefix_weights` — (2) rebuilds every split from copies of the same vertices,
 //! so their β agree; the end-to-end test (`spcbpt_agreement.rs`) is what guards that
@@ -136,7 +138,10 @@ fn spcbpt_weights_equal_brute_force_and_sum_to_one() {
                 if (s == 1 && t == 1) || s + t < 3 || s + t > 9 {
                     continue;
                 }
-                let Some(c) = spcbpt::strategy(&scene, &tracer, &model, LIGHT_TRACING, &light[..s], &cam[..t], s, t, lrng.next_f32(), lrng.next_2d(), &mut counters) else { continue };
+                // Odd paths go through the camera-label memo of the render loop (labels of
+                // the whole camera path, read for the prefix `cam[..t]`).
+                let labels = (i % 2 == 1).then(|| spcbpt::CameraLabels::new(&model, &cam));
+                let Some(c) = spcbpt::strategy_labelled(&scene, &tracer, &model, LIGHT_TRACING, &light[..s], &cam[..t], labels.as_ref(), s, t, lrng.next_f32(), lrng.next_2d(), &mut counters) else { continue };
                 let x = join(&light, &cam, c.sampled, s, t);
                 if x.last().unwrap().kind == VertexKind::InfiniteLight {
                     continue;

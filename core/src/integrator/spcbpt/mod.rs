@@ -36,7 +36,10 @@
 //! Dirac vertices count 1, no Russian roulette) so that all strategies of one path
 //! see the same counts and the weights sum to one exactly. Ratios of the sub-path
 //! densities come from BDPT's O(n) walk ([`bdpt::mis::mis_weight_counted`]); the count
-//! table of a path costs O(n) density evaluations and tree look-ups.
+//! table of a path costs O(n) density evaluations and tree look-ups. It is built lazily
+//! inside the one connection of a strategy with no sampled endpoint (nothing for an
+//! occluded connection), and the labels of the camera sub-path's own vertices are
+//! classified once per camera path ([`CameraLabels`]).
 //!
 //! Cross-iteration reuse (section 7.4, [`Retained`]): with M0 > 0 each light subspace k
 //! keeps a FIFO of the last M0 of its cacheable vertices (with their light prefixes:
@@ -352,9 +355,66 @@ pub fn build_gamma_tables(model: &Model, cache: &PassCache, eyes: Range<u32>, ta
     }
 }
 
+/// Subspace labels of a camera sub-path's own vertices, computed once per camera path:
+/// `eye[i]` = κ_E(z_i) seen from z_{i−1}, `light[i]` = κ_L(z_i) seen from z_{i+1}
+/// (u32::MAX where undefined). A split whose two classified vertices and their
+/// neighbours all lie on the camera sub-path reads them here instead of descending the
+/// trees again (same features, so the same labels: the counts do not change).
+#[derive(Clone, Debug, Default)]
+pub struct CameraLabels {
+    pub eye: heapless::Vec<u32, { bdpt::MAX_VERTICES }>,
+    pub light: heapless::Vec<u32, { bdpt::MAX_VERTICES }>,
+}
+
+impl CameraLabels {
+    pub fn new(model: &Model, camera: &[Vertex]) -> Self {
+        let mut labels = Self::default();
+        for i in 0..camera.len() {
+            let surface = camera[i].kind == VertexKind::Surface;
+            let eye = if surface && i >= 1 { model.classifier.eye_of(&camera[i], camera[i - 1].p) } else { u32::MAX };
+            let light = if surface && i + 1 < camera.len() { model.classifier.light_of(&camera[i], camera[i + 1].p) } else { u32::MAX };
+            let _ = labels.eye.push(eye);
+            let _ = labels.light.push(light);
+        }
+        labels
+    }
+}
+
 /// Sample counts n_{s'} of every split of full path `x` (s' = 0..=n), into `out`.
 pub fn path_counts(scene: &Scene, model: &Model, light_tracing: f64, x: &[Vertex], out: &mut [f64]) {
+    path_counts_labelled(scene, model, light_tracing, x, None, out)
+}
+
+/// [`path_counts`] for x = light prefix (s vertices) + the camera sub-path whose labels
+/// are `camera` = (labels, s): labels of camera vertices are read, not recomputed.
+pub fn path_counts_labelled(scene: &Scene, model: &Model, light_tracing: f64, x: &[Vertex], camera: Option<(&CameraLabels, usize)>, out: &mut [f64]) {
     let n = x.len();
+    // Camera index of full-path vertex j (j ≥ s): x[j] = camera[n − 1 − j].
+    let eye_of = |j: usize| -> u32 {
+        if let Some((labels, s)) = camera {
+            if j >= s {
+                if let Some(&l) = labels.eye.get(n - 1 - j) {
+                    if l != u32::MAX {
+                        return l;
+                    }
+                }
+            }
+        }
+        model.classifier.eye_of(&x[j], x[j + 1].p)
+    };
+    let light_of = |j: usize| -> u32 {
+        if let Some((labels, s)) = camera {
+            // The previous vertex x[j − 1] must be on the camera path too.
+            if j > s {
+                if let Some(&l) = labels.light.get(n - 1 - j) {
+                    if l != u32::MAX {
+                        return l;
+                    }
+                }
+            }
+        }
+        model.classifier.light_of(&x[j], x[j - 1].p)
+    };
     let mut w = [0.0f32; 2 * bdpt::MAX_VERTICES + 1];
     light_prefix_weights(scene, x, &mut w);
     for s in 0..=n.min(out.len() - 1) {
@@ -368,8 +428,8 @@ pub fn path_counts(scene: &Scene, model: &Model, light_tracing: f64, x: &[Vertex
             if y.kind != VertexKind::Surface || z.kind != VertexKind::Surface {
                 0.0
             } else {
-                let l = model.classifier.light_of(y, x[s - 2].p);
-                let e = model.classifier.eye_of(z, x[s + 1].p);
+                let l = light_of(s - 1);
+                let e = eye_of(s);
                 let q = model.q.get(l as usize).copied().unwrap_or(0.0);
                 if q > 0.0 { model.connections as f64 * model.gamma.get(l, e) as f64 * w[s] as f64 / q as f64 } else { 0.0 }
             }
@@ -403,14 +463,23 @@ pub fn join(light: &[Vertex], camera: &[Vertex], sampled: Option<Vertex>, s: usi
 
 /// Evaluate strategy (s, t) with SPCBPT's path-dependent counts: connect once with unit
 /// counts to get the unweighted value and the resampled endpoint, then weigh.
-fn weighted<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model: &Model, light_tracing: f64, light: &[Vertex], camera: &[Vertex], s: usize, t: usize, u_light: f32, u_point: Vec2, counters: &mut Counters) -> Option<(Rgb, Option<Vec2>, f32)> {
-    strategy(scene, tracer, model, light_tracing, light, camera, s, t, u_light, u_point, counters).map(|c| (c.value, c.film, c.weight))
+#[allow(clippy::too_many_arguments)]
+fn weighted<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model: &Model, light_tracing: f64, light: &[Vertex], camera: &[Vertex], labels: Option<&CameraLabels>, s: usize, t: usize, u_light: f32, u_point: Vec2, counters: &mut Counters) -> Option<(Rgb, Option<Vec2>, f32)> {
+    strategy_labelled(scene, tracer, model, light_tracing, light, camera, labels, s, t, u_light, u_point, counters).map(|c| (c.value, c.film, c.weight))
 }
 
 /// Strategy (s, t) with SPCBPT's MIS weight (`value` weighted, not divided by any
 /// selection probability); `sampled` is the resampled endpoint (s = 1 or t = 1).
 #[allow(clippy::too_many_arguments)]
 pub fn strategy<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model: &Model, light_tracing: f64, light: &[Vertex], camera: &[Vertex], s: usize, t: usize, u_light: f32, u_point: Vec2, counters: &mut Counters) -> Option<bdpt::Connection> {
+    strategy_labelled(scene, tracer, model, light_tracing, light, camera, None, s, t, u_light, u_point, counters)
+}
+
+/// [`strategy`] with the camera sub-path's precomputed labels (`camera` must be a prefix
+/// of the path the labels were computed on).
+#[allow(clippy::too_many_arguments)]
+pub fn strategy_labelled<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model: &Model, light_tracing: f64, light: &[Vertex], camera: &[Vertex], labels: Option<&CameraLabels>, s: usize, t: usize, u_light: f32, u_point: Vec2, counters: &mut Counters) -> Option<bdpt::Connection> {
+    let labels = if t >= 2 { labels.map(|l| (l, s)) } else { None };
     if s != 1 && t != 1 {
         // No endpoint is sampled: the full path is known before connecting, so one
         // connection computes the weight with the path's counts, evaluated lazily (only
@@ -421,7 +490,7 @@ pub fn strategy<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model: &Model, 
             let counts = table.get_or_init(|| {
                 let x = join(light, camera, None, s, t);
                 let mut counts = [0.0f64; 2 * bdpt::MAX_VERTICES + 1];
-                path_counts(scene, model, light_tracing, &x, &mut counts);
+                path_counts_labelled(scene, model, light_tracing, &x, labels, &mut counts);
                 counts
             });
             counts.get(s2).copied().unwrap_or(0.0)
@@ -434,7 +503,7 @@ pub fn strategy<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model: &Model, 
     let unweighted = if c.weight > 0.0 { c.value / c.weight } else { return None };
     let x = join(light, camera, c.sampled, s, t);
     let mut counts = [0.0f64; 2 * bdpt::MAX_VERTICES + 1];
-    path_counts(scene, model, light_tracing, &x, &mut counts);
+    path_counts_labelled(scene, model, light_tracing, &x, labels, &mut counts);
     let count = |s2: usize, _t2: usize| counts[s2];
     let weight = bdpt::mis::mis_weight_counted(scene, light, camera, c.sampled.as_ref(), s, t, &count);
     Some(bdpt::Connection { value: unweighted * weight, film: c.film, weight, sampled: c.sampled })
@@ -450,7 +519,7 @@ pub fn splat_light_paths<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params
             if !params.max_depth.allows(s as u32) {
                 break;
             }
-            if let Some((value, Some(film), _)) = weighted(scene, tracer, model, light_tracing, &light[..s], &[], s, 1, 0.0, Vec2::ZERO, &mut counters) {
+            if let Some((value, Some(film), _)) = weighted(scene, tracer, model, light_tracing, &light[..s], &[], None, s, 1, 0.0, Vec2::ZERO, &mut counters) {
                 splat(Splat { film, value: counters.sanitize(value) });
             }
         }
@@ -469,6 +538,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &R
         let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
         let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
         let camera = camera_subpath(scene, tracer, params, film, max_camera, &mut rng, &mut counters);
+        let labels = CameraLabels::new(model, &camera);
         let mut aux = SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, 0);
         let mut l = Rgb::ZERO;
         for t in 2..=camera.len() {
@@ -480,7 +550,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &R
                 if s == 1 && !params.max_depth.allows(t as u32) {
                     continue;
                 }
-                if let Some((v, _, _)) = weighted(scene, tracer, model, light_tracing, &[], &camera[..t], s, t, u_light, u_point, &mut counters) {
+                if let Some((v, _, _)) = weighted(scene, tracer, model, light_tracing, &[], &camera[..t], Some(&labels), s, t, u_light, u_point, &mut counters) {
                     l += counters.sanitize(v);
                 }
             }
@@ -488,7 +558,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &R
             if z.kind != VertexKind::Surface || !z.is_connectible(scene) {
                 continue;
             }
-            let e = model.classifier.eye_of(z, camera[t - 2].p);
+            let e = labels.eye.get(t - 1).copied().unwrap_or(u32::MAX);
             let Some(Some(stage1)) = cache.gamma_tables.get(e as usize) else { continue };
             for _ in 0..model.connections {
                 let (u1, u2) = (aux.next_f32(), aux.next_f32());
@@ -505,7 +575,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &R
                 if !(probability > 0.0) {
                     continue;
                 }
-                if let Some((v, _, _)) = weighted(scene, tracer, model, light_tracing, light, &camera[..t], s, t, 0.0, Vec2::ZERO, &mut counters) {
+                if let Some((v, _, _)) = weighted(scene, tracer, model, light_tracing, light, &camera[..t], Some(&labels), s, t, 0.0, Vec2::ZERO, &mut counters) {
                     l += counters.sanitize(v / probability);
                 }
             }
