@@ -10,3 +10,4 @@ pub mod render;
 pub mod reference;
 pub mod mmis_1d;
 pub mod cached;
+pub mod bdpt_oracle;

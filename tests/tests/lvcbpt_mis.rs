@@ -13,102 +13,16 @@
 //! - the ratios not divided by the strategy's own count fails (1) ((2, 1): 0.921 vs
 //!   0.812) and (2) (Σw = 0.914).
 
-use ember_core::bsdf::TransportMode;
 use ember_core::integrator::bdpt::mis::mis_weight_counted;
 use ember_core::integrator::bdpt::{Vertex, VertexKind, camera_subpath, connect_counted, light_subpath};
 use ember_core::integrator::lvcbpt::StrategyCounts;
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
-use ember_core::math::Frame;
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::Scene;
 use ember_tests::scenes::cornell_with_spheres;
+use ember_tests::bdpt_oracle::{brute_force_weights, is_delta_surface};
 use ember_tests::tracer::BruteForce;
-use glam::{Vec2, Vec3};
-
-/// Density (f64, per unit area at `to`) of sampling `to` from `from`, which was reached
-/// from `prev` (None for endpoints). Independent of the BDPT vertex code.
-fn area_density(scene: &Scene, prev: Option<&Vertex>, from: &Vertex, to: &Vertex) -> f64 {
-    let d = to.p - from.p;
-    let d2 = d.length_squared() as f64;
-    let w = d.normalize();
-    let cos_to = if to.ng == Vec3::ZERO { 1.0 } else { to.ng.dot(w).abs() as f64 };
-    let solid_angle = match from.kind {
-        VertexKind::Camera => scene.camera.pdf_dir(w).0 as f64,
-        VertexKind::Light(id) => scene.lights[id as usize].pdf_le(from.p, from.ng, w).1.0 as f64,
-        VertexKind::Surface if prev.is_none() => {
-            // A surface emitter as the light-path origin.
-            let id = from.emitter.expect("light origin must emit");
-            scene.lights[id as usize].pdf_le(from.p, from.ng, w).1.0 as f64
-        }
-        VertexKind::Surface => {
-            let m = &scene.materials[from.material as usize];
-            if m.is_delta() {
-                return 1.0; // Dirac: the same symbolic factor for every strategy.
-            }
-            let frame = Frame::from_normal(from.frame.n);
-            let wp = (prev.unwrap().p - from.p).normalize();
-            m.pdf(frame.to_local(wp), frame.to_local(w), TransportMode::Radiance).0 as f64
-        }
-        VertexKind::InfiniteLight => unreachable!("no infinite lights in this scene"),
-    };
-    solid_angle * cos_to / d2
-}
-
-fn origin_density(scene: &Scene, x0: &Vertex) -> f64 {
-    let id = match x0.kind {
-        VertexKind::Light(id) => id,
-        _ => x0.emitter.expect("x0 emits"),
-    };
-    let light = &scene.lights[id as usize];
-    let pos = if light.is_delta() { 1.0 } else { light.pdf_le(x0.p, x0.ng, x0.ng).0.0 as f64 };
-    scene.light_pmf(id) as f64 * pos
-}
-
-fn is_delta_surface(scene: &Scene, v: &Vertex) -> bool {
-    v.kind == VertexKind::Surface && scene.materials[v.material as usize].is_delta()
-}
-
-/// Brute-force balance weights n_s p_s / Σ n_i p_i of every strategy for full path `x`
-/// (light end first), with LVCBPT's sample counts.
-pub fn brute_force_weights(scene: &Scene, x: &[Vertex], counts: &StrategyCounts) -> Vec<Option<f64>> {
-    let n = x.len();
-    let mut p = vec![None; n + 1];
-    if n == 2 {
-        p[0] = Some(1.0);
-        return p;
-    }
-    for s in 0..n {
-        let t = n - s;
-        // Can strategy (s, t) connect x_{s−1} with x_s?
-        let possible = if s == 0 {
-            x[0].kind != VertexKind::Camera && x[0].emitter.is_some()
-        } else {
-            !is_delta_surface(scene, &x[s - 1]) && !is_delta_surface(scene, &x[s])
-        };
-        if !possible || t == 0 {
-            continue;
-        }
-        let mut prod = 1.0f64;
-        for i in 0..s {
-            prod *= match i {
-                0 => origin_density(scene, &x[0]),
-                1 => area_density(scene, None, &x[0], &x[1]),
-                _ => area_density(scene, Some(&x[i - 2]), &x[i - 1], &x[i]),
-            };
-        }
-        for j in 0..t {
-            let k = n - 1 - j;
-            prod *= match j {
-                0 => 1.0,
-                1 => area_density(scene, None, &x[n - 1], &x[k]),
-                _ => area_density(scene, Some(&x[k + 2]), &x[k + 1], &x[k]),
-            };
-        }
-        p[s] = Some(prod * counts.count(s, t));
-    }
-    let total: f64 = p.iter().flatten().sum();
-    p.iter().map(|v| v.map(|v| v / total)).collect()
-}
+use glam::Vec2;
 
 const COUNTS: StrategyCounts = StrategyCounts { light_tracing: 0.37, connection: 2.9 };
 
@@ -142,7 +56,7 @@ fn counted_weights_equal_brute_force_and_sum_to_one() {
                 }
                 cpart.reverse();
                 x.extend(cpart);
-                let bf = brute_force_weights(&scene, &x, &COUNTS);
+                let bf = brute_force_weights(&scene, &x, |s, t| COUNTS.count(s, t));
                 let expected = bf[s].expect("a strategy that produced a path must be possible");
                 let diff = (expected - c.weight as f64).abs();
                 worst = worst.max(diff);

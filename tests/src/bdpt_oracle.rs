@@ -1,0 +1,101 @@
+//! An f64 oracle for balance-heuristic weights of bidirectional strategies, independent
+//! of the BDPT vertex code: it calls only the primitive densities (light emission,
+//! camera, BSDF) and converts them to area measure itself. Shared by the BDPT, LVCBPT
+//! and SPCBPT weight tests (`tests/tests/{bdpt,lvcbpt,spcbpt}_mis.rs`).
+//!
+//! For a full path x₀ (light end) … x_{n−1} (camera), strategy s builds x₀…x_{s−1} from
+//! the light and x_s…x_{n−1} from the camera; its density is the product of the
+//! per-vertex densities of both sub-paths. Dirac vertices contribute the same symbolic
+//! factor to every strategy able to produce the path, so it cancels (taken as 1).
+
+use ember_core::bsdf::TransportMode;
+use ember_core::integrator::bdpt::{Vertex, VertexKind};
+use ember_core::math::Frame;
+use ember_core::scene::Scene;
+use glam::Vec3;
+
+/// Density (f64, per unit area at `to`) of sampling `to` from `from`, which was reached
+/// from `prev` (None for endpoints). Independent of the BDPT vertex code.
+pub fn area_density(scene: &Scene, prev: Option<&Vertex>, from: &Vertex, to: &Vertex) -> f64 {
+    let d = to.p - from.p;
+    let d2 = d.length_squared() as f64;
+    let w = d.normalize();
+    let cos_to = if to.ng == Vec3::ZERO { 1.0 } else { to.ng.dot(w).abs() as f64 };
+    let solid_angle = match from.kind {
+        VertexKind::Camera => scene.camera.pdf_dir(w).0 as f64,
+        VertexKind::Light(id) => scene.lights[id as usize].pdf_le(from.p, from.ng, w).1.0 as f64,
+        VertexKind::Surface if prev.is_none() => {
+            // A surface emitter as the light-path origin.
+            let id = from.emitter.expect("light origin must emit");
+            scene.lights[id as usize].pdf_le(from.p, from.ng, w).1.0 as f64
+        }
+        VertexKind::Surface => {
+            let m = &scene.materials[from.material as usize];
+            if m.is_delta() {
+                return 1.0; // Dirac: the same symbolic factor for every strategy.
+            }
+            let frame = Frame::from_normal(from.frame.n);
+            let wp = (prev.unwrap().p - from.p).normalize();
+            m.pdf(frame.to_local(wp), frame.to_local(w), TransportMode::Radiance).0 as f64
+        }
+        VertexKind::InfiniteLight => unreachable!("no infinite lights in this scene"),
+    };
+    solid_angle * cos_to / d2
+}
+
+pub fn origin_density(scene: &Scene, x0: &Vertex) -> f64 {
+    let id = match x0.kind {
+        VertexKind::Light(id) => id,
+        _ => x0.emitter.expect("x0 emits"),
+    };
+    let light = &scene.lights[id as usize];
+    let pos = if light.is_delta() { 1.0 } else { light.pdf_le(x0.p, x0.ng, x0.ng).0.0 as f64 };
+    scene.light_pmf(id) as f64 * pos
+}
+
+pub fn is_delta_surface(scene: &Scene, v: &Vertex) -> bool {
+    v.kind == VertexKind::Surface && scene.materials[v.material as usize].is_delta()
+}
+
+/// Balance weights n_s p_s / Σ n_i p_i of every strategy s (index = s) for full path `x`,
+/// with the sample count `count(s, t)` of each strategy; `None` where a strategy cannot
+/// produce the path.
+pub fn brute_force_weights(scene: &Scene, x: &[Vertex], count: impl Fn(usize, usize) -> f64) -> Vec<Option<f64>> {
+    let n = x.len();
+    let mut p = vec![None; n + 1];
+    if n == 2 {
+        p[0] = Some(1.0);
+        return p;
+    }
+    for s in 0..n {
+        let t = n - s;
+        // Can strategy (s, t) connect x_{s−1} with x_s?
+        let possible = if s == 0 {
+            x[0].kind != VertexKind::Camera && x[0].emitter.is_some()
+        } else {
+            !is_delta_surface(scene, &x[s - 1]) && !is_delta_surface(scene, &x[s])
+        };
+        if !possible || t == 0 {
+            continue;
+        }
+        let mut prod = 1.0f64;
+        for i in 0..s {
+            prod *= match i {
+                0 => origin_density(scene, &x[0]),
+                1 => area_density(scene, None, &x[0], &x[1]),
+                _ => area_density(scene, Some(&x[i - 2]), &x[i - 1], &x[i]),
+            };
+        }
+        for j in 0..t {
+            let k = n - 1 - j;
+            prod *= match j {
+                0 => 1.0,
+                1 => area_density(scene, None, &x[n - 1], &x[k]),
+                _ => area_density(scene, Some(&x[k + 2]), &x[k + 1], &x[k]),
+            };
+        }
+        p[s] = Some(prod * count(s, t));
+    }
+    let total: f64 = p.iter().flatten().sum();
+    p.iter().map(|v| v.map(|v| v / total)).collect()
+}
