@@ -12,6 +12,9 @@ set -euo pipefail
 cd "$(dirname "$0")/../fuzz"
 
 SECONDS_PER_TARGET="${FUZZ_SECONDS:-30}"
+# A fixed libFuzzer seed makes a CI run explore the same inputs first (a crash it finds
+# reproduces); FUZZ_SEED=0 lets libFuzzer pick one, for longer exploratory runs.
+SEED="${FUZZ_SEED:-1}"
 TARGETS=("$@")
 if [ ${#TARGETS[@]} -eq 0 ]; then
     TARGETS=(material_sampling light_sampling mis_weights mitsuba_parser exr_reader)
@@ -43,7 +46,7 @@ for t in "${TARGETS[@]}"; do
     fi
     echo "test-fuzz: $t: fuzzing for ${SECONDS_PER_TARGET}s"
     if ! cargo "${TOOLCHAIN[@]}" fuzz run -O "${SANITIZER[@]}" "$t" "$work" "$seeds" -- \
-        -max_total_time="$SECONDS_PER_TARGET" -rss_limit_mb=2048 -print_final_stats=1; then
+        -max_total_time="$SECONDS_PER_TARGET" -seed="$SEED" -rss_limit_mb=2048 -print_final_stats=1; then
         echo "test-fuzz: $t: CRASH (input in fuzz/artifacts/$t/)"; status=1
     fi
 done

@@ -20,7 +20,9 @@ use crate::warp;
 fn toward(position: Vec3, p_ref: Vec3) -> Option<(Vec3, f32, f32)> {
     let d = position - p_ref;
     let dist2 = d.length_squared();
-    if dist2 <= 0.0 || !dist2.is_finite() {
+    // A subnormal squared distance (|d| below ~1e-19) leaves too few bits to normalise
+    // d: the direction came out 0.2 % short of unit length (found by fuzzing).
+    if !(dist2 >= f32::MIN_POSITIVE) || !dist2.is_finite() {
         return None;
     }
     let dist = sqrt(dist2);
