@@ -218,7 +218,7 @@ pub struct CacheArgs {
     /// SPCBPT: training paths, |D| [default: min(1000000, W·H)].
     #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..))]
     pub dataset: Option<u32>,
-    /// SPCBPT: subspaces per side, N_S (about 20 % of the light ones go to light-source bins).
+    /// SPCBPT: subspaces per side, N_S (light-source vertices are not cached: s = 1 is next-event estimation, see docs/spcbpt.md).
     #[arg(long, value_name = "N", default_value_t = 1000, value_parser = clap::value_parser!(u32).range(2..))]
     pub subspaces: u32,
     /// SPCBPT: Adam learning rate α (the paper's 0.1: measured 4-40x less excess loss than
