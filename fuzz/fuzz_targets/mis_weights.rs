@@ -26,6 +26,7 @@ use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::Scene;
 use ember_core::spectrum::Rgb;
 use ember_fuzz::Bytes;
+use ember_tests::bdpt_oracle::for_each_strategy_split;
 use ember_tests::scenes::cornell;
 use ember_tests::tracer::BruteForce;
 use glam::{Vec2, Vec3};
@@ -52,31 +53,6 @@ fn sphere_material(b: &mut Bytes) -> Material {
         3 => Material::dielectric(ior, 1.0, c, c),
         _ => Material::rough_dielectric(distr, alpha, ior, 1.0, c, c),
     }
-}
-
-fn is_delta_surface(scene: &Scene, v: &Vertex) -> bool {
-    v.kind == VertexKind::Surface && scene.materials[v.material as usize].is_delta()
-}
-
-/// The sub-paths strategy (s, n − s) would have generated for full path `x`.
-fn split(scene: &Scene, x: &[Vertex], s: usize) -> (Vec<Vertex>, Vec<Vertex>) {
-    let mut light: Vec<Vertex> = x[..s].to_vec();
-    let mut cam: Vec<Vertex> = x[s..].iter().rev().copied().collect();
-    for path in [&mut light, &mut cam] {
-        for i in 0..path.len() {
-            path[i].pdf_rev = 0.0;
-            path[i].pdf_fwd = match i {
-                0 if path[0].kind == VertexKind::Camera => 0.0,
-                0 => path.get(1).or(x.get(1)).map_or(0.0, |next| path[0].pdf_light_origin(scene, next)),
-                1 => path[0].pdf(scene, None, &path[1]),
-                _ => path[i - 1].pdf(scene, Some(&path[i - 2]), &path[i]),
-            };
-            if i + 2 < path.len() {
-                path[i].pdf_rev = path[i + 1].pdf(scene, Some(&path[i + 2]), &path[i]);
-            }
-        }
-    }
-    (light, cam)
 }
 
 static FULL_PATHS: AtomicU64 = AtomicU64::new(0);
@@ -131,17 +107,11 @@ fn paths_of_one_sample(b: &mut Bytes, scene: &Scene, tracer: &BruteForce, params
             x.extend(cam[..t].iter().rev().copied());
             let n = x.len();
             let mut sum = 0.0f64;
-            for s2 in 0..n {
-                let t2 = n - s2;
-                let possible = if s2 == 0 { x[0].emitter.is_some() } else { !is_delta_surface(scene, &x[s2 - 1]) && !is_delta_surface(scene, &x[s2]) };
-                if !possible || (s2 == 1 && t2 == 1) {
-                    continue;
-                }
-                let (l, c) = split(scene, &x, s2);
-                let w = mis_weight(scene, &l, &c, None, s2, t2) as f64;
+            for_each_strategy_split(scene, &x, |s2, t2, l, c| {
+                let w = mis_weight(scene, l, c, None, s2, t2) as f64;
                 check_weight(w, &format!("BDPT split ({s2}, {t2}) of a {n}-vertex path"));
                 sum += w;
-            }
+            });
             assert!((sum - 1.0).abs() <= 1e-3, "BDPT weights of a {n}-vertex path (joined at ({s}, {t})) sum to {sum}");
             FULL_PATHS.fetch_add(1, Ordering::Relaxed);
         }

@@ -69,13 +69,7 @@ pub fn brute_force_weights(scene: &Scene, x: &[Vertex], count: impl Fn(usize, us
     }
     for s in 0..n {
         let t = n - s;
-        // Can strategy (s, t) connect x_{s−1} with x_s?
-        let possible = if s == 0 {
-            x[0].kind != VertexKind::Camera && x[0].emitter.is_some()
-        } else {
-            !is_delta_surface(scene, &x[s - 1]) && !is_delta_surface(scene, &x[s])
-        };
-        if !possible || t == 0 {
+        if !strategy_can_produce(scene, x, s) || t == 0 {
             continue;
         }
         let mut prod = 1.0f64;
@@ -98,4 +92,52 @@ pub fn brute_force_weights(scene: &Scene, x: &[Vertex], count: impl Fn(usize, us
     }
     let total: f64 = p.iter().flatten().sum();
     p.iter().map(|v| v.map(|v| v / total)).collect()
+}
+
+/// Can strategy s (light prefix x₀…x_{s−1}, camera suffix x_s…) produce full path `x`?
+/// s = 0 needs x₀ to emit; otherwise x_{s−1} and x_s are joined by a connection, which
+/// neither may be Dirac for.
+pub fn strategy_can_produce(scene: &Scene, x: &[Vertex], s: usize) -> bool {
+    if s == 0 {
+        x[0].kind != VertexKind::Camera && x[0].emitter.is_some()
+    } else {
+        !is_delta_surface(scene, &x[s - 1]) && !is_delta_surface(scene, &x[s])
+    }
+}
+
+/// The sub-paths strategy (s, n − s) would have generated for full path `x`, with their
+/// densities filled in as the random walk fills them.
+pub fn split(scene: &Scene, x: &[Vertex], s: usize) -> (Vec<Vertex>, Vec<Vertex>) {
+    let mut light: Vec<Vertex> = x[..s].to_vec();
+    let mut cam: Vec<Vertex> = x[s..].iter().rev().copied().collect();
+    for path in [&mut light, &mut cam] {
+        for i in 0..path.len() {
+            path[i].pdf_rev = 0.0;
+            path[i].pdf_fwd = match i {
+                0 if path[0].kind == VertexKind::Camera => 0.0,
+                0 => path.get(1).or(x.get(1)).map_or(0.0, |next| path[0].pdf_light_origin(scene, next)),
+                1 => path[0].pdf(scene, None, &path[1]),
+                _ => path[i - 1].pdf(scene, Some(&path[i - 2]), &path[i]),
+            };
+            if i + 2 < path.len() {
+                path[i].pdf_rev = path[i + 1].pdf(scene, Some(&path[i + 2]), &path[i]);
+            }
+        }
+    }
+    (light, cam)
+}
+
+/// Calls `f(s, t, light, camera)` for every strategy BDPT uses that can produce full path
+/// `x` ((1, 1) is not used: (0, 2) sees emitters directly), with the sub-paths that
+/// strategy would have generated ([`split`]).
+pub fn for_each_strategy_split(scene: &Scene, x: &[Vertex], mut f: impl FnMut(usize, usize, &[Vertex], &[Vertex])) {
+    let n = x.len();
+    for s in 0..n {
+        let t = n - s;
+        if !strategy_can_produce(scene, x, s) || (s == 1 && t == 1) {
+            continue;
+        }
+        let (light, camera) = split(scene, x, s);
+        f(s, t, &light, &camera);
+    }
 }

@@ -18,9 +18,8 @@ use ember_core::integrator::bdpt::{Vertex, VertexKind, camera_subpath, connect_c
 use ember_core::integrator::lvcbpt::StrategyCounts;
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::rng::{SampleStream, Stream};
-use ember_core::scene::Scene;
 use ember_tests::scenes::cornell_with_spheres;
-use ember_tests::bdpt_oracle::{brute_force_weights, is_delta_surface};
+use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split};
 use ember_tests::tracer::BruteForce;
 use glam::Vec2;
 
@@ -69,28 +68,6 @@ fn counted_weights_equal_brute_force_and_sum_to_one() {
     assert!(checked > 4000, "too few connections exercised: {checked}");
 }
 
-/// The sub-paths strategy (s, n − s) would have generated for full path `x`, with their
-/// densities filled in as the random walk fills them.
-fn split(scene: &Scene, x: &[Vertex], s: usize) -> (Vec<Vertex>, Vec<Vertex>) {
-    let mut light: Vec<Vertex> = x[..s].to_vec();
-    let mut cam: Vec<Vertex> = x[s..].iter().rev().copied().collect();
-    for path in [&mut light, &mut cam] {
-        for i in 0..path.len() {
-            path[i].pdf_rev = 0.0;
-            path[i].pdf_fwd = match i {
-                0 if path[0].kind == VertexKind::Camera => 0.0,
-                0 => path.get(1).or(x.get(1)).map_or(0.0, |next| path[0].pdf_light_origin(scene, next)),
-                1 => path[0].pdf(scene, None, &path[1]),
-                _ => path[i - 1].pdf(scene, Some(&path[i - 2]), &path[i]),
-            };
-            if i + 2 < path.len() {
-                path[i].pdf_rev = path[i + 1].pdf(scene, Some(&path[i + 2]), &path[i]);
-            }
-        }
-    }
-    (light, cam)
-}
-
 #[test]
 fn counted_weights_of_one_path_sum_to_one() {
     let (scene, geometry, _) = cornell_with_spheres(24, 24).build().expect("scene");
@@ -115,15 +92,7 @@ fn counted_weights_of_one_path_sum_to_one() {
                 x.extend(cam[..t].iter().rev().copied());
                 let n = x.len();
                 let mut sum = 0.0f64;
-                for s2 in 0..n {
-                    let t2 = n - s2;
-                    let possible = if s2 == 0 { x[0].emitter.is_some() } else { !is_delta_surface(&scene, &x[s2 - 1]) && !is_delta_surface(&scene, &x[s2]) };
-                    if !possible || (s2 == 1 && t2 == 1) {
-                        continue;
-                    }
-                    let (l, c) = split(&scene, &x, s2);
-                    sum += mis_weight_counted(&scene, &l, &c, None, s2, t2, &count) as f64;
-                }
+                for_each_strategy_split(&scene, &x, |s2, t2, l, c| sum += mis_weight_counted(&scene, l, c, None, s2, t2, &count) as f64);
                 worst = worst.max((sum - 1.0).abs());
                 assert!((sum - 1.0).abs() <= 1e-5, "weights of a {n}-vertex path sum to {sum}");
                 paths += 1;
