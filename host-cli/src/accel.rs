@@ -10,7 +10,7 @@
 //! former. Triangles are intersected with the watertight test (module `triangle`).
 //! Degenerate triangles (zero area or non-finite vertices) cannot be hit and are dropped.
 //! The hierarchy is built over leaf boxes grown by a few ulps of the scene's scale, as
-//! obvhs's slab test is not conservative (see `box_padding`: without it, rays aimed at
+//! obvhs's slab test is not conservative (see `hit::box_padding`: without it, rays aimed at
 //! the edge where two walls meet escaped a closed box).
 //!
 //! # Which hierarchy: measured
@@ -53,12 +53,13 @@
 //! A ray with a non-finite origin or direction, a zero direction, or a `t_max` that is
 //! not positive hits nothing.
 
+mod hit;
 mod sphere;
 mod triangle;
 
 use std::time::Duration;
 
-use glam::{Vec2, Vec3, Vec3A};
+use glam::{Vec3, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
@@ -171,25 +172,6 @@ fn finite(v: Vec3) -> bool {
     v.is_finite()
 }
 
-/// How far every leaf box is grown: 2⁻¹⁹ of the scene's largest coordinate (8 ulps).
-///
-/// obvhs's slab test is not conservative (pbrt-v4 widens t_max by 1 + 2γ(3) for this;
-/// obvhs does not): a flat box, such as an axis-aligned wall's, hit exactly on its rim
-/// can be missed by a few ulps. A camera ray through the exact edge where two such
-/// walls meet then misses both boxes and leaks out of a closed room, although the
-/// watertight triangle test would have caught it. Measured: unpadded, the BVH2 let 2
-/// of 1 M pixel-centre camera rays (the benchmark scene at 1024²) escape its closed
-/// box, and rays aimed exactly at the edges of a closed tessellated box escaped by
-/// thousands (test `closed_box_does_not_leak_at_edges`: 2 244 BVH2, 5 609 CWBVH of
-/// 120 000; none padded). Growing the boxes by a few ulps of the scene's scale closes
-/// those gaps at no measurable cost. The slab test's error grows with the distance of
-/// the ray origin, so the margin covers origins up to roughly ten scene sizes away.
-fn box_padding(geometry: &SceneGeometry) -> f32 {
-    let b = geometry.bounds();
-    let scale = if b.is_empty() { 1.0 } else { b.min.abs().max(b.max.abs()).max_element().max(1e-3) };
-    if scale.is_finite() { scale * (1.0 / 524_288.0) } else { 0.0 }
-}
-
 /// Grow a box by `pad` on every side.
 trait Padded {
     fn padded(self, pad: f32) -> Self;
@@ -207,14 +189,10 @@ impl<B: TriangleBvh> AccelWith<B> {
     pub fn new(geometry: &SceneGeometry) -> Self {
         // Keep the triangles that can be hit.
         let kept: Vec<u32> = (0..geometry.triangles.len() as u32)
-            .filter(|&i| {
-                let t = &geometry.triangles[i as usize];
-                let n = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]);
-                t.p.iter().all(|&p| finite(p)) && n.is_finite() && n.length_squared() > 0.0
-            })
+            .filter(|&i| hit::can_be_hit(&geometry.triangles[i as usize]))
             .collect();
         let input: Vec<[Vec3A; 3]> = kept.iter().map(|&i| geometry.triangles[i as usize].p.map(Vec3A::from)).collect();
-        let pad = box_padding(geometry);
+        let pad = hit::box_padding(geometry);
         let boxes: Vec<Aabb> = input.iter().map(|v| Aabb::from_points(v).padded(pad)).collect();
         let (bvh, tris, attrs) = if input.is_empty() {
             (None, Vec::new(), Vec::new())
@@ -334,18 +312,8 @@ impl<B: TriangleBvh> AccelWith<B> {
     /// The full record of a hit on the triangle in leaf slot `slot` at distance `t` with
     /// barycentrics `b`.
     fn triangle_hit(&self, slot: usize, t: f32, b: [f32; 3]) -> SurfaceHit {
-        let v = &self.tris[slot];
         let a = &self.attrs[slot];
-        let (p0, p1, p2) = (Vec3::from(v[0]), Vec3::from(v[1]), Vec3::from(v[2]));
-        // Interpolating the vertices is more accurate than o + t·d far from the origin.
-        let p = b[0] * p0 + b[1] * p1 + b[2] * p2;
-        let ng = (p1 - p0).cross(p2 - p0).normalize();
-        let ns = a
-            .normals
-            .map(|n| b[0] * n[0] + b[1] * n[1] + b[2] * n[2])
-            .and_then(|n| n.try_normalize())
-            .map_or(ng, |n| if n.dot(ng) < 0.0 { -n } else { n });
-        SurfaceHit { t, p, ng, ns, uv: Vec2::new(b[1], b[2]), material: a.material, emitter: a.emitter }
+        hit::surface_hit(&self.tris[slot], a.normals, a.material, a.emitter, t, b)
     }
 }
 

@@ -19,19 +19,21 @@
 //! files (`host-cli/src/accel/{triangle,sphere}.rs`), compiled here through `#[path]`:
 //! one implementation, so a closest hit is the same bit pattern on both hosts. Leaf
 //! boxes are padded by the same few ulps of the scene's scale (obvhs's slab test is not
-//! conservative; see the CLI's `box_padding`).
+//! conservative; see `box_padding` in the CLI's `accel/hit.rs`).
 //!
 //! # Spheres
 //! The built-in scenes hold at most a few spheres, so they are tested in a list,
 //! triangles first with `t_max` cut to the triangle hit (closest) and spheres first
 //! (occlusion), as the CLI does for up to 8 spheres.
 
+#[path = "../../host-cli/src/accel/hit.rs"]
+mod hit;
 #[path = "../../host-cli/src/accel/sphere.rs"]
 mod sphere;
 #[path = "../../host-cli/src/accel/triangle.rs"]
 mod triangle;
 
-use glam::{Vec2, Vec3, Vec3A};
+use glam::{Vec3, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
@@ -87,25 +89,14 @@ impl core::fmt::Debug for WasmAccel {
     }
 }
 
-/// 2⁻¹⁹ of the scene's largest coordinate (the CLI's `box_padding`, same reason).
-fn box_padding(geometry: &SceneGeometry) -> f32 {
-    let b = geometry.bounds();
-    let scale = if b.is_empty() { 1.0 } else { b.min.abs().max(b.max.abs()).max_element().max(1e-3) };
-    if scale.is_finite() { scale * (1.0 / 524_288.0) } else { 0.0 }
-}
-
 impl WasmAccel {
     /// Build; degenerate triangles and spheres (zero area, non-finite) are dropped.
     pub fn new(geometry: &SceneGeometry) -> Self {
         let kept: Vec<usize> = (0..geometry.triangles.len())
-            .filter(|&i| {
-                let t = &geometry.triangles[i];
-                let n = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]);
-                t.p.iter().all(|p| p.is_finite()) && n.is_finite() && n.length_squared() > 0.0
-            })
+            .filter(|&i| hit::can_be_hit(&geometry.triangles[i]))
             .collect();
         let input: Vec<[Vec3A; 3]> = kept.iter().map(|&i| geometry.triangles[i].p.map(Vec3A::from)).collect();
-        let pad = box_padding(geometry);
+        let pad = hit::box_padding(geometry);
         let (bvh, tris, attrs) = if input.is_empty() {
             (None, Vec::new(), Vec::new())
         } else {
@@ -144,17 +135,8 @@ impl WasmAccel {
     }
 
     fn triangle_hit(&self, slot: usize, t: f32, b: [f32; 3]) -> SurfaceHit {
-        let v = &self.tris[slot];
         let a = &self.attrs[slot];
-        let (p0, p1, p2) = (Vec3::from(v[0]), Vec3::from(v[1]), Vec3::from(v[2]));
-        let p = b[0] * p0 + b[1] * p1 + b[2] * p2;
-        let ng = (p1 - p0).cross(p2 - p0).normalize();
-        let ns = a
-            .normals
-            .map(|n| b[0] * n[0] + b[1] * n[1] + b[2] * n[2])
-            .and_then(|n| n.try_normalize())
-            .map_or(ng, |n| if n.dot(ng) < 0.0 { -n } else { n });
-        SurfaceHit { t, p, ng, ns, uv: Vec2::new(b[1], b[2]), material: a.material, emitter: a.emitter }
+        hit::surface_hit(&self.tris[slot], a.normals, a.material, a.emitter, t, b)
     }
 }
 

@@ -29,6 +29,19 @@ fn toward(position: Vec3, p_ref: Vec3) -> Option<(Vec3, f32, f32)> {
     Some((d / dist, dist, dist2))
 }
 
+/// Shared by point and spot: the Dirac sample of a light at `position` seen from
+/// `p_ref`, radiance I·falloff(wi)/d² (`falloff` of the direction toward the light).
+#[inline]
+fn sample_from_position(position: Vec3, intensity: Rgb, p_ref: Vec3, falloff: impl FnOnce(Vec3) -> f32) -> Option<LightSample> {
+    let (wi, dist, dist2) = toward(position, p_ref)?;
+    let radiance = intensity * (falloff(wi) / dist2);
+    // A reference point (almost) on the light: 1/d² overflows (found by fuzzing).
+    if !radiance.is_finite() {
+        return None;
+    }
+    Some(LightSample { wi, dist, p: position, n: Vec3::ZERO, radiance, pdf: SolidAnglePdf(1.0), is_delta: true })
+}
+
 #[derive(Clone, Copy, Debug)]
 pub(super) struct PointLight {
     pub(super) position: Vec3,
@@ -37,21 +50,7 @@ pub(super) struct PointLight {
 
 impl PointLight {
     pub(super) fn sample_li(&self, p_ref: Vec3) -> Option<LightSample> {
-        let (wi, dist, dist2) = toward(self.position, p_ref)?;
-        let radiance = self.intensity / dist2;
-        // A reference point (almost) on the light: 1/d² overflows (found by fuzzing).
-        if !radiance.is_finite() {
-            return None;
-        }
-        Some(LightSample {
-            wi,
-            dist,
-            p: self.position,
-            n: Vec3::ZERO,
-            radiance,
-            pdf: SolidAnglePdf(1.0),
-            is_delta: true,
-        })
+        sample_from_position(self.position, self.intensity, p_ref, |_| 1.0)
     }
 
     pub(super) fn sample_le(&self, u_dir: Vec2) -> Option<EmissionSample> {
@@ -125,21 +124,7 @@ impl SpotLight {
     }
 
     pub(super) fn sample_li(&self, p_ref: Vec3) -> Option<LightSample> {
-        let (wi, dist, dist2) = toward(self.position, p_ref)?;
-        let falloff = self.falloff(self.frame.to_local(-wi));
-        let radiance = self.intensity * (falloff / dist2);
-        if !radiance.is_finite() {
-            return None;
-        }
-        Some(LightSample {
-            wi,
-            dist,
-            p: self.position,
-            n: Vec3::ZERO,
-            radiance,
-            pdf: SolidAnglePdf(1.0),
-            is_delta: true,
-        })
+        sample_from_position(self.position, self.intensity, p_ref, |wi| self.falloff(self.frame.to_local(-wi)))
     }
 
     /// Uniform direction in the cutoff cone (Mitsuba 3 `SpotLight::sample_ray`).
