@@ -127,6 +127,8 @@ pub struct SpcbptReport {
     pub gamma_bytes: usize,
     pub n_eye: u32,
     pub n_light: u32,
+    /// Light subspaces that are light-source bins (0: s = 1 by NEE).
+    pub light_source_bins: u32,
 }
 
 use ember_core::integrator::spcbpt::{self, prepare};
@@ -164,7 +166,21 @@ impl SpcbptHost {
         }
         lf.truncate(FIT_CAP);
         lw.truncate(FIT_CAP);
-        let (light_tree, n_light) = prepare::fit_side(&lf, &lw, args.subspaces as usize, args.k_d, params.seed ^ 0x11);
+        // Light-source bins take their share of N_S when the scene can use them.
+        let wanted = (args.light_source_share * args.subspaces as f32).round() as u32;
+        let probe = spcbpt::light_source_bins(scene, wanted.min(args.subspaces - 1), 0);
+        let surface_subspaces = args.subspaces - probe.as_ref().map_or(0, |b| b.bin_count()).min(args.subspaces - 1);
+        let (light_tree, n_light_surface) = prepare::fit_side(&lf, &lw, surface_subspaces as usize, args.k_d, params.seed ^ 0x11);
+        let sources = match spcbpt::light_source_bins(scene, wanted.min(args.subspaces - 1), n_light_surface) {
+            Ok(bins) => Some(bins),
+            Err(why) => {
+                if wanted > 0 {
+                    eprintln!("spcbpt     light sources not binned ({why}): s = 1 is next-event estimation");
+                }
+                None
+            }
+        };
+        report.light_source_bins = sources.as_ref().map_or(0, |b| b.bin_count());
         drop((lf, lw));
         phase("light classification", &mut report);
 
@@ -193,7 +209,8 @@ impl SpcbptHost {
         let (eye_tree, n_eye) = prepare::fit_side(&ef, &ew, args.subspaces as usize, args.k_d, params.seed ^ 0x22);
         drop((ef, ew));
         let block_mean: Vec<f64> = blocks.iter().zip(&block_samples).map(|(s, &n)| if n > 0 { s / n as f64 } else { 0.0 }).collect();
-        let classifier = spcbpt::Classifier { eye: eye_tree, light: light_tree, n_eye, n_light };
+        let classifier = spcbpt::Classifier::new(eye_tree, n_eye, light_tree, n_light_surface, sources);
+        let n_light = classifier.n_light;
         phase("eye classification (dataset pass 1)", &mut report);
 
         // Q (eq. 19) over M' light paths.

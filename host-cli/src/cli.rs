@@ -218,7 +218,7 @@ pub struct CacheArgs {
     /// SPCBPT: training paths, |D| [default: min(1000000, W·H)].
     #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..))]
     pub dataset: Option<u32>,
-    /// SPCBPT: subspaces per side, N_S (light-source vertices are not cached: s = 1 is next-event estimation, see docs/spcbpt.md).
+    /// SPCBPT: subspaces per side, N_S (on the light side shared with the light-source bins).
     #[arg(long, value_name = "N", default_value_t = 1000, value_parser = clap::value_parser!(u32).range(2..))]
     pub subspaces: u32,
     /// SPCBPT: Adam learning rate α (the paper's 0.1: measured 4-40x less excess loss than
@@ -240,6 +240,11 @@ pub struct CacheArgs {
     /// SPCBPT: weight of the normal/direction terms in the classification distance, k_d.
     #[arg(long, value_name = "K", default_value_t = 0.05)]
     pub k_d: f32,
+    /// SPCBPT: share of the N_S light subspaces given to positions on the lights (the
+    /// paper's ~20 %); their vertices are cached and Γ-sampled instead of next-event
+    /// estimation. 0, or a scene with a point, spot or infinite light, keeps NEE.
+    #[arg(long, value_name = "SHARE", default_value_t = 0.2, value_parser = parse_share)]
+    pub light_source_share: f32,
     /// SPCBPT: light paths estimating Q per light subspace, M' [default: min(2000000, 2·W·H)].
     #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..))]
     pub q_paths: Option<u32>,
@@ -247,7 +252,16 @@ pub struct CacheArgs {
 
 impl Default for CacheArgs {
     fn default() -> Self {
-        Self { light_paths: None, connections: 3, dataset: None, subspaces: 1000, learning_rate: 0.1, batch: 10_000, epochs: 2, mixture: 0.1, reuse: 200, k_d: 0.05, q_paths: None }
+        Self { light_paths: None, connections: 3, dataset: None, subspaces: 1000, learning_rate: 0.1, batch: 10_000, epochs: 2, mixture: 0.1, reuse: 200, k_d: 0.05, light_source_share: 0.2, q_paths: None }
+    }
+}
+
+/// A share in [0, 1).
+fn parse_share(text: &str) -> Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(v) if (0.0..1.0).contains(&v) => Ok(v),
+        Ok(v) => Err(format!("{v} is not in [0, 1)")),
+        Err(e) => Err(e.to_string()),
     }
 }
 

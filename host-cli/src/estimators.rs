@@ -200,7 +200,7 @@ pub fn make_core_renderer(args: &RenderArgs) -> Result<CoreRenderer, String> {
     }
     if let Some(s) = &r.spcbpt {
         let rep = &s.report;
-        eprintln!("spcbpt     preprocessing {:.2} s ({}); {} eye × {} light subspaces", rep.seconds, rep.phases.iter().map(|(n, t)| format!("{n} {t:.2} s")).collect::<Vec<_>>().join(", "), rep.n_eye, rep.n_light);
+        eprintln!("spcbpt     preprocessing {:.2} s ({}); {} eye × {} light subspaces ({} of them light-source bins{})", rep.seconds, rep.phases.iter().map(|(n, t)| format!("{n} {t:.2} s")).collect::<Vec<_>>().join(", "), rep.n_eye, rep.n_light, rep.light_source_bins, if rep.light_source_bins > 0 { ", s = 1 through the cache" } else { ", s = 1 by NEE" });
         eprintln!("spcbpt     losses per epoch {:?}", rep.losses);
         eprintln!("spcbpt     memory: D {:.1} MiB ({} paths, freed after training), trees {:.1} KiB, Γ {:.1} KiB", rep.dataset_bytes as f64 / 1048576.0, rep.dataset_paths, rep.tree_bytes as f64 / 1024.0, rep.gamma_bytes as f64 / 1024.0);
     }

@@ -89,22 +89,54 @@ pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[[f32; 3]]) -> R
 /// Read the first layer with R, G and B channels of an EXR file as f32 (alpha, if any,
 /// is dropped; half and uint channels are converted).
 pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
-    let file = File::open(path).map_err(|e| ImageError::new(path, ImageErrorKind::Exr(e.into())))?;
-    decode_exr(std::io::BufReader::new(file)).map_err(|e| ImageError::new(path, ImageErrorKind::Exr(e)))
+    let fail = |e: exr::error::Error| ImageError::new(path, ImageErrorKind::Exr(e));
+    let file = File::open(path).map_err(|e| fail(e.into()))?;
+    let len = file.metadata().map_err(|e| fail(e.into()))?.len();
+    decode_exr(std::io::BufReader::new(file), len).map_err(fail)
 }
 
 /// [`read_exr`] on bytes already in memory (the fuzz target's entry point); errors name
 /// the file `<memory>`. Never panics on malformed input.
 pub fn read_exr_from_bytes(bytes: &[u8]) -> Result<RgbImage, ImageError> {
-    decode_exr(std::io::Cursor::new(bytes)).map_err(|e| ImageError::new(Path::new("<memory>"), ImageErrorKind::Exr(e)))
+    decode_exr(std::io::Cursor::new(bytes), bytes.len() as u64)
+        .map_err(|e| ImageError::new(Path::new("<memory>"), ImageErrorKind::Exr(e)))
 }
 
-/// The most pixels an EXR may declare (256 Mpixel, 3 GiB as f32 RGB): a corrupt or
-/// hostile header must not make the reader allocate without bound.
-const MAX_EXR_PIXELS: usize = 1 << 28;
+/// The most pixels an EXR may declare (64 Mpixel, 768 MiB as f32 RGB, past any reference
+/// image here): a corrupt or hostile header must not make the reader allocate without bound.
+const MAX_EXR_PIXELS: usize = 1 << 26;
 
-fn decode_exr(reader: impl std::io::Read + std::io::Seek) -> Result<RgbImage, exr::error::Error> {
+/// Reject, from the header alone, a file whose declared layout cannot fit in its
+/// `file_len` bytes: every chunk has an 8-byte entry in the offset table, so a header
+/// claiming more chunks than that is corrupt (the fuzzer's 480-byte file declaring
+/// 16.5 M scanlines made the decoder allocate 2.3 GB before noticing). Also bounds the
+/// declared pixel count by [`MAX_EXR_PIXELS`].
+fn check_exr_header(reader: &mut (impl std::io::Read + std::io::Seek), file_len: u64) -> Result<(), exr::error::Error> {
+    use exr::error::Error;
+    let start = reader.stream_position()?;
+    let meta = exr::meta::MetaData::read_from_buffered(&mut *reader, false)?;
+    reader.seek(std::io::SeekFrom::Start(start))?;
+    let mut chunks: u64 = 0;
+    for header in meta.headers.iter() {
+        let size = header.layer_size;
+        if size.width().checked_mul(size.height()).is_none_or(|n| n > MAX_EXR_PIXELS) {
+            return Err(Error::NotSupported(
+                format!("a {}x{} layer (more than {} pixels)", size.width(), size.height(), MAX_EXR_PIXELS).into(),
+            ));
+        }
+        chunks = chunks.saturating_add(header.chunk_count as u64);
+    }
+    if chunks.saturating_mul(8) > file_len {
+        return Err(Error::Invalid(
+            format!("the header declares {chunks} chunks, more than a {file_len}-byte file can index").into(),
+        ));
+    }
+    Ok(())
+}
+
+fn decode_exr(mut reader: impl std::io::Read + std::io::Seek, file_len: u64) -> Result<RgbImage, exr::error::Error> {
     use exr::prelude::*;
+    check_exr_header(&mut reader, file_len)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -126,7 +158,7 @@ fn decode_exr(reader: impl std::io::Read + std::io::Seek) -> Result<RgbImage, ex
     let size = image.layer_data.size;
     let (_, pixels) = image.layer_data.channel_data.pixels;
     if pixels.len() != size.width() * size.height() {
-        return Err(exr::error::Error::NotSupported("images larger than 2^28 pixels".into()));
+        return Err(exr::error::Error::NotSupported("images larger than 2^26 pixels".into()));
     }
     Ok(RgbImage { width: size.width() as u32, height: size.height() as u32, pixels })
 }
@@ -236,5 +268,25 @@ mod tests {
         let mut huge = float.clone();
         huge[at + 8..at + 16].copy_from_slice(&[0xff, 0xff, 0, 0, 0xff, 0xff, 0, 0]);
         assert!(read_exr_from_bytes(&huge).is_err());
+    }
+
+    /// Fuzz finding (CI, exr_reader): a 397-byte file whose dataWindow declares a
+    /// 67108865×2 layer made the reader allocate its 1.6 GB pixel buffer (then the bound
+    /// was 2^28 pixels) and libFuzzer stopped at 2.3 GB. Both header checks must refuse
+    /// such files before anything is allocated: the pixel bound (this seed), and the
+    /// chunk table (a 1×4M layer of the float seed: few pixels, too many chunks). Seen
+    /// failing with `check_exr_header` removed from `decode_exr`.
+    #[test]
+    fn oversized_headers_are_refused_before_decoding() {
+        let seeds = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/seeds/exr_reader");
+        let bytes = std::fs::read(seeds.join("header_declares_huge_layer.exr")).unwrap();
+        let message = read_exr_from_bytes(&bytes).unwrap_err().to_string();
+        assert!(message.contains("a 67108865x2 layer (more than 67108864 pixels)"), "{message}");
+
+        let mut tall = std::fs::read(seeds.join("float_2x2.exr")).unwrap();
+        let at = tall.windows(10).position(|w| w == b"dataWindow").unwrap() + b"dataWindow\0box2i\0".len() + 4;
+        tall[at..at + 16].copy_from_slice(&[0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x40, 0]);
+        let message = read_exr_from_bytes(&tall).unwrap_err().to_string();
+        assert!(message.contains("declares 4194305 chunks"), "{message}");
     }
 }

@@ -63,18 +63,22 @@ use ember_core::spcbpt::{AdamParams, SubspaceMatrix, TrainParams, TrainingSet};
 /// SPCBPT preprocessing on one thread (the CLI host's phases, in order): κ_L from
 /// `dataset` light paths, dataset pass 1 (eye features, block brightness), κ_E, Q over
 /// `q_paths` light paths, dataset pass 2 (training set), Adam. Returns the model and
-/// the per-epoch losses.
-pub fn spcbpt_model<Q: RayQuery>(scene: &Scene, tracer: &Q, params: &RenderParams, subspaces: usize, dataset: u32, q_paths: u32, light_paths: u32, mixture: f32) -> (Model, Vec<f64>) {
+/// the per-epoch losses. `light_source_bins` > 0 adds that many light-source subspaces
+/// (s = 1 through the cache); 0 keeps next-event estimation.
+#[allow(clippy::too_many_arguments)]
+pub fn spcbpt_model<Q: RayQuery>(scene: &Scene, tracer: &Q, params: &RenderParams, subspaces: usize, light_source_bins: u32, dataset: u32, q_paths: u32, light_paths: u32, mixture: f32) -> (Model, Vec<f64>) {
     let (w, h) = (scene.camera.width(), scene.camera.height());
     let (mut f, mut wt) = (Vec::new(), Vec::new());
     prepare::light_features(scene, tracer, params, 0..dataset, &mut f, &mut wt);
-    let (light, n_light) = prepare::fit_side(&f, &wt, subspaces, 0.05, 1);
+    let (light, n_light_surface) = prepare::fit_side(&f, &wt, subspaces, 0.05, 1);
     let blocks_n = (w.div_ceil(prepare::BLOCK) * h.div_ceil(prepare::BLOCK)) as usize;
     let (mut b, mut bs) = (vec![0.0; blocks_n], vec![0u32; blocks_n]);
     let (mut ef, mut ew) = (Vec::new(), Vec::new());
     prepare::dataset_features(scene, tracer, params, 0..dataset, &mut ef, &mut ew, &mut b, &mut bs);
     let (eye, n_eye) = prepare::fit_side(&ef, &ew, subspaces, 0.05, 2);
-    let classifier = Classifier { eye, light, n_eye, n_light };
+    let sources = (light_source_bins > 0).then(|| spcbpt::light_source_bins(scene, light_source_bins, n_light_surface).expect("light-source bins"));
+    let classifier = Classifier::new(eye, n_eye, light, n_light_surface, sources);
+    let n_light = classifier.n_light;
     let mut q = vec![0.0f64; n_light as usize];
     prepare::accumulate_q(scene, tracer, params, &classifier, 0..q_paths, &mut q);
     let q: Vec<f32> = q.iter().map(|v| (v / q_paths as f64) as f32).collect();

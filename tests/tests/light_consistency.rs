@@ -345,3 +345,26 @@ fn kinds_report_delta_and_infinite() {
     assert_eq!(all_lights()[0].1.environment_radiance(Vec3::Y), Rgb::ZERO);
     assert_eq!(all_lights()[6].1.environment_radiance(Vec3::Y), Rgb::ZERO);
 }
+
+/// `position_uv` inverts the position part of `sample_le` on the lights with a surface
+/// (SPCBPT's light-source subspaces are cells of this square), and only those report
+/// `has_area`. Seen failing with the triangle's barycentrics swapped (b0 ↔ b1).
+#[test]
+fn position_uv_inverts_emission_position() {
+    let mut r = rng(77);
+    for (name, light) in all_lights() {
+        assert_eq!(light.has_area(), name.starts_with("triangle") || name.starts_with("sphere"), "{name}");
+        if !light.has_area() || name == "sphere small" {
+            continue;
+        }
+        for _ in 0..2000 {
+            let u = Vec2::new(r.next_f32(), r.next_f32()).clamp(Vec2::splat(1e-3), Vec2::splat(0.999));
+            let Some(es) = light.sample_le(u, Vec2::new(r.next_f32(), r.next_f32())) else { continue };
+            let back = light.position_uv(es.p);
+            // Near the pole/apex one coordinate is ill-conditioned; compare positions there.
+            let again = light.sample_le(back, Vec2::splat(0.5)).unwrap();
+            assert!((again.p - es.p).length() < 1e-4, "{name}: u {u:?} → uv {back:?}, p {:?} vs {:?}", es.p, again.p);
+            assert!(back.x >= 0.0 && back.x < 1.0 && back.y >= 0.0 && back.y < 1.0, "{name}: {back:?}");
+        }
+    }
+}

@@ -133,7 +133,7 @@ fn spcbpt_agrees_with_pt_per_block_on_the_cornell_box() {
     let tracer = BruteForce::new(geometry);
     let params = RenderParams { max_depth: MaxDepth::UNBOUNDED, seed: 31, ..RenderParams::default() };
     let m = 32;
-    let (model, losses) = spcbpt_model(&scene, &tracer, &params, 128, 4000, 4000, m, 0.1);
+    let (model, losses) = spcbpt_model(&scene, &tracer, &params, 128, 32, 4000, 4000, m, 0.1);
     assert!(losses.iter().all(|l| l.is_finite()), "losses {losses:?}");
     let mut pt = vec![[MeanVar::default(); 3]; BLOCKS];
     let mut sp = vec![[MeanVar::default(); 3]; BLOCKS];

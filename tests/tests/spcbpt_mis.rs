@@ -19,8 +19,10 @@
 //! the counts do not depend on how a path was sampled (it fails on this bug at z = −25.4).
 
 use ember_core::integrator::bdpt::mis::mis_weight_counted;
-use ember_core::integrator::bdpt::{VertexKind, camera_subpath, light_subpath};
-use ember_core::integrator::spcbpt::{self, join, path_counts};
+use ember_core::integrator::bdpt::{Vertex, VertexKind, camera_subpath, light_subpath};
+use ember_core::spectrum::Rgb;
+use ember_core::integrator::spcbpt::{self, Model, join, path_counts};
+use ember_core::scene::Scene;
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::rng::{SampleStream, Stream};
 use ember_tests::cached::spcbpt_model;
@@ -36,16 +38,26 @@ fn spcbpt_weights_equal_brute_force_and_sum_to_one() {
     let (scene, geometry, _) = cornell_with_spheres(24, 24).build().expect("scene");
     let tracer = BruteForce::new(geometry);
     let params = RenderParams { max_depth: MaxDepth(8), seed: 9, ..RenderParams::default() };
-    let (model, _) = spcbpt_model(&scene, &tracer, &params, 32, 3000, 3000, 200, 0.1);
-    let (mut checked, mut worst) = (0usize, 0.0f64);
+    // s = 1 by next-event estimation (no light-source bins), then through the cache with
+    // 8 light-source bins (connect_light_source, its count N·Γ·W₁/Q).
+    for bins in [0, 8] {
+        let (model, _) = spcbpt_model(&scene, &tracer, &params, 32, bins, 3000, 3000, 200, 0.1);
+        assert_eq!(model.caches_light_sources(), bins > 0);
+        check_weights(&scene, &tracer, &params, &model, bins);
+    }
+}
+
+fn check_weights(scene: &Scene, tracer: &BruteForce, params: &RenderParams, model: &Model, bins: u32) {
+    let params = *params;
+    let (mut checked, mut worst, mut emitter_hits) = (0usize, 0.0f64, 0usize);
     let (mut paths, mut worst_sum) = (0usize, 0.0f64);
     for i in 0..1500u32 {
         let mut counters = Counters::default();
         let mut rng = SampleStream::for_sample(4, Stream::Camera, i, 0, 0);
         let film = rng.next_2d() * Vec2::splat(24.0);
-        let cam = camera_subpath(&scene, &tracer, &params, film, 9, &mut rng, &mut counters);
+        let cam = camera_subpath(scene, tracer, &params, film, 9, &mut rng, &mut counters);
         let mut lrng = SampleStream::for_sample(4, Stream::Light, i, 0, 0);
-        let light = light_subpath(&scene, &tracer, &params, 8, &mut lrng, &mut counters);
+        let light = light_subpath(scene, tracer, &params, 8, &mut lrng, &mut counters);
         for t in 1..=cam.len() {
             for s in 0..=light.len() {
                 if (s == 1 && t == 1) || s + t < 3 || s + t > 9 {
@@ -53,15 +65,26 @@ fn spcbpt_weights_equal_brute_force_and_sum_to_one() {
                 }
                 // Odd paths go through the camera-label memo of the render loop (labels of
                 // the whole camera path, read for the prefix `cam[..t]`).
-                let labels = (i % 2 == 1).then(|| spcbpt::CameraLabels::new(&model, &cam));
-                let Some(c) = spcbpt::strategy_labelled(&scene, &tracer, &model, LIGHT_TRACING, &light[..s], &cam[..t], labels.as_ref(), s, t, lrng.next_f32(), lrng.next_2d(), &mut counters) else { continue };
+                let labels = (i % 2 == 1).then(|| spcbpt::CameraLabels::new(model, &cam));
+                let Some(c) = spcbpt::strategy_labelled(scene, tracer, model, LIGHT_TRACING, &light[..s], &cam[..t], labels.as_ref(), s, t, lrng.next_f32(), lrng.next_2d(), &mut counters) else { continue };
                 let x = join(&light, &cam, c.sampled, s, t);
                 if x.last().unwrap().kind == VertexKind::InfiniteLight {
                     continue;
                 }
+                // A camera path that hit an emitter must find the light-source bin a light
+                // path starting there would (else the s = 0 and s = 1 counts of one path
+                // disagree and its weights do not sum to one).
+                if s == 0 && bins > 0 {
+                    let y = &x[0];
+                    let id = y.emitter.expect("an s = 0 path ends on an emitter");
+                    let as_light = Vertex::light(id, y.p, y.ng, Rgb::ZERO, 1.0, false);
+                    let (a, b) = (model.classifier.light_source_of(scene, y), model.classifier.light_source_of(scene, &as_light));
+                    assert!(a.is_some() && a == b, "emitter hit at {:?}: bin {a:?}, as a light vertex {b:?}", y.p);
+                    emitter_hits += 1;
+                }
                 let mut counts = [0.0f64; 70];
-                path_counts(&scene, &model, LIGHT_TRACING, &x, &mut counts);
-                let bf = brute_force_weights(&scene, &x, |s, _| counts[s]);
+                path_counts(scene, model, LIGHT_TRACING, &x, &mut counts);
+                let bf = brute_force_weights(scene, &x, |s, _| counts[s]);
                 let expected = bf[s].expect("a strategy that produced a path must be possible");
                 let diff = (expected - c.weight as f64).abs();
                 worst = worst.max(diff);
@@ -71,11 +94,11 @@ fn spcbpt_weights_equal_brute_force_and_sum_to_one() {
                 if s >= 2 && t >= 2 {
                     let n = x.len();
                     let mut sum = 0.0f64;
-                    for_each_strategy_split(&scene, &x, |s2, t2, l, cm| {
+                    for_each_strategy_split(scene, &x, |s2, t2, l, cm| {
                         let joined = join(l, cm, None, s2, t2);
                         let mut c2 = [0.0f64; 70];
-                        path_counts(&scene, &model, LIGHT_TRACING, &joined, &mut c2);
-                        sum += mis_weight_counted(&scene, l, cm, None, s2, t2, &|a: usize, _b: usize| c2[a]) as f64;
+                        path_counts(scene, model, LIGHT_TRACING, &joined, &mut c2);
+                        sum += mis_weight_counted(scene, l, cm, None, s2, t2, &|a: usize, _b: usize| c2[a]) as f64;
                     });
                     worst_sum = worst_sum.max((sum - 1.0).abs());
                     assert!((sum - 1.0).abs() <= 1e-5, "weights of a {n}-vertex path sum to {sum}");
@@ -84,7 +107,24 @@ fn spcbpt_weights_equal_brute_force_and_sum_to_one() {
             }
         }
     }
-    println!("checked {checked} weights (worst |Δw| = {worst:e}), {paths} paths summed (worst |Σw − 1| = {worst_sum:e})");
+    println!("{bins} light-source bins: checked {checked} weights (worst |Δw| = {worst:e}), {paths} paths summed (worst |Σw − 1| = {worst_sum:e}), {emitter_hits} emitter hits classified");
     assert!(checked > 3000 && paths > 500, "too few: {checked} weights, {paths} paths");
+    assert!(bins == 0 || emitter_hits >= 10, "too few emitter hits: {emitter_hits}");
+    // The same on 2000 emission samples: as a light vertex and as an emitting surface hit.
+    if bins > 0 {
+        let mut rng = SampleStream::for_sample(5, Stream::Aux, 0, 0, 0);
+        let mut seen = std::collections::BTreeSet::new();
+        for _ in 0..2000 {
+            let id = ((rng.next_f32() * scene.lights.len() as f32) as usize).min(scene.lights.len() - 1);
+            let Some(es) = scene.lights[id].sample_le(rng.next_2d(), rng.next_2d()) else { continue };
+            let y = Vertex::light(id as u32, es.p, es.n, Rgb::ZERO, 1.0, false);
+            let mut hit = y;
+            hit.kind = VertexKind::Surface;
+            let (a, b) = (model.classifier.light_source_of(scene, &y), model.classifier.light_source_of(scene, &hit));
+            assert!(a.is_some() && a == b, "light {id} at {:?}: bin {a:?} as a light vertex, {b:?} as a surface hit", es.p);
+            seen.insert(a.unwrap());
+        }
+        assert_eq!(seen.len() as u32, bins, "every bin is reached");
+    }
 }
 

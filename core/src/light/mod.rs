@@ -217,6 +217,25 @@ impl Light {
         }
     }
 
+    /// Inverse of the position part of [`Light::sample_le`]: the `u_pos` ∈ [0,1)² whose
+    /// sample is surface point `p` (triangle and sphere lights; equal-area cells of `u_pos`
+    /// are equal-area pieces of the light). (0, 0) for lights without a surface.
+    #[inline]
+    pub fn position_uv(&self, p: Vec3) -> Vec2 {
+        match &self.kind {
+            Kind::Triangle(l) => l.position_uv(p),
+            Kind::Sphere(l) => l.position_uv(p),
+            _ => Vec2::ZERO,
+        }
+    }
+
+    /// Triangle and sphere lights: a surface that rays can hit and light paths start on at
+    /// a non-Dirac position.
+    #[inline]
+    pub fn has_area(&self) -> bool {
+        matches!(self.kind, Kind::Triangle(_) | Kind::Sphere(_))
+    }
+
     /// Densities with which [`Light::sample_le`] returns a path leaving `p` (normal `n`)
     /// along `dir`: per unit area and per steradian. Delta components report 1.
     #[inline]

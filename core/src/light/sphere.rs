@@ -191,6 +191,11 @@ impl SphereLight {
         })
     }
 
+    /// Inverse of the position sampling of [`Self::sample_le`] for surface point `p`.
+    pub(super) fn position_uv(&self, p: Vec3) -> Vec2 {
+        warp::invert_uniform_sphere(self.normal_at(p, Vec3::ZERO))
+    }
+
     /// (1/(4πr²), cos/π) with cos taken against the outward normal at `p`.
     pub(super) fn pdf_le(&self, p: Vec3, n: Vec3, dir: Vec3) -> (AreaPdf, SolidAnglePdf) {
         self.pdf_le_normal(self.normal_at(p, n), dir)

@@ -39,6 +39,22 @@ impl TriangleLight {
         b.x * self.p0 + b.y * self.p1 + (1.0 - b.x - b.y) * self.p2
     }
 
+    /// Inverse of the position sampling of [`Self::sample_le`]: the `u_pos` in [0,1)² that
+    /// produces surface point `p` (projected onto the triangle's plane; clamped).
+    pub(super) fn position_uv(&self, p: Vec3) -> Vec2 {
+        // Barycentrics of p by the 2×2 normal equations of p − p2 = b0 e0 + b1 e1.
+        let (e0, e1, d) = (self.p0 - self.p2, self.p1 - self.p2, p - self.p2);
+        let (a00, a01, a11) = (e0.dot(e0), e0.dot(e1), e1.dot(e1));
+        let (r0, r1) = (d.dot(e0), d.dot(e1));
+        let det = a00 * a11 - a01 * a01;
+        if !(det > 0.0) {
+            return Vec2::ZERO;
+        }
+        let b0 = ((a11 * r0 - a01 * r1) / det).clamp(0.0, 1.0);
+        let b1 = ((a00 * r1 - a01 * r0) / det).clamp(0.0, 1.0 - b0);
+        warp::invert_uniform_triangle(Vec2::new(b0, b1))
+    }
+
     /// Radiance leaving the triangle toward `w`.
     #[inline]
     pub(super) fn radiance(&self, w: Vec3) -> Rgb {

@@ -151,6 +151,41 @@ pub fn connect_counted<Q: RayQuery + ?Sized, C: Fn(usize, usize) -> f64>(
     Some(Connection { value: value * weight, film, weight, sampled })
 }
 
+/// Strategy (1, t) with a GIVEN light-source vertex `y0` (the first vertex of a light
+/// path, e.g. one kept in SPCBPT's cache) instead of a fresh light sample:
+/// f/p = Le(y₀→z) · G(y₀, z) · f(z) · β(z) / p(y₀), p(y₀) = `y0.pdf_fwd` (light selection ×
+/// position density per area, as `light_subpath` sets it). The MIS weight, with
+/// `count`, is [`mis_weight_counted`]'s for the light sub-path [y₀] (its density as a
+/// path origin is the same p(y₀) that next-event estimation reports).
+pub fn connect_light_source<Q: RayQuery + ?Sized, C: Fn(usize, usize) -> f64>(
+    scene: &Scene,
+    tracer: &Q,
+    y0: &Vertex,
+    camera: &[Vertex],
+    t: usize,
+    counters: &mut Counters,
+    count: &C,
+) -> Option<Connection> {
+    if t < 2 || !matches!(y0.kind, VertexKind::Light(_)) || !(y0.pdf_fwd > 0.0) {
+        return None;
+    }
+    let pt = &camera[t - 1];
+    if pt.kind != VertexKind::Surface || !pt.is_connectible(scene) {
+        return None;
+    }
+    let value = pt.beta * pt.f(scene, y0, TransportMode::Radiance) * y0.le(scene, pt) * (geometry_term(y0, pt) / y0.pdf_fwd);
+    if value.is_black() || !value.is_finite() {
+        return None;
+    }
+    counters.rays += 1;
+    if tracer.occluded(&spawn_ray_to(pt.p, pt.ng, y0.p, y0.ng)) {
+        return None;
+    }
+    let light = [*y0];
+    let weight = mis_weight_counted(scene, &light, camera, None, 1, t, count);
+    Some(Connection { value: value * weight, film: None, weight, sampled: None })
+}
+
 /// G = |cos θ_q| |cos θ_p| / d² with shading cosines left to the BSDF factors (the
 /// geometric cosines belong to the measure).
 #[inline]

@@ -30,7 +30,7 @@ use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 
-pub use connect::{Connection, connect, connect_counted};
+pub use connect::{Connection, connect, connect_counted, connect_light_source};
 pub use vertex::{Vertex, VertexKind};
 pub use walk::{SubPath, camera_subpath, light_subpath};
 

@@ -4,7 +4,8 @@
 //! Eye and light sub-paths are classified by their end vertices into subspaces
 //! (κ_E, κ_L: nearest of contribution-sampled centroids under the distance of eq. 18,
 //! fitted by decision trees, [`crate::spcbpt`]). Per iteration M light paths are traced
-//! and their cacheable vertices (index ≥ 1, non-Dirac surfaces) are bucketed by κ_L.
+//! and their cacheable vertices (index ≥ 1, non-Dirac surfaces, and with light-source
+//! bins their first vertices) are bucketed by κ_L.
 //! Each camera vertex z (t ≥ 2) makes N connections by two-stage sampling (section 6.1):
 //! 1. a light subspace l with probability Γ'(l | κ_E(z)), where Γ' is the trained
 //!    Γ(· | e) restricted to the subspaces NON-EMPTY in this iteration and renormalised
@@ -26,10 +27,20 @@
 //! connection ESTIMATE divides by the true (restricted, renormalised) stage-1 pmf, so it
 //! stays exact, and an empty subspace is never sampled: no energy is lost.
 //!
+//! Light-source vertices (section 7.2.1): when every light has a surface (triangles,
+//! spheres), about 20 % of the light subspaces are bins of positions on the lights
+//! ([`LightSourceBins`]: per light ∝ power, cells of the inverse of its position
+//! sampler), each light path's first vertex y₀ is cached in its bin with stage-2 weight
+//! Le/p(y₀) ([`cache_weight`]), and s = 1 is a Γ-sampled connection to a cached y₀
+//! ([`bdpt::connect_light_source`]) instead of next-event estimation: Γ learns which
+//! parts of which lights each eye subspace sees. With a point, spot or infinite light
+//! (no position to bin or no surface to connect to) s = 1 stays next-event estimation.
+//!
 //! MIS counts: the balance heuristic over strategies with counts per camera
-//! sample: s = 0 and s = 1 (fresh next-event estimation, as in BDPT and LVCBPT: the
-//! light-source vertices are not cached, so the paper's light-source bins are not used
-//! here) count 1; t = 1 (light tracing) M/(W·H); a Γ-connection of split s' counts
+//! sample: s = 0 and, without light-source bins, s = 1 (next-event estimation) count 1;
+//! with bins s = 1 counts N · Γ(bin(x₀) | κ_E(x₁)) · W₁ / Q(bin), W₁ = Le/p(x₀) (an
+//! emitter hit by a camera path is binned exactly like a light path's y₀ there, so all
+//! strategies of a path agree); t = 1 (light tracing) M/(W·H); a Γ-connection of split s' counts
 //! N · Γ(κ_L(x_{s'−1}) | κ_E(x_{s'})) · W(x₀…x_{s'−1}) / Q(κ_L), the paper's
 //! expected-value form of M·p(Ȳ)·Γ·P_r with S_l ≈ M·Q_l (eq. 19) and W the light
 //! prefix's f/p. W is recomputed for every split from the path itself ([`light_prefix_weights`];
@@ -72,18 +83,25 @@ use crate::geometry::RayQuery;
 use crate::math::{Vec2, Vec3};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
-use crate::spcbpt::{DecisionTree, SubpathFeature, SubspaceMatrix};
+use crate::spcbpt::{DecisionTree, LightSourceBins, SubpathFeature, SubspaceMatrix};
 use crate::spectrum::Rgb;
 
 /// Vertices of a full path (light end first), bounded like BDPT's sub-paths.
 pub type FullPath = heapless::Vec<Vertex, { 2 * bdpt::MAX_VERTICES }>;
 
-/// κ_E and κ_L.
+/// κ_E and κ_L. Light subspaces 0..`n_light_surface` are the tree's (surface vertices
+/// seen from their predecessor); with `sources`, ids `n_light_surface..n_light` are the
+/// light-source bins of the light paths' first vertices (section 7.2.1).
 #[derive(Clone, Debug)]
 pub struct Classifier {
     pub eye: DecisionTree,
     pub light: DecisionTree,
     pub n_eye: u32,
+    /// Subspaces of the light tree.
+    pub n_light_surface: u32,
+    /// Light-source bins, when light-source vertices are cached and Γ-sampled.
+    pub sources: Option<LightSourceBins>,
+    /// All light subspaces (tree + bins): Γ's row count.
     pub n_light: u32,
 }
 
@@ -94,17 +112,58 @@ pub fn feature(v: &Vertex, prev: Vec3) -> SubpathFeature {
 }
 
 impl Classifier {
+    /// `sources` must number its bins from `n_light_surface` on.
+    pub fn new(eye: DecisionTree, n_eye: u32, light: DecisionTree, n_light_surface: u32, sources: Option<LightSourceBins>) -> Self {
+        let n_light = n_light_surface + sources.as_ref().map_or(0, |b| b.bin_count());
+        Self { eye, light, n_eye, n_light_surface, sources, n_light }
+    }
     #[inline]
     pub fn eye_of(&self, z: &Vertex, prev: Vec3) -> u32 {
         self.eye.classify(&feature(z, prev)).min(self.n_eye.saturating_sub(1))
     }
     #[inline]
     pub fn light_of(&self, y: &Vertex, prev: Vec3) -> u32 {
-        self.light.classify(&feature(y, prev)).min(self.n_light.saturating_sub(1))
+        self.light.classify(&feature(y, prev)).min(self.n_light_surface.saturating_sub(1))
+    }
+    /// The light-source bin of a vertex on a light (a light path's first vertex, or an
+    /// emitting surface a camera path hit); `None` without bins or off the lights.
+    #[inline]
+    pub fn light_source_of(&self, scene: &Scene, y: &Vertex) -> Option<u32> {
+        let bins = self.sources.as_ref()?;
+        let id = match y.kind {
+            VertexKind::Light(id) => id,
+            VertexKind::Surface => y.emitter?,
+            _ => return None,
+        };
+        let light = scene.lights.get(id as usize)?;
+        Some(bins.classify(id, light.position_uv(y.p)))
     }
     pub fn size_bytes(&self) -> usize {
-        self.eye.size_bytes() + self.light.size_bytes()
+        self.eye.size_bytes() + self.light.size_bytes() + self.sources.as_ref().map_or(0, |b| b.size_bytes())
     }
+}
+
+/// Light-source bins for SPCBPT, if this scene can use them: `budget` bins (raised to
+/// the number of lights) numbered from `first_id`, given to lights ∝ power. Light-source
+/// vertices are cached and Γ-sampled (replacing next-event estimation) only when every
+/// light has a surface (triangles, spheres): a point or spot light is one Dirac point
+/// that NEE already samples exactly, and a light at infinity has no position to cache.
+/// `Err` says why not.
+pub fn light_source_bins(scene: &Scene, budget: u32, first_id: u32) -> Result<LightSourceBins, &'static str> {
+    if budget == 0 {
+        return Err("no bins requested");
+    }
+    if scene.lights.is_empty() {
+        return Err("the scene has no lights");
+    }
+    if !scene.lights.iter().all(|l| l.has_area()) {
+        return Err("a light without a surface (point, spot, directional, environment) needs next-event estimation");
+    }
+    if scene.lights.len() > budget as usize {
+        return Err("more emitting triangles than light-source bins");
+    }
+    let powers: Vec<f32> = scene.lights.iter().map(|l| l.power()).collect();
+    Ok(LightSourceBins::new(&powers, budget, first_id))
 }
 
 /// Everything preprocessing produces: κ, Q per light subspace, Γ.
@@ -118,6 +177,27 @@ pub struct Model {
     pub connections: u32,
 }
 
+impl Model {
+    /// Are light-source vertices cached and Γ-sampled (s = 1 through the cache instead of
+    /// next-event estimation)?
+    #[inline]
+    pub fn caches_light_sources(&self) -> bool {
+        self.classifier.sources.is_some()
+    }
+}
+
+/// The stage-2 weight f/p of a cached light prefix ending at its last vertex: the
+/// sub-path throughput β, or, for a light-source vertex alone (whose β is the emitted
+/// radiance), Le / p(y₀) with p(y₀) = light selection × position density (`pdf_fwd`).
+#[inline]
+pub fn cache_weight(prefix: &[Vertex]) -> f32 {
+    match prefix {
+        [] => 0.0,
+        [y0] => if y0.pdf_fwd > 0.0 { finite(scalar(y0.beta) / y0.pdf_fwd) } else { 0.0 },
+        [.., last] => finite(scalar(last.beta)),
+    }
+}
+
 /// Scalar of a radiometric value (the RGB sum, as the paper's code).
 #[inline]
 pub fn scalar(c: Rgb) -> f32 {
@@ -126,7 +206,8 @@ pub fn scalar(c: Rgb) -> f32 {
 
 /// W(x₀…x_{k−1}) for k = 0..=n (index k = number of light vertices): the light prefix's
 /// f/p as a deterministic function of the path (Dirac vertices count 1, no roulette).
-/// Entries 0 and 1 are unused (0).
+/// Entry 1 is the light-source vertex alone, Le(x₀→x₁)/p(x₀) (the stage-2 weight of
+/// [`cache_weight`]); entry 0 is unused (0).
 pub fn light_prefix_weights(scene: &Scene, x: &[Vertex], out: &mut [f32]) {
     let n = x.len().min(out.len().saturating_sub(1));
     out.iter_mut().for_each(|w| *w = 0.0);
@@ -134,8 +215,11 @@ pub fn light_prefix_weights(scene: &Scene, x: &[Vertex], out: &mut [f32]) {
         return;
     }
     let (x0, x1) = (&x[0], &x[1]);
-    let origin = x0.pdf_light_origin(scene, x1) * x0.pdf_light(scene, x1);
-    let mut w = if origin > 0.0 { x0.le(scene, x1) * (geometry(x0, x1) / origin) } else { Rgb::ZERO };
+    let position = x0.pdf_light_origin(scene, x1);
+    let le = x0.le(scene, x1);
+    out[1] = if position > 0.0 { finite(scalar(le) / position) } else { 0.0 };
+    let origin = position * x0.pdf_light(scene, x1);
+    let mut w = if origin > 0.0 { le * (geometry(x0, x1) / origin) } else { Rgb::ZERO };
     out[2] = finite(scalar(w));
     for k in 1..n - 1 {
         let (prev, v, next) = (&x[k - 1], &x[k], &x[k + 1]);
@@ -295,6 +379,9 @@ pub fn build_buckets(scene: &Scene, model: &Model, cache: &mut PassCache) {
     for i in 0..cache.paths.len() {
         let start = cache.paths.starts[i];
         let path = cache.paths.path(i);
+        if let Some(l) = path.first().and_then(|y0| model.classifier.light_source_of(scene, y0)) {
+            labelled.push((l, CacheEntry { start, s: 1 }));
+        }
         for k in 1..path.len() {
             if is_cacheable(scene, &path[k]) {
                 let l = model.classifier.light_of(&path[k], path[k - 1].p);
@@ -322,13 +409,12 @@ pub fn build_buckets(scene: &Scene, model: &Model, cache: &mut PassCache) {
     cache.effective_paths.clear();
     let light_paths = cache.paths.len() as f64;
     let mut weights: Vec<f32> = Vec::new();
-    let end_weight = |p: &[Vertex]| p.last().map_or(0.0, |v| finite(scalar(v.beta)));
     if cache.retained.enabled() {
         cache.retained.push_pass(&cache.paths, &cache.entries, &cache.start);
         let r = &cache.retained;
         for l in 0..n_light {
             weights.clear();
-            weights.extend(r.fifos[l].iter().map(|p| end_weight(p)));
+            weights.extend(r.fifos[l].iter().map(|p| cache_weight(p)));
             cache.vertex_tables.push(AliasTable::new(&weights));
             let (kept, generated) = (r.fifos[l].len() as f64, r.generated[l] as f64);
             cache.effective_paths.push(if kept > 0.0 { r.passes as f64 * light_paths * kept / generated } else { 0.0 });
@@ -337,7 +423,7 @@ pub fn build_buckets(scene: &Scene, model: &Model, cache: &mut PassCache) {
         for l in 0..n_light {
             let bucket = &cache.entries[cache.start[l] as usize..cache.start[l + 1] as usize];
             weights.clear();
-            weights.extend(bucket.iter().map(|e| end_weight(e.subpath(&cache.paths))));
+            weights.extend(bucket.iter().map(|e| cache_weight(e.subpath(&cache.paths))));
             cache.vertex_tables.push(AliasTable::new(&weights));
             cache.effective_paths.push(light_paths);
         }
@@ -421,6 +507,16 @@ pub fn path_counts_labelled(scene: &Scene, model: &Model, light_tracing: f64, x:
         let t = n - s;
         out[s] = if t == 1 {
             light_tracing
+        } else if s == 1 && model.caches_light_sources() {
+            // The light-source vertex through the cache: N · Γ(bin | κ_E) · W₁ / Q(bin).
+            let z = &x[1];
+            match model.classifier.light_source_of(scene, &x[0]) {
+                Some(l) if z.kind == VertexKind::Surface && z.is_connectible(scene) => {
+                    let q = model.q.get(l as usize).copied().unwrap_or(0.0);
+                    if q > 0.0 { model.connections as f64 * model.gamma.get(l, eye_of(1)) as f64 * w[1] as f64 / q as f64 } else { 0.0 }
+                }
+                _ => 0.0,
+            }
         } else if s <= 1 || t == 0 {
             1.0
         } else {
@@ -480,7 +576,10 @@ pub fn strategy<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model: &Model, 
 #[allow(clippy::too_many_arguments)]
 pub fn strategy_labelled<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model: &Model, light_tracing: f64, light: &[Vertex], camera: &[Vertex], labels: Option<&CameraLabels>, s: usize, t: usize, u_light: f32, u_point: Vec2, counters: &mut Counters) -> Option<bdpt::Connection> {
     let labels = if t >= 2 { labels.map(|l| (l, s)) } else { None };
-    if s != 1 && t != 1 {
+    // s = 1 with the light path's own first vertex (a cached light-source vertex), not a
+    // fresh light sample: the full path is known before connecting, like s ≥ 2.
+    let cached_source = s == 1 && light.len() == 1 && model.caches_light_sources();
+    if (s != 1 || cached_source) && t != 1 {
         // No endpoint is sampled: the full path is known before connecting, so one
         // connection computes the weight with the path's counts, evaluated lazily (only
         // once the connection is known to carry light: an occluded or black connection
@@ -495,6 +594,9 @@ pub fn strategy_labelled<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model:
             });
             counts.get(s2).copied().unwrap_or(0.0)
         };
+        if cached_source {
+            return bdpt::connect_light_source(scene, tracer, &light[0], camera, t, counters, &count);
+        }
         return connect_counted(scene, tracer, light, camera, s, t, u_light, u_point, counters, &count);
     }
     // A sampled endpoint (s = 1 or t = 1) is only known after connecting: first the
@@ -547,7 +649,8 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &R
             }
             for s in 0..=1usize {
                 let (u_light, u_point) = (aux.next_f32(), aux.next_2d());
-                if s == 1 && !params.max_depth.allows(t as u32) {
+                // s = 1 comes from the cache's light-source bins when the model has them.
+                if s == 1 && (!params.max_depth.allows(t as u32) || model.caches_light_sources()) {
                     continue;
                 }
                 if let Some((v, _, _)) = weighted(scene, tracer, model, light_tracing, &[], &camera[..t], Some(&labels), s, t, u_light, u_point, &mut counters) {

@@ -18,7 +18,7 @@
 use alloc::vec::Vec;
 use core::ops::Range;
 
-use super::{Classifier, FullPath, join, light_prefix_weights, scalar};
+use super::{Classifier, FullPath, cache_weight, join, light_prefix_weights, scalar};
 use crate::integrator::bdpt::{self, Vertex, VertexKind, camera_subpath, connect_counted, mis::for_each_strategy_ratio};
 use crate::integrator::lvcbpt::{is_cacheable, trace_light_subpath};
 use crate::integrator::{Counters, RenderParams};
@@ -65,11 +65,17 @@ pub fn fit_side(features: &[SubpathFeature], weights: &[f32], count: usize, k_d:
 }
 
 /// Add Σ f/p of light paths `paths`' cacheable vertices into `q[κ_L]` (the host divides
-/// by M'). Every path of the range is traced: the loop never stops early.
+/// by M'), and of their light-source vertices into their bins when the classifier has
+/// them. Every path of the range is traced: the loop never stops early.
 pub fn accumulate_q<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, classifier: &Classifier, paths: Range<u32>, q: &mut [f64]) -> Counters {
     let mut counters = Counters::default();
     for i in paths {
         let light = trace_light_subpath(scene, tracer, params, Stream::Preprocess, Q_BASE.wrapping_add(i), 0, &mut counters);
+        if let Some(l) = light.first().and_then(|y0| classifier.light_source_of(scene, y0)) {
+            if let Some(slot) = q.get_mut(l as usize) {
+                *slot += cache_weight(&light[..1]) as f64;
+            }
+        }
         for k in 1..light.len() {
             if is_cacheable(scene, &light[k]) {
                 let l = classifier.light_of(&light[k], light[k - 1].p) as usize;
@@ -169,8 +175,20 @@ pub fn dataset_records<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: 
             let x: FullPath = join(&light, camera, Some(y), 1, t);
             let mut w = [0.0f32; 2 * bdpt::MAX_VERTICES + 1];
             light_prefix_weights(scene, &x, &mut w);
-            let mut fixed = 1.0f64; // the NEE strategy itself
             splits.clear();
+            // The sampling technique's own strategy (1, t): next-event estimation counts
+            // 1; with light-source bins s = 1 is a Γ-connection to the light's bin.
+            let mut fixed = match classifier.light_source_of(scene, &y) {
+                Some(l) => {
+                    let ql = q.get(l as usize).copied().unwrap_or(0.0);
+                    let coef = if ql > 0.0 { connections as f64 * w[1] as f64 / ql as f64 } else { 0.0 };
+                    if coef.is_finite() && coef > 0.0 {
+                        splits.push(TrainingSplit { eye: classifier.eye_of(&camera[t - 1], camera[t - 2].p), light: l, coef });
+                    }
+                    0.0
+                }
+                None => 1.0f64,
+            };
             for_each_strategy_ratio(scene, &light, &camera[..t], Some(&y), 1, t, &mut |s2, t2, ratio| {
                 if t2 == 1 {
                     fixed += light_tracing * ratio;
