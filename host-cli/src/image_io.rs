@@ -106,11 +106,17 @@ pub fn read_exr_from_bytes(bytes: &[u8]) -> Result<RgbImage, ImageError> {
 /// image here): a corrupt or hostile header must not make the reader allocate without bound.
 const MAX_EXR_PIXELS: usize = 1 << 26;
 
+/// Largest expansion of any compression the reader supports (deflate's ≈ 1032:1 in ZIP
+/// and PXR24, PIZ's Huffman runs ≈ 450:1, RLE 64:1, B44 ≈ 11:1), with margin.
+const MAX_EXR_EXPANSION: u64 = 4096;
+
 /// Reject, from the header alone, a file whose declared layout cannot fit in its
-/// `file_len` bytes: every chunk has an 8-byte entry in the offset table, so a header
-/// claiming more chunks than that is corrupt (the fuzzer's 480-byte file declaring
-/// 16.5 M scanlines made the decoder allocate 2.3 GB before noticing). Also bounds the
-/// declared pixel count by [`MAX_EXR_PIXELS`].
+/// `file_len` bytes: every chunk has an 8-byte entry in the offset table, and no
+/// compression expands its data more than [`MAX_EXR_EXPANSION`] times, so a header
+/// declaring more chunks, or more pixel bytes, than that is corrupt or hostile (the
+/// fuzzer's 397-byte files declaring 134 M pixels, or one 60 M-pixel scanline, made the
+/// reader allocate up to 2.3 GB before noticing). Also bounds the pixel count by
+/// [`MAX_EXR_PIXELS`].
 fn check_exr_header(reader: &mut (impl std::io::Read + std::io::Seek), file_len: u64) -> Result<(), exr::error::Error> {
     use exr::error::Error;
     let start = reader.stream_position()?;
@@ -125,6 +131,12 @@ fn check_exr_header(reader: &mut (impl std::io::Read + std::io::Seek), file_len:
             ));
         }
         chunks = chunks.saturating_add(header.chunk_count as u64);
+        let bytes = (size.width() as u64 * size.height() as u64).saturating_mul(header.channels.bytes_per_pixel as u64);
+        if bytes > file_len.saturating_mul(MAX_EXR_EXPANSION) {
+            return Err(Error::Invalid(
+                format!("a {}x{} layer of {bytes} bytes cannot be stored in a {file_len}-byte file", size.width(), size.height()).into(),
+            ));
+        }
     }
     if chunks.saturating_mul(8) > file_len {
         return Err(Error::Invalid(
@@ -274,8 +286,8 @@ mod tests {
     /// 67108865×2 layer made the reader allocate its 1.6 GB pixel buffer (then the bound
     /// was 2^28 pixels) and libFuzzer stopped at 2.3 GB. Both header checks must refuse
     /// such files before anything is allocated: the pixel bound (this seed), and the
-    /// chunk table (a 1×4M layer of the float seed: few pixels, too many chunks). Seen
-    /// failing with `check_exr_header` removed from `decode_exr`.
+    /// chunk table (a 1×4096 layer of the float seed: few pixels, too many chunks), and the
+    /// expansion bound. Seen failing with `check_exr_header` removed from `decode_exr`.
     #[test]
     fn oversized_headers_are_refused_before_decoding() {
         let seeds = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/seeds/exr_reader");
@@ -285,8 +297,15 @@ mod tests {
 
         let mut tall = std::fs::read(seeds.join("float_2x2.exr")).unwrap();
         let at = tall.windows(10).position(|w| w == b"dataWindow").unwrap() + b"dataWindow\0box2i\0".len() + 4;
-        tall[at..at + 16].copy_from_slice(&[0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x40, 0]);
+        tall[at..at + 16].copy_from_slice(&[0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0xff, 0x0f, 0, 0]);
         let message = read_exr_from_bytes(&tall).unwrap_err().to_string();
-        assert!(message.contains("declares 4194305 chunks"), "{message}");
+        assert!(message.contains("declares 4096 chunks"), "{message}");
+
+        // One scanline of 2^24 pixels: one chunk, but 192 MiB of float RGB from a
+        // 300-byte file (the fuzzer's slow inputs after the two checks above).
+        let mut wide = std::fs::read(seeds.join("float_2x2.exr")).unwrap();
+        wide[at..at + 16].copy_from_slice(&[0, 0, 0, 0, 0, 0, 0, 0, 0xff, 0xff, 0xff, 0, 0, 0, 0, 0]);
+        let message = read_exr_from_bytes(&wide).unwrap_err().to_string();
+        assert!(message.contains("a 16777216x1 layer of 201326592 bytes cannot be stored"), "{message}");
     }
 }
