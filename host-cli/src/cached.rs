@@ -167,11 +167,12 @@ impl SpcbptHost {
         lf.truncate(FIT_CAP);
         lw.truncate(FIT_CAP);
         // Light-source bins take their share of N_S when the scene can use them.
-        let wanted = (args.light_source_share * args.subspaces as f32).round() as u32;
-        let probe = spcbpt::light_source_bins(scene, wanted.min(args.subspaces - 1), 0);
-        let surface_subspaces = args.subspaces - probe.as_ref().map_or(0, |b| b.bin_count()).min(args.subspaces - 1);
+        let subspaces = args.subspaces_for(dataset);
+        let wanted = ((args.light_source_share * subspaces as f32).round() as u32).min(subspaces - 1);
+        let probe = spcbpt::light_source_bins(scene, wanted, 0);
+        let surface_subspaces = subspaces - probe.as_ref().map_or(0, |b| b.bin_count()).min(subspaces - 1);
         let (light_tree, n_light_surface) = prepare::fit_side(&lf, &lw, surface_subspaces as usize, args.k_d, params.seed ^ 0x11);
-        let sources = match spcbpt::light_source_bins(scene, wanted.min(args.subspaces - 1), n_light_surface) {
+        let sources = match spcbpt::light_source_bins(scene, wanted, n_light_surface) {
             Ok(bins) => Some(bins),
             Err(why) => {
                 if wanted > 0 {
@@ -206,7 +207,7 @@ impl SpcbptHost {
         }
         ef.truncate(FIT_CAP);
         ew.truncate(FIT_CAP);
-        let (eye_tree, n_eye) = prepare::fit_side(&ef, &ew, args.subspaces as usize, args.k_d, params.seed ^ 0x22);
+        let (eye_tree, n_eye) = prepare::fit_side(&ef, &ew, subspaces as usize, args.k_d, params.seed ^ 0x22);
         drop((ef, ew));
         let block_mean: Vec<f64> = blocks.iter().zip(&block_samples).map(|(s, &n)| if n > 0 { s / n as f64 } else { 0.0 }).collect();
         let classifier = spcbpt::Classifier::new(eye_tree, n_eye, light_tree, n_light_surface, sources);

@@ -205,7 +205,10 @@ pub struct RenderArgs {
 /// defaults. Scaling rule for small images: the paper renders about 1280×720 with
 /// M = 100 000 light paths per pass and |D| = 1 000 000 dataset paths; here M defaults
 /// to min(100 000, W·H) (the light paths per pixel sample never exceed one, as in BDPT),
-/// |D| to min(1 000 000, W·H) and M' (paths estimating Q) to min(2 000 000, 2·W·H).
+/// |D| to min(1 000 000, W·H), M' (paths estimating Q) to min(2 000 000, 2·W·H) and N_S
+/// to min(1000, ⌊√|D|⌋) (at least 16), which keeps the paper's one training path per entry
+/// of the N_S × N_S matrix Γ (measured on ajar at 320×240: N_S = 256 instead of 1000 gave
+/// 13.5 % instead of 15.3 % MAPE in 40 s, docs/results-spcbpt.md).
 #[derive(Args, Debug, Clone, PartialEq)]
 #[command(next_help_heading = "LVCBPT / SPCBPT")]
 pub struct CacheArgs {
@@ -218,9 +221,11 @@ pub struct CacheArgs {
     /// SPCBPT: training paths, |D| [default: min(1000000, W·H)].
     #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..))]
     pub dataset: Option<u32>,
-    /// SPCBPT: subspaces per side, N_S (on the light side shared with the light-source bins).
-    #[arg(long, value_name = "N", default_value_t = 1000, value_parser = clap::value_parser!(u32).range(2..))]
-    pub subspaces: u32,
+    /// SPCBPT: subspaces per side, N_S, on the light side shared with the light-source
+    /// bins [default: min(1000, ⌊√|D|⌋), at least 16: the paper's |D|/N_S² = 1 training
+    /// path per Γ entry].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..))]
+    pub subspaces: Option<u32>,
     /// SPCBPT: Adam learning rate α (the paper's 0.1: measured 4-40x less excess loss than
     /// the public code's 0.01-0.02 within the paper's step budget, docs/spcbpt-training.md).
     #[arg(long, value_name = "ALPHA", default_value_t = 0.1)]
@@ -252,7 +257,7 @@ pub struct CacheArgs {
 
 impl Default for CacheArgs {
     fn default() -> Self {
-        Self { light_paths: None, connections: 3, dataset: None, subspaces: 1000, learning_rate: 0.1, batch: 10_000, epochs: 2, mixture: 0.1, reuse: 200, k_d: 0.05, light_source_share: 0.2, q_paths: None }
+        Self { light_paths: None, connections: 3, dataset: None, subspaces: None, learning_rate: 0.1, batch: 10_000, epochs: 2, mixture: 0.1, reuse: 200, k_d: 0.05, light_source_share: 0.2, q_paths: None }
     }
 }
 
@@ -273,6 +278,10 @@ impl CacheArgs {
     /// |D| for a film of `pixels` pixels.
     pub fn dataset_for(&self, pixels: u32) -> u32 {
         self.dataset.unwrap_or(pixels.clamp(1, 1_000_000))
+    }
+    /// N_S for a training set of `dataset` paths.
+    pub fn subspaces_for(&self, dataset: u32) -> u32 {
+        self.subspaces.unwrap_or_else(|| ((dataset as f64).sqrt() as u32).clamp(16, 1000))
     }
     /// M' for a film of `pixels` pixels.
     pub fn q_paths_for(&self, pixels: u32) -> u32 {

@@ -60,7 +60,7 @@ fn cache_args() -> CacheArgs {
         light_paths: Some(48),
         dataset: Some(3000),
         q_paths: Some(3000),
-        subspaces: 64,
+        subspaces: Some(64),
         learning_rate: 0.1,
         batch: 200,
         reuse: 0,

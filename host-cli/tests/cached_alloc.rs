@@ -58,7 +58,7 @@ fn spcbpt_training_set_is_freed_after_training() {
     let prepared = prepare_file(&path, Some(64), Some(48), Vec::new()).expect("scene loads");
     // Start the global thread pool before measuring (its bookkeeping lives on).
     rayon::join(|| (), || ());
-    let args = CacheArgs { dataset: Some(30_000), q_paths: Some(6000), subspaces: 64, batch: 1000, reuse: 0, ..CacheArgs::default() };
+    let args = CacheArgs { dataset: Some(30_000), q_paths: Some(6000), subspaces: Some(64), batch: 1000, reuse: 0, ..CacheArgs::default() };
 
     let before = LIVE.load(Ordering::SeqCst);
     PEAK.store(before, Ordering::SeqCst);
