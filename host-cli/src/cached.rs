@@ -269,21 +269,23 @@ impl SpcbptHost {
     }
 
     pub fn prepare_pass(&self, scene: &Scene, accel: &Accel, params: &RenderParams, pass: u32, splat: &mut dyn FnMut(Splat)) -> PassStats {
-        let parts: Vec<(LightPaths, Counters)> = chunks(self.light_paths, LIGHT_CHUNK)
+        let parts: Vec<(LightPaths, Vec<spcbpt::PrefixMemo>, Counters)> = chunks(self.light_paths, LIGHT_CHUNK)
             .into_par_iter()
             .with_max_len(1)
             .map(|r| {
-                let mut paths = LightPaths::new();
-                let c = spcbpt::trace_light_paths(scene, accel, params, pass, r, &mut paths);
-                (paths, c)
+                let (mut paths, mut memo) = (LightPaths::new(), Vec::new());
+                let c = spcbpt::trace_light_paths(scene, accel, params, &self.model, pass, r, &mut paths, &mut memo);
+                (paths, memo, c)
             })
             .collect();
         let mut guard = self.pass.write().unwrap_or_else(|e| e.into_inner());
         let cache = &mut *guard;
         cache.paths.clear();
+        cache.memo.clear();
         let mut counters = Counters::default();
-        for (p, c) in &parts {
+        for (p, m, c) in &parts {
             cache.paths.append(p);
+            cache.memo.extend_from_slice(m);
             counters += *c;
         }
         drop(parts);

@@ -99,7 +99,7 @@ pub fn spcbpt_pass<Q: RayQuery>(model: &Model, light_paths: u32, scene: &Scene, 
     let (w, h) = (scene.camera.width(), scene.camera.height());
     let n = (w * h) as usize;
     let mut cache = PassCache::default();
-    let mut counters = spcbpt::trace_light_paths(scene, tracer, params, pass, 0..light_paths, &mut cache.paths);
+    let mut counters = spcbpt::trace_light_paths(scene, tracer, params, model, pass, 0..light_paths, &mut cache.paths, &mut cache.memo);
     spcbpt::build_buckets(scene, model, &mut cache);
     let ne = model.classifier.n_eye as usize;
     let (mut tables, mut norms) = (vec![None; ne], vec![0.0f32; ne]);

@@ -57,7 +57,8 @@ fn pass_with_cache<Q: RayQuery>(model: &Model, light_paths: u32, cache: &mut Pas
     let (w, h) = (scene.camera.width(), scene.camera.height());
     let n = (w * h) as usize;
     cache.paths.clear();
-    spcbpt::trace_light_paths(scene, tracer, params, pass, 0..light_paths, &mut cache.paths);
+    cache.memo.clear();
+    spcbpt::trace_light_paths(scene, tracer, params, model, pass, 0..light_paths, &mut cache.paths, &mut cache.memo);
     spcbpt::build_buckets(scene, model, cache);
     let ne = model.classifier.n_eye as usize;
     let (mut tables, mut norms) = (vec![None; ne], vec![0.0f32; ne]);

@@ -21,7 +21,7 @@
 use ember_core::integrator::bdpt::mis::mis_weight_counted;
 use ember_core::integrator::bdpt::{Vertex, VertexKind, camera_subpath, light_subpath};
 use ember_core::spectrum::Rgb;
-use ember_core::integrator::spcbpt::{self, Model, join, path_counts};
+use ember_core::integrator::spcbpt::{self, KnownLabels, Model, join, memoize_light_path, path_counts, path_counts_labelled};
 use ember_core::scene::Scene;
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::rng::{SampleStream, Stream};
@@ -49,7 +49,7 @@ fn spcbpt_weights_equal_brute_force_and_sum_to_one() {
 
 fn check_weights(scene: &Scene, tracer: &BruteForce, params: &RenderParams, model: &Model, bins: u32) {
     let params = *params;
-    let (mut checked, mut worst, mut emitter_hits) = (0usize, 0.0f64, 0usize);
+    let (mut checked, mut worst, mut emitter_hits, mut memo_checks) = (0usize, 0.0f64, 0usize, 0usize);
     let (mut paths, mut worst_sum) = (0usize, 0.0f64);
     for i in 0..1500u32 {
         let mut counters = Counters::default();
@@ -58,18 +58,34 @@ fn check_weights(scene: &Scene, tracer: &BruteForce, params: &RenderParams, mode
         let cam = camera_subpath(scene, tracer, &params, film, 9, &mut rng, &mut counters);
         let mut lrng = SampleStream::for_sample(4, Stream::Light, i, 0, 0);
         let light = light_subpath(scene, tracer, &params, 8, &mut lrng, &mut counters);
+        let mut light_memo = Vec::new();
+        memoize_light_path(scene, model, &light, &mut light_memo);
+        let labels_all = Some(spcbpt::CameraLabels::new(model, &cam));
         for t in 1..=cam.len() {
             for s in 0..=light.len() {
                 if (s == 1 && t == 1) || s + t < 3 || s + t > 9 {
                     continue;
                 }
-                // Odd paths go through the camera-label memo of the render loop (labels of
-                // the whole camera path, read for the prefix `cam[..t]`).
+                // Odd paths go through the memos of the render loop: labels of the whole
+                // camera path (read for the prefix `cam[..t]`) and the light path's
+                // per-vertex memo (read for `light[..s]`).
                 let labels = (i % 2 == 1).then(|| spcbpt::CameraLabels::new(model, &cam));
-                let Some(c) = spcbpt::strategy_labelled(scene, tracer, model, LIGHT_TRACING, &light[..s], &cam[..t], labels.as_ref(), s, t, lrng.next_f32(), lrng.next_2d(), &mut counters) else { continue };
+                let memo = if i % 2 == 1 { &light_memo[..s] } else { &[][..] };
+                let Some(c) = spcbpt::strategy_labelled(scene, tracer, model, LIGHT_TRACING, &light[..s], &cam[..t], labels.as_ref(), memo, s, t, lrng.next_f32(), lrng.next_2d(), &mut counters) else { continue };
                 let x = join(&light, &cam, c.sampled, s, t);
                 if x.last().unwrap().kind == VertexKind::InfiniteLight {
                     continue;
+                }
+                // The memos change no count, bit for bit (else the strategies of one path,
+                // some evaluated with memos and some without, would not sum to one).
+                {
+                    let fresh_light = c.sampled.is_none() || t == 1;
+                    let known = KnownLabels { camera: (t >= 2).then(|| labels_all.as_ref()).flatten(), light: if fresh_light { &light_memo[..s] } else { &[] }, s };
+                    let (mut with, mut without) = ([0.0f64; 70], [0.0f64; 70]);
+                    path_counts_labelled(scene, model, LIGHT_TRACING, &x, known, &mut with);
+                    path_counts(scene, model, LIGHT_TRACING, &x, &mut without);
+                    assert!(with.iter().zip(&without).all(|(a, b)| a.to_bits() == b.to_bits()), "({s}, {t}): counts with memos {:?} vs without {:?}", &with[..x.len() + 1], &without[..x.len() + 1]);
+                    memo_checks += 1;
                 }
                 // A camera path that hit an emitter must find the light-source bin a light
                 // path starting there would (else the s = 0 and s = 1 counts of one path
@@ -107,7 +123,7 @@ fn check_weights(scene: &Scene, tracer: &BruteForce, params: &RenderParams, mode
             }
         }
     }
-    println!("{bins} light-source bins: checked {checked} weights (worst |Δw| = {worst:e}), {paths} paths summed (worst |Σw − 1| = {worst_sum:e}), {emitter_hits} emitter hits classified");
+    println!("{bins} light-source bins: checked {checked} weights (worst |Δw| = {worst:e}), {paths} paths summed (worst |Σw − 1| = {worst_sum:e}), {emitter_hits} emitter hits classified, {memo_checks} count tables equal with memos");
     assert!(checked > 3000 && paths > 500, "too few: {checked} weights, {paths} paths");
     assert!(bins == 0 || emitter_hits >= 10, "too few emitter hits: {emitter_hits}");
     // The same on 2000 emission samples: as a light vertex and as an emitting surface hit.
