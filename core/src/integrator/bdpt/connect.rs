@@ -190,15 +190,7 @@ pub fn connect_light_source<Q: RayQuery + ?Sized, C: Fn(usize, usize) -> f64>(
 /// geometric cosines belong to the measure).
 #[inline]
 fn geometry_term(a: &Vertex, b: &Vertex) -> f32 {
-    let d = b.p - a.p;
-    let d2 = d.length_squared();
-    if !(d2 > 0.0) {
-        return 0.0;
-    }
-    let w = d / crate::math::sqrt(d2);
-    let ca = if a.is_on_surface() { a.frame.n.dot(w).abs() } else { 1.0 };
-    let cb = if b.is_on_surface() { b.frame.n.dot(w).abs() } else { 1.0 };
-    ca * cb / d2
+    super::vertex::cosines_over_distance2(a, a.frame.n, b, b.frame.n)
 }
 
 #[inline]

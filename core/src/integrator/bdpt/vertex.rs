@@ -191,6 +191,23 @@ impl Vertex {
     }
 }
 
+/// |n_a · ŵ| |n_b · ŵ| / d² between vertices `a` and `b` with the normals given (a vertex
+/// not on a surface contributes 1). BDPT's connections take shading normals at both ends;
+/// SPCBPT's prefix weights the shading normal at `a` and the geometric one at `b` (their
+/// area densities convert with it).
+#[inline]
+pub fn cosines_over_distance2(a: &Vertex, na: Vec3, b: &Vertex, nb: Vec3) -> f32 {
+    let d = b.p - a.p;
+    let d2 = d.length_squared();
+    if !(d2 > 0.0) {
+        return 0.0;
+    }
+    let w = d / crate::math::sqrt(d2);
+    let ca = if a.is_on_surface() { na.dot(w).abs() } else { 1.0 };
+    let cb = if b.is_on_surface() { nb.dot(w).abs() } else { 1.0 };
+    ca * cb / d2
+}
+
 fn light_origin(scene: &Scene, id: LightId, p: Vec3, n: Vec3, w: Vec3) -> f32 {
     let light = &scene.lights[id as usize];
     let pmf = scene.light_pmf(id);

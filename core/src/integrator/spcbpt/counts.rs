@@ -122,15 +122,7 @@ pub(super) fn finite(x: f32) -> f32 {
 
 /// |cos| |cos| / d² with shading normals (what β carries along a segment).
 fn geometry(a: &Vertex, b: &Vertex) -> f32 {
-    let d = b.p - a.p;
-    let d2 = d.length_squared();
-    if !(d2 > 0.0) {
-        return 0.0;
-    }
-    let w = d / crate::math::sqrt(d2);
-    let ca = if a.is_on_surface() { a.frame.n.dot(w).abs() } else { 1.0 };
-    let cb = if b.is_on_surface() { b.ng.dot(w).abs() } else { 1.0 };
-    ca * cb / d2
+    bdpt::vertex::cosines_over_distance2(a, a.frame.n, b, b.ng)
 }
 
 
