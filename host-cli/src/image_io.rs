@@ -75,15 +75,22 @@ fn check_size(path: &Path, width: u32, height: u32, pixels: &[[f32; 3]]) -> Resu
 }
 
 /// Write linear RGB as 32-bit float channels R, G, B (RLE compression, as the exr crate
-/// defaults to). Values round-trip bit-exactly through [`read_exr`].
+/// defaults to). Values round-trip bit-exactly through [`read_exr`]. Chunks are
+/// compressed on this thread, in order, so the same image gives the same bytes (the
+/// crate's parallel writer stores chunks in completion order).
 pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[[f32; 3]]) -> Result<(), ImageError> {
+    use exr::prelude::*;
     check_size(path, width, height, pixels)?;
     let w = width as usize;
-    exr::prelude::write_rgb_file(path, w, height as usize, |x, y| {
+    let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
         let p = pixels[y * w + x];
         (p[0], p[1], p[2])
-    })
-    .map_err(|e| ImageError::new(path, ImageErrorKind::Exr(e)))
+    });
+    Image::from_channels((w, height as usize), channels)
+        .write()
+        .non_parallel()
+        .to_file(path)
+        .map_err(|e| ImageError::new(path, ImageErrorKind::Exr(e)))
 }
 
 /// Read the first layer with R, G and B channels of an EXR file as f32 (alpha, if any,
@@ -307,5 +314,18 @@ mod tests {
         wide[at..at + 16].copy_from_slice(&[0, 0, 0, 0, 0, 0, 0, 0, 0xff, 0xff, 0xff, 0, 0, 0, 0, 0]);
         let message = read_exr_from_bytes(&wide).unwrap_err().to_string();
         assert!(message.contains("a 16777216x1 layer of 201326592 bytes cannot be stored"), "{message}");
+    }
+
+    /// The same image written twice gives the same bytes (determinism of the output
+    /// files, not only of the pixels). Seen failing with the crate's parallel writer
+    /// (`.non_parallel()` removed): chunks land in completion order.
+    #[test]
+    fn exr_bytes_are_deterministic() {
+        let (w, h) = (512u32, 384u32);
+        let pixels: Vec<[f32; 3]> = (0..w * h).map(|i| [(i % 97) as f32 * 0.37, (i % 13) as f32, (i / 7) as f32 * 1e-3]).collect();
+        let (a, b) = (temp("det_a.exr"), temp("det_b.exr"));
+        write_exr(&a, w, h, &pixels).unwrap();
+        write_exr(&b, w, h, &pixels).unwrap();
+        assert!(std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap(), "two writes of one image differ");
     }
 }
