@@ -120,7 +120,7 @@ pub fn measure(
             let start = Instant::now();
             let prepared = prepare()?;
             let depth = setup.max_depth.or(prepared.max_depth).unwrap_or(-1);
-            let renderer = CoreRenderer::new(prepared, estimator, depth, seed as u64);
+            let renderer = crate::estimators::on_threads(setup.threads, || CoreRenderer::new(prepared, estimator, depth, seed as u64));
             let (w, h) = (renderer.width(), renderer.height());
             if (w as usize, h as usize) != (reference.image.width as usize, reference.image.height as usize) {
                 return Err(format!("the scene renders {w}x{h} but the reference is {}x{}", reference.image.width, reference.image.height));

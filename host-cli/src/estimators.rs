@@ -182,6 +182,16 @@ pub fn make_built(args: &RenderArgs) -> Result<Built, String> {
     Ok(Built { scene: r.prepared.name.clone(), max_depth: r.params.max_depth.0, file_spp: r.prepared.spp, renderer: Box::new(r) })
 }
 
+/// Run `f` (a renderer's construction: SPCBPT's and LVCBPT's preprocessing is
+/// parallel) on `threads` rayon threads, so `--threads` bounds preprocessing as it
+/// bounds rendering; on rayon's global pool if that pool cannot be built.
+pub fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    match rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).thread_name(|i| format!("ember-prepare-{i}")).build() {
+        Ok(pool) => pool.install(f),
+        Err(_) => f(),
+    }
+}
+
 /// The renderer alone (benchmarks and tools that print nothing about the scene).
 pub fn make_renderer(args: &RenderArgs) -> Result<Box<dyn PassRenderer>, String> {
     Ok(Box::new(make_core_renderer(args)?))
@@ -194,7 +204,7 @@ pub fn make_core_renderer(args: &RenderArgs) -> Result<CoreRenderer, String> {
         eprintln!("warning: {w}");
     }
     let max_depth = args.max_depth.or(prepared.max_depth).unwrap_or(-1);
-    let r = CoreRenderer::with_options(prepared, args.estimator, max_depth, args.seed, &args.cache);
+    let r = on_threads(args.thread_count(), || CoreRenderer::with_options(prepared, args.estimator, max_depth, args.seed, &args.cache));
     if let Some(l) = &r.lvcbpt {
         eprintln!("lvcbpt     M = {} light paths/pass, N = {}, counts: light tracing {:.4}, connection {:.4}", l.light_paths, l.connections, l.counts.light_tracing, l.counts.connection);
     }
