@@ -157,3 +157,37 @@ fn spcbpt_agrees_with_pt_per_block_on_the_cornell_box() {
     let min_reuse = compare("SPCBPT with reuse", &pt, &reuse, alpha);
     println!("{} comparisons each, smallest p = {min_p:.4} without reuse, {min_reuse:.4} with reuse (α per test {alpha:.2e}); losses {losses:?}; {} × {} subspaces", BLOCKS * 3, model.classifier.n_eye, model.classifier.n_light);
 }
+
+/// A pass whose light paths include empty ones (an emission sample that failed, as a spot
+/// light's can) builds its cache and renders without panicking, with and without reuse.
+/// Found on `spot_mirror` (index out of bounds in `build_buckets`); seen failing with the
+/// `memo.first()` guard replaced by `memo[0]`.
+#[test]
+fn empty_light_paths_are_skipped() {
+    let (scene, geometry, _) = cornell(8, 8).build().expect("scene");
+    let tracer = BruteForce::new(geometry);
+    let params = RenderParams { max_depth: MaxDepth(5), seed: 2, ..RenderParams::default() };
+    let (model, _) = spcbpt_model(&scene, &tracer, &params, 8, 4, 300, 300, 16, 0.1);
+    for reuse in [0, 4] {
+        let mut cache = PassCache::with_reuse(reuse);
+        spcbpt::trace_light_paths(&scene, &tracer, &params, &model, 0, 0..16, &mut cache.paths, &mut cache.memo);
+        // Append two empty light paths and one more real one.
+        for _ in 0..2 {
+            cache.paths.starts.push(cache.paths.vertices.len() as u32);
+        }
+        spcbpt::trace_light_paths(&scene, &tracer, &params, &model, 0, 16..17, &mut cache.paths, &mut cache.memo);
+        spcbpt::build_buckets(&scene, &model, &mut cache);
+        assert!(!cache.entries.is_empty());
+        let ne = model.classifier.n_eye as usize;
+        let (mut tables, mut norms) = (vec![None; ne], vec![0.0f32; ne]);
+        spcbpt::build_gamma_tables(&model, &cache, 0..ne as u32, &mut tables, &mut norms);
+        cache.gamma_tables = tables;
+        cache.gamma_norm = norms;
+        let paths = cache.paths.len() as u32;
+        spcbpt::splat_light_paths(&scene, &tracer, &params, &model, &cache, paths as f64 / 64.0, 0..paths, &mut |_| {});
+        let mut out = vec![Rgb::ZERO; 64];
+        let c = spcbpt::render_pixels(&scene, &tracer, &params, &model, &cache, paths, 0, 0..64, &mut out);
+        assert_eq!(c.discarded, 0);
+        assert!(out.iter().all(|v| v.is_finite()));
+    }
+}

@@ -352,9 +352,10 @@ pub fn build_buckets(scene: &Scene, model: &Model, cache: &mut PassCache) {
         let start = cache.paths.starts[i];
         let path = cache.paths.path(i);
         let memo = &cache.memo[start as usize..start as usize + path.len()];
-        // y₀ has a label only when it goes to a light-source bin.
-        if memo[0].light != u32::MAX {
-            labelled.push((memo[0].light, CacheEntry { start, s: 1 }));
+        // y₀ has a label only when it goes to a light-source bin (a light path may also
+        // be empty: its emission sample failed).
+        if let Some(y0) = memo.first().filter(|m| m.light != u32::MAX) {
+            labelled.push((y0.light, CacheEntry { start, s: 1 }));
         }
         for k in 1..path.len() {
             if is_cacheable(scene, &path[k]) {
