@@ -5,7 +5,8 @@
 #
 # Reproducible by default: a fixed libFuzzer seed, a fresh working corpus (the committed
 # seeds only) and a fixed input count make a run explore the same inputs on every
-# machine; a slower machine stops at the time cap, after a prefix of the same sequence.
+# machine with the same toolchain; a slower machine stops at the time cap, after a prefix
+# of the same sequence.
 # So whatever CI can find, a local run of this script finds first. (A time-only budget
 # let CI, faster that day, run past anything tried locally and find an EXR header bomb.)
 #
