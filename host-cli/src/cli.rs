@@ -26,7 +26,7 @@ pub enum Command {
     Render(RenderArgs),
     /// Compare an EXR image with a reference: relMSE, MAPE, mean absolute error, ratio of means.
     Compare(CompareArgs),
-    /// Error against time: snapshots at 1, 2, 4, … seconds (scene loading included)
+    /// Error against time: snapshots at 1, 1.41, 2, 2.83, … seconds (scene loading and preprocessing included; estimators interleaved, each on its own clock)
     /// against a reference, averaged over seeds; writes a CSV and log-log plots.
     Convergence(ConvergenceArgs),
     /// Every estimator on every suite scene at equal time, threads and seeds; writes a

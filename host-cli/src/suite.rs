@@ -70,7 +70,7 @@ pub fn report(args: &SuiteArgs, threads: usize, results: &[SceneResult], command
     let _ = writeln!(s, "Reproduce with:\n\n    {command}\n");
     let _ = writeln!(
         s,
-        "Every estimator ran {} s per scene and seed ({} seeds, seed-averaged), on {threads} threads, scene loading and BVH build included, each scene at its own `max_depth`. relMSE and MAPE are against the Mitsuba 3 reference (definitions in `host-cli/src/metrics.rs`); *floor* is the reference's own noise (from its two halves). *t(MAPE target)* is when the seed-averaged MAPE reached max(12 %, 2 × floor), interpolated log-log between the checkpoints (spaced by √2) around the crossing. Plots: `{plots_rel}/<scene>-relmse.svg`, `{plots_rel}/<scene>-mape.svg`; raw data: `{plots_rel}/<scene>.csv`.\n",
+        "Every estimator ran {} s per scene and seed ({} seeds, seed-averaged), on {threads} threads, scene loading, BVH build and preprocessing included, each scene at its own `max_depth`; the estimators of a scene run interleaved, each on its own clock, so a load on the machine slows them alike. relMSE and MAPE are against the Mitsuba 3 reference (definitions in `host-cli/src/metrics.rs`); *floor* is the reference's own noise (from its two halves). *t(MAPE target)* is when the seed-averaged MAPE reached max(12 %, 2 × floor), interpolated log-log between the checkpoints (spaced by √2) around the crossing. Plots: `{plots_rel}/<scene>-relmse.svg`, `{plots_rel}/<scene>-mape.svg`; raw data: `{plots_rel}/<scene>.csv`.\n",
         args.budget, args.seeds
     );
     let _ = writeln!(s, "| scene | estimator | relMSE | MAPE % | passes | t(MAPE target) |");
