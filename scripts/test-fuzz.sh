@@ -5,8 +5,9 @@
 #
 # Reproducible by default: a fixed libFuzzer seed, a fresh working corpus (the committed
 # seeds only) and a fixed input count make a run explore the same inputs on every
-# machine with the same toolchain; a slower machine stops at the time cap, after a prefix
-# of the same sequence.
+# machine for the same build (toolchain and code: any change to the code under test
+# changes the path libFuzzer takes); a slower machine stops at the time cap, after a
+# prefix of the same sequence. Run this script on the commit you submit.
 # So whatever CI can find, a local run of this script finds first. (A time-only budget
 # let CI, faster that day, run past anything tried locally and find an EXR header bomb.)
 #
@@ -57,11 +58,12 @@ for t in "${TARGETS[@]}"; do
     fi
     mkdir -p "$work" "artifacts/$t"
     runs="${FUZZ_RUNS:-${RUNS[$t]:-0}}"
+    [ "$runs" = 0 ] && runs=-1   # libFuzzer: -runs=-1 is unbounded, -runs=0 only replays
     echo "test-fuzz: $t: replaying $(ls "$seeds" | wc -l) seeds"
     if ! cargo "${TOOLCHAIN[@]}" fuzz run -O "${SANITIZER[@]}" "$t" "$seeds" -- -runs=0; then
         echo "test-fuzz: $t: a committed seed fails"; status=1; continue
     fi
-    echo "test-fuzz: $t: fuzzing $runs inputs (0: unbounded), at most ${SECONDS_PER_TARGET}s, seed $SEED"
+    echo "test-fuzz: $t: fuzzing $runs inputs (-1: unbounded), at most ${SECONDS_PER_TARGET}s, seed $SEED"
     if ! cargo "${TOOLCHAIN[@]}" fuzz run -O "${SANITIZER[@]}" "$t" "$work" "$seeds" -- \
         -runs="$runs" -max_total_time="$SECONDS_PER_TARGET" -seed="$SEED" -rss_limit_mb=2048 -print_final_stats=1; then
         echo "test-fuzz: $t: CRASH (input in fuzz/artifacts/$t/)"; status=1

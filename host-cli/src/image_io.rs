@@ -173,6 +173,9 @@ fn decode_exr(mut reader: impl std::io::Read + std::io::Seek, file_len: u64) -> 
         )
         .first_valid_layer()
         .all_attributes()
+        // Decode on this thread: the result does not depend on scheduling, and a fault in
+        // a decoder surfaces here, with its input, instead of in a pool thread.
+        .non_parallel()
         .from_buffered(reader)?;
     let size = image.layer_data.size;
     let (_, pixels) = image.layer_data.channel_data.pixels;
