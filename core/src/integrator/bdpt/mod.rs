@@ -45,16 +45,23 @@ pub fn vertex_budgets(params: &RenderParams) -> (usize, usize) {
     (segments + 1, segments)
 }
 
+/// The camera sub-path of pixel `pixel`'s sample in pass `pass`: a jittered film position
+/// and the walk, both from the pixel's camera stream (the draws every estimator of the
+/// BDPT family makes, so their camera paths coincide).
+pub fn pixel_camera_subpath<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, pixel: u32, pass: u32, max_camera: usize, counters: &mut Counters) -> SubPath {
+    let width = scene.camera.width().max(1);
+    let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
+    let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
+    camera_subpath(scene, tracer, params, film, max_camera, &mut rng, counters)
+}
+
 /// Render one BDPT sample for each pixel in `pixels` of pass `pass`; camera-side
 /// estimates go to `out`, t = 1 splats to `splat`.
 pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, pass: u32, pixels: Range<u32>, out: &mut [Rgb], splat: &mut dyn FnMut(Splat)) -> Counters {
     let mut counters = Counters::default();
-    let width = scene.camera.width().max(1);
     let (max_camera, max_light) = vertex_budgets(params);
     for (slot, pixel) in out.iter_mut().zip(pixels) {
-        let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
-        let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
-        let camera = camera_subpath(scene, tracer, params, film, max_camera, &mut rng, &mut counters);
+        let camera = pixel_camera_subpath(scene, tracer, params, pixel, pass, max_camera, &mut counters);
         let mut light_rng = SampleStream::for_sample(params.seed, Stream::Light, pixel, pass, 0);
         let light = light_subpath(scene, tracer, params, max_light, &mut light_rng, &mut counters);
         let mut connect_rng = SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, 0);

@@ -31,7 +31,7 @@
 use alloc::vec::Vec;
 use core::ops::Range;
 
-use super::bdpt::{self, Vertex, VertexKind, camera_subpath, connect_counted, light_subpath};
+use super::bdpt::{self, Vertex, VertexKind, connect_counted, light_subpath};
 use super::{Counters, RenderParams, Splat};
 use crate::geometry::RayQuery;
 use crate::math::Vec2;
@@ -202,7 +202,6 @@ pub struct PassInputs<'a> {
 /// with t ≥ 2; t = 1 is splatted by [`trace_light_paths`]).
 pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, inputs: &PassInputs, pass: u32, pixels: Range<u32>, out: &mut [Rgb]) -> Counters {
     let mut counters = Counters::default();
-    let width = scene.camera.width().max(1);
     let (max_camera, _) = bdpt::vertex_budgets(params);
     let counts = inputs.counts;
     let count = |s: usize, t: usize| counts.count(s, t);
@@ -210,9 +209,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &R
     // Each connection's estimate is divided by its selection probability N/|C| and by M.
     let connection_scale = if inputs.connections > 0 && inputs.light_paths > 0 { cache_len as f32 / (inputs.connections as f32 * inputs.light_paths as f32) } else { 0.0 };
     for (slot, pixel) in out.iter_mut().zip(pixels) {
-        let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
-        let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
-        let camera = camera_subpath(scene, tracer, params, film, max_camera, &mut rng, &mut counters);
+        let camera = bdpt::pixel_camera_subpath(scene, tracer, params, pixel, pass, max_camera, &mut counters);
         let mut aux = SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, 0);
         let mut l = Rgb::ZERO;
         for t in 2..=camera.len() {

@@ -81,7 +81,7 @@ use alloc::collections::VecDeque;
 use alloc::vec::Vec;
 use core::ops::Range;
 
-use super::bdpt::{self, Vertex, VertexKind, camera_subpath, connect_counted};
+use super::bdpt::{self, Vertex, VertexKind, connect_counted};
 use super::lvcbpt::{CacheEntry, LightPaths, is_cacheable, trace_light_subpath};
 use super::{Counters, RenderParams, Splat};
 use crate::alias::AliasTable;
@@ -524,9 +524,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &R
     let light_tracing = light_paths as f64 / n_pixels as f64;
     let (max_camera, _) = bdpt::vertex_budgets(params);
     for (slot, pixel) in out.iter_mut().zip(pixels) {
-        let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
-        let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
-        let camera = camera_subpath(scene, tracer, params, film, max_camera, &mut rng, &mut counters);
+        let camera = bdpt::pixel_camera_subpath(scene, tracer, params, pixel, pass, max_camera, &mut counters);
         let labels = CameraLabels::new(model, &camera);
         let mut aux = SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, 0);
         let mut l = Rgb::ZERO;
