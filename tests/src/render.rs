@@ -6,6 +6,8 @@ use ember_core::integrator::{Counters, RenderParams, Splat, bdpt, lt, pt};
 use ember_core::scene::Scene;
 use ember_core::spectrum::Rgb;
 
+use crate::stats::{MeanVar, normal_two_sided_p};
+
 /// The estimators under test.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Estimator {
@@ -63,4 +65,29 @@ pub fn block_means(img: &[[f64; 3]], width: usize, block: usize) -> Vec<[f64; 3]
         }
     }
     sums
+}
+
+/// Add one pass image's [`block_means`] to per-block, per-channel statistics.
+pub fn push_block_means(stats: &mut [[MeanVar; 3]], img: &[[f64; 3]], width: usize, block: usize) {
+    for (s, mean) in stats.iter_mut().zip(&block_means(img, width, block)) {
+        for c in 0..3 {
+            s[c].push(mean[c]);
+        }
+    }
+}
+
+/// Two-sided z-test of every block and channel of `other` against `reference` (means of
+/// independent passes); panics naming `name`, the block and channel when p ≤ `alpha`.
+/// Returns the smallest p.
+pub fn assert_blocks_agree(name: &str, reference: &[[MeanVar; 3]], other: &[[MeanVar; 3]], alpha: f64) -> f64 {
+    let mut min_p = 1.0f64;
+    for (b, (x, y)) in reference.iter().zip(other).enumerate() {
+        for c in 0..3 {
+            let z = (x[c].mean() - y[c].mean()) / (x[c].std_error().powi(2) + y[c].std_error().powi(2)).sqrt();
+            let p = normal_two_sided_p(z);
+            min_p = min_p.min(p);
+            assert!(p > alpha, "{name}: block {b}, channel {c}: reference {} vs {} (z = {z:.2})", x[c].mean(), y[c].mean());
+        }
+    }
+    min_p
 }

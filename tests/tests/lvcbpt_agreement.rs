@@ -19,9 +19,9 @@
 use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_tests::cached::{LvcbptSetup, lvcbpt_pass};
 use ember_tests::chi2::sidak;
-use ember_tests::render::{Estimator, block_means, render_pass};
+use ember_tests::render::{Estimator, assert_blocks_agree, push_block_means, render_pass};
 use ember_tests::scenes::cornell;
-use ember_tests::stats::{MeanVar, normal_two_sided_p};
+use ember_tests::stats::MeanVar;
 use ember_tests::tracer::BruteForce;
 
 const RES: u32 = 32;
@@ -29,11 +29,7 @@ const BLOCK: u32 = 8;
 const BLOCKS: usize = ((RES / BLOCK) * (RES / BLOCK)) as usize;
 
 fn push(stats: &mut [[MeanVar; 3]], img: &[[f64; 3]]) {
-    for (s, sum) in stats.iter_mut().zip(&block_means(img, RES as usize, BLOCK as usize)) {
-        for c in 0..3 {
-            s[c].push(sum[c]);
-        }
-    }
+    push_block_means(stats, img, RES as usize, BLOCK as usize);
 }
 
 #[test]
@@ -55,15 +51,6 @@ fn lvcbpt_agrees_with_pt_per_block_on_the_cornell_box() {
         push(&mut lv, &img);
     }
     let alpha = sidak(0.01, BLOCKS * 3);
-    let mut min_p = 1.0f64;
-    for b in 0..BLOCKS {
-        for c in 0..3 {
-            let (x, y) = (&pt[b][c], &lv[b][c]);
-            let z = (x.mean() - y.mean()) / (x.std_error().powi(2) + y.std_error().powi(2)).sqrt();
-            let p = normal_two_sided_p(z);
-            min_p = min_p.min(p);
-            assert!(p > alpha, "block {b}, channel {c}: PT {} vs LVCBPT {} (z = {z:.2})", x.mean(), y.mean());
-        }
-    }
+    let min_p = assert_blocks_agree("LVCBPT vs PT", &pt, &lv, alpha);
     println!("{} comparisons, smallest p = {min_p:.4} (α per test {alpha:.2e}); c̄-based counts {:?}", BLOCKS * 3, setup.counts);
 }

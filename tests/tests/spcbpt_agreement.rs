@@ -35,9 +35,9 @@ use ember_core::scene::Scene;
 use ember_core::spectrum::Rgb;
 use ember_tests::cached::{add_splats, spcbpt_model, spcbpt_pass};
 use ember_tests::chi2::sidak;
-use ember_tests::render::{Estimator, block_means, render_pass};
+use ember_tests::render::{Estimator, assert_blocks_agree, push_block_means, render_pass};
 use ember_tests::scenes::cornell;
-use ember_tests::stats::{MeanVar, normal_two_sided_p};
+use ember_tests::stats::MeanVar;
 use ember_tests::tracer::BruteForce;
 
 const RES: u32 = 32;
@@ -45,11 +45,7 @@ const BLOCK: u32 = 8;
 const BLOCKS: usize = ((RES / BLOCK) * (RES / BLOCK)) as usize;
 
 fn push(stats: &mut [[MeanVar; 3]], img: &[[f64; 3]]) {
-    for (s, sum) in stats.iter_mut().zip(&block_means(img, RES as usize, BLOCK as usize)) {
-        for c in 0..3 {
-            s[c].push(sum[c]);
-        }
-    }
+    push_block_means(stats, img, RES as usize, BLOCK as usize);
 }
 
 /// One SPCBPT pass on a caller-kept cache (so that reuse carries vertices across passes).
@@ -72,21 +68,6 @@ fn pass_with_cache<Q: RayQuery>(model: &Model, light_paths: u32, cache: &mut Pas
     let mut img: Vec<[f64; 3]> = camera.iter().map(|c| c.to_f64()).collect();
     add_splats(&mut img, w, h, &splats, 1.0 / light_paths as f64);
     img
-}
-
-/// z-test of every block and channel of `a` against `b`; returns the smallest p.
-fn compare(name: &str, a: &[[MeanVar; 3]], b: &[[MeanVar; 3]], alpha: f64) -> f64 {
-    let mut min_p = 1.0f64;
-    for blk in 0..BLOCKS {
-        for c in 0..3 {
-            let (x, y) = (&a[blk][c], &b[blk][c]);
-            let z = (x.mean() - y.mean()) / (x.std_error().powi(2) + y.std_error().powi(2)).sqrt();
-            let p = normal_two_sided_p(z);
-            min_p = min_p.min(p);
-            assert!(p > alpha, "{name}: block {blk}, channel {c}: PT {} vs {} (z = {z:.2})", x.mean(), y.mean());
-        }
-    }
-    min_p
 }
 
 /// Cross-iteration reuse (section 7.4) with M0 = 4 vertices per subspace while a pass
@@ -153,8 +134,8 @@ fn spcbpt_agrees_with_pt_per_block_on_the_cornell_box() {
     println!("Γ in [{gmin:.2e}, {gmax:.2e}] (uniform {:.2e})", 1.0 / model.classifier.n_light as f32);
     let reuse = reuse_chains(&model, m, &scene, &tracer, &params, 60, 4, 4);
     let alpha = sidak(0.01, 2 * BLOCKS * 3);
-    let min_p = compare("SPCBPT", &pt, &sp, alpha);
-    let min_reuse = compare("SPCBPT with reuse", &pt, &reuse, alpha);
+    let min_p = assert_blocks_agree("SPCBPT vs PT", &pt, &sp, alpha);
+    let min_reuse = assert_blocks_agree("SPCBPT with reuse vs PT", &pt, &reuse, alpha);
     println!("{} comparisons each, smallest p = {min_p:.4} without reuse, {min_reuse:.4} with reuse (α per test {alpha:.2e}); losses {losses:?}; {} × {} subspaces", BLOCKS * 3, model.classifier.n_eye, model.classifier.n_light);
 }
 
