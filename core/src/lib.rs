@@ -23,6 +23,7 @@ pub mod math;
 pub mod measure;
 pub mod mmis;
 pub mod integrator;
+pub mod render;
 pub mod rng;
 pub mod scene;
 pub mod spcbpt;

@@ -20,6 +20,12 @@ pub const INV_4PI: f32 = 0.25 * core::f32::consts::FRAC_1_PI;
 /// 2π.
 pub const TWO_PI: f32 = 2.0 * core::f32::consts::PI;
 
+/// Round half away from zero (as `f32::round`).
+#[inline]
+pub fn round(x: f32) -> f32 {
+    libm::roundf(x)
+}
+
 #[inline]
 pub fn sqrt(x: f32) -> f32 {
     libm::sqrtf(x)

@@ -27,15 +27,14 @@
 //!    for a pass's last chunk, as a share of worker time, and the longest wait), a
 //!    number that other processes on the machine hardly move. Two controls frame the
 //!    speedups: the same driver over pure arithmetic (`spin`: what the machine gives
-//!    right now), and the driver's sequential per-pass merge timed alone (the Amdahl
-//!    bound it sets).
+//!    right now), and the reductions (the serial per-pass merge) timed within the runs (the
+//!    Amdahl bound they set).
 //!
 //! Run: `cargo bench -p ember-cli --bench render_throughput` (1–2.5 minutes on 2 cores,
 //! longer while other processes load the machine).
 
 use std::cell::RefCell;
 use std::hint::black_box;
-use std::ops::Range;
 use std::sync::Mutex;
 use std::time::Instant;
 
@@ -43,12 +42,12 @@ use clap::Parser;
 
 use ember_cli::accel::Accel;
 use ember_cli::cli::{Cli, Command, RenderArgs};
-use ember_cli::driver::{self, DriverConfig, Limits, PassRenderer, PassStats, Splat};
-use ember_cli::estimators::{CoreRenderer, prepare_builtin};
-use ember_cli::film::Film;
+use ember_cli::driver::{self, DriverConfig, Limits};
+use ember_cli::estimators::{CoreRenderer, PreparedScene, prepare_builtin};
 use ember_core::Rgb;
 use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
 use ember_core::integrator::pt;
+use ember_core::render::{ChunkOutput, Context, Cursor, Film, Phase, Phased, Stage};
 
 const HOT_RES: u32 = 256;
 const HOT_PASSES: u32 = 4;
@@ -72,7 +71,7 @@ fn args(extra: &[&str]) -> RenderArgs {
 /// The built-in scene and estimator as `ember render` (no scene file) builds them.
 fn default_renderer(a: &RenderArgs) -> CoreRenderer {
     let prepared = prepare_builtin(a).expect("built-in scene");
-    CoreRenderer::new(prepared, a.estimator, a.max_depth_or(-1), a.seed)
+    CoreRenderer::new(prepared, a.estimator, a.max_depth_or(-1), a.seed).expect("renderer")
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -105,7 +104,7 @@ fn pt_passes<Q: RayQuery + ?Sized>(r: &CoreRenderer, tracer: &Q, out: &mut [Rgb]
     let t = Instant::now();
     let mut rays = 0;
     for pass in 0..HOT_PASSES {
-        rays += pt::render_pixels(&r.prepared.scene, tracer, &r.params, pass, 0..pixels, out).rays;
+        rays += pt::render_pixels(&r.prepared.scene, tracer, r.renderer.params(), pass, 0..pixels, out).rays;
         black_box(&mut *out);
     }
     (rays, t.elapsed().as_secs_f64())
@@ -169,9 +168,11 @@ fn hot_loop() {
     );
 }
 
-/// A `PassRenderer` that does pure arithmetic: the machine's own scaling, right now.
+/// A renderer that does pure arithmetic: the machine's own scaling, right now.
 #[derive(Debug)]
-struct Spin;
+struct Spin {
+    cursor: Cursor,
+}
 
 fn spin(seed: u32) -> Rgb {
     let mut x = seed as u64 | 1;
@@ -183,27 +184,26 @@ fn spin(seed: u32) -> Rgb {
     Rgb::splat((x >> 40) as f32)
 }
 
-impl PassRenderer for Spin {
-    fn width(&self) -> u32 {
-        512
+impl<Q: RayQuery + ?Sized> Phased<Q> for Spin {
+    fn next_phase(&self) -> Option<Phase> {
+        let Some(Stage::Pass(p, _)) = self.cursor.stage() else { return None };
+        Some(Phase { name: "camera", id: 0, pass: Some(p), items: 512 * 512, chunk: 1024, samples: true })
     }
-    fn height(&self) -> u32 {
-        512
+    fn start_pass(&mut self, pass: u32) {
+        self.cursor.start_pass(pass);
     }
-    fn camera_pass(&self, _: u32, pixels: Range<u32>, out: &mut [Rgb], _: &mut dyn FnMut(Splat)) -> PassStats {
-        for (o, i) in out.iter_mut().zip(pixels) {
-            *o = spin(i);
+    fn map(&self, _: &Context<'_, Q>, _: &Phase, out: &mut ChunkOutput) {
+        for i in out.items.clone() {
+            out.pixels.push(spin(i));
         }
-        PassStats::default()
     }
-    fn light_paths_per_pass(&self) -> u32 {
-        0
-    }
-    fn light_pass(&self, _: u32, _: Range<u32>, _: &mut dyn FnMut(Splat)) -> PassStats {
-        PassStats::default()
-    }
-    fn splat_scale(&self) -> f64 {
-        1.0
+    fn reduce(&mut self, _: &Context<'_, Q>, _: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
+        for o in outputs.iter() {
+            film.set_camera_samples(o.items.clone(), &o.pixels);
+        }
+        if self.cursor.advance() {
+            film.end_pass(1.0);
+        }
     }
 }
 
@@ -216,11 +216,13 @@ fn cpu_seconds() -> f64 {
     (tick(11) + tick(12)) / 100.0
 }
 
-/// Logs every work item the driver hands out: (pass, worker, start, end) in seconds.
+/// Logs every work item (chunk) the driver hands out, (pass, worker, start, end) in
+/// seconds, and times the reductions (the serial merge of each phase).
 struct Logged<'a> {
-    inner: &'a dyn PassRenderer,
+    inner: &'a mut (dyn Phased<ember_cli::accel::Accel> + Sync + Send),
     t0: Instant,
     items: Mutex<Vec<(u32, usize, f64, f64)>>,
+    reduce_seconds: f64,
 }
 
 impl Logged<'_> {
@@ -254,30 +256,22 @@ impl Logged<'_> {
     }
 }
 
-impl PassRenderer for Logged<'_> {
-    fn width(&self) -> u32 {
-        self.inner.width()
+impl Phased<ember_cli::accel::Accel> for Logged<'_> {
+    fn next_phase(&self) -> Option<Phase> {
+        self.inner.next_phase()
     }
-    fn height(&self) -> u32 {
-        self.inner.height()
+    fn start_pass(&mut self, pass: u32) {
+        self.inner.start_pass(pass);
     }
-    fn camera_pass(&self, pass: u32, pixels: Range<u32>, out: &mut [Rgb], splat: &mut dyn FnMut(Splat)) -> PassStats {
+    fn map(&self, ctx: &Context<'_, ember_cli::accel::Accel>, phase: &Phase, out: &mut ChunkOutput) {
         let t = Instant::now();
-        let stats = self.inner.camera_pass(pass, pixels, out, splat);
-        self.log(pass, t);
-        stats
+        self.inner.map(ctx, phase, out);
+        self.log(phase.pass.unwrap_or(0), t);
     }
-    fn light_paths_per_pass(&self) -> u32 {
-        self.inner.light_paths_per_pass()
-    }
-    fn light_pass(&self, pass: u32, paths: Range<u32>, splat: &mut dyn FnMut(Splat)) -> PassStats {
+    fn reduce(&mut self, ctx: &Context<'_, ember_cli::accel::Accel>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         let t = Instant::now();
-        let stats = self.inner.light_pass(pass, paths, splat);
-        self.log(pass, t);
-        stats
-    }
-    fn splat_scale(&self) -> f64 {
-        self.inner.splat_scale()
+        self.inner.reduce(ctx, phase, outputs, film);
+        self.reduce_seconds += t.elapsed().as_secs_f64();
     }
 }
 
@@ -291,59 +285,28 @@ struct Run {
     /// End-of-pass idle share and longest wait (seconds), see [`Logged::tail_idle`].
     idle: f64,
     worst_wait: f64,
+    /// Seconds of reductions (serial merges) per pass.
+    merge: f64,
 }
 
-fn drive(r: &dyn PassRenderer, threads: usize, spp: u32) -> (Run, Film) {
-    let logged = Logged { inner: r, t0: Instant::now(), items: Mutex::new(Vec::new()) };
-    let mut film = Film::new(r.width(), r.height());
+fn drive(r: &mut (dyn Phased<ember_cli::accel::Accel> + Sync + Send), scene: &PreparedScene, threads: usize, spp: u32) -> (Run, Film) {
+    let mut logged = Logged { inner: r, t0: Instant::now(), items: Mutex::new(Vec::new()), reduce_seconds: 0.0 };
+    let camera = &scene.scene.camera;
+    let mut film = Film::new(camera.width(), camera.height());
     let config = DriverConfig { progress: false, ..DriverConfig::with_threads(threads) };
+    let ctx = Context { scene: &scene.scene, tracer: &scene.accel };
     let start = Instant::now();
     let cpu = cpu_seconds();
-    let s = driver::render(&logged, &mut film, Limits { spp, deadline: None }, config, start).expect("render");
+    let s = driver::render(&mut logged, &ctx, &mut film, Limits { spp, deadline: None }, config, start).expect("render");
     let cpu = cpu_seconds() - cpu;
     let (idle, worst_wait) = logged.tail_idle(threads, spp);
-    (Run { wall: s.render_seconds, cpu, idle, worst_wait }, film)
+    (Run { wall: s.render_seconds, cpu, idle, worst_wait, merge: logged.reduce_seconds / spp.max(1) as f64 }, film)
 }
 
 fn same_bits(a: &Film, b: &Film) -> bool {
     a.passes() == b.passes()
         && a.discarded() == b.discarded()
         && a.sums().iter().flatten().map(|v| v.to_bits()).eq(b.sums().iter().flatten().map(|v| v.to_bits()))
-}
-
-/// The driver's merge of one pass on its own: camera samples and splats collected as
-/// the driver collects them (chunk by chunk, one thread), then added to a film.
-/// Returns (merge seconds, splats per pass).
-fn merge_cost(r: &dyn PassRenderer) -> (f64, usize) {
-    let config = DriverConfig::with_threads(1);
-    let n = (r.width() * r.height()) as usize;
-    let mut out = vec![Rgb::ZERO; n];
-    let mut chunks: Vec<Vec<Splat>> = Vec::new();
-    for (c, o) in out.chunks_mut(config.pixel_chunk as usize).enumerate() {
-        let mut s = Vec::new();
-        let start = c as u32 * config.pixel_chunk;
-        r.camera_pass(0, start..start + o.len() as u32, o, &mut |x| s.push(x));
-        chunks.push(s);
-    }
-    let m = r.light_paths_per_pass();
-    for start in (0..m).step_by(config.light_chunk as usize) {
-        let mut s = Vec::new();
-        r.light_pass(0, start..(start + config.light_chunk).min(m), &mut |x| s.push(x));
-        chunks.push(s);
-    }
-    let mut film = Film::new(r.width(), r.height());
-    let mut best = f64::INFINITY;
-    for _ in 0..5 {
-        let t = Instant::now();
-        film.add_camera_samples(0..n as u32, &out);
-        for s in &chunks {
-            film.add_splats(s, r.splat_scale());
-        }
-        film.end_pass();
-        best = best.min(t.elapsed().as_secs_f64());
-    }
-    black_box(&film);
-    (best, chunks.iter().map(Vec::len).sum())
 }
 
 fn scaling() {
@@ -364,13 +327,14 @@ fn scaling() {
         "", "threads", "seconds", "speedup", "cores", "CPU s", "tail idle"
     );
 
-    let mut renderers: Vec<(&str, Box<dyn PassRenderer>)> = vec![("spin", Box::new(Spin))];
+    let scene = prepare_builtin(&args(&[])).expect("built-in scene");
+    let mut renderers: Vec<(&str, Box<dyn Phased<ember_cli::accel::Accel> + Sync + Send>)> = vec![("spin", Box::new(Spin { cursor: Cursor::new(0, 1) }))];
     for e in ["pt", "lt", "bdpt"] {
         let spp = SCALE_SPP.to_string();
         let a = args(&["--estimator", e, "--spp", &spp]);
-        renderers.push((e, Box::new(default_renderer(&a))));
+        renderers.push((e, Box::new(default_renderer(&a).renderer)));
     }
-    for (name, r) in &renderers {
+    for (name, r) in &mut renderers {
         // Per round, per thread count.
         let (mut clean, mut all): (Vec<Vec<Run>>, Vec<Vec<Run>>) = (Vec::new(), Vec::new());
         let mut identical = true;
@@ -382,7 +346,7 @@ fn scaling() {
             }
             let mut round = vec![Run::default(); counts.len()];
             for k in order {
-                let (run, film) = drive(&**r, counts[k], SCALE_SPP);
+                let (run, film) = drive(&mut **r, &scene, counts[k], SCALE_SPP);
                 round[k] = run;
                 match &reference {
                     None => reference = Some(film),
@@ -415,18 +379,18 @@ fn scaling() {
                 if k == 0 { note.clone() } else { per_round.join(" ") },
             );
         }
-        // The merge alone, as a share of a 1-thread pass, and the speedups it allows.
-        let (merge, splats) = merge_cost(&**r);
+        // The reductions alone (the serial merge), as a share of a 1-thread pass, and the
+        // speedups it allows.
+        let merge = of(&|r| r[0].merge);
         let f = (merge * SCALE_SPP as f64 / of(&|r| r[0].wall)).min(1.0);
         let bounds: Vec<String> =
             counts[1..].iter().map(|&n| format!("{:.2}", 1.0 / (f + (1.0 - f) / n as f64))).collect();
         println!(
-            "    {:<6} film bits across thread counts: {}; merge {:.1} ms/pass ({} splats) = {:.1} % of a \
+            "    {:<6} film bits across thread counts: {}; merge {:.1} ms/pass = {:.1} % of a \
              1-thread pass; Amdahl bound {}",
             "",
             if identical { "identical" } else { "DIFFER" },
             merge * 1e3,
-            splats,
             100.0 * f,
             bounds.join(" / ")
         );

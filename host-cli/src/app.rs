@@ -13,8 +13,8 @@ use crate::cli::{Cli, Command, CompareArgs, ConvergenceArgs, DEFAULT_RESOLUTION,
 use crate::convergence::{self, ConvergenceSetup, Reference};
 use crate::{estimators, suite};
 use crate::metrics::{self, ErrorMetrics};
-use crate::driver::{self, DriverConfig, DriverError, Limits, PassRenderer, RenderSummary};
-use crate::film::Film;
+use crate::driver::{DriverConfig, DriverError, Limits, RenderSummary};
+use ember_core::render::Film;
 use crate::image_io::{self, ImageError};
 
 /// Everything a command can fail with; each message says what to do or which file.
@@ -134,9 +134,34 @@ pub struct RenderReport {
     pub png: PathBuf,
 }
 
+/// Something that renders passes into a film: the core's estimators
+/// ([`estimators::CoreRenderer`]) or a test's stand-in.
+pub trait Render {
+    /// The image size.
+    fn size(&self) -> (u32, u32);
+    /// Render passes into `film` until `limits` say stop.
+    fn render(&mut self, film: &mut Film, limits: Limits, config: DriverConfig, program_start: Instant) -> Result<RenderSummary, DriverError>;
+    /// Lines about the renderer's memory, printed after rendering.
+    fn memory_report(&self) -> Vec<String> {
+        Vec::new()
+    }
+}
+
+impl Render for estimators::CoreRenderer {
+    fn size(&self) -> (u32, u32) {
+        (self.width(), self.height())
+    }
+    fn render(&mut self, film: &mut Film, limits: Limits, config: DriverConfig, program_start: Instant) -> Result<RenderSummary, DriverError> {
+        estimators::CoreRenderer::render(self, film, limits, config, program_start)
+    }
+    fn memory_report(&self) -> Vec<String> {
+        estimators::CoreRenderer::memory_report(self)
+    }
+}
+
 /// What `render` needs from the estimator wiring: the renderer and what to report.
 pub struct Built {
-    pub renderer: Box<dyn PassRenderer>,
+    pub renderer: Box<dyn Render>,
     /// The scene's name (its file, or "built-in Cornell box").
     pub scene: String,
     pub max_depth: i32,
@@ -165,8 +190,8 @@ pub fn render(
 
     // Build the scene, the ray queries and the estimator.
     let built = make(args).map_err(AppError::Estimator)?;
-    let renderer = built.renderer;
-    let (width, height) = (renderer.width(), renderer.height());
+    let mut renderer = built.renderer;
+    let (width, height) = renderer.size();
 
     // Render passes until the spp or time limit.
     let mut film = Film::new(width, height);
@@ -178,7 +203,10 @@ pub fn render(
     };
     let limits = Limits { spp, deadline };
     let config = DriverConfig { progress, ..DriverConfig::with_threads(args.thread_count()) };
-    let summary = driver::render(&*renderer, &mut film, limits, config, start).map_err(AppError::Driver)?;
+    let summary = renderer.render(&mut film, limits, config, start).map_err(AppError::Driver)?;
+    for line in renderer.memory_report() {
+        eprintln!("{line}");
+    }
 
     // Write the images.
     let image = film.to_rgb_f32();

@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand};
 
 /// Passes rendered when neither `--spp` nor `--time` is given (pbrt's default).
 pub const DEFAULT_SPP: u32 = 16;
@@ -41,8 +41,8 @@ pub struct ConvergenceArgs {
     #[arg(value_name = "SCENE")]
     pub scene: PathBuf,
     /// Estimators to compare, comma separated.
-    #[arg(short, long, value_enum, value_delimiter = ',', default_values_t = [EstimatorArg::Pt, EstimatorArg::Bdpt])]
-    pub estimators: Vec<EstimatorArg>,
+    #[arg(short, long, value_parser = estimator_parser(), value_delimiter = ',', default_values_t = [EstimatorKind::Pt, EstimatorKind::Bdpt])]
+    pub estimators: Vec<EstimatorKind>,
     /// Wall-clock budget per estimator and seed, in seconds (preprocessing included).
     #[arg(long, default_value_t = 16.0, value_name = "SECONDS")]
     pub budget: f64,
@@ -73,8 +73,8 @@ pub struct SuiteArgs {
     #[arg(long, value_delimiter = ',', value_name = "NAMES")]
     pub only: Vec<String>,
     /// Estimators, comma separated.
-    #[arg(short, long, value_enum, value_delimiter = ',', default_values_t = [EstimatorArg::Pt, EstimatorArg::Lt, EstimatorArg::Bdpt])]
-    pub estimators: Vec<EstimatorArg>,
+    #[arg(short, long, value_parser = estimator_parser(), value_delimiter = ',', default_values_t = [EstimatorKind::Pt, EstimatorKind::Lt, EstimatorKind::Bdpt])]
+    pub estimators: Vec<EstimatorKind>,
     /// Seconds per estimator, scene and seed (preprocessing included).
     #[arg(long, default_value_t = 30.0, value_name = "SECONDS")]
     pub budget: f64,
@@ -106,34 +106,15 @@ pub struct CompareArgs {
     pub error_max: f32,
 }
 
-/// The light-transport algorithm.
-#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
-pub enum EstimatorArg {
-    /// Path tracing: camera paths with next-event estimation and MIS (Mitsuba's `path`).
-    Pt,
-    /// Light tracing: light paths connected to the camera (Mitsuba's `ptracer`).
-    Lt,
-    /// Bidirectional path tracing with multiple importance sampling (Veach 1997).
-    Bdpt,
-    /// Light-vertex-cache BDPT: M light paths per pass into a cache, N uniform
-    /// connections per camera vertex (Davidovič et al. 2014).
-    Lvcbpt,
-    /// Subspace-based probabilistic connections (Su, Li, Wang 2022): Γ-guided
-    /// connections to cached light vertices, Γ trained by Adam before rendering.
-    Spcbpt,
-}
+/// The light-transport algorithm: the core's one list of estimators.
+pub use ember_core::render::EstimatorKind;
+use ember_core::render::{EstimatorConfig, LvcbptConfig, SpcbptConfig};
 
-impl EstimatorArg {
-    /// The name as typed on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Pt => "pt",
-            Self::Lt => "lt",
-            Self::Bdpt => "bdpt",
-            Self::Lvcbpt => "lvcbpt",
-            Self::Spcbpt => "spcbpt",
-        }
-    }
+/// Parses an estimator name; `--help` lists each with its summary.
+fn estimator_parser() -> impl clap::builder::TypedValueParser<Value = EstimatorKind> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new(EstimatorKind::ALL.map(|e| PossibleValue::new(e.name()).help(e.summary())))
+        .map(|name| EstimatorKind::from_name(&name).expect("clap accepts only the listed names"))
 }
 
 /// Options of `ember render`.
@@ -149,8 +130,8 @@ pub struct RenderArgs {
     pub builtin: Option<String>,
 
     /// Light-transport algorithm.
-    #[arg(short, long, value_enum, default_value_t = EstimatorArg::Pt)]
-    pub estimator: EstimatorArg,
+    #[arg(short, long, value_parser = estimator_parser(), default_value_t = EstimatorKind::Pt)]
+    pub estimator: EstimatorKind,
 
     #[command(flatten)]
     pub cache: CacheArgs,
@@ -201,14 +182,9 @@ pub struct RenderArgs {
     pub exposure: f32,
 }
 
-/// Options of the cache-based estimators (LVCBPT, SPCBPT), with the SPCBPT paper's
-/// defaults. Scaling rule for small images: the paper renders about 1280×720 with
-/// M = 100 000 light paths per pass and |D| = 1 000 000 dataset paths; here M defaults
-/// to min(100 000, W·H) (the light paths per pixel sample never exceed one, as in BDPT),
-/// |D| to min(1 000 000, W·H), M' (paths estimating Q) to min(2 000 000, 2·W·H) and N_S
-/// to min(1000, ⌊√|D|⌋) (at least 16), which keeps the paper's one training path per entry
-/// of the N_S × N_S matrix Γ (measured on ajar at 320×240: N_S = 256 instead of 1000 gave
-/// 13.5 % instead of 15.3 % MAPE in 40 s, docs/results-spcbpt.md).
+/// Options of the cache-based estimators (LVCBPT, SPCBPT): parsed into the core's
+/// [`LvcbptConfig`] and [`SpcbptConfig`], whose documentation holds the defaults and the
+/// scaling rule for small images; the core validates the ranges.
 #[derive(Args, Debug, Clone, PartialEq)]
 #[command(next_help_heading = "LVCBPT / SPCBPT")]
 pub struct CacheArgs {
@@ -216,7 +192,7 @@ pub struct CacheArgs {
     #[arg(long, value_name = "M", value_parser = clap::value_parser!(u32).range(1..))]
     pub light_paths: Option<u32>,
     /// Connections per camera vertex, N.
-    #[arg(long, value_name = "N", default_value_t = 3)]
+    #[arg(long, value_name = "N", default_value_t = SpcbptConfig::DEFAULT.connections)]
     pub connections: u32,
     /// SPCBPT: training paths, |D| [default: min(1000000, W·H)].
     #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..))]
@@ -228,27 +204,27 @@ pub struct CacheArgs {
     pub subspaces: Option<u32>,
     /// SPCBPT: Adam learning rate α (the paper's 0.1: measured 4-40x less excess loss than
     /// the public code's 0.01-0.02 within the paper's step budget, docs/spcbpt-training.md).
-    #[arg(long, value_name = "ALPHA", default_value_t = 0.1)]
+    #[arg(long, value_name = "ALPHA", default_value_t = SpcbptConfig::DEFAULT.learning_rate)]
     pub learning_rate: f32,
     /// SPCBPT: Adam mini-batch size.
-    #[arg(long, value_name = "PATHS", default_value_t = 10_000)]
-    pub batch: usize,
+    #[arg(long, value_name = "PATHS", default_value_t = SpcbptConfig::DEFAULT.batch)]
+    pub batch: u32,
     /// SPCBPT: training epochs.
-    #[arg(long, value_name = "N", default_value_t = 2)]
+    #[arg(long, value_name = "N", default_value_t = SpcbptConfig::DEFAULT.epochs)]
     pub epochs: u32,
     /// SPCBPT: weight of the uniform distribution mixed into Γ.
-    #[arg(long, value_name = "M", default_value_t = 0.1)]
+    #[arg(long, value_name = "M", default_value_t = SpcbptConfig::DEFAULT.mixture)]
     pub mixture: f32,
     /// SPCBPT: light vertices retained per subspace across passes, M0.
-    #[arg(long, value_name = "M0", default_value_t = 200)]
+    #[arg(long, value_name = "M0", default_value_t = SpcbptConfig::DEFAULT.reuse)]
     pub reuse: u32,
     /// SPCBPT: weight of the normal/direction terms in the classification distance, k_d.
-    #[arg(long, value_name = "K", default_value_t = 0.05)]
+    #[arg(long, value_name = "K", default_value_t = SpcbptConfig::DEFAULT.k_d)]
     pub k_d: f32,
     /// SPCBPT: share of the N_S light subspaces given to positions on the lights (the
     /// paper's ~20 %); their vertices are cached and Γ-sampled instead of next-event
     /// estimation. 0, or a scene with a point, spot or infinite light, keeps NEE.
-    #[arg(long, value_name = "SHARE", default_value_t = 0.2, value_parser = parse_share)]
+    #[arg(long, value_name = "SHARE", default_value_t = SpcbptConfig::DEFAULT.light_source_share, value_parser = parse_share)]
     pub light_source_share: f32,
     /// SPCBPT: light paths estimating Q per light subspace, M' [default: min(2000000, 2·W·H)].
     #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..))]
@@ -257,7 +233,53 @@ pub struct CacheArgs {
 
 impl Default for CacheArgs {
     fn default() -> Self {
-        Self { light_paths: None, connections: 3, dataset: None, subspaces: None, learning_rate: 0.1, batch: 10_000, epochs: 2, mixture: 0.1, reuse: 200, k_d: 0.05, light_source_share: 0.2, q_paths: None }
+        let d = SpcbptConfig::DEFAULT;
+        Self {
+            light_paths: d.light_paths,
+            connections: d.connections,
+            dataset: d.dataset,
+            subspaces: d.subspaces,
+            learning_rate: d.learning_rate,
+            batch: d.batch,
+            epochs: d.epochs,
+            mixture: d.mixture,
+            reuse: d.reuse,
+            k_d: d.k_d,
+            light_source_share: d.light_source_share,
+            q_paths: d.q_paths,
+        }
+    }
+}
+
+impl CacheArgs {
+    /// LVCBPT's configuration from these options.
+    pub fn lvcbpt(&self) -> LvcbptConfig {
+        LvcbptConfig { light_paths: self.light_paths, connections: self.connections, ..LvcbptConfig::DEFAULT }
+    }
+    /// SPCBPT's configuration from these options.
+    pub fn spcbpt(&self) -> SpcbptConfig {
+        SpcbptConfig {
+            light_paths: self.light_paths,
+            connections: self.connections,
+            dataset: self.dataset,
+            subspaces: self.subspaces,
+            learning_rate: self.learning_rate,
+            batch: self.batch,
+            epochs: self.epochs,
+            mixture: self.mixture,
+            reuse: self.reuse,
+            k_d: self.k_d,
+            light_source_share: self.light_source_share,
+            q_paths: self.q_paths,
+        }
+    }
+    /// The configuration of `estimator` (these options apply to LVCBPT and SPCBPT only).
+    pub fn config_for(&self, estimator: EstimatorKind) -> EstimatorConfig {
+        match estimator {
+            EstimatorKind::Lvcbpt => EstimatorConfig::Lvcbpt(self.lvcbpt()),
+            EstimatorKind::Spcbpt => EstimatorConfig::Spcbpt(self.spcbpt()),
+            other => other.default_config(),
+        }
     }
 }
 
@@ -267,25 +289,6 @@ fn parse_share(text: &str) -> Result<f32, String> {
         Ok(v) if (0.0..1.0).contains(&v) => Ok(v),
         Ok(v) => Err(format!("{v} is not in [0, 1)")),
         Err(e) => Err(e.to_string()),
-    }
-}
-
-impl CacheArgs {
-    /// M for a film of `pixels` pixels.
-    pub fn light_paths_for(&self, pixels: u32) -> u32 {
-        self.light_paths.unwrap_or(pixels.clamp(1, 100_000))
-    }
-    /// |D| for a film of `pixels` pixels.
-    pub fn dataset_for(&self, pixels: u32) -> u32 {
-        self.dataset.unwrap_or(pixels.clamp(1, 1_000_000))
-    }
-    /// N_S for a training set of `dataset` paths.
-    pub fn subspaces_for(&self, dataset: u32) -> u32 {
-        self.subspaces.unwrap_or_else(|| ((dataset as f64).sqrt() as u32).clamp(16, 1000))
-    }
-    /// M' for a film of `pixels` pixels.
-    pub fn q_paths_for(&self, pixels: u32) -> u32 {
-        self.q_paths.unwrap_or(pixels.saturating_mul(2).clamp(1, 2_000_000))
     }
 }
 
@@ -378,7 +381,7 @@ mod tests {
     fn defaults() {
         let a = parse(&[]).unwrap();
         assert_eq!(a.scene, None);
-        assert_eq!(a.estimator, EstimatorArg::Pt);
+        assert_eq!(a.estimator, EstimatorKind::Pt);
         assert_eq!((a.spp, a.time, a.threads, a.seed), (None, None, None, 0));
         assert_eq!(a.spp_limit(), DEFAULT_SPP);
         assert_eq!(a.resolution_or(DEFAULT_RESOLUTION), (512, 512));
@@ -415,7 +418,7 @@ mod tests {
         ])
         .unwrap();
         assert_eq!(a.scene, Some(PathBuf::from("scene.xml")));
-        assert_eq!(a.estimator, EstimatorArg::Bdpt);
+        assert_eq!(a.estimator, EstimatorKind::Bdpt);
         assert_eq!((a.spp, a.time, a.threads, a.seed), (Some(64), Some(2.5), Some(3), 42));
         assert_eq!(a.spp_limit(), 64);
         assert_eq!(a.thread_count(), 3);
@@ -424,7 +427,7 @@ mod tests {
         assert_eq!(a.exposure, -1.5);
         assert_eq!(a.output_paths().unwrap().1, PathBuf::from("img/x.png"));
         let b = parse(&["-e", "lt", "--max-depth", "3", "--time", "1"]).unwrap();
-        assert_eq!((b.estimator, b.max_depth, b.spp_limit()), (EstimatorArg::Lt, Some(3), u32::MAX));
+        assert_eq!((b.estimator, b.max_depth, b.spp_limit()), (EstimatorKind::Lt, Some(3), u32::MAX));
         assert_eq!(parse(&["--width", "100"]).unwrap().resolution_or((7, 9)), (100, 9));
     }
 

@@ -19,8 +19,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use crate::cli::EstimatorArg;
-use crate::driver::{self, DriverConfig, Limits, PassRenderer};
+use crate::cli::EstimatorKind;
+use crate::driver::{DriverConfig, Limits};
 use crate::estimators::{CoreRenderer, PreparedScene};
 use crate::film::Film;
 use crate::image_io::{self, RgbImage};
@@ -30,7 +30,7 @@ use crate::plot::{self, Floor, Series};
 /// What to measure.
 #[derive(Clone, Debug)]
 pub struct ConvergenceSetup {
-    pub estimators: Vec<EstimatorArg>,
+    pub estimators: Vec<EstimatorKind>,
     pub budget_seconds: f64,
     pub seeds: u32,
     pub threads: usize,
@@ -41,7 +41,7 @@ pub struct ConvergenceSetup {
 /// One snapshot.
 #[derive(Clone, Copy, Debug)]
 pub struct Checkpoint {
-    pub estimator: EstimatorArg,
+    pub estimator: EstimatorKind,
     pub seed: u32,
     pub target_seconds: f64,
     pub elapsed_seconds: f64,
@@ -110,7 +110,7 @@ pub fn time_to_reach(curve: &[(f64, f64)], target: f64) -> Option<f64> {
 
 /// One estimator's run of one seed: its renderer, film and own clock.
 struct Run {
-    estimator: EstimatorArg,
+    estimator: EstimatorKind,
     renderer: CoreRenderer,
     film: Film,
     /// Time this run has had so far (its preprocessing included).
@@ -140,7 +140,7 @@ pub fn measure(
             let start = Instant::now();
             let prepared = prepare()?;
             let depth = setup.max_depth.or(prepared.max_depth).unwrap_or(-1);
-            let renderer = crate::estimators::on_threads(setup.threads, || CoreRenderer::new(prepared, estimator, depth, seed as u64));
+            let renderer = CoreRenderer::with_config(prepared, estimator.default_config(), depth, seed as u64, setup.threads)?;
             let (w, h) = (renderer.width(), renderer.height());
             if (w as usize, h as usize) != (rw, rh) {
                 return Err(format!("the scene renders {w}x{h} but the reference is {rw}x{rh}"));
@@ -155,7 +155,7 @@ pub fn measure(
                     let now = Instant::now();
                     let start = now.checked_sub(run.spent).unwrap_or(now);
                     let limits = Limits { spp: u32::MAX, deadline: Some(start + target_duration) };
-                    driver::render(&run.renderer, &mut run.film, limits, config, start).map_err(|e| e.to_string())?;
+                    run.renderer.render(&mut run.film, limits, config, start).map_err(|e| e.to_string())?;
                     run.spent += now.elapsed();
                 }
                 let image = run.film.to_rgb_f32();
@@ -176,7 +176,7 @@ pub fn measure(
 }
 
 /// Seed-averaged (elapsed seconds, relMSE, MAPE) per checkpoint of one estimator.
-pub fn averaged(points: &[Checkpoint], estimator: EstimatorArg) -> Vec<(f64, f64, f64)> {
+pub fn averaged(points: &[Checkpoint], estimator: EstimatorKind) -> Vec<(f64, f64, f64)> {
     let mut targets: Vec<f64> = points.iter().filter(|c| c.estimator == estimator).map(|c| c.target_seconds).collect();
     targets.dedup();
     targets
@@ -204,7 +204,7 @@ pub fn csv(points: &[Checkpoint]) -> String {
 }
 
 /// The two plots (relMSE and MAPE against seconds) as SVG strings.
-pub fn plots(title: &str, points: &[Checkpoint], estimators: &[EstimatorArg], reference: &Reference) -> (String, String) {
+pub fn plots(title: &str, points: &[Checkpoint], estimators: &[EstimatorKind], reference: &Reference) -> (String, String) {
     let series = |pick: fn(&(f64, f64, f64)) -> f64| -> Vec<Series> {
         estimators
             .iter()
@@ -218,7 +218,7 @@ pub fn plots(title: &str, points: &[Checkpoint], estimators: &[EstimatorArg], re
 }
 
 /// Write `NAME.csv`, `NAME-relmse.svg` and `NAME-mape.svg` into `dir`.
-pub fn write_outputs(dir: &Path, name: &str, title: &str, points: &[Checkpoint], estimators: &[EstimatorArg], reference: &Reference) -> Result<Vec<PathBuf>, String> {
+pub fn write_outputs(dir: &Path, name: &str, title: &str, points: &[Checkpoint], estimators: &[EstimatorKind], reference: &Reference) -> Result<Vec<PathBuf>, String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let (rel, mape) = plots(title, points, estimators, reference);
     let files = [(format!("{name}.csv"), csv(points)), (format!("{name}-relmse.svg"), rel), (format!("{name}-mape.svg"), mape)];

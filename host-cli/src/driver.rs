@@ -1,15 +1,13 @@
-//! The render loop: passes of camera and light work in parallel, merged into the film
-//! in a fixed order.
+//! The render loop on threads: the core's render protocol ([`ember_core::render`]) with
+//! each phase's chunks mapped in parallel and reduced in chunk order.
 //!
-//! A *pass* gives every pixel one camera sample (`camera_pass`) and traces
-//! `light_paths_per_pass` light paths (`light_pass`). Within a pass the pixels are cut
-//! into fixed-size chunks and the light paths likewise; rayon runs the chunks on a local
-//! thread pool of `--threads` threads. Each chunk writes its pixels' samples into its own
-//! slice of a pass buffer and collects its splats into its own `Vec`. When the pass is
-//! done, the buffer and then the splat lists, camera chunks first and light chunks
-//! next, each in chunk order, are added to the film on one thread. The chunk sizes do
-//! not depend on the thread count and the random numbers depend only on (seed, pixel or
-//! path, pass, dimension), so the film is bit-identical for any number of threads.
+//! Every estimator's work is a sequence of phases (its setup, then per pass its light
+//! paths, caches and camera samples); each phase is a map over fixed-size chunks of an
+//! index range, followed by the estimator's reduction. This host maps the chunks on a
+//! local rayon pool of `--threads` threads, each into its own reusable [`ChunkOutput`],
+//! and hands them to the reduction in chunk order on one thread. The chunk sizes are the
+//! estimator's and the random numbers depend only on (seed, index, pass, dimension), so
+//! the film is bit-identical for any number of threads, and to the core's serial runner.
 //!
 //! # Stopping
 //! The loop stops after `spp` passes or at the wall-clock deadline, whichever comes
@@ -18,19 +16,16 @@
 //! than others, and light splats without their normalisation). The first pass always
 //! runs, even when preprocessing used up the whole budget, so an image exists.
 
-use core::ops::Range;
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 
-use ember_core::Rgb;
+use ember_core::geometry::RayQuery;
+use ember_core::render::{ChunkOutput, Context, Film, PhaseBuffers, Phased};
 
-use crate::film::Film;
-
-/// A contribution at a continuous film position (pixel (x, y) covers [x, x+1) × [y, y+1)):
-/// the core's type, so estimators splat straight into the driver.
+/// A contribution at a continuous film position: the core's type.
 pub use ember_core::integrator::Splat;
 
 /// Work counted by a renderer.
@@ -49,30 +44,70 @@ impl core::ops::Add for PassStats {
     }
 }
 
-/// What an estimator provides to be driven pass by pass.
-pub trait PassRenderer: Sync {
-    fn width(&self) -> u32;
-    fn height(&self) -> u32;
-    /// Camera-side work of pass `pass` for pixels `pixels` (index y*W+x): one sample per
-    /// pixel into `out[i - pixels.start]`; may also splat (BDPT's t = 1).
-    fn camera_pass(&self, pass: u32, pixels: Range<u32>, out: &mut [Rgb], splat: &mut dyn FnMut(Splat)) -> PassStats;
-    /// Number of light paths traced per pass by `light_pass` (0 = none); splats of a
-    /// pass are divided by max(this, camera-splatting count) — see `splat_scale`.
-    fn light_paths_per_pass(&self) -> u32;
-    /// Light-side work of pass `pass` for light paths `paths`.
-    fn light_pass(&self, pass: u32, paths: Range<u32>, splat: &mut dyn FnMut(Splat)) -> PassStats;
-    /// The factor every splat of one pass is multiplied by before it is added to the film
-    /// (e.g. 1/M for M light paths per pass; 1/(W·H) for BDPT whose camera_pass traces
-    /// one light path per pixel).
-    fn splat_scale(&self) -> f64;
-    /// Work that must finish before pass `pass`'s camera and light work starts (the
-    /// light paths and vertex caches of LVCBPT and SPCBPT). Runs inside the render thread
-    /// pool, so it may use rayon; its splats are merged with the pass's, scaled by
-    /// `splat_scale`, in the order they were emitted (which must not depend on the thread
-    /// count). State it builds lives behind interior mutability. Default: nothing.
-    fn prepare_pass(&self, _pass: u32, _splat: &mut dyn FnMut(Splat)) -> PassStats {
-        PassStats::default()
+/// Seconds spent in each phase, by name, summed over its runs, in first-run order.
+pub type PhaseTimes = Vec<(&'static str, f64)>;
+
+fn add_time(times: &mut PhaseTimes, name: &'static str, seconds: f64) {
+    match times.iter_mut().find(|(n, _)| *n == name) {
+        Some((_, t)) => *t += seconds,
+        None => times.push((name, seconds)),
     }
+}
+
+/// Map and reduce every pending phase of `est`: chunks in parallel on the current rayon
+/// pool (each chunk its own stealable task), reductions in chunk order on this thread.
+pub fn run_pending<E, Q>(est: &mut E, ctx: &Context<'_, Q>, film: &mut Film, buffers: &mut PhaseBuffers, times: &mut PhaseTimes) -> PassStats
+where
+    E: Phased<Q> + Sync + ?Sized,
+    Q: RayQuery + Sync + ?Sized,
+{
+    let mut stats = PassStats::default();
+    while let Some(phase) = est.next_phase() {
+        let start = Instant::now();
+        let outputs = buffers.for_phase(&phase);
+        let shared: &E = est;
+        // `with_max_len(1)` makes every chunk its own stealable task: rayon's adaptive
+        // splitting otherwise hands a thread runs of 32-64 chunks that cannot be stolen
+        // once started (on 2 threads one worker idled 10 % of every BDPT pass).
+        let rays: u64 = outputs
+            .par_iter_mut()
+            .with_max_len(1)
+            .map(|out: &mut ChunkOutput| {
+                shared.map(ctx, &phase, out);
+                out.counters.rays
+            })
+            .sum();
+        stats.rays += rays;
+        if phase.samples {
+            stats.samples += phase.items as u64;
+        }
+        est.reduce(ctx, &phase, outputs, film);
+        add_time(times, phase.name, start.elapsed().as_secs_f64());
+    }
+    stats
+}
+
+/// Run `est`'s setup phases (preprocessing) on `threads` threads; returns each phase's
+/// seconds. The setup touches no film.
+pub fn run_setup<E, Q>(est: &mut E, ctx: &Context<'_, Q>, threads: usize) -> Result<PhaseTimes, DriverError>
+where
+    E: Phased<Q> + Sync + Send + ?Sized,
+    Q: RayQuery + Sync + ?Sized,
+{
+    let pool = thread_pool(threads, "ember-prepare")?;
+    let mut times = PhaseTimes::new();
+    let mut film = Film::new(0, 0);
+    let mut buffers = PhaseBuffers::new();
+    pool.install(|| run_pending(est, ctx, &mut film, &mut buffers, &mut times));
+    Ok(times)
+}
+
+fn thread_pool(threads: usize, name: &'static str) -> Result<rayon::ThreadPool, DriverError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.max(1))
+        .thread_name(move |i| format!("{name}-{i}"))
+        .build()
+        .map_err(|e| DriverError::ThreadPool(e.to_string()))
 }
 
 /// When to stop.
@@ -89,24 +124,19 @@ pub struct Limits {
 #[derive(Clone, Copy, Debug)]
 pub struct DriverConfig {
     pub threads: usize,
-    /// Pixels per camera work item.
-    pub pixel_chunk: u32,
-    /// Light paths per light work item.
-    pub light_chunk: u32,
     /// Draw a progress bar when stderr is a terminal.
     pub progress: bool,
 }
 
 impl DriverConfig {
-    /// Default chunk sizes (small enough to balance, large enough to amortise the
-    /// per-chunk splat list) with `threads` threads.
+    /// `threads` threads, progress bar on.
     pub fn with_threads(threads: usize) -> Self {
-        Self { threads, pixel_chunk: 1024, light_chunk: 1024, progress: true }
+        Self { threads, progress: true }
     }
 }
 
 /// What a render did.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct RenderSummary {
     pub passes: u32,
     /// Seconds spent in the pass loop.
@@ -119,6 +149,8 @@ pub struct RenderSummary {
     /// Samples and splats discarded for NaN, infinite or negative values.
     pub discarded: u64,
     pub threads: usize,
+    /// Seconds per phase over the render loop (camera, light paths, …).
+    pub phase_seconds: PhaseTimes,
 }
 
 /// Problems the driver reports.
@@ -143,41 +175,31 @@ impl core::fmt::Display for DriverError {
 
 impl std::error::Error for DriverError {}
 
-/// Render passes into `film` until `limits` say stop. `program_start` is when the
-/// program started (for the summary's total time).
-pub fn render<R: PassRenderer + ?Sized>(
-    renderer: &R,
-    film: &mut Film,
-    limits: Limits,
-    config: DriverConfig,
-    program_start: Instant,
-) -> Result<RenderSummary, DriverError> {
-    let (w, h) = (renderer.width(), renderer.height());
+/// Render passes of `est` into `film` until `limits` say stop (pending setup phases run
+/// first). `program_start` is when the program started (for the summary's total time).
+pub fn render<E, Q>(est: &mut E, ctx: &Context<'_, Q>, film: &mut Film, limits: Limits, config: DriverConfig, program_start: Instant) -> Result<RenderSummary, DriverError>
+where
+    E: Phased<Q> + Sync + Send + ?Sized,
+    Q: RayQuery + Sync + ?Sized,
+{
+    let camera = &ctx.scene.camera;
+    let (w, h) = (camera.width(), camera.height());
     if (film.width(), film.height()) != (w, h) {
         return Err(DriverError::Resolution { film: (film.width(), film.height()), renderer: (w, h) });
     }
     let threads = config.threads.max(1);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .thread_name(|i| format!("ember-render-{i}"))
-        .build()
-        .map_err(|e| DriverError::ThreadPool(e.to_string()))?;
-
-    // Buffers reused by every pass.
-    let pixels = w as usize * h as usize;
-    let pixel_chunk = config.pixel_chunk.max(1) as usize;
-    let light_chunk = config.light_chunk.max(1) as usize;
-    let mut camera_out = vec![Rgb::ZERO; pixels];
-    let mut camera_splats: Vec<Vec<Splat>> = vec![Vec::new(); pixels.div_ceil(pixel_chunk)];
-    let light_paths = renderer.light_paths_per_pass() as usize;
-    let mut light_splats: Vec<Vec<Splat>> = vec![Vec::new(); light_paths.div_ceil(light_chunk)];
-    let mut prepare_splats: Vec<Splat> = Vec::new();
+    let pool = thread_pool(threads, "ember-render")?;
+    let mut buffers = PhaseBuffers::new();
+    let mut times = PhaseTimes::new();
+    // Setup not yet run (a renderer built without `run_setup`) counts as setup time.
+    pool.install(|| run_pending(est, ctx, &mut Film::new(0, 0), &mut buffers, &mut times));
 
     let progress = Progress::new(config.progress, limits, program_start);
     let loop_start = Instant::now();
     let discarded_before = film.discarded();
     let mut stats = PassStats::default();
     let mut passes = 0;
+    times.clear();
     // Continue a film that already holds passes (checkpointed renders), so pass indices,
     // and with them the random streams, never repeat.
     let first_pass = film.passes();
@@ -185,50 +207,8 @@ pub fn render<R: PassRenderer + ?Sized>(
         if pass > first_pass && limits.deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
-        // Run the pass's chunks in parallel, each into its own output. `with_max_len(1)`
-        // makes every chunk its own stealable task: rayon's adaptive splitting otherwise
-        // hands a thread runs of 32-64 chunks that cannot be stolen once started, and on
-        // 2 threads one worker idled 10 % of every BDPT pass (measured by the
-        // render_throughput benchmark).
-        let camera_work = || {
-            camera_out
-                .par_chunks_mut(pixel_chunk)
-                .zip(camera_splats.par_iter_mut())
-                .enumerate()
-                .with_max_len(1)
-                .map(|(c, (out, splats))| {
-                    splats.clear();
-                    let start = (c * pixel_chunk) as u32;
-                    let range = start..start + out.len() as u32;
-                    renderer.camera_pass(pass, range, out, &mut |s| splats.push(s))
-                })
-                .reduce(PassStats::default, |a, b| a + b)
-        };
-        let light_work = || {
-            light_splats
-                .par_iter_mut()
-                .enumerate()
-                .with_max_len(1)
-                .map(|(c, splats)| {
-                    splats.clear();
-                    let start = c * light_chunk;
-                    let range = start as u32..(start + light_chunk).min(light_paths) as u32;
-                    renderer.light_pass(pass, range, &mut |s| splats.push(s))
-                })
-                .reduce(PassStats::default, |a, b| a + b)
-        };
-        prepare_splats.clear();
-        stats = stats + pool.install(|| renderer.prepare_pass(pass, &mut |s| prepare_splats.push(s)));
-        let (cam, light) = pool.install(|| rayon::join(camera_work, light_work));
-        stats = stats + cam + light;
-
-        // Merge on this thread in a fixed order.
-        film.add_camera_samples(0..pixels as u32, &camera_out);
-        let scale = renderer.splat_scale();
-        for s in std::iter::once(&prepare_splats).chain(&camera_splats).chain(&light_splats) {
-            film.add_splats(s, scale);
-        }
-        film.end_pass();
+        est.start_pass(pass);
+        stats = stats + pool.install(|| run_pending(est, ctx, film, &mut buffers, &mut times));
         passes += 1;
         progress.pass_done(passes);
     }
@@ -245,6 +225,7 @@ pub fn render<R: PassRenderer + ?Sized>(
         rays_per_second: per_second(stats.rays),
         discarded: film.discarded() - discarded_before,
         threads,
+        phase_seconds: times,
     })
 }
 

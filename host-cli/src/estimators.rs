@@ -1,18 +1,17 @@
-//! The core's estimators as [`PassRenderer`]s: scene loading, ray queries and the
-//! per-pass calls into `ember_core::integrator`.
+//! Scene loading and ray queries for the core's estimators: a [`PreparedScene`] and a
+//! [`CoreRenderer`] (the core's [`Renderer`] bound to it, its setup run on threads).
 
-use std::ops::Range;
+use std::time::Instant;
 
-use ember_core::integrator::{Counters, Heuristic, MaxDepth, RenderParams, bdpt, lt, pt};
+use ember_core::integrator::{Heuristic, MaxDepth, RenderParams};
+use ember_core::render::{Context, EstimatorConfig, EstimatorKind, Film, Renderer};
 use ember_core::scene::{BuildWarnings, Scene, SceneGeometry, builtin};
 use std::path::Path;
-use ember_core::Rgb;
 
 use crate::accel::Accel;
 use crate::app::{Built, builtin_resolution};
-use crate::cached::{LvcbptHost, SpcbptHost};
-use crate::cli::{CacheArgs, EstimatorArg, RenderArgs};
-use crate::driver::{PassRenderer, PassStats, Splat};
+use crate::cli::{CacheArgs, RenderArgs};
+use crate::driver::{self, DriverConfig, DriverError, Limits, PhaseTimes, RenderSummary};
 use crate::mitsuba;
 
 /// A scene ready to render: what the estimators read and the ray queries.
@@ -70,147 +69,108 @@ fn finish(name: String, scene: Scene, geometry: &SceneGeometry, warnings: BuildW
     PreparedScene { name, scene, accel, max_depth, spp, warnings: notes }
 }
 
-/// One of the core's estimators bound to a prepared scene.
+/// One of the core's estimators bound to a prepared scene, its setup (SPCBPT's and
+/// LVCBPT's preprocessing) already run.
 #[derive(Debug)]
 pub struct CoreRenderer {
     pub prepared: PreparedScene,
-    pub estimator: EstimatorArg,
-    pub params: RenderParams,
-    /// LVCBPT's per-pass state (built in `new`).
-    pub lvcbpt: Option<LvcbptHost>,
-    /// SPCBPT's model and per-pass state (preprocessing runs in `new`).
-    pub spcbpt: Option<SpcbptHost>,
+    pub renderer: Renderer,
+    /// Seconds per setup phase.
+    pub setup_times: PhaseTimes,
+    /// Seconds the whole setup took.
+    pub setup_seconds: f64,
 }
 
 impl CoreRenderer {
-    pub fn new(prepared: PreparedScene, estimator: EstimatorArg, max_depth: i32, seed: u64) -> Self {
-        Self::with_options(prepared, estimator, max_depth, seed, &CacheArgs::default())
+    /// `estimator` with its default configuration; setup on rayon's current pool size.
+    pub fn new(prepared: PreparedScene, estimator: EstimatorKind, max_depth: i32, seed: u64) -> Result<Self, String> {
+        Self::with_config(prepared, estimator.default_config(), max_depth, seed, rayon::current_num_threads())
     }
 
-    /// [`Self::new`] with the cache-based estimators' options; their preprocessing runs
-    /// here (on the global rayon pool), so a clock started before counts it.
-    pub fn with_options(prepared: PreparedScene, estimator: EstimatorArg, max_depth: i32, seed: u64, cache: &CacheArgs) -> Self {
+    /// [`Self::new`] with the cache-based estimators' options from the command line.
+    pub fn with_options(prepared: PreparedScene, estimator: EstimatorKind, max_depth: i32, seed: u64, cache: &CacheArgs) -> Result<Self, String> {
+        Self::with_config(prepared, cache.config_for(estimator), max_depth, seed, rayon::current_num_threads())
+    }
+
+    /// The estimator `config` names; its setup phases run here on `threads` threads, so a
+    /// clock started before counts them.
+    pub fn with_config(prepared: PreparedScene, config: EstimatorConfig, max_depth: i32, seed: u64, threads: usize) -> Result<Self, String> {
         // PT combines its two techniques with the power heuristic (as Mitsuba does);
         // BDPT's weights are the balance heuristic by construction.
         let params = RenderParams { max_depth: MaxDepth(max_depth), seed, heuristic: Heuristic::Power, ..RenderParams::default() };
-        let lvcbpt = match estimator {
-            EstimatorArg::Lvcbpt => Some(LvcbptHost::new(&prepared.scene, &prepared.accel, &params, cache)),
-            _ => None,
-        };
-        let spcbpt = match estimator {
-            EstimatorArg::Spcbpt => Some(SpcbptHost::new(&prepared.scene, &prepared.accel, &params, cache)),
-            _ => None,
-        };
-        Self { prepared, estimator, params, lvcbpt, spcbpt }
+        let mut renderer = Renderer::new(&prepared.scene, params, config).map_err(|e| format!("{} {e}", config.kind()))?;
+        let start = Instant::now();
+        let ctx = Context { scene: &prepared.scene, tracer: &prepared.accel };
+        let setup_times = driver::run_setup(&mut renderer, &ctx, threads).map_err(|e| e.to_string())?;
+        Ok(Self { prepared, renderer, setup_times, setup_seconds: start.elapsed().as_secs_f64() })
     }
-    fn pixels(&self) -> u32 {
-        self.width() * self.height()
+
+    pub fn kind(&self) -> EstimatorKind {
+        self.renderer.kind()
     }
-}
 
-fn stats(c: Counters, samples: usize) -> PassStats {
-    PassStats { rays: c.rays, samples: samples as u64 }
-}
-
-impl PassRenderer for CoreRenderer {
-    fn width(&self) -> u32 {
+    pub fn width(&self) -> u32 {
         self.prepared.scene.camera.width()
     }
-    fn height(&self) -> u32 {
+
+    pub fn height(&self) -> u32 {
         self.prepared.scene.camera.height()
     }
-    fn camera_pass(&self, pass: u32, pixels: Range<u32>, out: &mut [Rgb], splat: &mut dyn FnMut(Splat)) -> PassStats {
-        let (scene, accel) = (&self.prepared.scene, &self.prepared.accel);
-        let n = pixels.len();
-        match self.estimator {
-            EstimatorArg::Pt => stats(pt::render_pixels(scene, accel, &self.params, pass, pixels, out), n),
-            EstimatorArg::Bdpt => stats(bdpt::render_pixels(scene, accel, &self.params, pass, pixels, out, splat), n),
-            EstimatorArg::Lvcbpt | EstimatorArg::Spcbpt => match (&self.lvcbpt, &self.spcbpt) {
-                (Some(l), _) => l.camera_pass(scene, accel, &self.params, pass, pixels, out),
-                (_, Some(s)) => s.camera_pass(scene, accel, &self.params, pass, pixels, out),
-                _ => {
-                    out.fill(Rgb::ZERO);
-                    PassStats::default()
-                }
-            },
-            // Light tracing has no camera-side work: its image is all splats.
-            EstimatorArg::Lt => {
-                out.fill(Rgb::ZERO);
-                PassStats::default()
+
+    /// What the estimator holds per pass, for the closing report.
+    pub fn memory_report(&self) -> Vec<String> {
+        let mib = |b: usize| b as f64 / 1_048_576.0;
+        match &self.renderer {
+            Renderer::Lvcbpt(l) => vec![format!("lvcbpt     memory per pass: light paths {:.1} MiB, cache {:.1} MiB ({} vertices)", mib(l.paths.size_bytes()), mib(l.size_bytes() - l.paths.size_bytes()), l.cache.len())],
+            Renderer::Spcbpt(s) => {
+                let cache = &s.cache;
+                let (total, paths, retained) = (cache.size_bytes(), cache.paths.size_bytes(), cache.retained.size_bytes());
+                let kept: usize = cache.retained.fifos.iter().map(|f| f.len()).sum();
+                let n_light = s.model.as_ref().map_or(0, |m| m.classifier.n_light);
+                vec![format!(
+                    "spcbpt     memory per pass: light paths {:.1} MiB, buckets + stage tables {:.1} MiB, reuse FIFOs {:.1} MiB ({kept} vertices, at most M0 = {} × {n_light} subspaces)",
+                    mib(paths),
+                    mib(total - paths - retained),
+                    mib(retained),
+                    cache.retained.capacity
+                )]
             }
+            Renderer::OnePhase(_) => Vec::new(),
         }
     }
-    fn light_paths_per_pass(&self) -> u32 {
-        match self.estimator {
-            EstimatorArg::Lt => self.pixels(),
-            _ => 0,
-        }
-    }
-    fn light_pass(&self, pass: u32, paths: Range<u32>, splat: &mut dyn FnMut(Splat)) -> PassStats {
-        match self.estimator {
-            EstimatorArg::Lt => {
-                let n = paths.len();
-                stats(lt::trace_paths(&self.prepared.scene, &self.prepared.accel, &self.params, pass, paths, splat), n)
-            }
-            _ => PassStats::default(),
-        }
-    }
-    fn prepare_pass(&self, pass: u32, splat: &mut dyn FnMut(Splat)) -> PassStats {
-        let (scene, accel) = (&self.prepared.scene, &self.prepared.accel);
-        match (&self.lvcbpt, &self.spcbpt) {
-            (Some(l), _) => l.prepare_pass(scene, accel, &self.params, pass, splat),
-            (_, Some(s)) => s.prepare_pass(scene, accel, &self.params, pass, splat),
-            _ => PassStats::default(),
-        }
-    }
-    fn splat_scale(&self) -> f64 {
-        if let Some(l) = &self.lvcbpt {
-            // LVCBPT's splats come from its M light paths.
-            return 1.0 / l.light_paths.max(1) as f64;
-        }
-        if let Some(s) = &self.spcbpt {
-            return 1.0 / s.light_paths.max(1) as f64;
-        }
-        // LT traces W·H light paths per pass; BDPT traces one per pixel sample.
-        1.0 / self.pixels() as f64
+
+    /// Render passes into `film` (see [`driver::render`]).
+    pub fn render(&mut self, film: &mut Film, limits: Limits, config: DriverConfig, program_start: Instant) -> Result<RenderSummary, DriverError> {
+        let ctx = Context { scene: &self.prepared.scene, tracer: &self.prepared.accel };
+        driver::render(&mut self.renderer, &ctx, film, limits, config, program_start)
     }
 }
 
 /// The renderer a `render` command asks for, with what its report needs.
 pub fn make_built(args: &RenderArgs) -> Result<Built, String> {
     let r = make_core_renderer(args)?;
-    Ok(Built { scene: r.prepared.name.clone(), max_depth: r.params.max_depth.0, file_spp: r.prepared.spp, renderer: Box::new(r) })
+    Ok(Built { scene: r.prepared.name.clone(), max_depth: r.renderer.params().max_depth.0, file_spp: r.prepared.spp, renderer: Box::new(r) })
 }
 
-/// Run `f` (a renderer's construction: SPCBPT's and LVCBPT's preprocessing is
-/// parallel) on `threads` rayon threads, so `--threads` bounds preprocessing as it
-/// bounds rendering; on rayon's global pool if that pool cannot be built.
-pub fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
-    match rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).thread_name(|i| format!("ember-prepare-{i}")).build() {
-        Ok(pool) => pool.install(f),
-        Err(_) => f(),
-    }
-}
-
-/// The renderer alone (benchmarks and tools that print nothing about the scene).
-pub fn make_renderer(args: &RenderArgs) -> Result<Box<dyn PassRenderer>, String> {
-    Ok(Box::new(make_core_renderer(args)?))
-}
-
-/// [`make_renderer`] with the concrete type (the scene's name and settings stay readable).
+/// The renderer a `render` command asks for, its setup run and reported on stderr.
 pub fn make_core_renderer(args: &RenderArgs) -> Result<CoreRenderer, String> {
     let prepared = prepare(args)?;
     for w in &prepared.warnings {
         eprintln!("warning: {w}");
     }
     let max_depth = args.max_depth.or(prepared.max_depth).unwrap_or(-1);
-    let r = on_threads(args.thread_count(), || CoreRenderer::with_options(prepared, args.estimator, max_depth, args.seed, &args.cache));
-    if let Some(l) = &r.lvcbpt {
-        eprintln!("lvcbpt     M = {} light paths/pass, N = {}, counts: light tracing {:.4}, connection {:.4}", l.light_paths, l.connections, l.counts.light_tracing, l.counts.connection);
+    let config = args.cache.config_for(args.estimator);
+    let r = CoreRenderer::with_config(prepared, config, max_depth, args.seed, args.thread_count())?;
+    if let Renderer::Lvcbpt(l) = &r.renderer {
+        eprintln!("lvcbpt     M = {} light paths/pass, N = {}, counts: light tracing {:.4}, connection {:.4}", l.light_paths, l.config.connections, l.counts.light_tracing, l.counts.connection);
     }
-    if let Some(s) = &r.spcbpt {
+    if let Renderer::Spcbpt(s) = &r.renderer {
         let rep = &s.report;
-        eprintln!("spcbpt     preprocessing {:.2} s ({}); {} eye × {} light subspaces ({} of them light-source bins{})", rep.seconds, rep.phases.iter().map(|(n, t)| format!("{n} {t:.2} s")).collect::<Vec<_>>().join(", "), rep.n_eye, rep.n_light, rep.light_source_bins, if rep.light_source_bins > 0 { ", s = 1 through the cache" } else { ", s = 1 by NEE" });
+        if let Some(why) = rep.unbinned_because {
+            eprintln!("spcbpt     light sources not binned ({why}): s = 1 is next-event estimation");
+        }
+        let phases = r.setup_times.iter().map(|(n, t)| format!("{n} {t:.2} s")).collect::<Vec<_>>().join(", ");
+        eprintln!("spcbpt     preprocessing {:.2} s ({phases}); {} eye × {} light subspaces ({} of them light-source bins{})", r.setup_seconds, rep.n_eye, rep.n_light, rep.light_source_bins, if rep.light_source_bins > 0 { ", s = 1 through the cache" } else { ", s = 1 by NEE" });
         eprintln!("spcbpt     losses per epoch {:?}", rep.losses);
         eprintln!("spcbpt     memory: D {:.1} MiB ({} paths, freed after training), trees {:.1} KiB, Γ {:.1} KiB", rep.dataset_bytes as f64 / 1048576.0, rep.dataset_paths, rep.tree_bytes as f64 / 1024.0, rep.gamma_bytes as f64 / 1024.0);
     }

@@ -6,14 +6,17 @@
 
 pub mod accel;
 pub mod app;
-pub mod cached;
 pub mod cli;
 pub mod convergence;
 pub mod driver;
 pub mod estimators;
-pub mod film;
 pub mod image_io;
 pub mod metrics;
 pub mod mitsuba;
 pub mod plot;
 pub mod suite;
+
+/// The core's film (one film for every host).
+pub mod film {
+    pub use ember_core::render::Film;
+}

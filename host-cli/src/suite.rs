@@ -10,7 +10,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::cli::{EstimatorArg, SuiteArgs};
+use crate::cli::{EstimatorKind, SuiteArgs};
 use crate::convergence::{self, Checkpoint, ConvergenceSetup, Reference};
 use crate::estimators;
 
@@ -91,6 +91,6 @@ pub fn report(args: &SuiteArgs, threads: usize, results: &[SceneResult], command
     s
 }
 
-fn final_point(points: &[Checkpoint], e: EstimatorArg) -> Option<(f64, f64, f64)> {
+fn final_point(points: &[Checkpoint], e: EstimatorKind) -> Option<(f64, f64, f64)> {
     convergence::averaged(points, e).last().copied()
 }

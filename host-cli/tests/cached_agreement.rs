@@ -37,8 +37,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use ember_cli::cli::{CacheArgs, EstimatorArg};
-use ember_cli::driver::{self, DriverConfig, Limits};
+use ember_cli::cli::{CacheArgs, EstimatorKind};
+use ember_cli::driver::{DriverConfig, Limits};
 use ember_cli::estimators::{CoreRenderer, prepare_file};
 use ember_cli::film::Film;
 use ember_tests::chi2::sidak;
@@ -71,15 +71,15 @@ fn cache_args() -> CacheArgs {
 /// Per-block, per-channel statistics of the pass images.
 type BlockStats = Vec<[MeanVar; 3]>;
 
-fn render_blocks(scene: &str, estimator: EstimatorArg, passes: u32) -> BlockStats {
+fn render_blocks(scene: &str, estimator: EstimatorKind, passes: u32) -> BlockStats {
     let prepared = prepare_file(&scene_path(scene), Some(W), Some(H), Vec::new()).expect("scene loads");
-    let renderer = CoreRenderer::with_options(prepared, estimator, MAX_DEPTH, SEED, &cache_args());
+    let mut renderer = CoreRenderer::with_options(prepared, estimator, MAX_DEPTH, SEED, &cache_args()).expect("valid configuration");
     let mut film = Film::new(W, H);
     let mut previous = vec![[0.0f64; 3]; (W * H) as usize];
     let mut stats = vec![[MeanVar::default(); 3]; BLOCKS];
     let config = DriverConfig { progress: false, ..DriverConfig::with_threads(2) };
     for pass in 0..passes {
-        driver::render(&renderer, &mut film, Limits { spp: pass + 1, deadline: None }, config, Instant::now()).expect("render");
+        renderer.render(&mut film, Limits { spp: pass + 1, deadline: None }, config, Instant::now()).expect("render");
         let mut block = vec![[0.0f64; 3]; BLOCKS];
         for (i, (now, before)) in film.sums().iter().zip(previous.iter_mut()).enumerate() {
             let (x, y) = (i as u32 % W, i as u32 / W);
@@ -121,7 +121,7 @@ fn worst(reference: &BlockStats, other: &BlockStats) -> (f64, usize, usize, f64)
 
 fn check_scene(scene: &str, pt_passes: u32, passes: u32) {
     let start = Instant::now();
-    let pt = render_blocks(scene, EstimatorArg::Pt, pt_passes);
+    let pt = render_blocks(scene, EstimatorKind::Pt, pt_passes);
     let brightness: f64 = pt.iter().map(|b| b[1].mean()).sum::<f64>() / BLOCKS as f64;
     assert!(brightness > 0.0, "{scene}: PT image is black");
     // Per scene: BDPT, LVCBPT, SPCBPT against PT, and LVCBPT, SPCBPT against BDPT (whose
@@ -130,7 +130,7 @@ fn check_scene(scene: &str, pt_passes: u32, passes: u32) {
     let alpha = sidak(0.01, 2 * 5 * BLOCKS * 3);
     let mut failures = Vec::new();
     let mut bdpt = None;
-    for estimator in [EstimatorArg::Bdpt, EstimatorArg::Lvcbpt, EstimatorArg::Spcbpt] {
+    for estimator in [EstimatorKind::Bdpt, EstimatorKind::Lvcbpt, EstimatorKind::Spcbpt] {
         let other = render_blocks(scene, estimator, passes);
         let mut references = vec![("PT", &pt)];
         if let Some(b) = &bdpt {
@@ -149,7 +149,7 @@ fn check_scene(scene: &str, pt_passes: u32, passes: u32) {
                 failures.push(format!("{estimator:?} vs {name} block {b} channel {c}: z = {z:.2}"));
             }
         }
-        if estimator == EstimatorArg::Bdpt {
+        if estimator == EstimatorKind::Bdpt {
             bdpt = Some(other);
         }
     }

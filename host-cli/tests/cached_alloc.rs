@@ -14,7 +14,7 @@
 //! left after construction +824 816 B against 824 608 B reported (trees 807 968 B, Γ 16 384 B).
 //!
 //! Injected-bug check (done once in a scratch copy, never in the tree): replacing
-//! `drop(set)` after training in `host-cli/src/cached.rs` by `std::mem::forget(set)`
+//! `drop(set)` after training (now in `core/src/integrator/spcbpt/phases.rs`, then in `host-cli/src/cached.rs`) by `std::mem::forget(set)`
 //! (D leaks): check 2 fails (+3 787 888 B left against 824 608 B reported). Check 1
 //! alone does NOT catch it: the peak holds D about twice (the per-chunk sets and the
 //! merged set while they are appended), so peak − after still exceeds size(D); check 2
@@ -26,8 +26,9 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use ember_cli::cli::{CacheArgs, EstimatorArg};
+use ember_cli::cli::{CacheArgs, EstimatorKind};
 use ember_cli::estimators::{CoreRenderer, prepare_file};
+use ember_core::render::Renderer;
 
 struct Counting;
 static LIVE: AtomicUsize = AtomicUsize::new(0);
@@ -62,14 +63,15 @@ fn spcbpt_training_set_is_freed_after_training() {
 
     let before = LIVE.load(Ordering::SeqCst);
     PEAK.store(before, Ordering::SeqCst);
-    let renderer = CoreRenderer::with_options(prepared, EstimatorArg::Spcbpt, 6, 1, &args);
+    let renderer = CoreRenderer::with_options(prepared, EstimatorKind::Spcbpt, 6, 1, &args).expect("valid configuration");
     let after = LIVE.load(Ordering::SeqCst);
     let peak = PEAK.load(Ordering::SeqCst);
 
-    let host = renderer.spcbpt.as_ref().expect("SPCBPT host");
+    let Renderer::Spcbpt(host) = &renderer.renderer else { panic!("SPCBPT renderer") };
     let r = &host.report;
     let retained = after.saturating_sub(before);
-    let reported = r.tree_bytes + r.gamma_bytes + host.model.q.capacity() * 4 + host.cache_bytes();
+    let q_bytes = host.model.as_ref().map_or(0, |m| m.q.capacity() * 4);
+    let reported = r.tree_bytes + r.gamma_bytes + q_bytes + host.cache.size_bytes();
     println!(
         "live before {before} B, peak {peak} B (+{}), after {after} B (+{retained}); D = {} paths, {} B; trees {} B, Γ {} B, reported total {reported} B",
         peak - before,

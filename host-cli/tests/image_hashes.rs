@@ -1,6 +1,6 @@
 //! Golden image hashes: every estimator, on the built-in Cornell box and two suite scene
 //! files, at a fixed seed, resolution and pass count, rendered through the CLI host on 1
-//! and 2 threads. The hash covers the bits of the film's f64 sums, its pass count and its
+//! and 2 threads, and through the core's serial runner. The hash covers the bits of the film's f64 sums, its pass count and its
 //! discarded-sample count, so any change to any random stream, any strategy, any weight
 //! or the order of any f64 addition changes it.
 //!
@@ -16,8 +16,9 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use ember_cli::cli::{CacheArgs, EstimatorArg, RenderArgs};
-use ember_cli::driver::{self, DriverConfig, Limits};
+use ember_cli::cli::{CacheArgs, EstimatorKind, RenderArgs};
+use ember_cli::driver::{DriverConfig, Limits};
+use ember_core::render::{Context, PhaseBuffers, Renderer, render_pass};
 use ember_cli::estimators::{CoreRenderer, PreparedScene, prepare_builtin, prepare_file};
 use ember_cli::film::Film;
 
@@ -67,12 +68,36 @@ fn test_args() -> RenderArgs {
     }
 }
 
-fn render_hash(scene: &str, estimator: EstimatorArg, threads: usize) -> u64 {
-    let depth = if scene == "builtin" { -1 } else { 6 };
-    let renderer = CoreRenderer::with_options(prepared(scene), estimator, depth, SEED, &cache_args());
-    let mut film = Film::new(renderer.prepared.scene.camera.width(), renderer.prepared.scene.camera.height());
-    let config = DriverConfig { progress: false, ..DriverConfig::with_threads(threads) };
-    driver::render(&renderer, &mut film, Limits { spp: PASSES, deadline: None }, config, Instant::now()).expect("render");
+fn depth(scene: &str) -> i32 {
+    if scene == "builtin" { -1 } else { 6 }
+}
+
+/// Through the CLI host: setup and passes on `threads` threads.
+fn render_hash(scene: &str, estimator: EstimatorKind, threads: usize) -> u64 {
+    let config = cache_args().config_for(estimator);
+    let mut renderer = CoreRenderer::with_config(prepared(scene), config, depth(scene), SEED, threads).expect("valid configuration");
+    let mut film = Film::new(renderer.width(), renderer.height());
+    let driver = DriverConfig { progress: false, ..DriverConfig::with_threads(threads) };
+    renderer.render(&mut film, Limits { spp: PASSES, deadline: None }, driver, Instant::now()).expect("render");
+    film_hash(&film)
+}
+
+/// Through the core's serial runner, with the CLI's scene and ray queries.
+fn serial_hash(scene: &str, estimator: EstimatorKind) -> u64 {
+    let p = prepared(scene);
+    let params = ember_core::integrator::RenderParams {
+        max_depth: ember_core::integrator::MaxDepth(depth(scene)),
+        seed: SEED,
+        heuristic: ember_core::integrator::Heuristic::Power,
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(&p.scene, params, cache_args().config_for(estimator)).expect("valid configuration");
+    let ctx = Context { scene: &p.scene, tracer: &p.accel };
+    let mut film = Film::new(p.scene.camera.width(), p.scene.camera.height());
+    let mut buffers = PhaseBuffers::new();
+    for pass in 0..PASSES {
+        render_pass(&mut renderer, &ctx, &mut film, &mut buffers, pass);
+    }
     film_hash(&film)
 }
 
@@ -96,7 +121,7 @@ const GOLDEN: &[(&str, &str, u64)] = &[
 ];
 
 const SCENES: [&str; 3] = ["builtin", "ajar", "veach-mis"];
-const ESTIMATORS: [EstimatorArg; 5] = [EstimatorArg::Pt, EstimatorArg::Lt, EstimatorArg::Bdpt, EstimatorArg::Lvcbpt, EstimatorArg::Spcbpt];
+const ESTIMATORS: [EstimatorKind; 5] = [EstimatorKind::Pt, EstimatorKind::Lt, EstimatorKind::Bdpt, EstimatorKind::Lvcbpt, EstimatorKind::Spcbpt];
 
 #[test]
 fn images_match_their_recorded_hashes_on_one_and_two_threads() {
@@ -106,6 +131,10 @@ fn images_match_their_recorded_hashes_on_one_and_two_threads() {
         for estimator in ESTIMATORS {
             let one = render_hash(scene, estimator, 1);
             let two = render_hash(scene, estimator, 2);
+            let serial = serial_hash(scene, estimator);
+            if serial != one {
+                failures.push(format!("{scene} {}: serial runner {serial:#018x}, threaded {one:#018x}", estimator.name()));
+            }
             if print {
                 println!("    (\"{scene}\", \"{}\", {one:#018x}),", estimator.name());
             }

@@ -1,4 +1,5 @@
-//! ember in the browser: the core's estimators (`ember_core::integrator::{pt, lt, bdpt}`)
+//! ember in the browser: the core's estimators (`ember_core::integrator::{pt, lt, bdpt}`;
+//! the others need the render protocol on the workers, issue 19)
 //! over an obvhs BVH2 ([`accel`]), compiled to `wasm32-unknown-unknown` and driven by a
 //! static page (`host-wasm/www/`) through plain C exports. No wasm-bindgen, no imports:
 //! the module needs nothing from JavaScript, and JavaScript reads the results straight
@@ -36,6 +37,7 @@ use core::cell::RefCell;
 
 use ember_core::Rgb;
 use ember_core::integrator::{Counters, Heuristic, MaxDepth, RenderParams, Splat, bdpt, lt, pt};
+use ember_core::render::{EstimatorKind, Film};
 use ember_core::scene::{Scene, SceneBuilder, builtin, builtin_glass};
 
 pub use accel::WasmAccel;
@@ -52,23 +54,10 @@ pub fn builtin_scene(index: u32, width: u32, height: u32) -> Option<SceneBuilder
     }
 }
 
-/// The estimators, by the index the page passes to `ember_setup`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Estimator {
-    Pt = 0,
-    Lt = 1,
-    Bdpt = 2,
-}
-
-impl Estimator {
-    pub fn from_index(i: u32) -> Option<Self> {
-        match i {
-            0 => Some(Self::Pt),
-            1 => Some(Self::Lt),
-            2 => Some(Self::Bdpt),
-            _ => None,
-        }
-    }
+/// The estimators the page can run (their indices in [`EstimatorKind::ALL`]: 0 pt,
+/// 1 lt, 2 bdpt); the cache-based ones need the phase protocol on the workers (issue 19).
+pub fn supported(kind: EstimatorKind) -> bool {
+    matches!(kind, EstimatorKind::Pt | EstimatorKind::Lt | EstimatorKind::Bdpt)
 }
 
 /// Why `ember_setup` failed (returned negated).
@@ -95,11 +84,13 @@ pub enum RenderError {
 pub struct Renderer {
     pub scene: Scene,
     pub accel: WasmAccel,
-    pub estimator: Estimator,
+    pub estimator: EstimatorKind,
     pub params: RenderParams,
     camera: Vec<Rgb>,
     camera_out: Vec<f32>,
-    splats: Vec<f64>,
+    /// The call's splats, then summed by the core's film (one pass, scaled by 1/(W·H)).
+    splats: Vec<Splat>,
+    splat_film: Film,
     splat_count: u32,
     pub last: Counters,
     pub discarded: u64,
@@ -108,7 +99,7 @@ pub struct Renderer {
 impl Renderer {
     /// Build a built-in scene; `max_depth` −1 is unbounded (the CLI's default).
     pub fn new(scene: u32, estimator: u32, width: u32, height: u32, max_depth: i32, seed: u64) -> Result<Self, SetupError> {
-        let estimator = Estimator::from_index(estimator).ok_or(SetupError::UnknownEstimator)?;
+        let estimator = EstimatorKind::from_index(estimator).filter(|&e| supported(e)).ok_or(SetupError::UnknownEstimator)?;
         if width == 0 || height == 0 || width > 4096 || height > 4096 {
             return Err(SetupError::BadResolution);
         }
@@ -117,7 +108,6 @@ impl Renderer {
         let accel = WasmAccel::new(&geometry);
         // As the CLI: PT with the power heuristic; BDPT's weights are balance by construction.
         let params = RenderParams { max_depth: MaxDepth(max_depth), seed, heuristic: Heuristic::Power, ..RenderParams::default() };
-        let pixels = width as usize * height as usize;
         Ok(Self {
             scene,
             accel,
@@ -125,7 +115,8 @@ impl Renderer {
             params,
             camera: Vec::new(),
             camera_out: Vec::new(),
-            splats: vec![0.0; 3 * pixels],
+            splats: Vec::new(),
+            splat_film: Film::new(width, height),
             splat_count: 0,
             last: Counters::default(),
             discarded: 0,
@@ -146,7 +137,7 @@ impl Renderer {
 
     /// Light paths per pass: W·H for LT (as the CLI), none otherwise.
     pub fn light_paths_per_pass(&self) -> u32 {
-        if self.estimator == Estimator::Lt { self.pixels() } else { 0 }
+        if self.estimator == EstimatorKind::Lt { self.pixels() } else { 0 }
     }
 
     /// Render one pass's share; see the crate documentation.
@@ -154,34 +145,25 @@ impl Renderer {
         if pixels.start > pixels.end || pixels.end > self.pixels() || paths.start > paths.end || paths.end > self.light_paths_per_pass() {
             return Err(RenderError::BadRange);
         }
-        self.splats.fill(0.0);
-        self.splat_count = 0;
+        self.splats.clear();
         self.camera.clear();
         self.camera.resize(pixels.len(), Rgb::ZERO);
-        let (width, height) = (self.width(), self.height());
-        let scale = 1.0 / self.pixels() as f64;
-        let (film, count, discarded) = (&mut self.splats, &mut self.splat_count, &mut self.discarded);
-        let mut splat = |s: Splat| {
-            if !s.value.is_valid_radiance() || !s.film.is_finite() {
-                *discarded += 1;
-                return;
-            }
-            let (x, y) = (s.film.x.floor(), s.film.y.floor());
-            if x < 0.0 || y < 0.0 || x >= width as f32 || y >= height as f32 {
-                return;
-            }
-            let i = 3 * (y as usize * width as usize + x as usize);
-            film[i] += s.value.r as f64 * scale;
-            film[i + 1] += s.value.g as f64 * scale;
-            film[i + 2] += s.value.b as f64 * scale;
-            *count += 1;
-        };
+        let splats = &mut self.splats;
+        let mut splat = |s: Splat| splats.push(s);
         let (scene, accel, params) = (&self.scene, &self.accel, &self.params);
         self.last = match self.estimator {
-            Estimator::Pt => pt::render_pixels(scene, accel, params, pass, pixels, &mut self.camera),
-            Estimator::Bdpt => bdpt::render_pixels(scene, accel, params, pass, pixels, &mut self.camera, &mut splat),
-            Estimator::Lt => lt::trace_paths(scene, accel, params, pass, paths, &mut splat),
+            EstimatorKind::Pt => pt::render_pixels(scene, accel, params, pass, pixels, &mut self.camera),
+            EstimatorKind::Bdpt => bdpt::render_pixels(scene, accel, params, pass, pixels, &mut self.camera, &mut splat),
+            EstimatorKind::Lt => lt::trace_paths(scene, accel, params, pass, paths, &mut splat),
+            _ => Counters::default(),
         };
+        // The core's film sums the splats (scaled by 1/(W·H), as the CLI's) and counts
+        // the invalid ones.
+        self.splat_film.clear();
+        self.splat_film.push_splats(&self.splats);
+        self.splat_film.end_pass(1.0 / self.pixels() as f64);
+        self.discarded += self.splat_film.discarded();
+        self.splat_count = (self.splats.len() as u64 - self.splat_film.discarded() - self.splat_film.splats_outside()) as u32;
         self.camera_out.clear();
         for v in &self.camera {
             if v.is_valid_radiance() {
@@ -201,7 +183,7 @@ impl Renderer {
 
     /// Scaled splats of the last call, 3 × f64 per pixel of the whole film.
     pub fn splat_film(&self) -> &[f64] {
-        &self.splats
+        self.splat_film.sums().as_flattened()
     }
 }
 

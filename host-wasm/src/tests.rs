@@ -16,8 +16,8 @@
 
 use std::time::Instant;
 
-use ember_cli::cli::{Cli, Command, EstimatorArg, RenderArgs};
-use ember_cli::driver::{self, DriverConfig, Limits};
+use ember_cli::cli::{Cli, Command, EstimatorKind, RenderArgs};
+use ember_cli::driver::{DriverConfig, Limits};
 use ember_cli::estimators::{CoreRenderer, prepare_builtin};
 use ember_cli::film::Film;
 
@@ -63,20 +63,20 @@ fn render_like_the_page(scene: u32, estimator: u32, bands: u32) -> LinearImage {
 }
 
 /// The CLI's render of the same scene (its CWBVH, its driver and film).
-fn render_with_the_cli(scene: &str, estimator: EstimatorArg) -> LinearImage {
+fn render_with_the_cli(scene: &str, estimator: EstimatorKind) -> LinearImage {
     let size = SIZE.to_string();
     let a = args(&["--builtin", scene, "--width", &size, "--height", &size]);
     let prepared = prepare_builtin(&a).expect("scene");
-    let renderer = CoreRenderer::new(prepared, estimator, -1, SEED);
+    let mut renderer = CoreRenderer::new(prepared, estimator, -1, SEED).expect("renderer");
     let mut film = Film::new(SIZE, SIZE);
     let config = DriverConfig { progress: false, ..DriverConfig::with_threads(2) };
-    driver::render(&renderer, &mut film, Limits { spp: PASSES, deadline: None }, config, Instant::now()).expect("render");
+    renderer.render(&mut film, Limits { spp: PASSES, deadline: None }, config, Instant::now()).expect("render");
     LinearImage { width: SIZE as usize, height: SIZE as usize, pixels: film.to_rgb_f32() }
 }
 
 #[test]
 fn page_protocol_matches_the_cli_film() {
-    let estimators = [(0, EstimatorArg::Pt), (1, EstimatorArg::Lt), (2, EstimatorArg::Bdpt)];
+    let estimators = [(0, EstimatorKind::Pt), (1, EstimatorKind::Lt), (2, EstimatorKind::Bdpt)];
     for (scene, name) in crate::SCENES.iter().enumerate() {
         for &(e, arg) in &estimators {
             let page = render_like_the_page(scene as u32, e, 3);

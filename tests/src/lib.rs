@@ -9,5 +9,4 @@ pub mod scenes;
 pub mod render;
 pub mod reference;
 pub mod mmis_1d;
-pub mod cached;
 pub mod bdpt_oracle;

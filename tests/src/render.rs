@@ -1,52 +1,87 @@
-//! Single-threaded pass rendering for tests: one image per pass, so per-pass statistics
-//! (independent across passes) give honest error bars.
+//! Single-threaded pass rendering for tests through the core's render protocol and its
+//! serial runner: one image per pass, so per-pass statistics (independent across passes)
+//! give honest error bars.
 
 use ember_core::geometry::RayQuery;
-use ember_core::integrator::{Counters, RenderParams, Splat, bdpt, lt, pt};
+use ember_core::integrator::spcbpt::{Model, Spcbpt};
+use ember_core::integrator::{Counters, RenderParams};
+use ember_core::render::{Context, EstimatorConfig, EstimatorKind, Film, PhaseBuffers, Renderer, SpcbptConfig, render_pass as serial_pass, run_phases};
 use ember_core::scene::Scene;
-use ember_core::spectrum::Rgb;
 
 use crate::stats::{MeanVar, normal_two_sided_p};
 
-/// The estimators under test.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Estimator {
-    Pt,
-    Lt,
-    Bdpt,
+/// The estimators without setup or per-pass caches (most tests compare these three).
+pub const PT_LT_BDPT: [EstimatorKind; 3] = [EstimatorKind::Pt, EstimatorKind::Lt, EstimatorKind::Bdpt];
+
+/// An estimator bound to a scene and tracer, its setup run, rendering one image per pass.
+#[derive(Debug)]
+pub struct Passes<'a, Q: RayQuery + ?Sized> {
+    pub renderer: Renderer,
+    ctx: Context<'a, Q>,
+    buffers: PhaseBuffers,
 }
 
-impl Estimator {
-    pub const ALL: [Estimator; 3] = [Estimator::Pt, Estimator::Lt, Estimator::Bdpt];
-}
-
-/// Render one pass: one sample per pixel (PT, BDPT) or W·H light paths (LT, and BDPT's
-/// light paths); returns the pass image in f64 and the counters.
-pub fn render_pass<Q: RayQuery>(est: Estimator, scene: &Scene, tracer: &Q, params: &RenderParams, pass: u32) -> (Vec<[f64; 3]>, Counters) {
-    let (w, h) = (scene.camera.width(), scene.camera.height());
-    let n = (w * h) as usize;
-    let mut img = vec![[0.0f64; 3]; n];
-    let mut camera = vec![Rgb::ZERO; n];
-    let mut splats: Vec<Splat> = Vec::new();
-    let counters = match est {
-        Estimator::Pt => pt::render_pixels(scene, tracer, params, pass, 0..n as u32, &mut camera),
-        Estimator::Lt => lt::trace_paths(scene, tracer, params, pass, 0..n as u32, &mut |s| splats.push(s)),
-        Estimator::Bdpt => bdpt::render_pixels(scene, tracer, params, pass, 0..n as u32, &mut camera, &mut |s| splats.push(s)),
-    };
-    for (px, c) in img.iter_mut().zip(&camera) {
-        *px = c.to_f64();
+impl<'a, Q: RayQuery + ?Sized> Passes<'a, Q> {
+    /// `config` for `scene`, its setup phases run serially here.
+    pub fn new(scene: &'a Scene, tracer: &'a Q, params: &RenderParams, config: EstimatorConfig) -> Self {
+        let mut renderer = Renderer::new(scene, *params, config).expect("valid test configuration");
+        let ctx = Context { scene, tracer };
+        let mut buffers = PhaseBuffers::new();
+        run_phases(&mut renderer, &ctx, &mut Film::new(0, 0), &mut buffers);
+        Self { renderer, ctx, buffers }
     }
-    let scale = 1.0 / n as f64;
-    for s in splats {
-        let (x, y) = (s.film.x.floor() as i64, s.film.y.floor() as i64);
-        if x >= 0 && y >= 0 && (x as u32) < w && (y as u32) < h {
-            let px = &mut img[(y as u32 * w + x as u32) as usize];
-            for c in 0..3 {
-                px[c] += s.value[c] as f64 * scale;
-            }
+
+    /// Pass `pass` alone: its image (the film's sums after one pass) and the counters,
+    /// with the film's discarded samples added to the estimator's.
+    pub fn pass_image(&mut self, pass: u32) -> (Vec<[f64; 3]>, Counters) {
+        let camera = &self.ctx.scene.camera;
+        let mut film = Film::new(camera.width(), camera.height());
+        let (mut counters, _) = serial_pass(&mut self.renderer, &self.ctx, &mut film, &mut self.buffers, pass);
+        counters.discarded += film.discarded();
+        (film.sums().to_vec(), counters)
+    }
+
+    /// The SPCBPT state (model, pass cache), if this is SPCBPT.
+    pub fn spcbpt(&mut self) -> Option<&mut Spcbpt> {
+        match &mut self.renderer {
+            Renderer::Spcbpt(s) => Some(s),
+            _ => None,
         }
     }
-    (img, counters)
+}
+
+/// Render one pass of PT, LT or BDPT (W·H light paths for LT; BDPT traces one light path
+/// per pixel): the pass image in f64 and the counters.
+pub fn render_pass<Q: RayQuery + ?Sized>(est: EstimatorKind, scene: &Scene, tracer: &Q, params: &RenderParams, pass: u32) -> (Vec<[f64; 3]>, Counters) {
+    Passes::new(scene, tracer, params, est.default_config()).pass_image(pass)
+}
+
+/// A small SPCBPT configuration for tests: `subspaces` light subspaces of which
+/// `light_source_bins` are light-source bins (0: next-event estimation), |D| = `dataset`,
+/// M' = `q_paths`, M = `light_paths`, Adam α = 0.1 on batches of 200 for 2 epochs (Γ far
+/// from uniform), N = 3, no reuse.
+pub fn spcbpt_config(subspaces: u32, light_source_bins: u32, dataset: u32, q_paths: u32, light_paths: u32, mixture: f32) -> SpcbptConfig {
+    SpcbptConfig {
+        light_paths: Some(light_paths),
+        connections: 3,
+        dataset: Some(dataset),
+        subspaces: Some(subspaces),
+        learning_rate: 0.1,
+        batch: 200,
+        epochs: 2,
+        mixture,
+        reuse: 0,
+        k_d: 0.05,
+        light_source_share: light_source_bins as f32 / subspaces as f32,
+        q_paths: Some(q_paths),
+    }
+}
+
+/// The SPCBPT model `config` trains (setup phases run serially) and its per-epoch losses.
+pub fn spcbpt_model<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, config: SpcbptConfig) -> (Model, Vec<f64>) {
+    let mut passes = Passes::new(scene, tracer, params, EstimatorConfig::Spcbpt(config));
+    let s = passes.spcbpt().expect("SPCBPT");
+    (s.model.clone().expect("setup ran"), s.report.losses.clone())
 }
 
 /// Per-channel means over square `block`×`block` pixel blocks of a `width`-wide image,

@@ -11,7 +11,8 @@
 
 use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
-use ember_tests::render::{Estimator, block_means, render_pass};
+use ember_core::render::EstimatorKind;
+use ember_tests::render::{block_means, render_pass};
 use ember_tests::scenes::cornell;
 use ember_tests::stats::{MeanVar, normal_two_sided_p};
 use ember_tests::tracer::BruteForce;
@@ -20,7 +21,7 @@ const RES: u32 = 32;
 const BLOCK: u32 = 8;
 const BLOCKS: usize = ((RES / BLOCK) * (RES / BLOCK)) as usize;
 
-fn block_stats(est: Estimator, passes: u32) -> Vec<[MeanVar; 3]> {
+fn block_stats(est: EstimatorKind, passes: u32) -> Vec<[MeanVar; 3]> {
     let (scene, geometry, _) = cornell(RES, RES).build().expect("scene");
     let tracer = BruteForce::new(geometry);
     let params = RenderParams { max_depth: MaxDepth::UNBOUNDED, seed: 17, ..RenderParams::default() };
@@ -40,9 +41,9 @@ fn block_stats(est: Estimator, passes: u32) -> Vec<[MeanVar; 3]> {
 
 #[test]
 fn pt_lt_and_bdpt_agree_per_block() {
-    let pt = block_stats(Estimator::Pt, 160);
-    let lt = block_stats(Estimator::Lt, 160);
-    let bdpt = block_stats(Estimator::Bdpt, 120);
+    let pt = block_stats(EstimatorKind::Pt, 160);
+    let lt = block_stats(EstimatorKind::Lt, 160);
+    let bdpt = block_stats(EstimatorKind::Bdpt, 120);
     let pairs = [("PT", &pt, "LT", &lt), ("PT", &pt, "BDPT", &bdpt), ("LT", &lt, "BDPT", &bdpt)];
     let alpha = sidak(0.01, pairs.len() * BLOCKS * 3);
     let mut min_p = 1.0f64;
@@ -77,7 +78,7 @@ fn pt_and_bdpt_agree_on_an_environment_through_a_window() {
     let params = RenderParams { max_depth: MaxDepth(6), seed: 29, ..RenderParams::default() };
     const B: usize = 4; // 4×4-pixel blocks: 4 × 3 of them
     let mut stats = [[MeanVar::default(); 12]; 2];
-    for (k, (est, passes)) in [(Estimator::Pt, 600u32), (Estimator::Bdpt, 300)].into_iter().enumerate() {
+    for (k, (est, passes)) in [(EstimatorKind::Pt, 600u32), (EstimatorKind::Bdpt, 300)].into_iter().enumerate() {
         for pass in 0..passes {
             let (img, counters) = render_pass(est, &scene, &tracer, &params, pass);
             assert_eq!(counters.discarded, 0);

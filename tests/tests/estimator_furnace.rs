@@ -11,7 +11,7 @@
 //! read 1.90 (z ≈ −139).
 
 use ember_core::integrator::{MaxDepth, RenderParams};
-use ember_tests::render::{Estimator, render_pass};
+use ember_tests::render::{PT_LT_BDPT, render_pass};
 use ember_tests::scenes::furnace_box;
 use ember_tests::stats::{MeanVar, normal_two_sided_p};
 use ember_tests::chi2::sidak;
@@ -24,8 +24,8 @@ fn every_estimator_matches_the_furnace() {
     let (scene, geometry, _) = furnace_box(albedo, le, 16, 16).build().expect("scene");
     let tracer = BruteForce::new(geometry);
     let params = RenderParams { max_depth: MaxDepth::UNBOUNDED, seed: 3, ..RenderParams::default() };
-    let alpha = sidak(0.01, Estimator::ALL.len());
-    for est in Estimator::ALL {
+    let alpha = sidak(0.01, PT_LT_BDPT.len());
+    for est in PT_LT_BDPT {
         let mut mv = MeanVar::default();
         for pass in 0..200 {
             let (img, c) = render_pass(est, &scene, &tracer, &params, pass);

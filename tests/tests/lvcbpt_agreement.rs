@@ -17,9 +17,9 @@
 //! cannot and need not see it (it passed); `lvcbpt_mis.rs` checks the counts themselves.
 
 use ember_core::integrator::{MaxDepth, RenderParams};
-use ember_tests::cached::{LvcbptSetup, lvcbpt_pass};
 use ember_tests::chi2::sidak;
-use ember_tests::render::{Estimator, assert_blocks_agree, push_block_means, render_pass};
+use ember_core::render::{EstimatorConfig, EstimatorKind, LvcbptConfig, Renderer};
+use ember_tests::render::{Passes, assert_blocks_agree, push_block_means, render_pass};
 use ember_tests::scenes::cornell;
 use ember_tests::stats::MeanVar;
 use ember_tests::tracer::BruteForce;
@@ -37,20 +37,24 @@ fn lvcbpt_agrees_with_pt_per_block_on_the_cornell_box() {
     let (scene, geometry, _) = cornell(RES, RES).build().expect("scene");
     let tracer = BruteForce::new(geometry);
     let params = RenderParams { max_depth: MaxDepth::UNBOUNDED, seed: 23, ..RenderParams::default() };
-    let setup = LvcbptSetup::new(&scene, &tracer, &params, RES * RES / 2, 3, 2000);
+    let config = LvcbptConfig { light_paths: Some(RES * RES / 2), connections: 3, probe_paths: 2000 };
+    let mut lvcbpt = Passes::new(&scene, &tracer, &params, EstimatorConfig::Lvcbpt(config));
     let mut pt = vec![[MeanVar::default(); 3]; BLOCKS];
     let mut lv = vec![[MeanVar::default(); 3]; BLOCKS];
     for pass in 0..160 {
-        let (img, c) = render_pass(Estimator::Pt, &scene, &tracer, &params, pass);
+        let (img, c) = render_pass(EstimatorKind::Pt, &scene, &tracer, &params, pass);
         assert_eq!(c.discarded, 0);
         push(&mut pt, &img);
     }
     for pass in 0..80 {
-        let (img, c) = lvcbpt_pass(&setup, &scene, &tracer, &params, pass);
+        let (img, c) = lvcbpt.pass_image(pass);
         assert_eq!(c.discarded, 0);
         push(&mut lv, &img);
     }
     let alpha = sidak(0.01, BLOCKS * 3);
     let min_p = assert_blocks_agree("LVCBPT vs PT", &pt, &lv, alpha);
-    println!("{} comparisons, smallest p = {min_p:.4} (α per test {alpha:.2e}); c̄-based counts {:?}", BLOCKS * 3, setup.counts);
+    println!("{} comparisons, smallest p = {min_p:.4} (α per test {alpha:.2e}); c̄-based counts {:?}", BLOCKS * 3, match &lvcbpt.renderer {
+        Renderer::Lvcbpt(l) => l.counts,
+        _ => unreachable!("LVCBPT"),
+    });
 }

@@ -15,7 +15,8 @@
 use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
 use ember_tests::reference::{read_exr, scenes_dir};
-use ember_tests::render::{Estimator, block_means, render_pass};
+use ember_core::render::EstimatorKind;
+use ember_tests::render::{block_means, render_pass};
 use ember_tests::scenes::cornell;
 use ember_tests::stats::{MeanVar, normal_two_sided_p};
 use ember_tests::tracer::BruteForce;
@@ -37,7 +38,7 @@ fn path_tracer_matches_mitsuba_on_the_cornell_box() {
     let nb = (RES / BLOCK) as usize;
     let mut stats = vec![[MeanVar::default(); 3]; nb * nb];
     for pass in 0..256 {
-        let (img, _) = render_pass(Estimator::Pt, &scene, &tracer, &params, pass);
+        let (img, _) = render_pass(EstimatorKind::Pt, &scene, &tracer, &params, pass);
         for (s, v) in stats.iter_mut().zip(&block_means(&img, RES as usize, BLOCK as usize)) {
             for c in 0..3 {
                 s[c].push(v[c]);

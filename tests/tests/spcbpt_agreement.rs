@@ -29,13 +29,12 @@
 //!   block 0 at z = −25.4.
 
 use ember_core::geometry::RayQuery;
-use ember_core::integrator::spcbpt::{self, Model, PassCache};
+use ember_core::integrator::spcbpt::{self, PassCache};
 use ember_core::integrator::{MaxDepth, RenderParams};
-use ember_core::scene::Scene;
 use ember_core::spectrum::Rgb;
-use ember_tests::cached::{add_splats, spcbpt_model, spcbpt_pass};
 use ember_tests::chi2::sidak;
-use ember_tests::render::{Estimator, assert_blocks_agree, push_block_means, render_pass};
+use ember_core::render::{EstimatorConfig, EstimatorKind};
+use ember_tests::render::{Passes, assert_blocks_agree, push_block_means, render_pass, spcbpt_config, spcbpt_model};
 use ember_tests::scenes::cornell;
 use ember_tests::stats::MeanVar;
 use ember_tests::tracer::BruteForce;
@@ -46,28 +45,6 @@ const BLOCKS: usize = ((RES / BLOCK) * (RES / BLOCK)) as usize;
 
 fn push(stats: &mut [[MeanVar; 3]], img: &[[f64; 3]]) {
     push_block_means(stats, img, RES as usize, BLOCK as usize);
-}
-
-/// One SPCBPT pass on a caller-kept cache (so that reuse carries vertices across passes).
-fn pass_with_cache<Q: RayQuery>(model: &Model, light_paths: u32, cache: &mut PassCache, scene: &Scene, tracer: &Q, params: &RenderParams, pass: u32) -> Vec<[f64; 3]> {
-    let (w, h) = (scene.camera.width(), scene.camera.height());
-    let n = (w * h) as usize;
-    cache.paths.clear();
-    cache.memo.clear();
-    spcbpt::trace_light_paths(scene, tracer, params, model, pass, 0..light_paths, &mut cache.paths, &mut cache.memo);
-    spcbpt::build_buckets(scene, model, cache);
-    let ne = model.classifier.n_eye as usize;
-    let (mut tables, mut norms) = (vec![None; ne], vec![0.0f32; ne]);
-    spcbpt::build_gamma_tables(model, cache, 0..ne as u32, &mut tables, &mut norms);
-    cache.gamma_tables = tables;
-    cache.gamma_norm = norms;
-    let mut splats = Vec::new();
-    spcbpt::splat_light_paths(scene, tracer, params, model, cache, light_paths as f64 / n as f64, 0..light_paths, &mut |s| splats.push(s));
-    let mut camera = vec![Rgb::ZERO; n];
-    spcbpt::render_pixels(scene, tracer, params, model, cache, light_paths, pass, 0..n as u32, &mut camera);
-    let mut img: Vec<[f64; 3]> = camera.iter().map(|c| c.to_f64()).collect();
-    add_splats(&mut img, w, h, &splats, 1.0 / light_paths as f64);
-    img
 }
 
 /// Cross-iteration reuse (section 7.4) with M0 = 4 vertices per subspace while a pass
@@ -83,13 +60,14 @@ fn pass_with_cache<Q: RayQuery>(model: &Model, light_paths: u32, cache: &mut Pas
 ///   j·M·M_r,k·(M_r,k/M_k(j))): fails, block 0 at z = 27.5 (PT 0.120 vs 0.0915).
 /// Measured: 317 retained vertices after 4 passes of chain 0 (its last pass made 87),
 /// 37 of 128 FIFOs full.
-fn reuse_chains<Q: RayQuery>(model: &Model, m: u32, scene: &Scene, tracer: &Q, params: &RenderParams, chains: u32, length: u32, m0: u32) -> Vec<[MeanVar; 3]> {
+fn reuse_chains<Q: RayQuery>(sp: &mut Passes<'_, Q>, chains: u32, length: u32, m0: u32) -> Vec<[MeanVar; 3]> {
     let mut out = vec![[MeanVar::default(); 3]; BLOCKS];
     for chain in 0..chains {
-        let mut cache = PassCache::with_reuse(m0);
+        sp.spcbpt().expect("SPCBPT").cache = PassCache::with_reuse(m0);
         let mut sum = vec![[0.0f64; 3]; (RES * RES) as usize];
         for k in 0..length {
-            let img = pass_with_cache(model, m, &mut cache, scene, tracer, params, 10_000 + chain * length + k);
+            let (img, c) = sp.pass_image(10_000 + chain * length + k);
+            assert_eq!(c.discarded, 0);
             for (a, b) in sum.iter_mut().zip(&img) {
                 for c in 0..3 {
                     a[c] += b[c] / length as f64;
@@ -98,6 +76,7 @@ fn reuse_chains<Q: RayQuery>(model: &Model, m: u32, scene: &Scene, tracer: &Q, p
         }
         push(&mut out, &sum);
         // The FIFOs must really span passes and drop vertices, or nothing is tested.
+        let cache = &sp.spcbpt().expect("SPCBPT").cache;
         let r = &cache.retained;
         let kept: usize = r.fifos.iter().map(|f| f.len()).sum();
         let full = r.fifos.iter().zip(&r.generated).filter(|(f, g)| f.len() == m0 as usize && **g > m0 as u64).count();
@@ -115,26 +94,30 @@ fn spcbpt_agrees_with_pt_per_block_on_the_cornell_box() {
     let tracer = BruteForce::new(geometry);
     let params = RenderParams { max_depth: MaxDepth::UNBOUNDED, seed: 31, ..RenderParams::default() };
     let m = 32;
-    let (model, losses) = spcbpt_model(&scene, &tracer, &params, 128, 32, 4000, 4000, m, 0.1);
+    let mut sp = Passes::new(&scene, &tracer, &params, EstimatorConfig::Spcbpt(spcbpt_config(128, 32, 4000, 4000, m, 0.1)));
+    let (model, losses) = {
+        let s = sp.spcbpt().expect("SPCBPT");
+        (s.model.clone().expect("trained"), s.report.losses.clone())
+    };
     assert!(losses.iter().all(|l| l.is_finite()), "losses {losses:?}");
     let mut pt = vec![[MeanVar::default(); 3]; BLOCKS];
-    let mut sp = vec![[MeanVar::default(); 3]; BLOCKS];
+    let mut stats = vec![[MeanVar::default(); 3]; BLOCKS];
     for pass in 0..480 {
-        let (img, c) = render_pass(Estimator::Pt, &scene, &tracer, &params, pass);
+        let (img, c) = render_pass(EstimatorKind::Pt, &scene, &tracer, &params, pass);
         assert_eq!(c.discarded, 0);
         push(&mut pt, &img);
     }
     for pass in 0..240 {
-        let (img, c) = spcbpt_pass(&model, m, &scene, &tracer, &params, pass);
+        let (img, c) = sp.pass_image(pass);
         assert_eq!(c.discarded, 0);
-        push(&mut sp, &img);
+        push(&mut stats, &img);
     }
     let g = model.gamma.as_slice();
     let (gmin, gmax) = g.iter().fold((f32::MAX, 0.0f32), |(a, b), &x| (a.min(x), b.max(x)));
     println!("Γ in [{gmin:.2e}, {gmax:.2e}] (uniform {:.2e})", 1.0 / model.classifier.n_light as f32);
-    let reuse = reuse_chains(&model, m, &scene, &tracer, &params, 60, 4, 4);
+    let reuse = reuse_chains(&mut sp, 60, 4, 4);
     let alpha = sidak(0.01, 2 * BLOCKS * 3);
-    let min_p = assert_blocks_agree("SPCBPT vs PT", &pt, &sp, alpha);
+    let min_p = assert_blocks_agree("SPCBPT vs PT", &pt, &stats, alpha);
     let min_reuse = assert_blocks_agree("SPCBPT with reuse vs PT", &pt, &reuse, alpha);
     println!("{} comparisons each, smallest p = {min_p:.4} without reuse, {min_reuse:.4} with reuse (α per test {alpha:.2e}); losses {losses:?}; {} × {} subspaces", BLOCKS * 3, model.classifier.n_eye, model.classifier.n_light);
 }
@@ -148,7 +131,7 @@ fn empty_light_paths_are_skipped() {
     let (scene, geometry, _) = cornell(8, 8).build().expect("scene");
     let tracer = BruteForce::new(geometry);
     let params = RenderParams { max_depth: MaxDepth(5), seed: 2, ..RenderParams::default() };
-    let (model, _) = spcbpt_model(&scene, &tracer, &params, 8, 4, 300, 300, 16, 0.1);
+    let (model, _) = spcbpt_model(&scene, &tracer, &params, spcbpt_config(8, 4, 300, 300, 16, 0.1));
     for reuse in [0, 4] {
         let mut cache = PassCache::with_reuse(reuse);
         spcbpt::trace_light_paths(&scene, &tracer, &params, &model, 0, 0..16, &mut cache.paths, &mut cache.memo);

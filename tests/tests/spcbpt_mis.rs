@@ -25,7 +25,7 @@ use ember_core::integrator::spcbpt::{self, KnownLabels, Model, join, memoize_lig
 use ember_core::scene::Scene;
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::rng::{SampleStream, Stream};
-use ember_tests::cached::spcbpt_model;
+use ember_tests::render::{spcbpt_config, spcbpt_model};
 use ember_tests::scenes::cornell_with_spheres;
 use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split};
 use ember_tests::tracer::BruteForce;
@@ -41,7 +41,7 @@ fn spcbpt_weights_equal_brute_force_and_sum_to_one() {
     // s = 1 by next-event estimation (no light-source bins), then through the cache with
     // 8 light-source bins (connect_light_source, its count N·Γ·W₁/Q).
     for bins in [0, 8] {
-        let (model, _) = spcbpt_model(&scene, &tracer, &params, 32, bins, 3000, 3000, 200, 0.1);
+        let (model, _) = spcbpt_model(&scene, &tracer, &params, spcbpt_config(32, bins, 3000, 3000, 200, 0.1));
         assert_eq!(model.caches_light_sources(), bins > 0);
         check_weights(&scene, &tracer, &params, &model, bins);
     }

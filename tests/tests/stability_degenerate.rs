@@ -12,7 +12,7 @@ use ember_core::camera::{FovAxis, PerspectiveCamera};
 use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::scene::{AreaEmission, Scene, SceneBuilder, SceneError, builtin};
 use ember_core::spectrum::Rgb;
-use ember_tests::render::{Estimator, render_pass};
+use ember_tests::render::{PT_LT_BDPT, render_pass};
 use ember_tests::scenes::cornell;
 use ember_tests::tracer::BruteForce;
 use glam::{Mat4, Vec3};
@@ -20,7 +20,7 @@ use glam::{Mat4, Vec3};
 fn render_all(scene: &Scene, tracer: &BruteForce) -> f64 {
     let params = RenderParams { max_depth: MaxDepth(5), seed: 2, ..RenderParams::default() };
     let mut total = 0.0;
-    for est in Estimator::ALL {
+    for est in PT_LT_BDPT {
         for pass in 0..2 {
             let (img, counters) = render_pass(est, scene, tracer, &params, pass);
             assert_eq!(counters.discarded, 0, "{est:?}: non-finite samples");

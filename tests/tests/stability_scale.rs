@@ -24,7 +24,8 @@
 use ember_core::camera::{FovAxis, PerspectiveCamera};
 use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::scene::{AreaEmission, Scene, SceneBuilder};
-use ember_tests::render::{Estimator, render_pass};
+use ember_core::render::EstimatorKind;
+use ember_tests::render::{render_pass};
 use ember_tests::scenes::cornell;
 use ember_tests::stats::MeanVar;
 use ember_tests::tracer::BruteForce;
@@ -61,7 +62,7 @@ pub fn transformed_cornell(scale: f64, offset: DVec3, camera_centred: bool) -> (
     (scene, BruteForce::new(geometry))
 }
 
-fn image_mean(est: Estimator, scene: &Scene, tracer: &BruteForce) -> (f64, f64) {
+fn image_mean(est: EstimatorKind, scene: &Scene, tracer: &BruteForce) -> (f64, f64) {
     let params = RenderParams { max_depth: MaxDepth(6), seed: 3, ..RenderParams::default() };
     let mut per_pass = MeanVar::default();
     for pass in 0..PASSES {
@@ -78,7 +79,7 @@ fn image_mean(est: Estimator, scene: &Scene, tracer: &BruteForce) -> (f64, f64) 
 fn cornell_box_mean_is_invariant_under_scale_and_translation() {
     let cases = [(1e-4, 0.0), (1e-2, 0.0), (1e2, 0.0), (1e4, 0.0), (1.0, 1e5), (1e2, 1e5)];
     let mut report = Vec::new();
-    for est in [Estimator::Pt, Estimator::Bdpt] {
+    for est in [EstimatorKind::Pt, EstimatorKind::Bdpt] {
         let (scene, tracer) = transformed_cornell(1.0, DVec3::ZERO, true);
         let (reference, se) = image_mean(est, &scene, &tracer);
         report.push(format!("{est:?} unit scale: mean {reference:.5} ± {se:.5} ({:.2} %)", 100.0 * se / reference));

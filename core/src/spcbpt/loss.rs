@@ -100,6 +100,15 @@ impl TrainingSet {
         self.splits.extend_from_slice(&other.splits);
     }
 
+    /// Remove every path, keeping the capacity.
+    pub fn clear(&mut self) {
+        self.weights.clear();
+        self.fixed.clear();
+        self.split_start.clear();
+        self.split_start.push(0);
+        self.splits.clear();
+    }
+
     /// Number of paths.
     pub fn len(&self) -> usize {
         self.weights.len()

@@ -1,7 +1,7 @@
 use super::*;
 
 use crate::cli::{Cli, Command};
-use crate::driver::{PassStats, Splat};
+use ember_core::render::{ChunkOutput, Context, Cursor, Phase, Phased, Stage};
 use clap::Parser;
 use ember_core::Rgb;
 
@@ -9,36 +9,53 @@ use ember_core::Rgb;
 struct Ramp {
     w: u32,
     h: u32,
+    cursor: Cursor,
 }
 
-impl PassRenderer for Ramp {
-    fn width(&self) -> u32 {
-        self.w
+impl<Q: ember_core::geometry::RayQuery + ?Sized> Phased<Q> for Ramp {
+    fn next_phase(&self) -> Option<Phase> {
+        let Some(Stage::Pass(p, _)) = self.cursor.stage() else { return None };
+        Some(Phase { name: "camera", id: 0, pass: Some(p), items: self.w * self.h, chunk: 5, samples: true })
     }
-    fn height(&self) -> u32 {
-        self.h
+    fn start_pass(&mut self, pass: u32) {
+        self.cursor.start_pass(pass);
     }
-    fn camera_pass(
-        &self,
-        _: u32,
-        pixels: core::ops::Range<u32>,
-        out: &mut [Rgb],
-        _: &mut dyn FnMut(Splat),
-    ) -> PassStats {
-        for (i, o) in pixels.clone().zip(out.iter_mut()) {
-            *o = Rgb::splat((i % self.w) as f32 / self.w as f32);
+    fn map(&self, _: &Context<'_, Q>, _: &Phase, out: &mut ChunkOutput) {
+        for i in out.items.clone() {
+            out.pixels.push(Rgb::splat((i % self.w) as f32 / self.w as f32));
+            out.counters.rays += 1;
         }
-        PassStats { rays: pixels.len() as u64, samples: pixels.len() as u64 }
     }
-    fn light_paths_per_pass(&self) -> u32 {
-        0
+    fn reduce(&mut self, _: &Context<'_, Q>, _: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
+        for out in outputs.iter() {
+            film.set_camera_samples(out.items.clone(), &out.pixels);
+        }
+        if self.cursor.advance() {
+            film.end_pass(1.0);
+        }
     }
-    fn light_pass(&self, _: u32, _: core::ops::Range<u32>, _: &mut dyn FnMut(Splat)) -> PassStats {
-        PassStats::default()
+}
+
+/// The ramp with a scene of its size for the context (which it does not read).
+struct RampHost {
+    ramp: Ramp,
+    scene: ember_core::scene::Scene,
+    accel: crate::accel::Accel,
+}
+
+impl Render for RampHost {
+    fn size(&self) -> (u32, u32) {
+        (self.ramp.w, self.ramp.h)
     }
-    fn splat_scale(&self) -> f64 {
-        1.0
+    fn render(&mut self, film: &mut Film, limits: Limits, config: DriverConfig, start: Instant) -> Result<RenderSummary, DriverError> {
+        let ctx = Context { scene: &self.scene, tracer: &self.accel };
+        crate::driver::render(&mut self.ramp, &ctx, film, limits, config, start)
     }
+}
+
+fn ramp_host(w: u32, h: u32) -> RampHost {
+    let (scene, geometry, _) = ember_core::scene::builtin::cornell_box(w, h).build().expect("built-in scene");
+    RampHost { ramp: Ramp { w, h, cursor: Cursor::new(0, 1) }, scene, accel: crate::accel::Accel::new(&geometry) }
 }
 
 fn args(extra: &[&str]) -> RenderArgs {
@@ -62,7 +79,7 @@ fn render_writes_exr_and_png_and_reports() {
     let a = args(&["--spp", "3", "--threads", "2", "--width", "8", "--height", "4", "-o", out.to_str().unwrap()]);
     let report = render(&a, Instant::now(), false, |a| {
         let (w, h) = builtin_resolution(a);
-        Ok(Built { renderer: Box::new(Ramp { w, h }), scene: "ramp".into(), max_depth: -1, file_spp: None })
+        Ok(Built { renderer: Box::new(ramp_host(w, h)), scene: "ramp".into(), max_depth: -1, file_spp: None })
     })
     .unwrap();
     assert_eq!(report.summary.passes, 3);

@@ -1,5 +1,10 @@
 use super::*;
 
+use crate::accel::Accel;
+use ember_core::Rgb;
+use ember_core::render::{ChunkOutput, Cursor, Phase, Stage, render_pass};
+use ember_core::scene::Scene;
+
 use ember_core::rng::{SampleStream, Stream};
 use glam::Vec2;
 
@@ -10,6 +15,7 @@ struct Fake {
     w: u32,
     h: u32,
     light_paths: u32,
+    cursor: Cursor,
 }
 
 fn value(s: &mut SampleStream) -> Rgb {
@@ -29,56 +35,91 @@ fn busy_work(s: &mut SampleStream) {
     s.set_dimension(0);
 }
 
-impl PassRenderer for Fake {
-    fn width(&self) -> u32 {
-        self.w
-    }
-    fn height(&self) -> u32 {
-        self.h
-    }
-    fn camera_pass(&self, pass: u32, pixels: Range<u32>, out: &mut [Rgb], splat: &mut dyn FnMut(Splat)) -> PassStats {
-        for (i, o) in pixels.clone().zip(out.iter_mut()) {
+impl Fake {
+    fn camera(&self, pass: u32, pixels: core::ops::Range<u32>, out: &mut ChunkOutput) {
+        for i in pixels {
             let mut s = SampleStream::for_sample(9, Stream::Camera, i, 0, pass);
             busy_work(&mut s);
-            *o = value(&mut s);
+            let mut v = value(&mut s);
             let u = s.next_f32();
             if u < 0.01 {
-                *o = Rgb::new(f32::NAN, 0.0, 0.0);
+                v = Rgb::new(f32::NAN, 0.0, 0.0);
             } else if u < 0.02 {
-                *o = Rgb::new(-1.0, 0.0, 0.0);
+                v = Rgb::new(-1.0, 0.0, 0.0);
             }
+            out.pixels.push(v);
             if s.next_f32() < 0.3 {
                 let p = s.next_2d() * Vec2::new(self.w as f32, self.h as f32);
-                splat(Splat { film: p, value: value(&mut s) });
+                out.splats.push(Splat { film: p, value: value(&mut s) });
             }
+            out.counters.rays += 3;
         }
-        PassStats { rays: 3 * pixels.len() as u64, samples: pixels.len() as u64 }
     }
-    fn light_paths_per_pass(&self) -> u32 {
-        self.light_paths
-    }
-    fn light_pass(&self, pass: u32, paths: Range<u32>, splat: &mut dyn FnMut(Splat)) -> PassStats {
-        for j in paths.clone() {
+    fn light(&self, pass: u32, paths: core::ops::Range<u32>, out: &mut ChunkOutput) {
+        for j in paths {
             let mut s = SampleStream::for_sample(9, Stream::Light, j, 0, pass);
             busy_work(&mut s);
             for _ in 0..3 {
                 // A few splats land on the same pixels, in an order the merge must keep.
                 let p = s.next_2d() * Vec2::new(4.0, 3.0);
-                splat(Splat { film: p, value: value(&mut s) });
+                out.splats.push(Splat { film: p, value: value(&mut s) });
             }
+            out.counters.rays += 5;
         }
-        PassStats { rays: 5 * paths.len() as u64, samples: paths.len() as u64 }
-    }
-    fn splat_scale(&self) -> f64 {
-        1.0 / 7.0
     }
 }
 
+/// Two phases per pass (camera chunks of 13 pixels, then light chunks of 7 paths), so
+/// chunk boundaries fall everywhere; splats scaled by 1/7.
+impl<Q: RayQuery + ?Sized> Phased<Q> for Fake {
+    fn next_phase(&self) -> Option<Phase> {
+        match self.cursor.stage()? {
+            Stage::Pass(p, 0) => Some(Phase { name: "camera", id: 0, pass: Some(p), items: self.w * self.h, chunk: 13, samples: true }),
+            Stage::Pass(p, _) => Some(Phase { name: "light", id: 1, pass: Some(p), items: self.light_paths, chunk: 7, samples: true }),
+            Stage::Setup(_) => None,
+        }
+    }
+    fn start_pass(&mut self, pass: u32) {
+        self.cursor.start_pass(pass);
+    }
+    fn map(&self, _: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput) {
+        let pass = phase.pass.unwrap_or(0);
+        match phase.id {
+            0 => self.camera(pass, out.items.clone(), out),
+            _ => self.light(pass, out.items.clone(), out),
+        }
+    }
+    fn reduce(&mut self, _: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
+        for out in outputs.iter() {
+            if phase.id == 0 {
+                film.set_camera_samples(out.items.clone(), &out.pixels);
+            }
+            film.push_splats(&out.splats);
+        }
+        if self.cursor.advance() {
+            film.end_pass(1.0 / 7.0);
+        }
+    }
+}
+
+fn fake(w: u32, h: u32, light_paths: u32) -> Fake {
+    Fake { w, h, light_paths, cursor: Cursor::new(0, 2) }
+}
+
+/// A scene of the film's size for the context (the fake reads none of it).
+fn scene(w: u32, h: u32) -> (Scene, Accel) {
+    let (scene, geometry, _) = ember_core::scene::builtin::cornell_box(w, h).build().expect("built-in scene");
+    let accel = Accel::new(&geometry);
+    (scene, accel)
+}
+
 fn run(threads: usize, spp: u32) -> (Film, RenderSummary) {
-    let fake = Fake { w: 61, h: 47, light_paths: 1001 };
+    let mut fake = fake(61, 47, 1001);
+    let (scene, accel) = scene(61, 47);
     let mut film = Film::new(61, 47);
-    let config = DriverConfig { threads, pixel_chunk: 13, light_chunk: 7, progress: false };
-    let summary = render(&fake, &mut film, Limits { spp, deadline: None }, config, Instant::now()).unwrap();
+    let config = DriverConfig { threads, progress: false };
+    let ctx = Context { scene: &scene, tracer: &accel };
+    let summary = render(&mut fake, &ctx, &mut film, Limits { spp, deadline: None }, config, Instant::now()).unwrap();
     (film, summary)
 }
 
@@ -110,49 +151,49 @@ fn film_is_bit_identical_for_1_2_and_3_threads() {
     assert!(f1.to_rgb_f32().iter().flatten().all(|v| v.is_finite() && *v >= 0.0));
 }
 
-/// The same film, merged as a whole in the driver's order by hand: camera samples,
-/// then camera splats, then light splats, each in index order.
+/// The same film from the core's serial runner: the threaded host reduces exactly as it does.
 #[test]
-fn driver_merges_in_pixel_then_path_order() {
-    let fake = Fake { w: 61, h: 47, light_paths: 1001 };
+fn threaded_driver_matches_the_serial_runner() {
+    let mut f = fake(61, 47, 1001);
+    let (scene, accel) = scene(61, 47);
+    let ctx = Context { scene: &scene, tracer: &accel };
     let mut film = Film::new(61, 47);
+    let mut buffers = PhaseBuffers::new();
     for pass in 0..2 {
-        let mut out = vec![Rgb::ZERO; 61 * 47];
-        let mut splats = Vec::new();
-        fake.camera_pass(pass, 0..61 * 47, &mut out, &mut |s| splats.push(s));
-        fake.light_pass(pass, 0..1001, &mut |s| splats.push(s));
-        film.add_camera_samples(0..61 * 47, &out);
-        film.add_splats(&splats, fake.splat_scale());
-        film.end_pass();
+        render_pass(&mut f, &ctx, &mut film, &mut buffers, pass);
     }
     let (driven, _) = run(2, 2);
-    assert_same_bits(&film, &driven, "by hand vs driven");
+    assert_same_bits(&film, &driven, "serial vs driven");
 }
 
 /// A time budget stops the loop between passes; at least one pass always runs.
 #[test]
 fn deadline_stops_between_passes() {
-    let fake = Fake { w: 8, h: 8, light_paths: 0 };
+    let mut fake = fake(8, 8, 0);
+    let (scene, accel) = scene(8, 8);
+    let ctx = Context { scene: &scene, tracer: &accel };
     let mut film = Film::new(8, 8);
-    let config = DriverConfig { threads: 2, pixel_chunk: 16, light_chunk: 16, progress: false };
+    let config = DriverConfig { threads: 2, progress: false };
     let past = Instant::now();
     let limits = Limits { spp: u32::MAX, deadline: Some(past) };
-    let s = render(&fake, &mut film, limits, config, past).unwrap();
+    let s = render(&mut fake, &ctx, &mut film, limits, config, past).unwrap();
     assert_eq!(s.passes, 1);
     assert_eq!(film.passes(), 1);
 
     let mut film = Film::new(8, 8);
     let soon = Instant::now() + Duration::from_millis(50);
-    let s = render(&fake, &mut film, Limits { spp: u32::MAX, deadline: Some(soon) }, config, past).unwrap();
+    let s = render(&mut fake, &ctx, &mut film, Limits { spp: u32::MAX, deadline: Some(soon) }, config, past).unwrap();
     assert!(Instant::now() >= soon);
     assert!(s.passes > 1 && s.passes == film.passes());
 }
 
 #[test]
 fn resolution_mismatch_is_an_error() {
-    let fake = Fake { w: 8, h: 8, light_paths: 0 };
+    let mut fake = fake(8, 8, 0);
+    let (scene, accel) = scene(8, 8);
+    let ctx = Context { scene: &scene, tracer: &accel };
     let mut film = Film::new(8, 9);
     let config = DriverConfig::with_threads(1);
-    let r = render(&fake, &mut film, Limits { spp: 1, deadline: None }, config, Instant::now());
+    let r = render(&mut fake, &ctx, &mut film, Limits { spp: 1, deadline: None }, config, Instant::now());
     assert!(matches!(r, Err(DriverError::Resolution { .. })));
 }

@@ -28,6 +28,10 @@
 //! Each phase is a function over an index range writing into caller storage:
 //! [`trace_light_paths`] (vertices + t = 1 splats), [`build_cache`], [`render_pixels`].
 
+mod phases;
+
+pub use phases::Lvcbpt;
+
 use alloc::vec::Vec;
 use core::ops::Range;
 

@@ -71,7 +71,10 @@
 //! j·M·(M_r/M_k)·p(Ȳ)·N·Γ·W/S_k ≈ N·Γ·W/Q_k as before.
 
 pub mod counts;
+mod phases;
 pub mod prepare;
+
+pub use phases::{Spcbpt, SpcbptReport};
 
 pub use counts::{CameraLabels, KnownLabels, PrefixMemo, light_prefix_weights, memoize_light_path, path_counts, path_counts_labelled, scalar};
 use counts::finite;

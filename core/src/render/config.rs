@@ -1,0 +1,339 @@
+//! The estimators by name, and each one's configuration: a plain struct whose defaults
+//! are documented here once (hosts only parse into it), whose scene-dependent defaults
+//! (M, |D|, M', N_S) are resolved from the film size, and whose validation names the
+//! field and its allowed range.
+
+use core::fmt;
+
+/// The light-transport estimators, in the order hosts list them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum EstimatorKind {
+    /// Path tracing: camera paths with next-event estimation and MIS (Mitsuba's `path`).
+    Pt,
+    /// Light tracing: light paths connected to the camera (Mitsuba's `ptracer`).
+    Lt,
+    /// Bidirectional path tracing with multiple importance sampling (Veach 1997).
+    Bdpt,
+    /// Light-vertex-cache BDPT: M light paths per pass into a cache, N uniform
+    /// connections per camera vertex (Davidovič et al. 2014).
+    Lvcbpt,
+    /// Subspace-based probabilistic connections (Su, Li, Wang 2022): Γ-guided
+    /// connections to cached light vertices, Γ trained by Adam before rendering.
+    Spcbpt,
+}
+
+impl EstimatorKind {
+    /// Every estimator, in listing order (its index is the browser's and the C ABI's id).
+    pub const ALL: [EstimatorKind; 5] = [Self::Pt, Self::Lt, Self::Bdpt, Self::Lvcbpt, Self::Spcbpt];
+
+    /// The name as typed on a command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Pt => "pt",
+            Self::Lt => "lt",
+            Self::Bdpt => "bdpt",
+            Self::Lvcbpt => "lvcbpt",
+            Self::Spcbpt => "spcbpt",
+        }
+    }
+
+    /// One line for help texts.
+    pub fn summary(self) -> &'static str {
+        match self {
+            Self::Pt => "path tracing with next-event estimation and MIS (Mitsuba's `path`)",
+            Self::Lt => "light tracing: light paths connected to the camera (Mitsuba's `ptracer`)",
+            Self::Bdpt => "bidirectional path tracing with every (s, t) strategy and balance-heuristic MIS",
+            Self::Lvcbpt => "light-vertex-cache BDPT: N uniform connections to M cached light paths per pass",
+            Self::Spcbpt => "subspace-based probabilistic connections: Γ-guided connections, Γ trained before rendering",
+        }
+    }
+
+    /// The estimator called `name` ([`Self::name`]).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|e| e.name() == name)
+    }
+
+    /// The estimator with index `i` in [`Self::ALL`].
+    pub fn from_index(i: u32) -> Option<Self> {
+        Self::ALL.get(i as usize).copied()
+    }
+
+    /// This estimator with its default configuration.
+    pub fn default_config(self) -> EstimatorConfig {
+        match self {
+            Self::Pt => EstimatorConfig::Pt,
+            Self::Lt => EstimatorConfig::Lt,
+            Self::Bdpt => EstimatorConfig::Bdpt,
+            Self::Lvcbpt => EstimatorConfig::Lvcbpt(LvcbptConfig::DEFAULT),
+            Self::Spcbpt => EstimatorConfig::Spcbpt(SpcbptConfig::DEFAULT),
+        }
+    }
+}
+
+impl fmt::Display for EstimatorKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// An estimator and its settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum EstimatorConfig {
+    /// Path tracing (its MIS heuristic is [`crate::integrator::RenderParams::heuristic`]).
+    Pt,
+    /// Light tracing: W·H light paths per pass.
+    Lt,
+    /// BDPT: one light path per pixel sample.
+    Bdpt,
+    /// LVCBPT.
+    Lvcbpt(LvcbptConfig),
+    /// SPCBPT.
+    Spcbpt(SpcbptConfig),
+}
+
+impl EstimatorConfig {
+    /// Which estimator this configures.
+    pub fn kind(&self) -> EstimatorKind {
+        match self {
+            Self::Pt => EstimatorKind::Pt,
+            Self::Lt => EstimatorKind::Lt,
+            Self::Bdpt => EstimatorKind::Bdpt,
+            Self::Lvcbpt(_) => EstimatorKind::Lvcbpt,
+            Self::Spcbpt(_) => EstimatorKind::Spcbpt,
+        }
+    }
+
+    /// Check every field against its range.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        match self {
+            Self::Pt | Self::Lt | Self::Bdpt => Ok(()),
+            Self::Lvcbpt(c) => c.validate(),
+            Self::Spcbpt(c) => c.validate(),
+        }
+    }
+}
+
+/// A configuration value outside its allowed range.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConfigError {
+    /// The field, as the command line spells its option (without dashes).
+    pub field: &'static str,
+    /// The value given.
+    pub value: f64,
+    /// The allowed range, in words.
+    pub allowed: &'static str,
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} = {} is outside its allowed range {}", self.field, self.value, self.allowed)
+    }
+}
+
+impl core::error::Error for ConfigError {}
+
+fn check_u32(field: &'static str, value: u32, range: core::ops::RangeInclusive<u32>, allowed: &'static str) -> Result<(), ConfigError> {
+    if range.contains(&value) { Ok(()) } else { Err(ConfigError { field, value: value as f64, allowed }) }
+}
+
+fn check_f32(field: &'static str, value: f32, ok: bool, allowed: &'static str) -> Result<(), ConfigError> {
+    if value.is_finite() && ok { Ok(()) } else { Err(ConfigError { field, value: value as f64, allowed }) }
+}
+
+/// Largest M: a pass's light paths are held in memory (about 1 KiB per path).
+pub const MAX_LIGHT_PATHS: u32 = 4_000_000;
+/// Largest |D| and M'.
+pub const MAX_DATASET: u32 = 20_000_000;
+
+/// M for a film of `pixels` pixels: `light_paths` where given, else min(100 000, W·H)
+/// (at most one light path per pixel sample, as in BDPT).
+fn light_paths_for(light_paths: Option<u32>, pixels: u32) -> u32 {
+    light_paths.unwrap_or(pixels.clamp(1, 100_000))
+}
+
+/// LVCBPT's settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LvcbptConfig {
+    /// Light paths per pass, M [default: min(100 000, W·H)].
+    pub light_paths: Option<u32>,
+    /// Connections per camera vertex, N (default 3).
+    pub connections: u32,
+    /// Light paths measuring c̄, the mean cacheable vertices per path (default 16 384).
+    pub probe_paths: u32,
+}
+
+impl LvcbptConfig {
+    /// The defaults.
+    pub const DEFAULT: Self = Self { light_paths: None, connections: 3, probe_paths: 16_384 };
+
+    /// M for a film of `pixels` pixels.
+    pub fn light_paths_for(&self, pixels: u32) -> u32 {
+        light_paths_for(self.light_paths, pixels)
+    }
+
+    /// Check every field against its range.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        if let Some(m) = self.light_paths {
+            check_u32("light-paths", m, 1..=MAX_LIGHT_PATHS, "1..=4000000")?;
+        }
+        check_u32("connections", self.connections, 1..=1000, "1..=1000")?;
+        check_u32("probe-paths", self.probe_paths, 1..=MAX_DATASET, "1..=20000000")
+    }
+}
+
+impl Default for LvcbptConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// SPCBPT's settings, with the paper's defaults. Scaling rule for small images: the
+/// paper renders about 1280×720 with M = 100 000 light paths per pass and
+/// |D| = 1 000 000 dataset paths; here M defaults to min(100 000, W·H), |D| to
+/// min(1 000 000, W·H), M' to min(2 000 000, 2·W·H) and N_S to min(1000, ⌊√|D|⌋) (at
+/// least 16), which keeps the paper's one training path per entry of the N_S × N_S
+/// matrix Γ (measured on ajar at 320×240: N_S = 256 instead of 1000 gave 13.5 % instead
+/// of 15.3 % MAPE in 40 s, docs/results-spcbpt.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpcbptConfig {
+    /// Light paths per pass, M [default: min(100 000, W·H)].
+    pub light_paths: Option<u32>,
+    /// Connections per camera vertex, N (default 3).
+    pub connections: u32,
+    /// Training paths, |D| [default: min(1 000 000, W·H)].
+    pub dataset: Option<u32>,
+    /// Subspaces per side, N_S, on the light side shared with the light-source bins
+    /// [default: min(1000, ⌊√|D|⌋), at least 16].
+    pub subspaces: Option<u32>,
+    /// Adam learning rate α (the paper's 0.1: measured 4-40× less excess loss than the
+    /// public code's 0.01-0.02 within the paper's step budget, docs/spcbpt-training.md).
+    pub learning_rate: f32,
+    /// Adam mini-batch size (default 10 000).
+    pub batch: u32,
+    /// Training epochs (default 2).
+    pub epochs: u32,
+    /// Weight of the uniform distribution mixed into Γ (default 0.1).
+    pub mixture: f32,
+    /// Light vertices retained per subspace across passes, M0 (default 200; 0: none).
+    pub reuse: u32,
+    /// Weight of the normal/direction terms in the classification distance, k_d (0.05).
+    pub k_d: f32,
+    /// Share of the N_S light subspaces given to positions on the lights (the paper's
+    /// ~20 %); their vertices are cached and Γ-sampled instead of next-event estimation.
+    /// 0, or a scene with a point, spot or infinite light, keeps NEE.
+    pub light_source_share: f32,
+    /// Light paths estimating Q per light subspace, M' [default: min(2 000 000, 2·W·H)].
+    pub q_paths: Option<u32>,
+}
+
+impl SpcbptConfig {
+    /// The defaults.
+    pub const DEFAULT: Self = Self {
+        light_paths: None,
+        connections: 3,
+        dataset: None,
+        subspaces: None,
+        learning_rate: 0.1,
+        batch: 10_000,
+        epochs: 2,
+        mixture: 0.1,
+        reuse: 200,
+        k_d: 0.05,
+        light_source_share: 0.2,
+        q_paths: None,
+    };
+
+    /// M for a film of `pixels` pixels.
+    pub fn light_paths_for(&self, pixels: u32) -> u32 {
+        light_paths_for(self.light_paths, pixels)
+    }
+    /// |D| for a film of `pixels` pixels.
+    pub fn dataset_for(&self, pixels: u32) -> u32 {
+        self.dataset.unwrap_or(pixels.clamp(1, 1_000_000))
+    }
+    /// N_S for a training set of `dataset` paths.
+    pub fn subspaces_for(&self, dataset: u32) -> u32 {
+        self.subspaces.unwrap_or_else(|| (crate::math::sqrt_f64(dataset as f64) as u32).clamp(16, 1000))
+    }
+    /// M' for a film of `pixels` pixels.
+    pub fn q_paths_for(&self, pixels: u32) -> u32 {
+        self.q_paths.unwrap_or(pixels.saturating_mul(2).clamp(1, 2_000_000))
+    }
+
+    /// Check every field against its range.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        if let Some(m) = self.light_paths {
+            check_u32("light-paths", m, 1..=MAX_LIGHT_PATHS, "1..=4000000")?;
+        }
+        check_u32("connections", self.connections, 1..=1000, "1..=1000")?;
+        if let Some(d) = self.dataset {
+            check_u32("dataset", d, 1..=MAX_DATASET, "1..=20000000")?;
+        }
+        if let Some(n) = self.subspaces {
+            check_u32("subspaces", n, 2..=4096, "2..=4096")?;
+        }
+        if let Some(q) = self.q_paths {
+            check_u32("q-paths", q, 1..=MAX_DATASET, "1..=20000000")?;
+        }
+        check_f32("learning-rate", self.learning_rate, self.learning_rate > 0.0 && self.learning_rate <= 10.0, "(0, 10]")?;
+        check_u32("batch", self.batch, 1..=10_000_000, "1..=10000000")?;
+        check_u32("epochs", self.epochs, 0..=1000, "0..=1000")?;
+        check_f32("mixture", self.mixture, (0.0..=1.0).contains(&self.mixture), "[0, 1]")?;
+        check_u32("reuse", self.reuse, 0..=100_000, "0..=100000")?;
+        check_f32("k-d", self.k_d, (0.0..=1000.0).contains(&self.k_d), "[0, 1000]")?;
+        check_f32("light-source-share", self.light_source_share, (0.0..1.0).contains(&self.light_source_share), "[0, 1)")
+    }
+}
+
+impl Default for SpcbptConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_and_indices_are_stable() {
+        for (i, e) in EstimatorKind::ALL.into_iter().enumerate() {
+            assert_eq!(EstimatorKind::from_name(e.name()), Some(e));
+            assert_eq!(EstimatorKind::from_index(i as u32), Some(e));
+            assert_eq!(e.default_config().kind(), e);
+        }
+        assert_eq!(EstimatorKind::from_name("PT"), None);
+        // The browser page passes these indices.
+        assert_eq!(EstimatorKind::from_index(2), Some(EstimatorKind::Bdpt));
+    }
+
+    #[test]
+    fn invalid_values_name_their_field() {
+        assert!(SpcbptConfig::DEFAULT.validate().is_ok());
+        assert!(LvcbptConfig::DEFAULT.validate().is_ok());
+        let cases: [(SpcbptConfig, &str); 6] = [
+            (SpcbptConfig { mixture: f32::NAN, ..SpcbptConfig::DEFAULT }, "mixture"),
+            (SpcbptConfig { mixture: 1.5, ..SpcbptConfig::DEFAULT }, "mixture"),
+            (SpcbptConfig { learning_rate: 0.0, ..SpcbptConfig::DEFAULT }, "learning-rate"),
+            (SpcbptConfig { light_source_share: 1.0, ..SpcbptConfig::DEFAULT }, "light-source-share"),
+            (SpcbptConfig { subspaces: Some(1_000_000), ..SpcbptConfig::DEFAULT }, "subspaces"),
+            (SpcbptConfig { k_d: f32::INFINITY, ..SpcbptConfig::DEFAULT }, "k-d"),
+        ];
+        for (c, field) in cases {
+            assert_eq!(c.validate().map_err(|e| e.field), Err(field));
+        }
+        let e = LvcbptConfig { connections: 0, ..LvcbptConfig::DEFAULT }.validate().unwrap_err();
+        assert_eq!(e.field, "connections");
+    }
+
+    #[test]
+    fn scene_defaults_follow_the_film() {
+        let c = SpcbptConfig::DEFAULT;
+        assert_eq!(c.light_paths_for(64 * 48), 64 * 48);
+        assert_eq!(c.light_paths_for(1280 * 720), 100_000);
+        assert_eq!(c.dataset_for(1280 * 720), 921_600);
+        assert_eq!(c.subspaces_for(921_600), 960);
+        assert_eq!(c.subspaces_for(100), 16);
+        assert_eq!(c.q_paths_for(1280 * 720), 1_843_200);
+    }
+}

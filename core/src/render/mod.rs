@@ -1,0 +1,418 @@
+//! The render protocol: one way for every host to drive every estimator.
+//!
+//! An estimator's whole work, preprocessing included, is a sequence of **phases**. A
+//! phase is a map over an index range `0..items` (light paths, pixels, training records,
+//! eye subspaces), cut into chunks of a size the estimator fixes, followed by a
+//! **reduction** the estimator owns, which takes the chunks' outputs in index order:
+//!
+//! ```text
+//! loop { phase = est.next_phase()?;                          // what to map next
+//!        for chunk in phase.chunks() { est.map(ctx, phase, chunk, &mut out[c]) }   // any thread
+//!        est.reduce(ctx, phase, &mut out, film) }             // one thread, index order
+//! ```
+//!
+//! Phases before [`Phased::start_pass`] was first called are the estimator's setup (SPCBPT's
+//! κ_L → dataset → κ_E → Q → dataset → Adam, LVCBPT's c̄ probe); after `start_pass(p)` they
+//! are pass p's (LVCBPT: light paths → camera; SPCBPT: light paths → Γ tables → splats →
+//! camera). The last phase of a pass commits it to the [`Film`] with the pass's splat
+//! factor. Each estimator's phase order lives in its own module, once.
+//!
+//! **Determinism.** Random numbers derive from (seed, index, pass, dimension) and the
+//! chunk sizes do not depend on the host, so a host that maps chunks on any number of
+//! threads (or address spaces) and hands the outputs to `reduce` in chunk order gets the
+//! same bits as [`run_phases`], the serial runner the tests and thread-less hosts use.
+//!
+//! **Plain data.** A chunk's output ([`ChunkOutput`]) is vectors of plain values (camera
+//! samples, splats, light vertices, feature vectors, sums, training records): a host can
+//! copy it between address spaces. The reduced state a later phase reads is a function of
+//! those outputs alone, so a host without shared memory hands every worker the same
+//! outputs and lets each reduce them.
+//!
+//! **Allocation.** Hosts keep one [`PhaseBuffers`] across passes: a chunk's output is
+//! cleared and refilled in place, so its vectors keep their capacity from pass to pass.
+
+mod config;
+mod film;
+mod renderer;
+
+pub use config::{ConfigError, EstimatorConfig, EstimatorKind, LvcbptConfig, MAX_DATASET, MAX_LIGHT_PATHS, SpcbptConfig};
+pub use film::Film;
+pub use renderer::Renderer;
+
+use alloc::vec::Vec;
+use core::ops::Range;
+
+use crate::alias::AliasTable;
+use crate::geometry::RayQuery;
+use crate::integrator::lvcbpt::LightPaths;
+use crate::integrator::spcbpt::PrefixMemo;
+use crate::integrator::{Counters, Splat};
+use crate::scene::Scene;
+use crate::spcbpt::{SubpathFeature, TrainingSet};
+use crate::spectrum::Rgb;
+
+/// What every phase reads: the scene and the ray queries.
+#[derive(Debug)]
+pub struct Context<'a, Q: ?Sized> {
+    /// The scene the estimators read.
+    pub scene: &'a Scene,
+    /// The host's ray queries over the same scene.
+    pub tracer: &'a Q,
+}
+
+impl<Q: ?Sized> Clone for Context<'_, Q> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<Q: ?Sized> Copy for Context<'_, Q> {}
+
+/// One phase: a map over `0..items` in chunks of `chunk`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Phase {
+    /// What it does, for progress reports and timing tables.
+    pub name: &'static str,
+    /// Its number in the estimator's schedule, stable across passes (hosts key
+    /// [`PhaseBuffers`] by it).
+    pub id: u8,
+    /// The pass it belongs to; `None` during setup.
+    pub pass: Option<u32>,
+    /// Items to map: `0..items`.
+    pub items: u32,
+    /// Items per chunk (fixed by the estimator, never by the host).
+    pub chunk: u32,
+    /// Do the items count as samples (camera samples, light paths) in throughput reports?
+    pub samples: bool,
+}
+
+impl Phase {
+    /// Number of chunks.
+    pub fn chunk_count(&self) -> usize {
+        self.items.div_ceil(self.chunk.max(1)) as usize
+    }
+    /// The index range of chunk `c`.
+    pub fn chunk_range(&self, c: usize) -> Range<u32> {
+        let chunk = self.chunk.max(1);
+        let start = (c as u32).saturating_mul(chunk).min(self.items);
+        start..start.saturating_add(chunk).min(self.items)
+    }
+}
+
+/// Estimator-specific plain data a chunk produces.
+#[derive(Clone, Debug, Default)]
+pub enum PhaseData {
+    /// Nothing beyond samples and splats.
+    #[default]
+    None,
+    /// Light sub-paths, with one SPCBPT prefix memo per vertex (empty for LVCBPT).
+    LightPaths { paths: LightPaths, memo: Vec<PrefixMemo> },
+    /// A count (LVCBPT's cacheable vertices).
+    Count(u64),
+    /// Classification features with their weights, per-block brightness sums and
+    /// sample counts (SPCBPT preprocessing).
+    Features { features: Vec<SubpathFeature>, weights: Vec<f32>, blocks: Vec<f64>, block_samples: Vec<u32> },
+    /// Sums per slot (SPCBPT's Q).
+    Sums(Vec<f64>),
+    /// Training records (SPCBPT's dataset).
+    Training(TrainingSet),
+    /// Stage-1 tables and norms for a range of eye subspaces (SPCBPT).
+    GammaTables { tables: Vec<Option<AliasTable>>, norms: Vec<f32> },
+}
+
+/// What mapping one chunk produced. Plain data; cleared and refilled in place.
+#[derive(Clone, Debug, Default)]
+pub struct ChunkOutput {
+    /// The chunk's index range.
+    pub items: Range<u32>,
+    /// One camera sample per item (pixel phases).
+    pub pixels: Vec<Rgb>,
+    /// Splats, in emission order.
+    pub splats: Vec<Splat>,
+    /// Work counters.
+    pub counters: Counters,
+    /// Estimator-specific output.
+    pub data: PhaseData,
+}
+
+impl ChunkOutput {
+    /// Clear for a new map over `items`, keeping every buffer's capacity.
+    pub fn reset(&mut self, items: Range<u32>) {
+        self.items = items;
+        self.pixels.clear();
+        self.splats.clear();
+        self.counters = Counters::default();
+        match &mut self.data {
+            PhaseData::None => {}
+            PhaseData::LightPaths { paths, memo } => {
+                paths.clear();
+                memo.clear();
+            }
+            PhaseData::Count(n) => *n = 0,
+            PhaseData::Features { features, weights, blocks, block_samples } => {
+                features.clear();
+                weights.clear();
+                blocks.clear();
+                block_samples.clear();
+            }
+            PhaseData::Sums(s) => s.clear(),
+            PhaseData::Training(t) => t.clear(),
+            PhaseData::GammaTables { tables, norms } => {
+                tables.clear();
+                norms.clear();
+            }
+        }
+    }
+
+    /// The camera-sample buffer sized to the chunk (zeroed).
+    pub fn pixel_buffer(&mut self) -> &mut [Rgb] {
+        self.pixels.clear();
+        self.pixels.resize(self.items.len(), Rgb::ZERO);
+        &mut self.pixels
+    }
+
+    /// The light-path store of this chunk (switching the data to it if needed).
+    pub fn light_paths(&mut self) -> (&mut LightPaths, &mut Vec<PrefixMemo>) {
+        if !matches!(self.data, PhaseData::LightPaths { .. }) {
+            self.data = PhaseData::LightPaths { paths: LightPaths::new(), memo: Vec::new() };
+        }
+        match &mut self.data {
+            PhaseData::LightPaths { paths, memo } => (paths, memo),
+            _ => unreachable!("set just above"),
+        }
+    }
+
+    /// The feature buffers of this chunk (switching the data to them if needed).
+    pub fn features(&mut self) -> (&mut Vec<SubpathFeature>, &mut Vec<f32>, &mut Vec<f64>, &mut Vec<u32>) {
+        if !matches!(self.data, PhaseData::Features { .. }) {
+            self.data = PhaseData::Features { features: Vec::new(), weights: Vec::new(), blocks: Vec::new(), block_samples: Vec::new() };
+        }
+        match &mut self.data {
+            PhaseData::Features { features, weights, blocks, block_samples } => (features, weights, blocks, block_samples),
+            _ => unreachable!("set just above"),
+        }
+    }
+
+    /// The sums of this chunk, `n` slots zeroed (switching the data to them if needed).
+    pub fn sums(&mut self, n: usize) -> &mut Vec<f64> {
+        if !matches!(self.data, PhaseData::Sums(_)) {
+            self.data = PhaseData::Sums(Vec::new());
+        }
+        match &mut self.data {
+            PhaseData::Sums(s) => {
+                s.clear();
+                s.resize(n, 0.0);
+                s
+            }
+            _ => unreachable!("set just above"),
+        }
+    }
+
+    /// The training set of this chunk (switching the data to it if needed).
+    pub fn training(&mut self) -> &mut TrainingSet {
+        if !matches!(self.data, PhaseData::Training(_)) {
+            self.data = PhaseData::Training(TrainingSet::new());
+        }
+        match &mut self.data {
+            PhaseData::Training(t) => t,
+            _ => unreachable!("set just above"),
+        }
+    }
+
+    /// Stage-1 tables of this chunk, one zeroed slot per item (switching if needed).
+    pub fn gamma_tables(&mut self) -> (&mut [Option<AliasTable>], &mut [f32]) {
+        if !matches!(self.data, PhaseData::GammaTables { .. }) {
+            self.data = PhaseData::GammaTables { tables: Vec::new(), norms: Vec::new() };
+        }
+        let n = self.items.len();
+        match &mut self.data {
+            PhaseData::GammaTables { tables, norms } => {
+                tables.clear();
+                tables.resize(n, None);
+                norms.clear();
+                norms.resize(n, 0.0);
+                (tables, norms)
+            }
+            _ => unreachable!("set just above"),
+        }
+    }
+}
+
+/// Chunk outputs kept across phases and passes, one list per phase id.
+#[derive(Clone, Debug, Default)]
+pub struct PhaseBuffers {
+    lists: Vec<Vec<ChunkOutput>>,
+}
+
+impl PhaseBuffers {
+    /// No buffers yet.
+    pub fn new() -> Self {
+        Self::default()
+    }
+    /// The outputs for `phase`, one per chunk, each reset to its chunk's range.
+    pub fn for_phase(&mut self, phase: &Phase) -> &mut [ChunkOutput] {
+        let id = phase.id as usize;
+        if self.lists.len() <= id {
+            self.lists.resize_with(id + 1, Vec::new);
+        }
+        let list = &mut self.lists[id];
+        let n = phase.chunk_count();
+        if list.len() < n {
+            list.resize_with(n, ChunkOutput::default);
+        }
+        for (c, out) in list[..n].iter_mut().enumerate() {
+            out.reset(phase.chunk_range(c));
+        }
+        &mut list[..n]
+    }
+}
+
+/// What an estimator implements to be driven phase by phase (see the module notes).
+pub trait Phased<Q: RayQuery + ?Sized> {
+    /// The phase to map next, or `None` when nothing is pending (setup is done and the
+    /// last started pass is committed).
+    fn next_phase(&self) -> Option<Phase>;
+    /// Queue pass `pass`: its phases follow any pending setup phases.
+    fn start_pass(&mut self, pass: u32);
+    /// Map `phase` over `out.items` into `out` (which [`PhaseBuffers::for_phase`] reset).
+    fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput);
+    /// Reduce the phase's outputs, given in chunk order, into the estimator's state and
+    /// the film; advances to the next phase.
+    fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film);
+}
+
+/// Where an estimator stands in its schedule of `setup` setup phases and `pass` phases
+/// per pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Cursor {
+    setup: u8,
+    per_pass: u8,
+    state: CursorState,
+    queued: Option<u32>,
+}
+
+/// A position in a schedule.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// Setup phase i.
+    Setup(u8),
+    /// Phase i of a pass.
+    Pass(u32, u8),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum CursorState {
+    At(Stage),
+    Idle,
+}
+
+impl Cursor {
+    /// A schedule of `setup` setup phases, then `per_pass` phases in every pass.
+    pub fn new(setup: u8, per_pass: u8) -> Self {
+        let state = if setup > 0 { CursorState::At(Stage::Setup(0)) } else { CursorState::Idle };
+        Self { setup, per_pass, state, queued: None }
+    }
+    /// The pending stage, if any.
+    pub fn stage(&self) -> Option<Stage> {
+        match self.state {
+            CursorState::At(s) => Some(s),
+            CursorState::Idle => None,
+        }
+    }
+    /// Has setup finished?
+    pub fn set_up(&self) -> bool {
+        !matches!(self.state, CursorState::At(Stage::Setup(_)))
+    }
+    /// Queue pass `pass` (after setup, if setup is still pending).
+    pub fn start_pass(&mut self, pass: u32) {
+        match self.state {
+            CursorState::At(Stage::Setup(_)) => self.queued = Some(pass),
+            _ if self.per_pass > 0 => self.state = CursorState::At(Stage::Pass(pass, 0)),
+            _ => {}
+        }
+    }
+    /// Move past the current stage; returns true when that ended a pass.
+    pub fn advance(&mut self) -> bool {
+        match self.state {
+            CursorState::At(Stage::Setup(i)) if i + 1 < self.setup => {
+                self.state = CursorState::At(Stage::Setup(i + 1));
+                false
+            }
+            CursorState::At(Stage::Setup(_)) => {
+                self.state = CursorState::Idle;
+                if let Some(p) = self.queued.take() {
+                    self.start_pass(p);
+                }
+                false
+            }
+            CursorState::At(Stage::Pass(p, i)) if i + 1 < self.per_pass => {
+                self.state = CursorState::At(Stage::Pass(p, i + 1));
+                false
+            }
+            CursorState::At(Stage::Pass(..)) => {
+                self.state = CursorState::Idle;
+                true
+            }
+            CursorState::Idle => false,
+        }
+    }
+}
+
+/// The serial runner: map and reduce every pending phase in order on this thread.
+/// Returns the summed counters and the items of phases that count as samples.
+pub fn run_phases<Q: RayQuery + ?Sized, E: Phased<Q> + ?Sized>(est: &mut E, ctx: &Context<'_, Q>, film: &mut Film, buffers: &mut PhaseBuffers) -> (Counters, u64) {
+    let mut counters = Counters::default();
+    let mut samples = 0u64;
+    while let Some(phase) = est.next_phase() {
+        let outputs = buffers.for_phase(&phase);
+        for out in outputs.iter_mut() {
+            est.map(ctx, &phase, out);
+            counters += out.counters;
+        }
+        if phase.samples {
+            samples += phase.items as u64;
+        }
+        est.reduce(ctx, &phase, outputs, film);
+    }
+    (counters, samples)
+}
+
+/// Run setup (if pending) and pass `pass` serially into `film`.
+pub fn render_pass<Q: RayQuery + ?Sized, E: Phased<Q> + ?Sized>(est: &mut E, ctx: &Context<'_, Q>, film: &mut Film, buffers: &mut PhaseBuffers, pass: u32) -> (Counters, u64) {
+    est.start_pass(pass);
+    run_phases(est, ctx, film, buffers)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cursor_runs_setup_then_queued_passes() {
+        let mut c = Cursor::new(2, 3);
+        assert_eq!(c.stage(), Some(Stage::Setup(0)));
+        c.start_pass(7);
+        assert!(!c.advance());
+        assert_eq!(c.stage(), Some(Stage::Setup(1)));
+        assert!(!c.advance());
+        assert_eq!(c.stage(), Some(Stage::Pass(7, 0)));
+        assert!(!c.advance());
+        assert!(!c.advance());
+        assert!(c.advance(), "third phase ends the pass");
+        assert_eq!(c.stage(), None);
+        c.start_pass(8);
+        assert_eq!(c.stage(), Some(Stage::Pass(8, 0)));
+        let mut none = Cursor::new(0, 1);
+        assert_eq!(none.stage(), None);
+        none.start_pass(0);
+        assert_eq!(none.stage(), Some(Stage::Pass(0, 0)));
+    }
+
+    #[test]
+    fn chunks_cover_the_range_once() {
+        let p = Phase { name: "x", id: 0, pass: None, items: 10, chunk: 4, samples: false };
+        assert_eq!(p.chunk_count(), 3);
+        assert_eq!([p.chunk_range(0), p.chunk_range(1), p.chunk_range(2)], [0..4, 4..8, 8..10]);
+        let empty = Phase { items: 0, ..p };
+        assert_eq!(empty.chunk_count(), 0);
+    }
+}
