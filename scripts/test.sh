@@ -7,8 +7,13 @@ cd "$(dirname "$0")/.."
 
 step() { printf '\n==> %s\n' "$*"; }
 
-step "toolchain targets for the no_std proof"
+step "toolchain targets for the no_std proof, rustfmt and clippy"
 rustup target add thumbv7em-none-eabihf x86_64-unknown-none >/dev/null
+rustup component add rustfmt clippy >/dev/null
+
+step "formatting (rustfmt.toml) and lints (clippy, warnings denied)"
+cargo fmt --check
+cargo clippy --workspace --all-targets -- -D warnings
 
 step "core builds with no std at all"
 cargo build --release -p ember-core --target thumbv7em-none-eabihf

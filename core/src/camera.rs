@@ -93,8 +93,7 @@ impl PerspectiveCamera {
         let aspect = width as f32 / height as f32;
         let linear = Mat3::from_mat4(to_world);
         let det = linear.determinant();
-        let (to_world, linear) =
-            if det != 0.0 && det.is_finite() { (to_world, linear) } else { (Mat4::IDENTITY, Mat3::IDENTITY) };
+        let (to_world, linear) = if det != 0.0 && det.is_finite() { (to_world, linear) } else { (Mat4::IDENTITY, Mat3::IDENTITY) };
         let to_local = linear.inverse();
         // Mitsuba's parse_fov, in tangents: every axis is converted to the x extent.
         let t = tan(0.5 * fov_deg.clamp(1e-3, 179.9).to_radians());

@@ -29,11 +29,7 @@ pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, (PI / 4.0) * (o.y / o.x))
-    } else {
-        (o.y, PI / 2.0 - (PI / 4.0) * (o.x / o.y))
-    };
+    let (r, theta) = if o.x.abs() > o.y.abs() { (o.x, (PI / 4.0) * (o.y / o.x)) } else { (o.y, PI / 2.0 - (PI / 4.0) * (o.x / o.y)) };
     let (s, c) = sin_cos(theta);
     Vec2::new(r * c, r * s)
 }
@@ -155,11 +151,7 @@ pub fn sample_uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
 /// Density of [`sample_uniform_cone`]: 1/(2π(1 − cos_max)) inside the cone.
 #[inline]
 pub fn uniform_cone_pdf(w: Vec3, cos_max: f32) -> SolidAnglePdf {
-    if w.z >= cos_max && cos_max < 1.0 {
-        SolidAnglePdf(1.0 / (TWO_PI * (1.0 - cos_max)))
-    } else {
-        SolidAnglePdf(0.0)
-    }
+    if w.z >= cos_max && cos_max < 1.0 { SolidAnglePdf(1.0 / (TWO_PI * (1.0 - cos_max))) } else { SolidAnglePdf(0.0) }
 }
 
 /// Inverse of [`sample_uniform_cone`].

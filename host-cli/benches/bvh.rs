@@ -144,12 +144,7 @@ fn main() {
     let bvh2 = build::<Bvh2>(&g);
     let cwbvh = build::<CwBvh>(&g);
     // Shadow rays from the camera hits toward the light.
-    let shadow: Vec<Ray> = sets
-        .camera
-        .iter()
-        .filter_map(|r| cwbvh.intersect(r))
-        .map(|h| spawn_ray_to(h.p, h.ng, LIGHT, Vec3::ZERO))
-        .collect();
+    let shadow: Vec<Ray> = sets.camera.iter().filter_map(|r| cwbvh.intersect(r)).map(|h| spawn_ray_to(h.p, h.ng, LIGHT, Vec3::ZERO)).collect();
     // Alternate the two structures and keep each one's best of REPS (robust to other
     // processes sharing the machine).
     let mut best = [[(0.0f64, 0usize); 4]; 2];
@@ -161,8 +156,7 @@ fn main() {
         }
     }
     println!("{:<30} {:>7} {:>7} {:>13}", "Mrays/s, 1 thread, best of 7", "BVH2", "CWBVH", "CWBVH / BVH2");
-    let names =
-        ["camera, closest hit", "camera, occlusion (NEE)", "random, closest hit", "random, occlusion (segments)"];
+    let names = ["camera, closest hit", "camera, occlusion (NEE)", "random, closest hit", "random, occlusion (segments)"];
     for (k, name) in names.iter().enumerate() {
         let (a, b) = (best[0][k], best[1][k]);
         assert_eq!(a.1, b.1, "{name}: the hierarchies disagree on the hit count");

@@ -123,10 +123,7 @@ fn hot_loop() {
     let (closest, shadow) = (rec.closest.into_inner(), rec.shadow.into_inner());
     let total = (closest.len() + shadow.len()) as u64;
     assert_eq!(counted, total, "the estimator's ray count disagrees with the queries it made");
-    println!(
-        "[1,2] PT hot loop: Cornell box {HOT_RES}², {HOT_PASSES} passes, unbounded depth, 1 thread, {} triangles",
-        accel.triangle_count()
-    );
+    println!("[1,2] PT hot loop: Cornell box {HOT_RES}², {HOT_PASSES} passes, unbounded depth, 1 thread, {} triangles", accel.triangle_count());
     println!(
         "      {} rays = {} closest-hit + {} shadow ({:.2} rays per pixel sample)",
         total,
@@ -156,16 +153,8 @@ fn hot_loop() {
     let raw = median(raw_rate);
     println!("      median of {HOT_REPS} (PT and raw alternating):");
     println!("      PT hot loop             {pt:>7.2} Mrays/s");
-    println!(
-        "      raw Accel, same rays    {raw:>7.2} Mrays/s  (closest {:.2}, occlusion {:.2})",
-        median(c_rate),
-        median(s_rate)
-    );
-    println!(
-        "      ratio PT / raw          {:>7.3}   (traversal share of the hot loop, per round: {:.3})",
-        pt / raw,
-        median(share)
-    );
+    println!("      raw Accel, same rays    {raw:>7.2} Mrays/s  (closest {:.2}, occlusion {:.2})", median(c_rate), median(s_rate));
+    println!("      ratio PT / raw          {:>7.3}   (traversal share of the hot loop, per round: {:.3})", pt / raw, median(share));
 }
 
 /// A renderer that does pure arithmetic: the machine's own scaling, right now.
@@ -322,10 +311,7 @@ fn scaling() {
          medians over clean rounds; {cores} cores; load average before: {}",
         load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
     );
-    println!(
-        "    {:<6} {:>7} {:>8} {:>8} {:>6} {:>7} {:>15}   rounds / speedup per round",
-        "", "threads", "seconds", "speedup", "cores", "CPU s", "tail idle"
-    );
+    println!("    {:<6} {:>7} {:>8} {:>8} {:>6} {:>7} {:>15}   rounds / speedup per round", "", "threads", "seconds", "speedup", "cores", "CPU s", "tail idle");
 
     let scene = prepare_builtin(&args(&[])).expect("built-in scene");
     let mut renderers: Vec<(&str, Box<dyn Phased<ember_cli::accel::Accel> + Sync + Send>)> = vec![("spin", Box::new(Spin { cursor: Cursor::new(0, 1) }))];
@@ -383,8 +369,7 @@ fn scaling() {
         // speedups it allows.
         let merge = of(&|r| r[0].merge);
         let f = (merge * SCALE_SPP as f64 / of(&|r| r[0].wall)).min(1.0);
-        let bounds: Vec<String> =
-            counts[1..].iter().map(|&n| format!("{:.2}", 1.0 / (f + (1.0 - f) / n as f64))).collect();
+        let bounds: Vec<String> = counts[1..].iter().map(|&n| format!("{:.2}", 1.0 / (f + (1.0 - f) / n as f64))).collect();
         println!(
             "    {:<6} film bits across thread counts: {}; merge {:.1} ms/pass = {:.1} % of a \
              1-thread pass; Amdahl bound {}",

@@ -188,9 +188,7 @@ impl<B: TriangleBvh> AccelWith<B> {
     /// spheres with a radius that is not positive and finite) are dropped.
     pub fn new(geometry: &SceneGeometry) -> Self {
         // Keep the triangles that can be hit.
-        let kept: Vec<u32> = (0..geometry.triangles.len() as u32)
-            .filter(|&i| hit::can_be_hit(&geometry.triangles[i as usize]))
-            .collect();
+        let kept: Vec<u32> = (0..geometry.triangles.len() as u32).filter(|&i| hit::can_be_hit(&geometry.triangles[i as usize])).collect();
         let input: Vec<[Vec3A; 3]> = kept.iter().map(|&i| geometry.triangles[i as usize].p.map(Vec3A::from)).collect();
         let pad = hit::box_padding(geometry);
         let boxes: Vec<Aabb> = input.iter().map(|v| Aabb::from_points(v).padded(pad)).collect();
@@ -226,8 +224,7 @@ impl<B: TriangleBvh> AccelWith<B> {
                     Aabb::new(c - r, c + r).padded(pad)
                 })
                 .collect();
-            let bvh =
-                obvhs::bvh2::builder::build_bvh2(&boxes, BvhBuildParams::medium_build(), &mut Duration::default());
+            let bvh = obvhs::bvh2::builder::build_bvh2(&boxes, BvhBuildParams::medium_build(), &mut Duration::default());
             let ids = bvh.primitive_indices.iter().map(|&k| sphere_ids[k as usize]).collect();
             (Some(bvh), ids)
         } else {
@@ -275,9 +272,7 @@ impl<B: TriangleBvh> AccelWith<B> {
         }
         let (t, which) = best?;
         Some(match which {
-            Candidate::Triangle(slot, b) => {
-                (self.triangle_hit(slot, t, b), PrimitiveRef::Triangle(self.attrs[slot].original))
-            }
+            Candidate::Triangle(slot, b) => (self.triangle_hit(slot, t, b), PrimitiveRef::Triangle(self.attrs[slot].original)),
             Candidate::Sphere(i) => {
                 let s = &self.spheres[i];
                 let (p, ng, uv) = sphere::surface(s, ray.origin, ray.dir, t);
@@ -293,9 +288,7 @@ impl<B: TriangleBvh> AccelWith<B> {
             let mut hit = RayHit::none();
             let mut r = q.bvh_ray;
             r.tmax = t_max;
-            let found = bvh.ray_traverse(r, &mut hit, |r, i| {
-                sphere::intersect(&self.spheres[i], ray.origin, ray.dir, r.tmax).unwrap_or(f32::INFINITY)
-            });
+            let found = bvh.ray_traverse(r, &mut hit, |r, i| sphere::intersect(&self.spheres[i], ray.origin, ray.dir, r.tmax).unwrap_or(f32::INFINITY));
             return found.then_some((hit.t, hit.primitive_id as usize));
         }
         let mut best = None;
@@ -345,9 +338,7 @@ impl<B: TriangleBvh> RayQuery for AccelWith<B> {
         let Some(q) = Query::new(ray) else { return false };
         // Spheres first: few and cheap.
         if let Some(bvh) = &self.sphere_bvh {
-            let missed = bvh.ray_traverse_miss(q.bvh_ray, |r, i| {
-                sphere::intersect(&self.spheres[i], ray.origin, ray.dir, r.tmax).unwrap_or(f32::INFINITY)
-            });
+            let missed = bvh.ray_traverse_miss(q.bvh_ray, |r, i| sphere::intersect(&self.spheres[i], ray.origin, ray.dir, r.tmax).unwrap_or(f32::INFINITY));
             if !missed {
                 return true;
             }

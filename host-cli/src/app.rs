@@ -11,11 +11,11 @@ use std::time::{Duration, Instant};
 
 use crate::cli::{Cli, Command, CompareArgs, ConvergenceArgs, DEFAULT_RESOLUTION, RenderArgs};
 use crate::convergence::{self, ConvergenceSetup, Reference};
-use crate::{estimators, suite};
-use crate::metrics::{self, ErrorMetrics};
 use crate::driver::{DriverConfig, DriverError, Limits, RenderSummary};
-use ember_core::render::Film;
 use crate::image_io::{self, ImageError};
+use crate::metrics::{self, ErrorMetrics};
+use crate::{estimators, suite};
+use ember_core::render::Film;
 
 /// Everything a command can fail with; each message says what to do or which file.
 #[derive(Debug)]
@@ -80,7 +80,15 @@ fn run_convergence(args: &ConvergenceArgs) -> Result<(), AppError> {
     let setup = ConvergenceSetup { estimators: args.estimators.clone(), budget_seconds: args.budget, seeds: args.seeds, threads, max_depth: args.max_depth };
     let prepare = || estimators::prepare_file(&args.scene, None, None, Vec::new());
     let points = convergence::measure(&setup, &reference, &prepare, |c| {
-        println!("{:5} seed {} at {:7.2} s: relMSE {:.4e}  MAPE {:7.3} %  ({} passes)", c.estimator.name(), c.seed, c.elapsed_seconds, c.metrics.rel_mse, c.metrics.mape, c.passes);
+        println!(
+            "{:5} seed {} at {:7.2} s: relMSE {:.4e}  MAPE {:7.3} %  ({} passes)",
+            c.estimator.name(),
+            c.seed,
+            c.elapsed_seconds,
+            c.metrics.rel_mse,
+            c.metrics.mape,
+            c.passes
+        );
     })
     .map_err(AppError::Estimator)?;
     if let Some((rel, mape)) = reference.floor {
@@ -176,12 +184,7 @@ impl fmt::Debug for Built {
 }
 
 /// `ember render` with the renderer built by `make` (the estimator wiring, or a test's).
-pub fn render(
-    args: &RenderArgs,
-    start: Instant,
-    progress: bool,
-    make: impl FnOnce(&RenderArgs) -> Result<Built, String>,
-) -> Result<RenderReport, AppError> {
+pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOnce(&RenderArgs) -> Result<Built, String>) -> Result<RenderReport, AppError> {
     // Fail early on what needs no work.
     let (exr, png) = args.output_paths().map_err(AppError::Output)?;
     if let Some(dir) = exr.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir()) {
@@ -213,17 +216,7 @@ pub fn render(
     image_io::write_exr(&exr, width, height, &image).map_err(AppError::Image)?;
     image_io::write_png(&png, width, height, &image, args.exposure).map_err(AppError::Image)?;
 
-    Ok(RenderReport {
-        scene: built.scene,
-        estimator: args.estimator.name(),
-        width,
-        height,
-        max_depth: built.max_depth,
-        seed: args.seed,
-        summary,
-        exr,
-        png,
-    })
+    Ok(RenderReport { scene: built.scene, estimator: args.estimator.name(), width, height, max_depth: built.max_depth, seed: args.seed, summary, exr, png })
 }
 
 /// `1234567.0` → `"1.23 M"`.
@@ -240,17 +233,9 @@ impl fmt::Display for RenderReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let s = &self.summary;
         let depth = if self.max_depth < 0 { "-1 (unbounded)".to_string() } else { self.max_depth.to_string() };
-        writeln!(
-            f,
-            "rendered   {} with {}, {}x{}, max depth {}, seed {}",
-            self.scene, self.estimator, self.width, self.height, depth, self.seed
-        )?;
+        writeln!(f, "rendered   {} with {}, {}x{}, max depth {}, seed {}", self.scene, self.estimator, self.width, self.height, depth, self.seed)?;
         let setup = (s.total_seconds - s.render_seconds).max(0.0);
-        writeln!(
-            f,
-            "time       {:.2} s ({:.2} s setup, {:.2} s rendering) on {} threads",
-            s.total_seconds, setup, s.render_seconds, s.threads
-        )?;
+        writeln!(f, "time       {:.2} s ({:.2} s setup, {:.2} s rendering) on {} threads", s.total_seconds, setup, s.render_seconds, s.threads)?;
         writeln!(f, "passes     {} (samples per pixel)", s.passes)?;
         writeln!(f, "samples    {}samples/s ({}samples)", si(s.samples_per_second), si(s.stats.samples as f64))?;
         writeln!(f, "rays       {}rays/s ({}rays)", si(s.rays_per_second), si(s.stats.rays as f64))?;

@@ -348,10 +348,7 @@ pub fn output_paths(output: &Path) -> Result<(PathBuf, PathBuf), String> {
         None if output.file_name().is_some() => output.with_extension("exr"),
         Some(e) if e.eq_ignore_ascii_case("exr") => output.to_path_buf(),
         _ => {
-            return Err(format!(
-                "output '{}' must be an .exr file (a tone-mapped .png is written beside it)",
-                output.display()
-            ));
+            return Err(format!("output '{}' must be an .exr file (a tone-mapped .png is written beside it)", output.display()));
         }
     };
     let png = exr.with_extension("png");

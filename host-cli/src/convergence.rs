@@ -198,7 +198,19 @@ pub fn csv(points: &[Checkpoint]) -> String {
     let mut s = String::from("estimator,seed,checkpoint_s,elapsed_s,passes,relmse,mape,mae,mean_ratio\n");
     for c in points {
         let m = c.metrics;
-        let _ = writeln!(s, "{},{},{},{:.4},{},{:.6e},{:.6},{:.6e},{:.6}", c.estimator.name(), c.seed, c.target_seconds, c.elapsed_seconds, c.passes, m.rel_mse, m.mape, m.mae, m.mean_ratio);
+        let _ = writeln!(
+            s,
+            "{},{},{},{:.4},{},{:.6e},{:.6},{:.6e},{:.6}",
+            c.estimator.name(),
+            c.seed,
+            c.target_seconds,
+            c.elapsed_seconds,
+            c.passes,
+            m.rel_mse,
+            m.mape,
+            m.mae,
+            m.mean_ratio
+        );
     }
     s
 }
@@ -206,19 +218,25 @@ pub fn csv(points: &[Checkpoint]) -> String {
 /// The two plots (relMSE and MAPE against seconds) as SVG strings.
 pub fn plots(title: &str, points: &[Checkpoint], estimators: &[EstimatorKind], reference: &Reference) -> (String, String) {
     let series = |pick: fn(&(f64, f64, f64)) -> f64| -> Vec<Series> {
-        estimators
-            .iter()
-            .map(|&e| Series { label: e.name().to_string(), points: averaged(points, e).iter().map(|p| (p.0, pick(p))).collect() })
-            .collect()
+        estimators.iter().map(|&e| Series { label: e.name().to_string(), points: averaged(points, e).iter().map(|p| (p.0, pick(p))).collect() }).collect()
     };
     let floor = |v: Option<f64>| v.map(|y| vec![Floor { label: "reference noise".into(), y }]).unwrap_or_default();
-    let rel = plot::log_log_svg(&format!("{title}: relMSE"), "seconds (preprocessing included)", "relMSE", &series(|p| p.1), &floor(reference.floor.map(|f| f.0)));
-    let mape = plot::log_log_svg(&format!("{title}: MAPE"), "seconds (preprocessing included)", "MAPE (%)", &series(|p| p.2), &floor(reference.floor.map(|f| f.1)));
+    let rel =
+        plot::log_log_svg(&format!("{title}: relMSE"), "seconds (preprocessing included)", "relMSE", &series(|p| p.1), &floor(reference.floor.map(|f| f.0)));
+    let mape =
+        plot::log_log_svg(&format!("{title}: MAPE"), "seconds (preprocessing included)", "MAPE (%)", &series(|p| p.2), &floor(reference.floor.map(|f| f.1)));
     (rel, mape)
 }
 
 /// Write `NAME.csv`, `NAME-relmse.svg` and `NAME-mape.svg` into `dir`.
-pub fn write_outputs(dir: &Path, name: &str, title: &str, points: &[Checkpoint], estimators: &[EstimatorKind], reference: &Reference) -> Result<Vec<PathBuf>, String> {
+pub fn write_outputs(
+    dir: &Path,
+    name: &str,
+    title: &str,
+    points: &[Checkpoint],
+    estimators: &[EstimatorKind],
+    reference: &Reference,
+) -> Result<Vec<PathBuf>, String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let (rel, mape) = plots(title, points, estimators, reference);
     let files = [(format!("{name}.csv"), csv(points)), (format!("{name}-relmse.svg"), rel), (format!("{name}-mape.svg"), mape)];

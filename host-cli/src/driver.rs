@@ -177,7 +177,14 @@ impl std::error::Error for DriverError {}
 
 /// Render passes of `est` into `film` until `limits` say stop (pending setup phases run
 /// first). `program_start` is when the program started (for the summary's total time).
-pub fn render<E, Q>(est: &mut E, ctx: &Context<'_, Q>, film: &mut Film, limits: Limits, config: DriverConfig, program_start: Instant) -> Result<RenderSummary, DriverError>
+pub fn render<E, Q>(
+    est: &mut E,
+    ctx: &Context<'_, Q>,
+    film: &mut Film,
+    limits: Limits,
+    config: DriverConfig,
+    program_start: Instant,
+) -> Result<RenderSummary, DriverError>
 where
     E: Phased<Q> + Sync + Send + ?Sized,
     Q: RayQuery + Sync + ?Sized,
@@ -238,17 +245,10 @@ struct Progress {
 
 impl Progress {
     fn new(enabled: bool, limits: Limits, program_start: Instant) -> Self {
-        let target = if enabled && std::io::stderr().is_terminal() {
-            ProgressDrawTarget::stderr()
-        } else {
-            ProgressDrawTarget::hidden()
-        };
+        let target = if enabled && std::io::stderr().is_terminal() { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() };
         let by_time = limits.deadline.filter(|_| limits.spp == u32::MAX);
         let (len, template) = match by_time {
-            Some(d) => (
-                d.saturating_duration_since(program_start).as_millis() as u64,
-                "{elapsed_precise} [{wide_bar}] {msg} (ETA {eta})",
-            ),
+            Some(d) => (d.saturating_duration_since(program_start).as_millis() as u64, "{elapsed_precise} [{wide_bar}] {msg} (ETA {eta})"),
             None => (limits.spp as u64, "{elapsed_precise} [{wide_bar}] {pos}/{len} passes (ETA {eta})"),
         };
         let bar = ProgressBar::with_draw_target(Some(len), target);

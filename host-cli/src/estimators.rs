@@ -31,9 +31,7 @@ pub struct PreparedScene {
 pub fn prepare_builtin(args: &RenderArgs) -> Result<PreparedScene, String> {
     let (w, h) = builtin_resolution(args);
     let (name, builder) = match args.builtin.as_deref() {
-        Some(ember_core::scene::builtin_glass::GLASS_SPHERES) => {
-            ("built-in glass-spheres", ember_core::scene::builtin_glass::glass_spheres(w, h))
-        }
+        Some(ember_core::scene::builtin_glass::GLASS_SPHERES) => ("built-in glass-spheres", ember_core::scene::builtin_glass::glass_spheres(w, h)),
         _ => ("built-in Cornell box", builtin::cornell_box(w, h)),
     };
     let (scene, geometry, warnings) = builder.build().map_err(|e| format!("built-in scene: {e}"))?;
@@ -55,7 +53,15 @@ pub fn prepare(args: &RenderArgs) -> Result<PreparedScene, String> {
     }
 }
 
-fn finish(name: String, scene: Scene, geometry: &SceneGeometry, warnings: BuildWarnings, max_depth: Option<i32>, spp: Option<u32>, mut notes: Vec<String>) -> PreparedScene {
+fn finish(
+    name: String,
+    scene: Scene,
+    geometry: &SceneGeometry,
+    warnings: BuildWarnings,
+    max_depth: Option<i32>,
+    spp: Option<u32>,
+    mut notes: Vec<String>,
+) -> PreparedScene {
     if warnings.degenerate_triangles > 0 {
         notes.push(format!("{} degenerate (zero-area) triangles dropped", warnings.degenerate_triangles));
     }
@@ -121,7 +127,12 @@ impl CoreRenderer {
     pub fn memory_report(&self) -> Vec<String> {
         let mib = |b: usize| b as f64 / 1_048_576.0;
         match &self.renderer {
-            Renderer::Lvcbpt(l) => vec![format!("lvcbpt     memory per pass: light paths {:.1} MiB, cache {:.1} MiB ({} vertices)", mib(l.paths.size_bytes()), mib(l.size_bytes() - l.paths.size_bytes()), l.cache.len())],
+            Renderer::Lvcbpt(l) => vec![format!(
+                "lvcbpt     memory per pass: light paths {:.1} MiB, cache {:.1} MiB ({} vertices)",
+                mib(l.paths.size_bytes()),
+                mib(l.size_bytes() - l.paths.size_bytes()),
+                l.cache.len()
+            )],
             Renderer::Spcbpt(s) => {
                 let cache = &s.cache;
                 let (total, paths, retained) = (cache.size_bytes(), cache.paths.size_bytes(), cache.retained.size_bytes());
@@ -162,7 +173,10 @@ pub fn make_core_renderer(args: &RenderArgs) -> Result<CoreRenderer, String> {
     let config = args.cache.config_for(args.estimator);
     let r = CoreRenderer::with_config(prepared, config, max_depth, args.seed, args.thread_count())?;
     if let Renderer::Lvcbpt(l) = &r.renderer {
-        eprintln!("lvcbpt     M = {} light paths/pass, N = {}, counts: light tracing {:.4}, connection {:.4}", l.light_paths, l.config.connections, l.counts.light_tracing, l.counts.connection);
+        eprintln!(
+            "lvcbpt     M = {} light paths/pass, N = {}, counts: light tracing {:.4}, connection {:.4}",
+            l.light_paths, l.config.connections, l.counts.light_tracing, l.counts.connection
+        );
     }
     if let Renderer::Spcbpt(s) = &r.renderer {
         let rep = &s.report;
@@ -170,9 +184,22 @@ pub fn make_core_renderer(args: &RenderArgs) -> Result<CoreRenderer, String> {
             eprintln!("spcbpt     light sources not binned ({why}): s = 1 is next-event estimation");
         }
         let phases = r.setup_times.iter().map(|(n, t)| format!("{n} {t:.2} s")).collect::<Vec<_>>().join(", ");
-        eprintln!("spcbpt     preprocessing {:.2} s ({phases}); {} eye × {} light subspaces ({} of them light-source bins{})", r.setup_seconds, rep.n_eye, rep.n_light, rep.light_source_bins, if rep.light_source_bins > 0 { ", s = 1 through the cache" } else { ", s = 1 by NEE" });
+        eprintln!(
+            "spcbpt     preprocessing {:.2} s ({phases}); {} eye × {} light subspaces ({} of them light-source bins{})",
+            r.setup_seconds,
+            rep.n_eye,
+            rep.n_light,
+            rep.light_source_bins,
+            if rep.light_source_bins > 0 { ", s = 1 through the cache" } else { ", s = 1 by NEE" }
+        );
         eprintln!("spcbpt     losses per epoch {:?}", rep.losses);
-        eprintln!("spcbpt     memory: D {:.1} MiB ({} paths, freed after training), trees {:.1} KiB, Γ {:.1} KiB", rep.dataset_bytes as f64 / 1048576.0, rep.dataset_paths, rep.tree_bytes as f64 / 1024.0, rep.gamma_bytes as f64 / 1024.0);
+        eprintln!(
+            "spcbpt     memory: D {:.1} MiB ({} paths, freed after training), trees {:.1} KiB, Γ {:.1} KiB",
+            rep.dataset_bytes as f64 / 1048576.0,
+            rep.dataset_paths,
+            rep.tree_bytes as f64 / 1024.0,
+            rep.gamma_bytes as f64 / 1024.0
+        );
     }
     Ok(r)
 }

@@ -86,11 +86,7 @@ pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[[f32; 3]]) -> R
         let p = pixels[y * w + x];
         (p[0], p[1], p[2])
     });
-    Image::from_channels((w, height as usize), channels)
-        .write()
-        .non_parallel()
-        .to_file(path)
-        .map_err(|e| ImageError::new(path, ImageErrorKind::Exr(e)))
+    Image::from_channels((w, height as usize), channels).write().non_parallel().to_file(path).map_err(|e| ImageError::new(path, ImageErrorKind::Exr(e)))
 }
 
 /// Read the first layer with R, G and B channels of an EXR file as f32 (alpha, if any,
@@ -105,8 +101,7 @@ pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
 /// [`read_exr`] on bytes already in memory (the fuzz target's entry point); errors name
 /// the file `<memory>`. Never panics on malformed input.
 pub fn read_exr_from_bytes(bytes: &[u8]) -> Result<RgbImage, ImageError> {
-    decode_exr(std::io::Cursor::new(bytes), bytes.len() as u64)
-        .map_err(|e| ImageError::new(Path::new("<memory>"), ImageErrorKind::Exr(e)))
+    decode_exr(std::io::Cursor::new(bytes), bytes.len() as u64).map_err(|e| ImageError::new(Path::new("<memory>"), ImageErrorKind::Exr(e)))
 }
 
 /// The most pixels an EXR may declare (64 Mpixel, 768 MiB as f32 RGB, past any reference
@@ -133,9 +128,7 @@ fn check_exr_header(reader: &mut (impl std::io::Read + std::io::Seek), file_len:
     for header in meta.headers.iter() {
         let size = header.layer_size;
         if size.width().checked_mul(size.height()).is_none_or(|n| n > MAX_EXR_PIXELS) {
-            return Err(Error::NotSupported(
-                format!("a {}x{} layer (more than {} pixels)", size.width(), size.height(), MAX_EXR_PIXELS).into(),
-            ));
+            return Err(Error::NotSupported(format!("a {}x{} layer (more than {} pixels)", size.width(), size.height(), MAX_EXR_PIXELS).into()));
         }
         chunks = chunks.saturating_add(header.chunk_count as u64);
         let bytes = (size.width() as u64 * size.height() as u64).saturating_mul(header.channels.bytes_per_pixel as u64);
@@ -146,9 +139,7 @@ fn check_exr_header(reader: &mut (impl std::io::Read + std::io::Seek), file_len:
         }
     }
     if chunks.saturating_mul(8) > file_len {
-        return Err(Error::Invalid(
-            format!("the header declares {chunks} chunks, more than a {file_len}-byte file can index").into(),
-        ));
+        return Err(Error::Invalid(format!("the header declares {chunks} chunks, more than a {file_len}-byte file can index").into()));
     }
     Ok(())
 }

@@ -42,10 +42,7 @@ pub fn compare(test: &[[f32; 3]], reference: &[[f32; 3]]) -> ErrorMetrics {
 /// Per-pixel relative error |a − b| / (b + 0.01) averaged over channels (MAPE's d),
 /// for the false-colour image.
 pub fn per_pixel_relative_error(test: &[[f32; 3]], reference: &[[f32; 3]]) -> Vec<f32> {
-    test.iter()
-        .zip(reference)
-        .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs() / (b[c] + 0.01)).sum::<f32>() / 3.0)
-        .collect()
+    test.iter().zip(reference).map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs() / (b[c] + 0.01)).sum::<f32>() / 3.0).collect()
 }
 
 /// False colour for a relative error: black (0) → blue → green → yellow → red (≥ `max`),

@@ -57,7 +57,13 @@ pub fn log_log_svg(title: &str, x_label: &str, y_label: &str, series: &[Series],
     }
     let _ = writeln!(svg, r##"<rect x="{LEFT}" y="{TOP}" width="{:.1}" height="{:.1}" fill="none" stroke="#333"/>"##, W - LEFT - RIGHT, H - TOP - BOTTOM);
     let _ = writeln!(svg, r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">{}</text>"#, (LEFT + W - RIGHT) / 2.0, H - 12.0, escape(x_label));
-    let _ = writeln!(svg, r#"<text x="18" y="{:.1}" text-anchor="middle" transform="rotate(-90 18 {:.1})">{}</text>"#, (TOP + H - BOTTOM) / 2.0, (TOP + H - BOTTOM) / 2.0, escape(y_label));
+    let _ = writeln!(
+        svg,
+        r#"<text x="18" y="{:.1}" text-anchor="middle" transform="rotate(-90 18 {:.1})">{}</text>"#,
+        (TOP + H - BOTTOM) / 2.0,
+        (TOP + H - BOTTOM) / 2.0,
+        escape(y_label)
+    );
     // Floors, dashed grey.
     for f in floors.iter().filter(|f| f.y > 0.0 && f.y.is_finite()) {
         let y = py(f.y);
@@ -76,7 +82,8 @@ pub fn log_log_svg(title: &str, x_label: &str, y_label: &str, series: &[Series],
             }
         }
         let ly = TOP + 14.0 + 18.0 * i as f64;
-        let _ = writeln!(svg, r#"<line x1="{:.1}" y1="{ly:.1}" x2="{:.1}" y2="{ly:.1}" stroke="{colour}" stroke-width="2"/>"#, W - RIGHT + 8.0, W - RIGHT + 28.0);
+        let _ =
+            writeln!(svg, r#"<line x1="{:.1}" y1="{ly:.1}" x2="{:.1}" y2="{ly:.1}" stroke="{colour}" stroke-width="2"/>"#, W - RIGHT + 8.0, W - RIGHT + 28.0);
         let _ = writeln!(svg, r#"<text x="{:.1}" y="{:.1}">{}</text>"#, W - RIGHT + 34.0, ly + 4.0, escape(&s.label));
     }
     svg.push_str("</svg>\n");

@@ -53,7 +53,15 @@ pub fn run(args: &SuiteArgs, threads: usize) -> Result<Vec<SceneResult>, String>
         let scene_file = folder.join("scene.xml");
         let prepare = || estimators::prepare_file(&scene_file, None, None, Vec::new());
         let points = convergence::measure(&setup, &reference, &prepare, |c| {
-            eprintln!("{name:12} {:5} seed {} at {:6.1} s: relMSE {:.4e}, MAPE {:6.2} % ({} passes)", c.estimator.name(), c.seed, c.elapsed_seconds, c.metrics.rel_mse, c.metrics.mape, c.passes);
+            eprintln!(
+                "{name:12} {:5} seed {} at {:6.1} s: relMSE {:.4e}, MAPE {:6.2} % ({} passes)",
+                c.estimator.name(),
+                c.seed,
+                c.elapsed_seconds,
+                c.metrics.rel_mse,
+                c.metrics.mape,
+                c.passes
+            );
         })?;
         convergence::write_outputs(&plots_dir, &name, &name, &points, &args.estimators, &reference)?;
         results.push(SceneResult { name, floor: reference.floor, points });

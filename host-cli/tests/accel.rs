@@ -248,10 +248,7 @@ fn spawned_rays_do_not_rehit_their_surface() {
                     let cos = d.dot(n_out);
                     assert!(cos < 0.0, "sphere {i} re-hit by an outward ray");
                     // The far end of the chord from the (offset) origin, in f64.
-                    let exact = brute_hits(&g, next.origin, next.dir, f32::INFINITY)
-                        .into_iter()
-                        .find(|h| h.prim == p2 && h.t > 0.0)
-                        .expect("reference hit");
+                    let exact = brute_hits(&g, next.origin, next.dir, f32::INFINITY).into_iter().find(|h| h.prim == p2 && h.t > 0.0).expect("reference hit");
                     let chord = 2.0 * sp.radius as f64 * -cos as f64;
                     assert!(exact.t > 0.5 * chord, "reference is the far side");
                     assert!((h2.t as f64 - exact.t).abs() < 1e-4 * exact.t, "t {} vs {}", h2.t, exact.t);

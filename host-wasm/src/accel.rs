@@ -51,13 +51,8 @@ use triangle::WatertightRay;
 pub fn build_bvh2_without_clock(boxes: &[Aabb]) -> Bvh2 {
     let config = BvhBuildParams::medium_build();
     let indices = (0..boxes.len() as u32).collect();
-    let mut bvh = PlocBuilder::with_capacity(boxes.len()).build(
-        config.ploc_search_distance,
-        boxes,
-        indices,
-        config.sort_precision,
-        config.search_depth_threshold,
-    );
+    let mut bvh =
+        PlocBuilder::with_capacity(boxes.len()).build(config.ploc_search_distance, boxes, indices, config.sort_precision, config.search_depth_threshold);
     let mut reinsertion = ReinsertionOptimizer::default();
     reinsertion.run(&mut bvh, config.reinsertion_batch_ratio, None);
     collapse(&mut bvh, config.max_prims_per_leaf.clamp(1, 255), config.collapse_traversal_cost);
@@ -92,9 +87,7 @@ impl core::fmt::Debug for WasmAccel {
 impl WasmAccel {
     /// Build; degenerate triangles and spheres (zero area, non-finite) are dropped.
     pub fn new(geometry: &SceneGeometry) -> Self {
-        let kept: Vec<usize> = (0..geometry.triangles.len())
-            .filter(|&i| hit::can_be_hit(&geometry.triangles[i]))
-            .collect();
+        let kept: Vec<usize> = (0..geometry.triangles.len()).filter(|&i| hit::can_be_hit(&geometry.triangles[i])).collect();
         let input: Vec<[Vec3A; 3]> = kept.iter().map(|&i| geometry.triangles[i].p.map(Vec3A::from)).collect();
         let pad = hit::box_padding(geometry);
         let (bvh, tris, attrs) = if input.is_empty() {
@@ -120,12 +113,7 @@ impl WasmAccel {
                 .collect();
             (Some(bvh), tris, attrs)
         };
-        let spheres = geometry
-            .spheres
-            .iter()
-            .filter(|s| s.center.is_finite() && s.radius.is_finite() && s.radius > 0.0)
-            .copied()
-            .collect();
+        let spheres = geometry.spheres.iter().filter(|s| s.center.is_finite() && s.radius.is_finite() && s.radius > 0.0).copied().collect();
         Self { bvh, tris, attrs, spheres }
     }
 

@@ -191,7 +191,13 @@ pub fn compare(browser: &LinearImage, native: &LinearImage, criteria: Criteria) 
                 let diff = (stats[0].0 - stats[1].0) / n;
                 // Identical blocks have z = 0 whatever their spread; a difference in a
                 // flat block (se = 0) is infinitely significant.
-                let z = if diff == 0.0 { 0.0 } else if se > 0.0 { diff.abs() / se } else { f64::INFINITY };
+                let z = if diff == 0.0 {
+                    0.0
+                } else if se > 0.0 {
+                    diff.abs() / se
+                } else {
+                    f64::INFINITY
+                };
                 if !(z <= worst_z) {
                     worst_z = if z.is_nan() { f64::INFINITY } else { z };
                     worst_at = (bx, by, c);

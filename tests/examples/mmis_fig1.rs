@@ -28,8 +28,8 @@
 //! if the excess variance of MMIS_n over MIS does not shrink as n grows.
 
 use ember_core::mmis::{Mmis, Technique};
-use ember_tests::mmis_1d::{Tech, bump, tri_pdf as tri};
 use ember_core::rng::{SampleStream, Stream};
+use ember_tests::mmis_1d::{Tech, bump, tri_pdf as tri};
 use std::fmt::Write as _;
 
 /// A technique presented to MMIS with its exact marginal: the reference MIS of eq. (1).
@@ -55,15 +55,7 @@ struct Stats {
 
 /// Run `trials` estimates, each averaging `realisations` MMIS estimates of `f` with
 /// `counts[i]` pairs drawn from `samplers[i]` and weighed by `techs[i]`.
-fn run(
-    seed: u64,
-    trials: u32,
-    techs: &[&dyn Technique<f64, f64>],
-    samplers: &[Tech],
-    counts: &[usize],
-    realisations: usize,
-    f: fn(f64) -> f64,
-) -> Stats {
+fn run(seed: u64, trials: u32, techs: &[&dyn Technique<f64, f64>], samplers: &[Tech], counts: &[usize], realisations: usize, f: fn(f64) -> f64) -> Stats {
     let mut buf = Vec::with_capacity(counts.iter().sum());
     let estimates: Vec<f64> = (0..trials)
         .map(|trial| {
@@ -117,8 +109,7 @@ fn main() {
     // Check the quadrature: every marginal integrates to one.
     for (i, t) in PARTS.iter().chain([&B]).enumerate() {
         let cells = 20_000;
-        let mass: f64 =
-            (0..cells).map(|k| t.marginal((k as f64 + 0.5) / cells as f64)).sum::<f64>() / cells as f64;
+        let mass: f64 = (0..cells).map(|k| t.marginal((k as f64 + 0.5) / cells as f64)).sum::<f64>() / cells as f64;
         assert!((mass - 1.0).abs() < 1e-6, "marginal {i} integrates to {mass}");
     }
 
@@ -137,10 +128,7 @@ fn main() {
     for (seed, (name, label, techs, samplers, counts)) in cases.iter().enumerate() {
         let s = run(100 + seed as u64, trials, techs, samplers, counts, 1, f_a);
         let split = counts.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(" + ");
-        println!(
-            "| {name} | {split} | {:.4} ± {:.4} | {:.3e} ± {:.1e} |",
-            s.mean, s.se_mean, s.var, s.se_var
-        );
+        println!("| {name} | {split} | {:.4} ± {:.4} | {:.3e} ± {:.1e} |", s.mean, s.se_mean, s.var, s.se_var);
         rows_a.push((*label, s.var));
     }
 
@@ -192,11 +180,7 @@ fn svg(rows_a: &[(&str, f64)], rows_b: &[(usize, f64, f64)], reference: f64) -> 
     let (w, h, top, bottom, left) = (460.0, 360.0, 40.0, 300.0, 70.0);
     let right = w - 20.0;
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{}" height="{h}" font-family="sans-serif" font-size="11">"#,
-        2.0 * w
-    );
+    let _ = writeln!(s, r#"<svg xmlns="http://www.w3.org/2000/svg" width="{}" height="{h}" font-family="sans-serif" font-size="11">"#, 2.0 * w);
     let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
     // Decade range covering every plotted value.
     let values = rows_a.iter().map(|r| r.1).chain(rows_b.iter().flat_map(|r| [r.1, r.2])).chain([reference]);
@@ -204,18 +188,11 @@ fn svg(rows_a: &[(&str, f64)], rows_b: &[(usize, f64, f64)], reference: f64) -> 
     let lo = logs.iter().copied().fold(f64::INFINITY, f64::min).floor();
     let hi = (logs.iter().copied().fold(f64::NEG_INFINITY, f64::max) + 0.1).ceil();
     let y = |v: f64| bottom - (v.log10() - lo) / (hi - lo) * (bottom - top);
-    for (panel, title, xlabel) in [
-        (0.0, "(a) classical + marginal, N = 64", ""),
-        (w, "(b) MMIS_n vs MIS with exact marginals, N = 64", "n (pairs per technique)"),
-    ] {
+    for (panel, title, xlabel) in
+        [(0.0, "(a) classical + marginal, N = 64", ""), (w, "(b) MMIS_n vs MIS with exact marginals, N = 64", "n (pairs per technique)")]
+    {
         let _ = writeln!(s, r#"<text x="{}" y="22" font-size="13">{title}</text>"#, panel + left);
-        let _ = writeln!(
-            s,
-            r#"<rect x="{}" y="{top}" width="{}" height="{}" fill="none" stroke="black"/>"#,
-            panel + left,
-            right - left,
-            bottom - top
-        );
+        let _ = writeln!(s, r#"<rect x="{}" y="{top}" width="{}" height="{}" fill="none" stroke="black"/>"#, panel + left, right - left, bottom - top);
         for d in lo as i32..=hi as i32 {
             let yy = y(10f64.powi(d));
             let _ = writeln!(
@@ -235,58 +212,26 @@ fn svg(rows_a: &[(&str, f64)], rows_b: &[(usize, f64, f64)], reference: f64) -> 
             panel + 16.0,
             (top + bottom) / 2.0
         );
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="{}" text-anchor="middle">{xlabel}</text>"#,
-            panel + (left + right) / 2.0,
-            bottom + 45.0
-        );
+        let _ = writeln!(s, r#"<text x="{}" y="{}" text-anchor="middle">{xlabel}</text>"#, panel + (left + right) / 2.0, bottom + 45.0);
     }
     // (a): one bar per estimator, from the bottom of the log axis.
     let slot = (right - left) / rows_a.len() as f64;
     for (i, (name, var)) in rows_a.iter().enumerate() {
         let x0 = left + slot * (i as f64 + 0.2);
-        let _ = writeln!(
-            s,
-            r##"<rect x="{x0}" y="{}" width="{}" height="{}" fill="#4477aa"/>"##,
-            y(*var),
-            slot * 0.6,
-            bottom - y(*var)
-        );
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="{}" text-anchor="middle" font-size="9">{}</text>"#,
-            x0 + slot * 0.3,
-            bottom + 14.0,
-            name
-        );
+        let _ = writeln!(s, r##"<rect x="{x0}" y="{}" width="{}" height="{}" fill="#4477aa"/>"##, y(*var), slot * 0.6, bottom - y(*var));
+        let _ = writeln!(s, r#"<text x="{}" y="{}" text-anchor="middle" font-size="9">{}</text>"#, x0 + slot * 0.3, bottom + 14.0, name);
     }
     // (b): log2 axis in n.
     let nmax = rows_b.last().map_or(16.0, |r| r.0 as f64);
     let x = |n: f64| w + left + 20.0 + n.log2() / nmax.log2() * (right - left - 40.0);
     for &(n, ..) in rows_b {
-        let _ =
-            writeln!(s, r#"<text x="{}" y="{}" text-anchor="middle">{n}</text>"#, x(n as f64), bottom + 16.0);
+        let _ = writeln!(s, r#"<text x="{}" y="{}" text-anchor="middle">{n}</text>"#, x(n as f64), bottom + 16.0);
     }
-    let _ = writeln!(
-        s,
-        r##"<line x1="{}" x2="{}" y1="{2}" y2="{2}" stroke="#222" stroke-dasharray="6 4"/>"##,
-        w + left,
-        w + right,
-        y(reference)
-    );
+    let _ = writeln!(s, r##"<line x1="{}" x2="{}" y1="{2}" y2="{2}" stroke="#222" stroke-dasharray="6 4"/>"##, w + left, w + right, y(reference));
     for (k, color, label) in [(1usize, "#4477aa", "MMIS_n variance"), (2, "#cc6677", "excess over MIS")] {
-        let pts: Vec<(f64, f64)> = rows_b
-            .iter()
-            .map(|r| (r.0 as f64, if k == 1 { r.1 } else { r.2 }))
-            .filter(|p| p.1 > 0.0)
-            .collect();
+        let pts: Vec<(f64, f64)> = rows_b.iter().map(|r| (r.0 as f64, if k == 1 { r.1 } else { r.2 })).filter(|p| p.1 > 0.0).collect();
         let line: Vec<String> = pts.iter().map(|&(n, v)| format!("{:.1},{:.1}", x(n), y(v))).collect();
-        let _ = writeln!(
-            s,
-            r#"<polyline points="{}" fill="none" stroke="{color}" stroke-width="2"/>"#,
-            line.join(" ")
-        );
+        let _ = writeln!(s, r#"<polyline points="{}" fill="none" stroke="{color}" stroke-width="2"/>"#, line.join(" "));
         for &(n, v) in &pts {
             let _ = writeln!(s, r#"<circle cx="{:.1}" cy="{:.1}" r="3.5" fill="{color}"/>"#, x(n), y(v));
         }

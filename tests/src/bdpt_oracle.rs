@@ -98,11 +98,7 @@ pub fn brute_force_weights(scene: &Scene, x: &[Vertex], count: impl Fn(usize, us
 /// s = 0 needs x₀ to emit; otherwise x_{s−1} and x_s are joined by a connection, which
 /// neither may be Dirac for.
 pub fn strategy_can_produce(scene: &Scene, x: &[Vertex], s: usize) -> bool {
-    if s == 0 {
-        x[0].kind != VertexKind::Camera && x[0].emitter.is_some()
-    } else {
-        !is_delta_surface(scene, &x[s - 1]) && !is_delta_surface(scene, &x[s])
-    }
+    if s == 0 { x[0].kind != VertexKind::Camera && x[0].emitter.is_some() } else { !is_delta_surface(scene, &x[s - 1]) && !is_delta_surface(scene, &x[s]) }
 }
 
 /// The sub-paths strategy (s, n − s) would have generated for full path `x`, with their

@@ -138,12 +138,7 @@ pub fn chi2_sphere(
 }
 
 /// χ² test of a sampler of the unit square against its density on [0,1]².
-pub fn chi2_square(
-    name: &str,
-    cfg: &Chi2Config,
-    mut sample: impl FnMut(&mut SampleStream) -> Option<Vec2>,
-    pdf: impl Fn(Vec2) -> f64 + Sync,
-) -> Chi2Result {
+pub fn chi2_square(name: &str, cfg: &Chi2Config, mut sample: impl FnMut(&mut SampleStream) -> Option<Vec2>, pdf: impl Fn(Vec2) -> f64 + Sync) -> Chi2Result {
     let (nt, np) = (cfg.theta_bins, cfg.phi_bins);
     let bin_of = |p: Vec2| -> Option<usize> {
         if !(p.x >= 0.0 && p.x <= 1.0 && p.y >= 0.0 && p.y <= 1.0) {
@@ -223,16 +218,7 @@ fn run(
 
     let (statistic, dof, worst) = pooled_statistic(bins);
     let p_value = if dof == 0 { 1.0 } else { chi2_survival(statistic, dof as f64) };
-    Chi2Result {
-        name: name.to_string(),
-        statistic,
-        dof,
-        p_value,
-        sampled_fraction,
-        pdf_integral,
-        impossible_sample: impossible,
-        worst_bins: worst,
-    }
+    Chi2Result { name: name.to_string(), statistic, dof, p_value, sampled_fraction, pdf_integral, impossible_sample: impossible, worst_bins: worst }
 }
 
 /// Pool every bin expecting fewer than 5 samples into one, then sum (O−E)²/E.

@@ -56,41 +56,23 @@ impl Tech {
     pub fn draw(&self, rng: &mut SampleStream) -> Pair<f64, f64> {
         let (u0, u1, u2) = (rng.next_f64(), rng.next_f64(), rng.next_f64());
         match *self {
-            Tech::Classical { c, h, eps } => {
-                Pair { t: 0.0, x: if u0 < eps { u1 } else { tri_sample(u1, c, h) } }
-            }
+            Tech::Classical { c, h, eps } => Pair { t: 0.0, x: if u0 < eps { u1 } else { tri_sample(u1, c, h) } },
             Tech::Marginal { c, w, h, eps } => {
                 let t = tri_sample(u0, c, w);
                 Pair { t, x: if u1 < eps { u2 } else { tri_sample(u2, t, h) } }
             }
-            Tech::Wrapped => {
-                Pair { t: u0, x: if u1 < 0.5 { u2 } else { (u0 + tri_sample(u2, 0.0, 0.5)).rem_euclid(1.0) } }
-            }
+            Tech::Wrapped => Pair { t: u0, x: if u1 < 0.5 { u2 } else { (u0 + tri_sample(u2, 0.0, 0.5)).rem_euclid(1.0) } },
         }
     }
 
     /// The marginal density `p(x) = ∫ p(x | t) p(t) dt`, by 5-point Gauss–Legendre on the
     /// pieces between the kinks in t (the integrand is piecewise quadratic there).
     pub fn marginal(&self, x: f64) -> f64 {
-        const NODES: [f64; 5] = [
-            0.0,
-            -0.538_469_310_105_683_1,
-            0.538_469_310_105_683_1,
-            -0.906_179_845_938_664,
-            0.906_179_845_938_664,
-        ];
-        const WEIGHTS: [f64; 5] = [
-            0.568_888_888_888_888_9,
-            0.478_628_670_499_366_5,
-            0.478_628_670_499_366_5,
-            0.236_926_885_056_189_1,
-            0.236_926_885_056_189_1,
-        ];
+        const NODES: [f64; 5] = [0.0, -0.538_469_310_105_683_1, 0.538_469_310_105_683_1, -0.906_179_845_938_664, 0.906_179_845_938_664];
+        const WEIGHTS: [f64; 5] = [0.568_888_888_888_888_9, 0.478_628_670_499_366_5, 0.478_628_670_499_366_5, 0.236_926_885_056_189_1, 0.236_926_885_056_189_1];
         let (lo, hi, kinks, pt): (f64, f64, [f64; 6], &dyn Fn(f64) -> f64) = match self {
             Tech::Classical { .. } => return self.pdf(&x, &0.0),
-            Tech::Marginal { c, w, h, .. } => {
-                (c - w, c + w, [c - w, *c, c + w, x - h, x, x + h], &|t| tri_pdf(t, *c, *w))
-            }
+            Tech::Marginal { c, w, h, .. } => (c - w, c + w, [c - w, *c, c + w, x - h, x, x + h], &|t| tri_pdf(t, *c, *w)),
             Tech::Wrapped => (0.0, 1.0, [0.0, 1.0, x, (x + 0.5).rem_euclid(1.0), x, x], &|_| 1.0),
         };
         let mut cuts = kinks.map(|k| k.clamp(lo, hi));

@@ -1,6 +1,6 @@
 //! Analytic and small scenes shared by the integration tests.
 
-use ember_core::bsdf::{MicrofacetKind, Material};
+use ember_core::bsdf::{Material, MicrofacetKind};
 use ember_core::camera::{FovAxis, PerspectiveCamera};
 use ember_core::math::Mat4;
 use ember_core::scene::{AreaEmission, SceneBuilder, builtin};
@@ -52,15 +52,15 @@ pub fn window_room(width: u32, height: u32) -> SceneBuilder {
     let rect = |sx: f32, sy: f32, rot: Mat4, t: Vec3| Mat4::from_translation(t) * rot * Mat4::from_scale(Vec3::new(sx, sy, 1.0));
     let (rx, ry) = (core::f32::consts::FRAC_PI_2, core::f32::consts::FRAC_PI_2);
     let walls = [
-        rect(1.5, 1.5, Mat4::from_rotation_x(-rx), Vec3::ZERO),                  // floor
-        rect(1.5, 1.5, Mat4::from_rotation_x(rx), Vec3::new(0.0, 2.5, 0.0)),     // ceiling
-        rect(1.5, 1.25, Mat4::from_rotation_y(ry), Vec3::new(-1.5, 1.25, 0.0)),  // left
-        rect(1.5, 1.25, Mat4::from_rotation_y(-ry), Vec3::new(1.5, 1.25, 0.0)),  // right
+        rect(1.5, 1.5, Mat4::from_rotation_x(-rx), Vec3::ZERO),                      // floor
+        rect(1.5, 1.5, Mat4::from_rotation_x(rx), Vec3::new(0.0, 2.5, 0.0)),         // ceiling
+        rect(1.5, 1.25, Mat4::from_rotation_y(ry), Vec3::new(-1.5, 1.25, 0.0)),      // left
+        rect(1.5, 1.25, Mat4::from_rotation_y(-ry), Vec3::new(1.5, 1.25, 0.0)),      // right
         rect(1.5, 1.25, Mat4::from_rotation_y(2.0 * ry), Vec3::new(0.0, 1.25, 1.5)), // front
-        rect(0.5, 1.25, Mat4::IDENTITY, Vec3::new(-1.0, 1.25, -1.5)),            // back, left of the window
-        rect(0.5, 1.25, Mat4::IDENTITY, Vec3::new(1.0, 1.25, -1.5)),             // back, right
-        rect(0.5, 0.6, Mat4::IDENTITY, Vec3::new(0.0, 0.6, -1.5)),               // below the window
-        rect(0.5, 0.35, Mat4::IDENTITY, Vec3::new(0.0, 2.15, -1.5)),             // above the window
+        rect(0.5, 1.25, Mat4::IDENTITY, Vec3::new(-1.0, 1.25, -1.5)),                // back, left of the window
+        rect(0.5, 1.25, Mat4::IDENTITY, Vec3::new(1.0, 1.25, -1.5)),                 // back, right
+        rect(0.5, 0.6, Mat4::IDENTITY, Vec3::new(0.0, 0.6, -1.5)),                   // below the window
+        rect(0.5, 0.35, Mat4::IDENTITY, Vec3::new(0.0, 2.15, -1.5)),                 // above the window
     ];
     for m in walls {
         b.add_rectangle(m, false, wall, None);

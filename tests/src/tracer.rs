@@ -27,7 +27,13 @@ impl BruteForce {
                 let ns = match tri.n {
                     Some(n) => {
                         let s = (n[0] * (1.0 - b1 - b2) + n[1] * b1 + n[2] * b2).normalize_or_zero();
-                        if s == Vec3::ZERO { ng } else if s.dot(ng) < 0.0 { -s } else { s }
+                        if s == Vec3::ZERO {
+                            ng
+                        } else if s.dot(ng) < 0.0 {
+                            -s
+                        } else {
+                            s
+                        }
                     }
                     None => ng,
                 };

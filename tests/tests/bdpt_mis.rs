@@ -23,8 +23,8 @@ use ember_core::integrator::bdpt::{Vertex, VertexKind, camera_subpath, connect, 
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::Scene;
-use ember_tests::scenes::cornell_with_spheres;
 use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split};
+use ember_tests::scenes::cornell_with_spheres;
 use ember_tests::tracer::BruteForce;
 use glam::Vec2;
 
@@ -67,7 +67,13 @@ fn recursive_weights_equal_brute_force() {
                 let expected = bf[s].expect("a strategy that produced a path must be possible");
                 let diff = (expected - c.weight as f64).abs();
                 worst = worst.max(diff);
-                assert!(diff <= 1e-5, "(s, t) = ({s}, {t}), n = {}: recursive {} vs brute force {expected}; all brute-force weights {bf:?}; kinds {:?}", x.len(), c.weight, x.iter().map(|v| (v.kind, v.material, v.delta)).collect::<Vec<_>>());
+                assert!(
+                    diff <= 1e-5,
+                    "(s, t) = ({s}, {t}), n = {}: recursive {} vs brute force {expected}; all brute-force weights {bf:?}; kinds {:?}",
+                    x.len(),
+                    c.weight,
+                    x.iter().map(|v| (v.kind, v.material, v.delta)).collect::<Vec<_>>()
+                );
                 checked += 1;
             }
         }

@@ -26,8 +26,8 @@ use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
 use ember_core::math::Vec3;
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::spectrum::Rgb;
-use ember_tests::stats::fresnel_f64;
 use ember_tests::chi2::{Chi2Config, SphereBinning, chi2_sphere, sidak};
+use ember_tests::stats::fresnel_f64;
 use ember_tests::stats::normal_two_sided_p;
 
 const ALPHAS: [f32; 4] = [0.01, 0.1, 0.5, 1.0];
@@ -85,7 +85,14 @@ fn all_cases() -> Vec<Case> {
     for kind in KINDS {
         for alpha in ALPHAS {
             for deg in ANGLES_DEG {
-                v.push(Case { name: "rough-conductor", material: white_conductor(kind, alpha), kind: Some(kind), alpha, wo: incident(deg, false), part: Part::All });
+                v.push(Case {
+                    name: "rough-conductor",
+                    material: white_conductor(kind, alpha),
+                    kind: Some(kind),
+                    alpha,
+                    wo: incident(deg, false),
+                    part: Part::All,
+                });
             }
         }
     }
@@ -104,7 +111,14 @@ fn all_cases() -> Vec<Case> {
     }
     // Two-sided materials seen from the back.
     for deg in [0.0, 45.0, 89.0] {
-        v.push(Case { name: "twosided-diffuse-back", material: Material::diffuse(Rgb::splat(0.5)).two_sided(), kind: None, alpha: 1.0, wo: incident(deg, true), part: Part::All });
+        v.push(Case {
+            name: "twosided-diffuse-back",
+            material: Material::diffuse(Rgb::splat(0.5)).two_sided(),
+            kind: None,
+            alpha: 1.0,
+            wo: incident(deg, true),
+            part: Part::All,
+        });
     }
     for (kind, alpha) in [(MicrofacetKind::Ggx, 0.1), (MicrofacetKind::Beckmann, 0.5)] {
         for deg in [0.0, 45.0, 89.0] {
@@ -249,9 +263,8 @@ fn dirac_lobe_test(name: &str, material: Material, wo: Vec3, eta: f32, expected_
     let mut reflections = 0u32;
     for k in 0..N {
         let mut rng = SampleStream::for_sample(0xd1ac, Stream::Aux, k, 0, 0);
-        let s = material
-            .sample(wo, rng.next_f32(), rng.next_2d(), TransportMode::Radiance)
-            .unwrap_or_else(|| panic!("{name}: smooth material absorbed a sample"));
+        let s =
+            material.sample(wo, rng.next_f32(), rng.next_2d(), TransportMode::Radiance).unwrap_or_else(|| panic!("{name}: smooth material absorbed a sample"));
         assert!(s.is_delta, "{name}");
         let weight = s.f * s.wi.z.abs() / s.pdf.value();
         if s.is_transmission {
@@ -273,11 +286,7 @@ fn dirac_lobe_test(name: &str, material: Material, wo: Vec3, eta: f32, expected_
     }
     let p_hat = reflections as f64 / N as f64;
     let sd = (expected_r * (1.0 - expected_r) / N as f64).sqrt();
-    let p = if sd == 0.0 {
-        if reflections as f64 == expected_r * N as f64 { 1.0 } else { 0.0 }
-    } else {
-        normal_two_sided_p((p_hat - expected_r) / sd)
-    };
+    let p = if sd == 0.0 { if reflections as f64 == expected_r * N as f64 { 1.0 } else { 0.0 } } else { normal_two_sided_p((p_hat - expected_r) / sd) };
     println!("{name}: reflected {p_hat:.5}, expected F = {expected_r:.5}, p = {p:.3}");
     assert!(p >= significance, "{name}: reflection frequency {p_hat} vs F = {expected_r}, p = {p:e}");
 }

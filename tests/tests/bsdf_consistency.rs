@@ -245,10 +245,7 @@ fn reciprocity_and_adjoint() {
             } else if let Some(eta) = m.eta {
                 // f(wo, wi)/η_wo² = f(wi, wo)/η_wi².
                 let (eo, ei) = (eta_of_side(wo, eta), eta_of_side(wi, eta));
-                assert!(
-                    close_rgb(fr * (1.0 / (eo * eo)), fr_swap * (1.0 / (ei * ei)), 2e-3, 1e-6),
-                    "generalised reciprocity {fr:?} vs {fr_swap:?}: {ctx}"
-                );
+                assert!(close_rgb(fr * (1.0 / (eo * eo)), fr_swap * (1.0 / (ei * ei)), 2e-3, 1e-6), "generalised reciprocity {fr:?} vs {fr_swap:?}: {ctx}");
             } else {
                 assert!(fr.is_black() && fr_swap.is_black(), "{ctx}");
             }
@@ -263,11 +260,8 @@ fn reciprocity_and_adjoint() {
 #[test]
 fn one_sided_materials_are_black_from_behind() {
     let (eta, k) = gold();
-    for material in [
-        Material::diffuse(Rgb::ONE),
-        Material::rough_conductor(MicrofacetKind::Ggx, 0.3, eta, k, Rgb::ONE),
-        Material::conductor(eta, k, Rgb::ONE),
-    ] {
+    for material in [Material::diffuse(Rgb::ONE), Material::rough_conductor(MicrofacetKind::Ggx, 0.3, eta, k, Rgb::ONE), Material::conductor(eta, k, Rgb::ONE)]
+    {
         for k in 0..500u32 {
             let mut rng = SampleStream::for_sample(5, Stream::Aux, k, 0, 0);
             let (wo, wi) = (uniform_sphere(rng.next_2d()), uniform_sphere(rng.next_2d()));

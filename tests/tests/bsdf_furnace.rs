@@ -44,8 +44,8 @@ use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
 use ember_core::math::Vec3;
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::spectrum::Rgb;
-use ember_tests::stats::fresnel_f64;
 use ember_tests::chi2::sidak;
+use ember_tests::stats::fresnel_f64;
 use ember_tests::stats::{MeanVar, normal_two_sided_p};
 use glam::Vec2;
 
@@ -116,7 +116,14 @@ fn cases() -> Vec<Case> {
     for deg in ANGLES {
         let wo = incident(deg, false);
         v.push(Case { group: Group::Smooth, name: format!("diffuse θ={deg}°"), material: Material::diffuse(Rgb::ONE), wo, alpha: 1.0, exact: Some(1.0) });
-        v.push(Case { group: Group::Smooth, name: format!("mirror θ={deg}°"), material: Material::conductor(eta, k, Rgb::ONE), wo, alpha: 0.0, exact: Some(1.0) });
+        v.push(Case {
+            group: Group::Smooth,
+            name: format!("mirror θ={deg}°"),
+            material: Material::conductor(eta, k, Rgb::ONE),
+            wo,
+            alpha: 0.0,
+            exact: Some(1.0),
+        });
         for inside in [false, true] {
             v.push(Case {
                 group: Group::Smooth,

@@ -52,9 +52,7 @@ fn image_is_neither_mirrored_nor_flipped() {
 
 #[test]
 fn film_position_inverts_generate_ray() {
-    for (fov, axis, w, h) in
-        [(70.0, FovAxis::X, 96, 64), (30.0, FovAxis::Y, 50, 120), (120.0, FovAxis::Diagonal, 33, 17)]
-    {
+    for (fov, axis, w, h) in [(70.0, FovAxis::X, 96, 64), (30.0, FovAxis::Y, 50, 120), (120.0, FovAxis::Diagonal, 33, 17)] {
         let cam = PerspectiveCamera::new(tilted(), fov, axis, w, h);
         for i in 0..41 {
             for j in 0..37 {
@@ -122,8 +120,7 @@ fn importance_integrates_to_one_per_pixel() {
     let (w, h) = (64u32, 48u32);
     let cam = PerspectiveCamera::new(tilted(), 100.0, FovAxis::X, w, h);
     for pixel in [(32u32, 24u32), (0, 0), (63, 20)] {
-        let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
-            .map(|(a, b)| cam.generate_ray(Vec2::new(pixel.0 as f32 + a, pixel.1 as f32 + b)).dir);
+        let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].map(|(a, b)| cam.generate_ray(Vec2::new(pixel.0 as f32 + a, pixel.1 as f32 + b)).dir);
         let axis = cam.generate_ray(Vec2::new(pixel.0 as f32 + 0.5, pixel.1 as f32 + 0.5)).dir;
         let est = integrate_over_cone(axis, &corners, 400_000, |omega| {
             let in_pixel = cam.film_position(omega).is_some_and(|f| f.x as u32 == pixel.0 && f.y as u32 == pixel.1);
@@ -133,9 +130,7 @@ fn importance_integrates_to_one_per_pixel() {
         println!("pixel {pixel:?}: ∫ We cos dω = {:.5} ± {:.5} (z = {z:.2})", est.mean(), est.std_error());
         assert!(z.abs() < 4.0, "pixel {pixel:?}: ∫ We cos dω = {} ± {}", est.mean(), est.std_error());
     }
-    let est = integrate_over_cone(cam.forward(), &film_corners(&cam), 1_000_000, |omega| {
-        (cam.importance(omega) * omega.dot(cam.forward())) as f64
-    });
+    let est = integrate_over_cone(cam.forward(), &film_corners(&cam), 1_000_000, |omega| (cam.importance(omega) * omega.dot(cam.forward())) as f64);
     let z = (est.mean() - (w * h) as f64) / est.std_error();
     println!("frustum: ∫ We cos dω = {:.2} ± {:.2} vs {} (z = {z:.2})", est.mean(), est.std_error(), w * h);
     assert!(z.abs() < 4.0);
@@ -148,8 +143,7 @@ fn importance_integrates_to_one_per_pixel() {
 fn pdf_dir_integrates_to_one() {
     for (fov, axis, w, h) in [(100.0, FovAxis::X, 64, 48), (20.0, FovAxis::Y, 30, 60)] {
         let cam = PerspectiveCamera::new(tilted(), fov, axis, w, h);
-        let est =
-            integrate_over_cone(cam.forward(), &film_corners(&cam), 1_000_000, |omega| cam.pdf_dir(omega).0 as f64);
+        let est = integrate_over_cone(cam.forward(), &film_corners(&cam), 1_000_000, |omega| cam.pdf_dir(omega).0 as f64);
         let z = (est.mean() - 1.0) / est.std_error();
         println!("fov {fov}: ∫ pdf_dir = {:.5} ± {:.5} (z = {z:.2})", est.mean(), est.std_error());
         assert!(z.abs() < 4.0);
@@ -213,9 +207,7 @@ fn sample_wi_connects_to_the_pinhole() {
 /// Degenerate construction: zero size, singular transform, extreme fov: no panic, no NaN.
 #[test]
 fn degenerate_camera_is_finite() {
-    for (m, fov, w, h) in
-        [(Mat4::ZERO, 60.0, 0, 0), (tilted(), 0.0, 10, 10), (tilted(), 180.0, 10, 1), (Mat4::IDENTITY, -5.0, 1, 1)]
-    {
+    for (m, fov, w, h) in [(Mat4::ZERO, 60.0, 0, 0), (tilted(), 0.0, 10, 10), (tilted(), 180.0, 10, 1), (Mat4::IDENTITY, -5.0, 1, 1)] {
         let cam = PerspectiveCamera::new(m, fov, FovAxis::Diagonal, w, h);
         let ray = cam.generate_ray(Vec2::new(0.5, 0.5));
         assert!(ray.dir.is_finite() && ray.origin.is_finite());

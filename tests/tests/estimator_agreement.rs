@@ -10,8 +10,8 @@
 //! against PT in the first block that sees the light (z = 18.9).
 
 use ember_core::integrator::{MaxDepth, RenderParams};
-use ember_tests::chi2::sidak;
 use ember_core::render::EstimatorKind;
+use ember_tests::chi2::sidak;
 use ember_tests::render::{block_means, render_pass};
 use ember_tests::scenes::cornell;
 use ember_tests::stats::{MeanVar, normal_two_sided_p};

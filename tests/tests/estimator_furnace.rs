@@ -11,10 +11,10 @@
 //! read 1.90 (z ≈ −139).
 
 use ember_core::integrator::{MaxDepth, RenderParams};
+use ember_tests::chi2::sidak;
 use ember_tests::render::{PT_LT_BDPT, render_pass};
 use ember_tests::scenes::furnace_box;
 use ember_tests::stats::{MeanVar, normal_two_sided_p};
-use ember_tests::chi2::sidak;
 use ember_tests::tracer::BruteForce;
 
 #[test]

@@ -142,18 +142,10 @@ fn power_matches_monte_carlo() {
                     light.radiance(p, n, omega).average() * n.dot(omega).abs() * area * 4.0 * std::f32::consts::PI
                 }
                 "sphere" | "sphere small" => {
-                    let (c, radius) = if name == "sphere" {
-                        (Vec3::new(0.2, 0.3, -0.4), 0.7)
-                    } else {
-                        (Vec3::new(2.0, 1.0, 3.0), 1e-3)
-                    };
+                    let (c, radius) = if name == "sphere" { (Vec3::new(0.2, 0.3, -0.4), 0.7) } else { (Vec3::new(2.0, 1.0, 3.0), 1e-3) };
                     let n = warp::sample_uniform_sphere(u);
                     let area = 4.0 * std::f32::consts::PI * radius * radius;
-                    light.radiance(c + radius * n, n, omega).average()
-                        * n.dot(omega).abs()
-                        * area
-                        * 4.0
-                        * std::f32::consts::PI
+                    light.radiance(c + radius * n, n, omega).average() * n.dot(omega).abs() * area * 4.0 * std::f32::consts::PI
                 }
                 "point" | "spot" => {
                     // Intensity toward ω, read through sample_li from a point one unit along ω.
@@ -179,12 +171,7 @@ fn power_matches_monte_carlo() {
         let tol = 4.0 * est.std_error() + 1e-4 * power;
         let z = (est.mean() - power) / est.std_error().max(1e-30);
         println!("{name}: power {power:.6}, Monte Carlo {:.6} ± {:.6} (z = {z:.2})", est.mean(), est.std_error());
-        assert!(
-            (est.mean() - power).abs() <= tol,
-            "{name}: power {power} vs Monte Carlo {} ± {}",
-            est.mean(),
-            est.std_error()
-        );
+        assert!((est.mean() - power).abs() <= tol, "{name}: power {power} vs Monte Carlo {} ± {}", est.mean(), est.std_error());
     }
 }
 
@@ -211,8 +198,7 @@ fn spot_falloff_is_mitsubas() {
     for theta in [0.0f64, 5.0, 19.9, 20.1, 22.0, 27.5, 30.0, 34.0, 34.9, 35.1, 60.0, 120.0, 180.0] {
         for phi in [0.0f64, 2.0, 4.5] {
             let t = theta.to_radians();
-            let d =
-                frame.to_world(Vec3::new((t.sin() * phi.cos()) as f32, (t.sin() * phi.sin()) as f32, t.cos() as f32));
+            let d = frame.to_world(Vec3::new((t.sin() * phi.cos()) as f32, (t.sin() * phi.sin()) as f32, t.cos() as f32));
             let s = light.sample_li(pos + 2.5 * d, Vec2::ZERO).unwrap();
             let got = (s.radiance.g * s.dist * s.dist / intensity.g) as f64;
             let want = mitsuba(theta);
@@ -230,10 +216,7 @@ fn spot_falloff_is_mitsubas() {
     let hard = Light::spot(pos, axis, intensity, 20.0, 25.0);
     let inside = hard.sample_li(pos + frame.to_world(Vec3::new(0.3, 0.0, 1.0)), Vec2::ZERO).unwrap();
     assert!(rgb_close(inside.radiance * inside.dist * inside.dist, intensity, 1e-5));
-    assert!(
-        (hard.power() - 2.0 * std::f32::consts::PI * (1.0 - 20f32.to_radians().cos()) * intensity.average()).abs()
-            < 1e-3
-    );
+    assert!((hard.power() - 2.0 * std::f32::consts::PI * (1.0 - 20f32.to_radians().cos()) * intensity.average()).abs() < 1e-3);
 }
 
 /// Degenerate input: no panic, no NaN; no sample or zero density where nothing can be sampled.
@@ -249,13 +232,7 @@ fn degenerate_input_gives_no_sample_and_no_nan() {
         Light::directional(Vec3::ZERO, Rgb::ONE),
         Light::constant_environment(Rgb::ONE), // no scene bounds
     ];
-    let us = [
-        Vec2::ZERO,
-        Vec2::splat(0.5),
-        Vec2::splat(1.0 - f32::EPSILON / 2.0),
-        Vec2::new(0.0, 0.999),
-        Vec2::new(0.25, 0.0),
-    ];
+    let us = [Vec2::ZERO, Vec2::splat(0.5), Vec2::splat(1.0 - f32::EPSILON / 2.0), Vec2::new(0.0, 0.999), Vec2::new(0.25, 0.0)];
     for (i, light) in lights.iter().enumerate() {
         for &u in &us {
             for p_ref in [p, p + Vec3::X * 0.5, Vec3::ZERO] {
@@ -266,10 +243,7 @@ fn degenerate_input_gives_no_sample_and_no_nan() {
                 assert!(pdf.0.is_finite() && pdf.0 >= 0.0, "light {i}");
             }
             if let Some(s) = light.sample_le(u, u) {
-                assert!(
-                    s.p.is_finite() && s.dir.is_finite() && s.pdf_pos.0.is_finite() && s.pdf_dir.0.is_finite(),
-                    "light {i}: {s:?}"
-                );
+                assert!(s.p.is_finite() && s.dir.is_finite() && s.pdf_pos.0.is_finite() && s.pdf_dir.0.is_finite(), "light {i}: {s:?}");
             }
             let (a, w) = light.pdf_le(p, Vec3::Z, Vec3::Z);
             assert!(a.0.is_finite() && w.0.is_finite(), "light {i}");

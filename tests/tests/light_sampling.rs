@@ -91,10 +91,7 @@ fn li_dirs(light: Light, p_ref: Vec3) -> impl FnMut(&mut SampleStream) -> Option
 fn triangle_li(name: &str, two_sided: bool, p_ref: Vec3, binning: SphereBinning, config: Chi2Config) {
     let light = triangle(two_sided);
     let n = Vec3::Z;
-    chi2_sphere(name, &config, &binning, li_dirs(light, p_ref), |w| {
-        hit_triangle(p_ref, w).map_or(0.0, |p| light.pdf_li(p_ref, w, p, n).0 as f64)
-    })
-    .pass();
+    chi2_sphere(name, &config, &binning, li_dirs(light, p_ref), |w| hit_triangle(p_ref, w).map_or(0.0, |p| light.pdf_li(p_ref, w, p, n).0 as f64)).pass();
 }
 
 fn toward_centroid(p_ref: Vec3) -> SphereBinning {
@@ -151,9 +148,7 @@ fn triangle_two_sided_grazing() {
         |q| {
             let (az, el) = (az0 + q.x * (az1 - az0), el0 + q.y * (el1 - el0));
             let w = Vec3::new(-az.cos() * el.cos(), -az.sin() * el.cos(), el.sin());
-            hit_triangle(p_ref, w).map_or(0.0, |p| {
-                light.pdf_li(p_ref, w, p, Vec3::Z).0 as f64 * (el.cos() * (az1 - az0) * (el1 - el0)) as f64
-            })
+            hit_triangle(p_ref, w).map_or(0.0, |p| light.pdf_li(p_ref, w, p, Vec3::Z).0 as f64 * (el.cos() * (az1 - az0) * (el1 - el0)) as f64)
         },
     )
     .pass();
@@ -270,10 +265,8 @@ fn environment() -> Light {
 fn environment_li_is_uniform() {
     let light = environment();
     let p_ref = Vec3::new(0.2, 0.1, 0.3);
-    chi2_sphere("environment li", &cfg(12), &SphereBinning::uniform(), li_dirs(light, p_ref), |w| {
-        light.pdf_li(p_ref, w, p_ref + w, Vec3::ZERO).0 as f64
-    })
-    .pass();
+    chi2_sphere("environment li", &cfg(12), &SphereBinning::uniform(), li_dirs(light, p_ref), |w| light.pdf_li(p_ref, w, p_ref + w, Vec3::ZERO).0 as f64)
+        .pass();
 }
 
 // Injected bug: `pdf_le`'s direction density 1/(2π) for the environment fails this with
@@ -312,11 +305,7 @@ fn disk_positions(name: &str, light: Light, seed: u64) {
         |q| {
             let d = 2.0 * q - Vec2::ONE;
             let dir = Vec3::new(0.36, 0.48, -0.8);
-            if d.length_squared() <= 1.0 {
-                (light.pdf_le(SCENE_C, Vec3::ZERO, dir).0.0 * 4.0 * SCENE_R * SCENE_R) as f64
-            } else {
-                0.0
-            }
+            if d.length_squared() <= 1.0 { (light.pdf_le(SCENE_C, Vec3::ZERO, dir).0.0 * 4.0 * SCENE_R * SCENE_R) as f64 } else { 0.0 }
         },
     );
     assert!(along_ok.get(), "{name}: emission does not start one radius upstream");

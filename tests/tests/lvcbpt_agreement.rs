@@ -12,13 +12,14 @@
 //!   z = -7.7 (LVCBPT 0.137 vs PT 0.123);
 //! - the connection estimate not divided by its selection probability N/|C|: fails,
 //!   block 0 at z = 22.0.
+//!
 //! A count that is wrong but used CONSISTENTLY by every strategy (e.g. n = 1 for the
 //! connections everywhere) only changes the weights, which still sum to one: this test
 //! cannot and need not see it (it passed); `lvcbpt_mis.rs` checks the counts themselves.
 
 use ember_core::integrator::{MaxDepth, RenderParams};
-use ember_tests::chi2::sidak;
 use ember_core::render::{EstimatorConfig, EstimatorKind, LvcbptConfig, Renderer};
+use ember_tests::chi2::sidak;
 use ember_tests::render::{Passes, assert_blocks_agree, push_block_means, render_pass};
 use ember_tests::scenes::cornell;
 use ember_tests::stats::MeanVar;
@@ -53,8 +54,12 @@ fn lvcbpt_agrees_with_pt_per_block_on_the_cornell_box() {
     }
     let alpha = sidak(0.01, BLOCKS * 3);
     let min_p = assert_blocks_agree("LVCBPT vs PT", &pt, &lv, alpha);
-    println!("{} comparisons, smallest p = {min_p:.4} (α per test {alpha:.2e}); c̄-based counts {:?}", BLOCKS * 3, match &lvcbpt.renderer {
-        Renderer::Lvcbpt(l) => l.counts,
-        _ => unreachable!("LVCBPT"),
-    });
+    println!(
+        "{} comparisons, smallest p = {min_p:.4} (α per test {alpha:.2e}); c̄-based counts {:?}",
+        BLOCKS * 3,
+        match &lvcbpt.renderer {
+            Renderer::Lvcbpt(l) => l.counts,
+            _ => unreachable!("LVCBPT"),
+        }
+    );
 }

@@ -18,8 +18,8 @@ use ember_core::integrator::bdpt::{Vertex, VertexKind, camera_subpath, connect_c
 use ember_core::integrator::lvcbpt::StrategyCounts;
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::rng::{SampleStream, Stream};
-use ember_tests::scenes::cornell_with_spheres;
 use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split};
+use ember_tests::scenes::cornell_with_spheres;
 use ember_tests::tracer::BruteForce;
 use glam::Vec2;
 
@@ -44,7 +44,10 @@ fn counted_weights_equal_brute_force_and_sum_to_one() {
                 if (s == 1 && t == 1) || s + t < 2 || s + t > 9 {
                     continue;
                 }
-                let Some(c) = connect_counted(&scene, &tracer, &light[..s], &cam[..t.max(1)], s, t, lrng.next_f32(), lrng.next_2d(), &mut counters, &count) else { continue };
+                let Some(c) = connect_counted(&scene, &tracer, &light[..s], &cam[..t.max(1)], s, t, lrng.next_f32(), lrng.next_2d(), &mut counters, &count)
+                else {
+                    continue;
+                };
                 let mut x: Vec<Vertex> = light[..s].to_vec();
                 let mut cpart: Vec<Vertex> = cam[..t].to_vec();
                 if let Some(v) = c.sampled {

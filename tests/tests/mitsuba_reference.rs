@@ -13,9 +13,9 @@
 //! wall's corner (z = −92).
 
 use ember_core::integrator::{MaxDepth, RenderParams};
+use ember_core::render::EstimatorKind;
 use ember_tests::chi2::sidak;
 use ember_tests::reference::{read_exr, scenes_dir};
-use ember_core::render::EstimatorKind;
 use ember_tests::render::{block_means, render_pass};
 use ember_tests::scenes::cornell;
 use ember_tests::stats::{MeanVar, normal_two_sided_p};

@@ -51,12 +51,7 @@ fn square(x: f64) -> f64 {
 }
 
 /// Draw `counts[i]` pairs from each technique into `buf`, grouped by technique.
-fn draw_all<'b>(
-    techs: &[Tech],
-    counts: &[usize],
-    rng: &mut SampleStream,
-    buf: &'b mut [Pair<f64, f64>],
-) -> &'b [Pair<f64, f64>] {
+fn draw_all<'b>(techs: &[Tech], counts: &[usize], rng: &mut SampleStream, buf: &'b mut [Pair<f64, f64>]) -> &'b [Pair<f64, f64>] {
     let mut k = 0;
     for (tech, &n) in techs.iter().zip(counts) {
         for _ in 0..n {
@@ -87,12 +82,7 @@ fn check_unbiased(name: &str, seed: u64, techs: &[Tech], counts: &[usize], f: fn
     let z = (stats.mean() - integral) / stats.std_error();
     let p = normal_two_sided_p(z);
     let alpha = sidak(0.01, UNBIASED_TESTS);
-    println!(
-        "{name}: mean {:.5} ± {:.5} (I = {integral}), sd {:.4}, z = {z:.2}, p = {p:.3}",
-        stats.mean(),
-        stats.std_error(),
-        stats.variance().sqrt()
-    );
+    println!("{name}: mean {:.5} ± {:.5} (I = {integral}), sd {:.4}, z = {z:.2}, p = {p:.3}", stats.mean(), stats.std_error(), stats.variance().sqrt());
     assert!(p >= alpha, "{name}: mean {} vs {integral}, z = {z:.2}, p = {p:.2e} < {alpha:.2e}", stats.mean());
 }
 
@@ -252,11 +242,9 @@ fn check_weights(name: &str, mmis: &Mmis<'_, Fixed, f64, f64>, x: f64) {
 #[test]
 fn densities_spanning_sixty_orders_of_magnitude_give_finite_weights_summing_to_one() {
     let scales = [1e-30, 1e-20, 1e-10, 1.0, 1e10, 1e20, 1e30];
-    let techs: Vec<Fixed> =
-        scales.iter().enumerate().map(|(i, &scale)| Fixed { scale, classical: i % 2 == 0 }).collect();
+    let techs: Vec<Fixed> = scales.iter().enumerate().map(|(i, &scale)| Fixed { scale, classical: i % 2 == 0 }).collect();
     let counts = [2; 7];
-    let pairs: Vec<Pair<f64, f64>> =
-        (0..14).map(|k| Pair { t: 0.1 * k as f64, x: 0.05 * k as f64 }).collect();
+    let pairs: Vec<Pair<f64, f64>> = (0..14).map(|k| Pair { t: 0.1 * k as f64, x: 0.05 * k as f64 }).collect();
     let mmis = Mmis::new(&techs, &counts, &pairs).unwrap();
     for pair in &pairs {
         check_weights("1e-30..1e30", &mmis, pair.x);

@@ -31,9 +31,9 @@
 use ember_core::geometry::RayQuery;
 use ember_core::integrator::spcbpt::{self, PassCache};
 use ember_core::integrator::{MaxDepth, RenderParams};
+use ember_core::render::{EstimatorConfig, EstimatorKind};
 use ember_core::spectrum::Rgb;
 use ember_tests::chi2::sidak;
-use ember_core::render::{EstimatorConfig, EstimatorKind};
 use ember_tests::render::{Passes, assert_blocks_agree, push_block_means, render_pass, spcbpt_config, spcbpt_model};
 use ember_tests::scenes::cornell;
 use ember_tests::stats::MeanVar;
@@ -58,6 +58,7 @@ fn push(stats: &mut [[MeanVar; 3]], img: &[[f64; 3]]) {
 ///   fails, block 3 at z = 4.81 (PT 0.0583 vs 0.0557);
 /// - the paper's eq. 20 as printed (an extra M_r inside the sum: dividing by
 ///   j·M·M_r,k·(M_r,k/M_k(j))): fails, block 0 at z = 27.5 (PT 0.120 vs 0.0915).
+///
 /// Measured: 317 retained vertices after 4 passes of chain 0 (its last pass made 87),
 /// 37 of 128 FIFOs full.
 fn reuse_chains<Q: RayQuery>(sp: &mut Passes<'_, Q>, chains: u32, length: u32, m0: u32) -> Vec<[MeanVar; 3]> {
@@ -119,7 +120,12 @@ fn spcbpt_agrees_with_pt_per_block_on_the_cornell_box() {
     let alpha = sidak(0.01, 2 * BLOCKS * 3);
     let min_p = assert_blocks_agree("SPCBPT vs PT", &pt, &stats, alpha);
     let min_reuse = assert_blocks_agree("SPCBPT with reuse vs PT", &pt, &reuse, alpha);
-    println!("{} comparisons each, smallest p = {min_p:.4} without reuse, {min_reuse:.4} with reuse (α per test {alpha:.2e}); losses {losses:?}; {} × {} subspaces", BLOCKS * 3, model.classifier.n_eye, model.classifier.n_light);
+    println!(
+        "{} comparisons each, smallest p = {min_p:.4} without reuse, {min_reuse:.4} with reuse (α per test {alpha:.2e}); losses {losses:?}; {} × {} subspaces",
+        BLOCKS * 3,
+        model.classifier.n_eye,
+        model.classifier.n_light
+    );
 }
 
 /// A pass whose light paths include empty ones (an emission sample that failed, as a spot

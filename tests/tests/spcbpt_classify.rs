@@ -20,9 +20,7 @@
 use ember_core::Vec2;
 use ember_core::Vec3;
 use ember_core::rng::{SampleStream, Stream};
-use ember_core::spcbpt::classify::{
-    nearest_centroid, sample_centroids, DecisionTree, DistanceParams, LightSourceBins, TreeParams,
-};
+use ember_core::spcbpt::classify::{DecisionTree, DistanceParams, LightSourceBins, TreeParams, nearest_centroid, sample_centroids};
 use ember_core::spcbpt::features::SubpathFeature;
 use ember_tests::chi2::sidak;
 use ember_tests::stats::chi2_survival;
@@ -41,12 +39,7 @@ struct Face {
 
 /// The Cornell-like scene: the [-1,1]³ box without its front wall, plus a short block.
 fn cornell_faces() -> Vec<Face> {
-    let f = |o: [f32; 3], u: [f32; 3], v: [f32; 3], n: [f32; 3]| Face {
-        origin: Vec3::from(o),
-        u: Vec3::from(u),
-        v: Vec3::from(v),
-        normal: Vec3::from(n),
-    };
+    let f = |o: [f32; 3], u: [f32; 3], v: [f32; 3], n: [f32; 3]| Face { origin: Vec3::from(o), u: Vec3::from(u), v: Vec3::from(v), normal: Vec3::from(n) };
     vec![
         f([-1.0, -1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0], [0.0, 1.0, 0.0]), // floor
         f([-1.0, 1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0], [0.0, -1.0, 0.0]), // ceiling
@@ -54,7 +47,7 @@ fn cornell_faces() -> Vec<Face> {
         f([-1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0], [1.0, 0.0, 0.0]), // left
         f([1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0], [-1.0, 0.0, 0.0]), // right
         f([-0.6, -0.3, -0.5], [0.5, 0.0, 0.0], [0.0, 0.0, 0.5], [0.0, 1.0, 0.0]), // block top
-        f([-0.6, -1.0, 0.0], [0.5, 0.0, 0.0], [0.0, 0.7, 0.0], [0.0, 0.0, 1.0]), // block front
+        f([-0.6, -1.0, 0.0], [0.5, 0.0, 0.0], [0.0, 0.7, 0.0], [0.0, 0.0, 1.0]),  // block front
         f([-0.1, -1.0, -0.5], [0.0, 0.7, 0.0], [0.0, 0.0, 0.5], [1.0, 0.0, 0.0]), // block right
     ]
 }
@@ -126,8 +119,7 @@ fn sigma2_is_the_largest_axis_variance_and_distance_is_eq18() {
 #[test]
 fn centroids_are_drawn_in_proportion_to_weight() {
     let weights = [1.0f32, 2.0, 3.0, 4.0, 0.0, 10.0, 0.5];
-    let candidates: Vec<SubpathFeature> =
-        (0..weights.len()).map(|i| SubpathFeature::new(Vec3::splat(i as f32), Vec3::Y, Vec3::ZERO)).collect();
+    let candidates: Vec<SubpathFeature> = (0..weights.len()).map(|i| SubpathFeature::new(Vec3::splat(i as f32), Vec3::Y, Vec3::ZERO)).collect();
     let draws = 40_000u64;
     let mut counts = [0u64; 7];
     for seed in 0..draws {

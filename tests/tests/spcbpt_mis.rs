@@ -20,14 +20,14 @@
 
 use ember_core::integrator::bdpt::mis::mis_weight_counted;
 use ember_core::integrator::bdpt::{Vertex, VertexKind, camera_subpath, light_subpath};
-use ember_core::spectrum::Rgb;
 use ember_core::integrator::spcbpt::{self, KnownLabels, Model, join, memoize_light_path, path_counts, path_counts_labelled};
-use ember_core::scene::Scene;
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::rng::{SampleStream, Stream};
+use ember_core::scene::Scene;
+use ember_core::spectrum::Rgb;
+use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split};
 use ember_tests::render::{spcbpt_config, spcbpt_model};
 use ember_tests::scenes::cornell_with_spheres;
-use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split};
 use ember_tests::tracer::BruteForce;
 use glam::Vec2;
 
@@ -71,7 +71,23 @@ fn check_weights(scene: &Scene, tracer: &BruteForce, params: &RenderParams, mode
                 // per-vertex memo (read for `light[..s]`).
                 let labels = (i % 2 == 1).then(|| spcbpt::CameraLabels::new(model, &cam));
                 let memo = if i % 2 == 1 { &light_memo[..s] } else { &[][..] };
-                let Some(c) = spcbpt::strategy_labelled(scene, tracer, model, LIGHT_TRACING, &light[..s], &cam[..t], labels.as_ref(), memo, s, t, lrng.next_f32(), lrng.next_2d(), &mut counters) else { continue };
+                let Some(c) = spcbpt::strategy_labelled(
+                    scene,
+                    tracer,
+                    model,
+                    LIGHT_TRACING,
+                    &light[..s],
+                    &cam[..t],
+                    labels.as_ref(),
+                    memo,
+                    s,
+                    t,
+                    lrng.next_f32(),
+                    lrng.next_2d(),
+                    &mut counters,
+                ) else {
+                    continue;
+                };
                 let x = join(&light, &cam, c.sampled, s, t);
                 if x.last().unwrap().kind == VertexKind::InfiniteLight {
                     continue;
@@ -80,11 +96,16 @@ fn check_weights(scene: &Scene, tracer: &BruteForce, params: &RenderParams, mode
                 // some evaluated with memos and some without, would not sum to one).
                 {
                     let fresh_light = c.sampled.is_none() || t == 1;
-                    let known = KnownLabels { camera: (t >= 2).then(|| labels_all.as_ref()).flatten(), light: if fresh_light { &light_memo[..s] } else { &[] }, s };
+                    let known = KnownLabels { camera: labels_all.as_ref().filter(|_| t >= 2), light: if fresh_light { &light_memo[..s] } else { &[] }, s };
                     let (mut with, mut without) = ([0.0f64; 70], [0.0f64; 70]);
                     path_counts_labelled(scene, model, LIGHT_TRACING, &x, known, &mut with);
                     path_counts(scene, model, LIGHT_TRACING, &x, &mut without);
-                    assert!(with.iter().zip(&without).all(|(a, b)| a.to_bits() == b.to_bits()), "({s}, {t}): counts with memos {:?} vs without {:?}", &with[..x.len() + 1], &without[..x.len() + 1]);
+                    assert!(
+                        with.iter().zip(&without).all(|(a, b)| a.to_bits() == b.to_bits()),
+                        "({s}, {t}): counts with memos {:?} vs without {:?}",
+                        &with[..x.len() + 1],
+                        &without[..x.len() + 1]
+                    );
                     memo_checks += 1;
                 }
                 // A camera path that hit an emitter must find the light-source bin a light
@@ -123,7 +144,9 @@ fn check_weights(scene: &Scene, tracer: &BruteForce, params: &RenderParams, mode
             }
         }
     }
-    println!("{bins} light-source bins: checked {checked} weights (worst |Δw| = {worst:e}), {paths} paths summed (worst |Σw − 1| = {worst_sum:e}), {emitter_hits} emitter hits classified, {memo_checks} count tables equal with memos");
+    println!(
+        "{bins} light-source bins: checked {checked} weights (worst |Δw| = {worst:e}), {paths} paths summed (worst |Σw − 1| = {worst_sum:e}), {emitter_hits} emitter hits classified, {memo_checks} count tables equal with memos"
+    );
     assert!(checked > 3000 && paths > 500, "too few: {checked} weights, {paths} paths");
     assert!(bins == 0 || emitter_hits >= 10, "too few emitter hits: {emitter_hits}");
     // The same on 2000 emission samples: as a light vertex and as an emitting surface hit.
@@ -143,4 +166,3 @@ fn check_weights(scene: &Scene, tracer: &BruteForce, params: &RenderParams, mode
         assert_eq!(seen.len() as u32, bins, "every bin is reached");
     }
 }
-

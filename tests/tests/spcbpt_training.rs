@@ -19,9 +19,9 @@
 
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::spcbpt::adam::{Adam, AdamParams};
-use ember_core::spcbpt::loss::{loss_and_gradient, loss_only, TrainingSet, TrainingSplit};
-use ember_core::spcbpt::subspace_matrix::{gamma_from_theta, SubspaceMatrix};
-use ember_core::spcbpt::train::{train, TrainParams};
+use ember_core::spcbpt::loss::{TrainingSet, TrainingSplit, loss_and_gradient, loss_only};
+use ember_core::spcbpt::subspace_matrix::{SubspaceMatrix, gamma_from_theta};
+use ember_core::spcbpt::train::{TrainParams, train};
 
 fn rng(index: u32) -> SampleStream {
     SampleStream::for_sample(0x5bc9, Stream::Aux, index, 0, 0)
@@ -44,8 +44,7 @@ fn gamma_f64(theta: &[f64], n_light: usize, n_eye: usize, m: f64) -> Vec<f64> {
 fn loss_f64(set: &TrainingSet, gamma: &[f64], n_light: usize) -> f64 {
     (0..set.len())
         .map(|i| {
-            let f = set.fixed(i)
-                + set.splits(i).iter().map(|s| s.coef * gamma[s.eye as usize * n_light + s.light as usize]).sum::<f64>();
+            let f = set.fixed(i) + set.splits(i).iter().map(|s| s.coef * gamma[s.eye as usize * n_light + s.light as usize]).sum::<f64>();
             set.weight(i) / f
         })
         .sum()
@@ -56,13 +55,8 @@ fn random_set(n_paths: u32, n_light: usize, n_eye: usize, with_fixed: bool) -> T
     for i in 0..n_paths {
         let mut r = rng(1000 + i);
         let k = 1 + r.next_below(3);
-        let splits: Vec<TrainingSplit> = (0..k)
-            .map(|_| TrainingSplit {
-                eye: r.next_below(n_eye as u32),
-                light: r.next_below(n_light as u32),
-                coef: 0.1 + 3.0 * r.next_f64(),
-            })
-            .collect();
+        let splits: Vec<TrainingSplit> =
+            (0..k).map(|_| TrainingSplit { eye: r.next_below(n_eye as u32), light: r.next_below(n_light as u32), coef: 0.1 + 3.0 * r.next_f64() }).collect();
         let fixed = if with_fixed && r.next_f32() < 0.7 { 0.5 * r.next_f64() } else { 0.0 };
         set.push_path(0.01 + r.next_f64() * r.next_f64() * 5.0, fixed, &splits);
     }
@@ -122,11 +116,7 @@ fn gradient_matches_central_differences() {
                 - loss_f64(&set, &gamma_f64(&minus, n_light, n_eye, m as f64), n_light))
                 / (2.0 * h);
             let err = (grad[k] - fd).abs();
-            assert!(
-                err < 1e-4 * scale + 1e-3 * fd.abs(),
-                "m = {m}: ∂L/∂Θ[{k}] analytic {} vs central difference {fd} (err {err:e}, scale {scale:e})",
-                grad[k]
-            );
+            assert!(err < 1e-4 * scale + 1e-3 * fd.abs(), "m = {m}: ∂L/∂Θ[{k}] analytic {} vs central difference {fd} (err {err:e}, scale {scale:e})", grad[k]);
         }
         // The gradient is ADDED: a second call doubles it.
         let first = grad.clone();
@@ -159,13 +149,7 @@ fn adam_recovers_closed_form_optimum() {
     }
     let mixture = 0.1;
     let mut theta = vec![0.0f32; n_light * n_eye];
-    let params = TrainParams {
-        adam: AdamParams { learning_rate: 0.05, ..AdamParams::default() },
-        batch: set.len(),
-        epochs: 600,
-        mixture,
-        seed: 1,
-    };
+    let params = TrainParams { adam: AdamParams { learning_rate: 0.05, ..AdamParams::default() }, batch: set.len(), epochs: 600, mixture, seed: 1 };
     let losses = train(&set, &mut theta, n_light, n_eye, &params);
     assert!(losses.iter().all(|l| l.is_finite()));
     assert!(losses.last().unwrap() < &losses[0]);
@@ -186,9 +170,7 @@ fn adam_recovers_closed_form_optimum() {
 /// The optimum with fixed > 0 by nested bisection (KKT: Σ_{i∈l} w_i c_i/(f_i + c_i Γ_l)² = λ
 /// for every l, Σ_l Γ_l = 1), against Adam.
 fn kkt_optimum(paths: &[(usize, f64, f64, f64)], n_light: usize) -> Vec<f64> {
-    let h = |l: usize, g: f64| -> f64 {
-        paths.iter().filter(|p| p.0 == l).map(|&(_, w, f, c)| w * c / ((f + c * g) * (f + c * g))).sum()
-    };
+    let h = |l: usize, g: f64| -> f64 { paths.iter().filter(|p| p.0 == l).map(|&(_, w, f, c)| w * c / ((f + c * g) * (f + c * g))).sum() };
     let gamma_at = |lambda: f64| -> Vec<f64> {
         (0..n_light)
             .map(|l| {
@@ -235,13 +217,7 @@ fn adam_recovers_numerical_optimum_with_fixed_strategies() {
         assert!(g > mixture as f64 / n_light as f64 + 0.01, "optimum {optimum:?} not inside the mixed set");
     }
     let mut theta = vec![0.0f32; n_light];
-    let params = TrainParams {
-        adam: AdamParams { learning_rate: 0.05, ..AdamParams::default() },
-        batch: set.len(),
-        epochs: 800,
-        mixture,
-        seed: 2,
-    };
+    let params = TrainParams { adam: AdamParams { learning_rate: 0.05, ..AdamParams::default() }, batch: set.len(), epochs: 800, mixture, seed: 2 };
     train(&set, &mut theta, n_light, 1, &params);
     let gamma = SubspaceMatrix::from_theta(&theta, n_light, 1, mixture);
     for (l, &g) in optimum.iter().enumerate() {
@@ -398,11 +374,13 @@ fn epoch_time_at_paper_scale() {
     let mut grad = vec![0.0f64; n_light * n_eye];
     // Minimum of 7 runs per piece: the shared 2-core machine is noisy.
     let min_ms = |f: &mut dyn FnMut()| -> f64 {
-        (0..7).map(|_| {
-            let t = Instant::now();
-            f();
-            t.elapsed().as_secs_f64() * 1e3
-        }).fold(f64::INFINITY, f64::min)
+        (0..7)
+            .map(|_| {
+                let t = Instant::now();
+                f();
+                t.elapsed().as_secs_f64() * 1e3
+            })
+            .fold(f64::INFINITY, f64::min)
     };
     let gamma_ms = min_ms(&mut || gamma_from_theta(&theta, n_light, n_eye, 0.1, &mut gamma));
     let batch: Vec<u32> = (0..10_000u32).map(|i| i.wrapping_mul(2_654_435_761) % 1_000_000).collect();
@@ -465,13 +443,7 @@ fn sweep(exponent: f64) {
     println!("uniform Γ: excess loss {:.4}", uniform / best - 1.0);
     for lr in [0.005f32, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5] {
         let mut theta = vec![0.0f32; n_light * n_eye];
-        let params = TrainParams {
-            adam: AdamParams { learning_rate: lr, ..AdamParams::default() },
-            batch: 400,
-            epochs: 2,
-            mixture: 0.1,
-            seed: 4,
-        };
+        let params = TrainParams { adam: AdamParams { learning_rate: lr, ..AdamParams::default() }, batch: 400, epochs: 2, mixture: 0.1, seed: 4 };
         train(&set, &mut theta, n_light, n_eye, &params);
         let gamma = SubspaceMatrix::from_theta(&theta, n_light, n_eye, 0.1);
         let (loss, _) = loss_only(&set, 0..set.len(), gamma.as_slice(), n_light, n_eye);

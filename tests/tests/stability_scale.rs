@@ -23,9 +23,9 @@
 
 use ember_core::camera::{FovAxis, PerspectiveCamera};
 use ember_core::integrator::{MaxDepth, RenderParams};
-use ember_core::scene::{AreaEmission, Scene, SceneBuilder};
 use ember_core::render::EstimatorKind;
-use ember_tests::render::{render_pass};
+use ember_core::scene::{AreaEmission, Scene, SceneBuilder};
+use ember_tests::render::render_pass;
 use ember_tests::scenes::cornell;
 use ember_tests::stats::MeanVar;
 use ember_tests::tracer::BruteForce;

@@ -31,14 +31,6 @@ impl Conductor {
         }
         let wi = local::reflect(wo);
         let f = self.reflectance(wo.z) / wi.z;
-        Some(BsdfSample {
-            wi,
-            f,
-            pdf: SolidAnglePdf(1.0),
-            pdf_rev: SolidAnglePdf(1.0),
-            is_delta: true,
-            is_transmission: false,
-            eta: 1.0,
-        })
+        Some(BsdfSample { wi, f, pdf: SolidAnglePdf(1.0), pdf_rev: SolidAnglePdf(1.0), is_delta: true, is_transmission: false, eta: 1.0 })
     }
 }

@@ -147,12 +147,7 @@ impl Material {
     /// distribution `kind` of roughness `alpha` (clamped to ≥ 10⁻⁴), Smith masking, and
     /// the conductor Fresnel term of [`Self::conductor`].
     pub fn rough_conductor(kind: MicrofacetKind, alpha: f32, eta: Rgb, k: Rgb, specular_reflectance: Rgb) -> Self {
-        Self::new(Kind::RoughConductor(RoughConductor {
-            distr: Microfacet::new(kind, alpha),
-            eta,
-            k,
-            specular_reflectance,
-        }))
+        Self::new(Kind::RoughConductor(RoughConductor { distr: Microfacet::new(kind, alpha), eta, k, specular_reflectance }))
     }
 
     /// Smooth dielectric interface (Mitsuba `dielectric`) between an inside of index
@@ -160,23 +155,12 @@ impl Material {
     /// with probability F and refracts with 1 − F. Invalid indices (non-positive or
     /// non-finite ratio) are read as index-matched.
     pub fn dielectric(int_ior: f32, ext_ior: f32, specular_reflectance: Rgb, specular_transmittance: Rgb) -> Self {
-        Self::new(Kind::Dielectric(Dielectric {
-            eta: relative_ior(int_ior, ext_ior),
-            specular_reflectance,
-            specular_transmittance,
-        }))
+        Self::new(Kind::Dielectric(Dielectric { eta: relative_ior(int_ior, ext_ior), specular_reflectance, specular_transmittance }))
     }
 
     /// Rough dielectric interface (Mitsuba `roughdielectric`, isotropic): Walter et al.'s
     /// microfacet reflection and refraction, roughness `alpha` clamped to ≥ 10⁻⁴.
-    pub fn rough_dielectric(
-        kind: MicrofacetKind,
-        alpha: f32,
-        int_ior: f32,
-        ext_ior: f32,
-        specular_reflectance: Rgb,
-        specular_transmittance: Rgb,
-    ) -> Self {
+    pub fn rough_dielectric(kind: MicrofacetKind, alpha: f32, int_ior: f32, ext_ior: f32, specular_reflectance: Rgb, specular_transmittance: Rgb) -> Self {
         Self::new(Kind::RoughDielectric(RoughDielectric {
             distr: Microfacet::new(kind, alpha),
             eta: relative_ior(int_ior, ext_ior),

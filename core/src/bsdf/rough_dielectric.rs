@@ -132,11 +132,7 @@ impl RoughDielectric {
         let m = self.distr.sample_visible(wo_up, u)?;
         let fr = fresnel::dielectric(wo.dot(m), self.eta);
         let reflected = u_lobe < fr.f;
-        let wi = if reflected {
-            reflect(wo, m)
-        } else {
-            fresnel::refract(wo, m, fr.cos_t, fr.eta_ti).normalize_or_zero()
-        };
+        let wi = if reflected { reflect(wo, m) } else { fresnel::refract(wo, m, fr.cos_t, fr.eta_ti).normalize_or_zero() };
         // A reflection must stay on wo's side, a refraction must cross.
         if (wi.z * wo.z > 0.0) != reflected || wi.z == 0.0 {
             return None;
@@ -146,15 +142,7 @@ impl RoughDielectric {
         if !(pdf.value() > 0.0 && pdf.value().is_finite() && f.is_finite()) {
             return None;
         }
-        Some(BsdfSample {
-            wi,
-            f,
-            pdf,
-            pdf_rev: self.pdf(wi, wo),
-            is_delta: false,
-            is_transmission: !reflected,
-            eta: if reflected { 1.0 } else { fr.eta_it },
-        })
+        Some(BsdfSample { wi, f, pdf, pdf_rev: self.pdf(wi, wo), is_delta: false, is_transmission: !reflected, eta: if reflected { 1.0 } else { fr.eta_it } })
     }
 
     /// Reflectance-like colour at normal incidence: F0·R_s + (1 − F0)·T_s.

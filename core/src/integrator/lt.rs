@@ -20,7 +20,14 @@ use crate::scene::Scene;
 const DIMS_PER_BOUNCE: u32 = 4;
 
 /// Trace light paths `paths` of pass `pass`; every camera connection goes to `splat`.
-pub fn trace_paths<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, pass: u32, paths: Range<u32>, splat: &mut dyn FnMut(Splat)) -> Counters {
+pub fn trace_paths<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    pass: u32,
+    paths: Range<u32>,
+    splat: &mut dyn FnMut(Splat),
+) -> Counters {
     let mut counters = Counters::default();
     for path in paths {
         let mut rng = SampleStream::for_sample(params.seed, Stream::Light, path, pass, 0);
@@ -29,7 +36,14 @@ pub fn trace_paths<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Ren
     counters
 }
 
-fn trace_one<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, rng: &mut SampleStream, counters: &mut Counters, splat: &mut dyn FnMut(Splat)) {
+fn trace_one<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    rng: &mut SampleStream,
+    counters: &mut Counters,
+    splat: &mut dyn FnMut(Splat),
+) {
     let Some(table) = scene.light_selection.as_ref() else { return };
     // Sample the light path's first vertex and direction.
     let chosen = table.sample(rng.next_f32());

@@ -132,7 +132,15 @@ fn emission_weight(params: &RenderParams, prev: Option<PrevBounce>, light_pdf: i
 
 /// One light sample from `sp`: choose a light ∝ power, sample a point on it, trace the
 /// shadow ray, weight against BSDF sampling. Returns the weighted contribution (without β).
-fn next_event<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, sp: &SurfacePoint, u_light: f32, u_point: Vec2, counters: &mut Counters) -> Rgb {
+fn next_event<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    sp: &SurfacePoint,
+    u_light: f32,
+    u_point: Vec2,
+    counters: &mut Counters,
+) -> Rgb {
     let Some(table) = scene.light_selection.as_ref() else { return Rgb::ZERO };
     let chosen = table.sample(u_light);
     let light = &scene.lights[chosen.index];

@@ -47,11 +47,7 @@ impl SceneDisk {
     /// 1/(πR²).
     #[inline]
     fn pdf(&self) -> AreaPdf {
-        if self.radius > 0.0 {
-            AreaPdf(warp::concentric_disk_pdf(Vec2::ZERO).value() / (self.radius * self.radius))
-        } else {
-            AreaPdf::ZERO
-        }
+        if self.radius > 0.0 { AreaPdf(warp::concentric_disk_pdf(Vec2::ZERO).value() / (self.radius * self.radius)) } else { AreaPdf::ZERO }
     }
 
     /// πR².

@@ -56,16 +56,7 @@ impl PointLight {
     pub(super) fn sample_le(&self, u_dir: Vec2) -> Option<EmissionSample> {
         let dir = warp::sample_uniform_sphere(u_dir);
         let (pdf_pos, pdf_dir) = Self::pdf_le();
-        Some(EmissionSample {
-            p: self.position,
-            n: Vec3::ZERO,
-            dir,
-            radiance: self.intensity,
-            pdf_pos,
-            pdf_dir,
-            delta_pos: true,
-            delta_dir: false,
-        })
+        Some(EmissionSample { p: self.position, n: Vec3::ZERO, dir, radiance: self.intensity, pdf_pos, pdf_dir, delta_pos: true, delta_dir: false })
     }
 
     /// (1 (delta), 1/(4π)).
@@ -99,15 +90,7 @@ impl SpotLight {
         let axis = direction.normalize_or(Vec3::Z);
         let cutoff = cutoff_deg.clamp(0.0, 180.0).to_radians();
         let beam = beam_deg.clamp(0.0, 180.0).to_radians().min(cutoff);
-        Self {
-            position,
-            frame: Frame::from_normal(axis),
-            intensity,
-            cutoff,
-            beam,
-            cos_cutoff: cos(cutoff),
-            cos_beam: cos(beam),
-        }
+        Self { position, frame: Frame::from_normal(axis), intensity, cutoff, beam, cos_cutoff: cos(cutoff), cos_beam: cos(beam) }
     }
 
     /// Mitsuba's falloff for a unit direction `local` in the spot's frame.

@@ -179,16 +179,7 @@ impl SphereLight {
         if !pdf_pos.is_positive() || !pdf_dir.is_positive() {
             return None;
         }
-        Some(EmissionSample {
-            p,
-            n,
-            dir,
-            radiance: self.radiance,
-            pdf_pos,
-            pdf_dir,
-            delta_pos: false,
-            delta_dir: false,
-        })
+        Some(EmissionSample { p, n, dir, radiance: self.radiance, pdf_pos, pdf_dir, delta_pos: false, delta_dir: false })
     }
 
     /// Inverse of the position sampling of [`Self::sample_le`] for surface point `p`.

@@ -106,16 +106,7 @@ impl TriangleLight {
         if !pdf_dir.is_positive() || !pdf_pos.is_positive() {
             return None;
         }
-        Some(EmissionSample {
-            p,
-            n: self.n,
-            dir,
-            radiance: self.radiance(dir),
-            pdf_pos,
-            pdf_dir,
-            delta_pos: false,
-            delta_dir: false,
-        })
+        Some(EmissionSample { p, n: self.n, dir, radiance: self.radiance(dir), pdf_pos, pdf_dir, delta_pos: false, delta_dir: false })
     }
 
     /// (1/A, cos/π) one-sided; (1/A, |cos|/(2π)) two-sided.

@@ -31,11 +31,7 @@ impl<'a, Q, X, T> Mmis<'a, Q, X, T> {
     /// the counts add up to the number of pairs.
     pub fn new(techniques: &'a [Q], counts: &'a [usize], pairs: &'a [Pair<X, T>]) -> Option<Self> {
         let total = counts.iter().try_fold(0usize, |acc, &n| acc.checked_add(n))?;
-        (counts.len() == techniques.len() && total == pairs.len()).then_some(Self {
-            techniques,
-            counts,
-            pairs,
-        })
+        (counts.len() == techniques.len() && total == pairs.len()).then_some(Self { techniques, counts, pairs })
     }
 
     /// The techniques.
@@ -71,9 +67,7 @@ impl<Q: Technique<X, T>, X, T> Mmis<'_, Q, X, T> {
     fn group_sum(q: &Q, group: &[Pair<X, T>], x: &X) -> Scaled {
         match group.first() {
             None => Scaled::ZERO,
-            Some(first) if q.is_classical() => {
-                Scaled::new(q.pdf(x, &first.t)).times(Scaled::new(group.len() as f64))
-            }
+            Some(first) if q.is_classical() => Scaled::new(q.pdf(x, &first.t)).times(Scaled::new(group.len() as f64)),
             Some(_) => Scaled::sum(group.iter().map(|pair| q.pdf(x, &pair.t))),
         }
     }

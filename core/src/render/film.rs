@@ -46,7 +46,17 @@ impl Film {
     /// A black film with no passes. Allocates the sums and the staging buffer once.
     pub fn new(width: u32, height: u32) -> Self {
         let n = width as usize * height as usize;
-        Self { width, height, sum: vec![[0.0; 3]; n], passes: 0, discarded: 0, splats_outside: 0, camera: vec![Rgb::ZERO; n], has_camera: false, splats: Vec::new() }
+        Self {
+            width,
+            height,
+            sum: vec![[0.0; 3]; n],
+            passes: 0,
+            discarded: 0,
+            splats_outside: 0,
+            camera: vec![Rgb::ZERO; n],
+            has_camera: false,
+            splats: Vec::new(),
+        }
     }
 
     /// Image width in pixels.
@@ -252,7 +262,8 @@ mod tests {
     /// chunk order, and why the determinism tests can detect a merge in completion order.
     #[test]
     fn summation_order_is_visible_in_the_bits() {
-        let splats: Vec<Splat> = (0..64).map(|i| Splat { film: Vec2::new(0.5, 0.5), value: Rgb::splat((1.0 + math::sin(i as f32 * 0.37) * 1e3).abs() * 1.000_123) }).collect();
+        let splats: Vec<Splat> =
+            (0..64).map(|i| Splat { film: Vec2::new(0.5, 0.5), value: Rgb::splat((1.0 + math::sin(i as f32 * 0.37) * 1e3).abs() * 1.000_123) }).collect();
         let mut forward = Film::new(1, 1);
         forward.push_splats(&splats);
         forward.end_pass(1.0 / 3.0);

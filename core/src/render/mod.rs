@@ -31,6 +31,8 @@
 //! **Allocation.** Hosts keep one [`PhaseBuffers`] across passes: a chunk's output is
 //! cleared and refilled in place, so its vectors keep their capacity from pass to pass.
 
+#![warn(missing_docs)]
+
 mod config;
 mod film;
 mod renderer;
@@ -104,19 +106,38 @@ pub enum PhaseData {
     /// Nothing beyond samples and splats.
     #[default]
     None,
-    /// Light sub-paths, with one SPCBPT prefix memo per vertex (empty for LVCBPT).
-    LightPaths { paths: LightPaths, memo: Vec<PrefixMemo> },
+    /// Light sub-paths of the chunk.
+    LightPaths {
+        /// The paths' vertices, contiguous.
+        paths: LightPaths,
+        /// One SPCBPT prefix memo per vertex (empty for LVCBPT).
+        memo: Vec<PrefixMemo>,
+    },
     /// A count (LVCBPT's cacheable vertices).
     Count(u64),
     /// Classification features with their weights, per-block brightness sums and
     /// sample counts (SPCBPT preprocessing).
-    Features { features: Vec<SubpathFeature>, weights: Vec<f32>, blocks: Vec<f64>, block_samples: Vec<u32> },
+    Features {
+        /// Sub-path end features.
+        features: Vec<SubpathFeature>,
+        /// Their weights (f/p).
+        weights: Vec<f32>,
+        /// Brightness sums per pixel block.
+        blocks: Vec<f64>,
+        /// Samples per pixel block.
+        block_samples: Vec<u32>,
+    },
     /// Sums per slot (SPCBPT's Q).
     Sums(Vec<f64>),
     /// Training records (SPCBPT's dataset).
     Training(TrainingSet),
     /// Stage-1 tables and norms for a range of eye subspaces (SPCBPT).
-    GammaTables { tables: Vec<Option<AliasTable>>, norms: Vec<f32> },
+    GammaTables {
+        /// Γ(· | e) restricted to the pass's non-empty subspaces, per eye subspace.
+        tables: Vec<Option<AliasTable>>,
+        /// The restricted column sums.
+        norms: Vec<f32>,
+    },
 }
 
 /// What mapping one chunk produced. Plain data; cleared and refilled in place.
@@ -359,7 +380,12 @@ impl Cursor {
 
 /// The serial runner: map and reduce every pending phase in order on this thread.
 /// Returns the summed counters and the items of phases that count as samples.
-pub fn run_phases<Q: RayQuery + ?Sized, E: Phased<Q> + ?Sized>(est: &mut E, ctx: &Context<'_, Q>, film: &mut Film, buffers: &mut PhaseBuffers) -> (Counters, u64) {
+pub fn run_phases<Q: RayQuery + ?Sized, E: Phased<Q> + ?Sized>(
+    est: &mut E,
+    ctx: &Context<'_, Q>,
+    film: &mut Film,
+    buffers: &mut PhaseBuffers,
+) -> (Counters, u64) {
     let mut counters = Counters::default();
     let mut samples = 0u64;
     while let Some(phase) = est.next_phase() {
@@ -377,7 +403,13 @@ pub fn run_phases<Q: RayQuery + ?Sized, E: Phased<Q> + ?Sized>(est: &mut E, ctx:
 }
 
 /// Run setup (if pending) and pass `pass` serially into `film`.
-pub fn render_pass<Q: RayQuery + ?Sized, E: Phased<Q> + ?Sized>(est: &mut E, ctx: &Context<'_, Q>, film: &mut Film, buffers: &mut PhaseBuffers, pass: u32) -> (Counters, u64) {
+pub fn render_pass<Q: RayQuery + ?Sized, E: Phased<Q> + ?Sized>(
+    est: &mut E,
+    ctx: &Context<'_, Q>,
+    film: &mut Film,
+    buffers: &mut PhaseBuffers,
+    pass: u32,
+) -> (Counters, u64) {
     est.start_pass(pass);
     run_phases(est, ctx, film, buffers)
 }

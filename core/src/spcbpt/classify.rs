@@ -72,9 +72,7 @@ impl DistanceParams {
     #[inline]
     pub fn distance(&self, a: &SubpathFeature, b: &SubpathFeature) -> f32 {
         let dp = a.position - b.position;
-        dp.dot(dp)
-            + self.sigma2 * (1.0 - a.normal.dot(b.normal))
-            + self.k_d * self.sigma2 * (1.0 - a.incident.dot(b.incident))
+        dp.dot(dp) + self.sigma2 * (1.0 - a.normal.dot(b.normal)) + self.k_d * self.sigma2 * (1.0 - a.incident.dot(b.incident))
     }
 }
 
@@ -211,11 +209,7 @@ impl DecisionTree {
             }
             let label = if total > 0.0 { best.1 } else { parent_label };
             nodes[node as usize].label = label;
-            if total <= 0.0
-                || best.0 >= params.accuracy as f64 * total
-                || depth >= params.max_depth
-                || total < params.min_leaf_weight as f64
-            {
+            if total <= 0.0 || best.0 >= params.accuracy as f64 * total || depth >= params.max_depth || total < params.min_leaf_weight as f64 {
                 continue;
             }
 
@@ -381,17 +375,11 @@ impl LightSourceBins {
     pub fn new(light_powers: &[f32], total_bins: u32, first_id: u32) -> Self {
         let n = light_powers.len();
         let total = (total_bins as usize).max(n);
-        let power: Vec<f64> = light_powers
-            .iter()
-            .map(|&p| if p > 0.0 && p.is_finite() { p as f64 } else { 0.0 })
-            .collect();
+        let power: Vec<f64> = light_powers.iter().map(|&p| if p > 0.0 && p.is_finite() { p as f64 } else { 0.0 }).collect();
         let sum: f64 = power.iter().sum();
         let spare = total - n;
         // Each light 1 bin, plus its share of the spare ones.
-        let share: Vec<f64> = power
-            .iter()
-            .map(|&p| if sum > 0.0 { p / sum * spare as f64 } else { spare as f64 / n.max(1) as f64 })
-            .collect();
+        let share: Vec<f64> = power.iter().map(|&p| if sum > 0.0 { p / sum * spare as f64 } else { spare as f64 / n.max(1) as f64 }).collect();
         let mut bins: Vec<u32> = share.iter().map(|&s| 1 + s as u32).collect();
         let given: usize = bins.iter().map(|&b| b as usize).sum();
         let mut by_fraction: Vec<usize> = (0..n).collect();

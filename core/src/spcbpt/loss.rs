@@ -75,12 +75,7 @@ impl TrainingSet {
     pub fn with_capacity(paths: usize, splits: usize) -> Self {
         let mut split_start = Vec::with_capacity(paths + 1);
         split_start.push(0);
-        Self {
-            weights: Vec::with_capacity(paths),
-            fixed: Vec::with_capacity(paths),
-            split_start,
-            splits: Vec::with_capacity(splits),
-        }
+        Self { weights: Vec::with_capacity(paths), fixed: Vec::with_capacity(paths), split_start, splits: Vec::with_capacity(splits) }
     }
 
     /// Append one path: `weight = f²/p`, `fixed = g₀`, its Γ-dependent splits.
@@ -307,11 +302,7 @@ fn loss_and_gradient_over(
         for s in set.splits(i) {
             let (l, e) = (s.light as usize, s.eye as usize);
             if column_sum[e] == 0.0 {
-                column_sum[e] = column_sum_from_gamma(
-                    &theta[e * n_light..(e + 1) * n_light],
-                    &gamma[e * n_light..(e + 1) * n_light],
-                    mixture,
-                );
+                column_sum[e] = column_sum_from_gamma(&theta[e * n_light..(e + 1) * n_light], &gamma[e * n_light..(e + 1) * n_light], mixture);
                 touched.push(e as u32);
             }
             let sum = column_sum[e];

@@ -38,10 +38,8 @@ pub mod subspace_matrix;
 pub mod train;
 
 pub use adam::{Adam, AdamParams};
-pub use classify::{
-    nearest_centroid, sample_centroids, DecisionTree, DistanceParams, LightSourceBins, TreeParams,
-};
+pub use classify::{DecisionTree, DistanceParams, LightSourceBins, TreeParams, nearest_centroid, sample_centroids};
 pub use features::SubpathFeature;
-pub use loss::{loss_and_gradient, loss_and_gradient_indexed, loss_only, TrainingSet, TrainingSplit};
-pub use subspace_matrix::{gamma_from_theta, SubspaceMatrix};
-pub use train::{train, TrainParams};
+pub use loss::{TrainingSet, TrainingSplit, loss_and_gradient, loss_and_gradient_indexed, loss_only};
+pub use subspace_matrix::{SubspaceMatrix, gamma_from_theta};
+pub use train::{TrainParams, train};

@@ -51,8 +51,7 @@ fn exp_bounded(x: f32) -> f32 {
     let shifted = x * core::f32::consts::LOG2_E + SHIFTER;
     let n = shifted - SHIFTER;
     let r = (x - n * LN2_HI) - n * LN2_LO;
-    let p = 1.0
-        + r * (1.0 + r * (0.5 + r * (1.0 / 6.0 + r * (1.0 / 24.0 + r * (1.0 / 120.0 + r * (1.0 / 720.0))))));
+    let p = 1.0 + r * (1.0 + r * (0.5 + r * (1.0 / 6.0 + r * (1.0 / 24.0 + r * (1.0 / 120.0 + r * (1.0 / 720.0))))));
     // shifted's low mantissa bits hold 2²² + n; shifting them into the exponent field
     // drops the 2²² (2⁴⁵ wraps to 0) and leaves n in two's complement: 2ⁿ without a
     // float→int conversion (whose saturation checks would stop vectorisation).

@@ -17,7 +17,7 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use super::adam::{Adam, AdamParams};
-use super::loss::{loss_and_gradient_indexed, TrainingSet};
+use super::loss::{TrainingSet, loss_and_gradient_indexed};
 use super::subspace_matrix::gamma_from_theta;
 use crate::rng::{SampleStream, Stream};
 
@@ -71,9 +71,7 @@ pub fn train(set: &TrainingSet, theta: &mut [f32], n_light: usize, n_eye: usize,
             // Refresh Γ for the current Θ, accumulate the batch gradient, step.
             gamma_from_theta(theta, n_light, n_eye, params.mixture, &mut gamma);
             grad.iter_mut().for_each(|g| *g = 0.0);
-            let (loss, skipped) = loss_and_gradient_indexed(
-                set, chunk, theta, &gamma, n_light, n_eye, params.mixture, &mut grad,
-            );
+            let (loss, skipped) = loss_and_gradient_indexed(set, chunk, theta, &gamma, n_light, n_eye, params.mixture, &mut grad);
             let used = chunk.len() - skipped;
             epoch_loss += loss;
             counted += used;

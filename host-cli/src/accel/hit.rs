@@ -39,9 +39,6 @@ pub(crate) fn surface_hit(v: &[Vec3A; 3], normals: Option<[Vec3; 3]>, material: 
     // Interpolating the vertices is more accurate than o + t·d far from the origin.
     let p = b[0] * p0 + b[1] * p1 + b[2] * p2;
     let ng = (p1 - p0).cross(p2 - p0).normalize();
-    let ns = normals
-        .map(|n| b[0] * n[0] + b[1] * n[1] + b[2] * n[2])
-        .and_then(|n| n.try_normalize())
-        .map_or(ng, |n| if n.dot(ng) < 0.0 { -n } else { n });
+    let ns = normals.map(|n| b[0] * n[0] + b[1] * n[1] + b[2] * n[2]).and_then(|n| n.try_normalize()).map_or(ng, |n| if n.dot(ng) < 0.0 { -n } else { n });
     SurfaceHit { t, p, ng, ns, uv: Vec2::new(b[1], b[2]), material, emitter }
 }

@@ -1,9 +1,9 @@
 use super::*;
 
 use crate::cli::{Cli, Command};
-use ember_core::render::{ChunkOutput, Context, Cursor, Phase, Phased, Stage};
 use clap::Parser;
 use ember_core::Rgb;
+use ember_core::render::{ChunkOutput, Context, Cursor, Phase, Phased, Stage};
 
 /// A renderer drawing a horizontal ramp, one ray per sample.
 struct Ramp {
@@ -103,8 +103,7 @@ fn a_missing_scene_file_is_reported_with_its_name() {
 
 #[test]
 fn bad_outputs_and_estimator_errors_are_reported() {
-    let e = render(&args(&["-o", "/nonexistent-ember-dir/x.exr"]), Instant::now(), false, |_| panic!("must not build"))
-        .unwrap_err();
+    let e = render(&args(&["-o", "/nonexistent-ember-dir/x.exr"]), Instant::now(), false, |_| panic!("must not build")).unwrap_err();
     assert!(e.to_string().contains("/nonexistent-ember-dir"), "{e}");
     let e = render(&args(&["-o", "x.png"]), Instant::now(), false, |_| panic!("must not build")).unwrap_err();
     assert!(e.to_string().contains(".exr"), "{e}");

@@ -183,10 +183,7 @@ impl<'a> Ctx<'a> {
         let obj = self.obj(idx)?;
         self.mark(idx);
         if obj.kind != "area" {
-            return Err(Fail::at(
-                obj.loc,
-                format!("only `area` emitters can be nested in a <shape>; a \"{}\" emitter belongs directly in <scene>", obj.kind),
-            ));
+            return Err(Fail::at(obj.loc, format!("only `area` emitters can be nested in a <shape>; a \"{}\" emitter belongs directly in <scene>", obj.kind)));
         }
         self.no_children(obj)?;
         let mut p = Props::new(obj);
@@ -277,9 +274,7 @@ impl<'a> Ctx<'a> {
         let film = self.single_child(obj, Tag::Film)?;
         let sampler = self.single_child(obj, Tag::Sampler)?;
         let mut p = Props::new(obj);
-        let fov = p
-            .float_opt("fov")?
-            .ok_or_else(|| Fail::at(obj.loc, "the perspective sensor needs `fov` (in degrees; `focal_length` is not supported)"))?;
+        let fov = p.float_opt("fov")?.ok_or_else(|| Fail::at(obj.loc, "the perspective sensor needs `fov` (in degrees; `focal_length` is not supported)"))?;
         if !(fov > 0.0 && fov < 180.0) {
             return Err(Fail::at(p.loc_of("fov"), format!("`fov` must be in (0, 180) degrees, got {fov}")));
         }
@@ -290,10 +285,7 @@ impl<'a> Ctx<'a> {
             Some("larger") => FovAxis::Larger,
             Some("diagonal") => FovAxis::Diagonal,
             Some(other) => {
-                return Err(Fail::at(
-                    p.loc_of("fov_axis"),
-                    format!("unknown fov_axis \"{other}\" (supported: x, y, smaller, larger, diagonal)"),
-                ));
+                return Err(Fail::at(p.loc_of("fov_axis"), format!("unknown fov_axis \"{other}\" (supported: x, y, smaller, larger, diagonal)")));
             }
         };
         let to_world = self.render_frame * p.transform("to_world")?;
@@ -357,10 +349,9 @@ impl<'a> Ctx<'a> {
                 self.no_children(rf)?;
                 Props::new(rf).finish()?;
             }
-            None => self.warnings.push(format!(
-                "line {}: the film has no <rfilter>: Mitsuba would use a gaussian filter; ember uses a box filter",
-                obj.loc.line
-            )),
+            None => {
+                self.warnings.push(format!("line {}: the film has no <rfilter>: Mitsuba would use a gaussian filter; ember uses a box filter", obj.loc.line))
+            }
         }
         Ok((width, height))
     }
@@ -377,10 +368,8 @@ impl<'a> Ctx<'a> {
         };
         p.finish()?;
         if obj.kind != "independent" {
-            self.warnings.push(format!(
-                "line {}: sampler type \"{}\" is not modelled: ember uses its own sampler (only sample_count is read)",
-                obj.loc.line, obj.kind
-            ));
+            self.warnings
+                .push(format!("line {}: sampler type \"{}\" is not modelled: ember uses its own sampler (only sample_count is read)", obj.loc.line, obj.kind));
         }
         Ok(spp)
     }
@@ -392,10 +381,7 @@ impl<'a> Ctx<'a> {
         let depth = match p.int_opt("max_depth")? {
             Some(d) if d >= -1 && d <= i32::MAX as i64 => Some(d as i32),
             Some(d) => {
-                return Err(Fail::at(
-                    p.loc_of("max_depth"),
-                    format!("`max_depth` must be -1 (unbounded) or a non-negative integer, got {d}"),
-                ));
+                return Err(Fail::at(p.loc_of("max_depth"), format!("`max_depth` must be -1 (unbounded) or a non-negative integer, got {d}")));
             }
             None => None,
         };
@@ -420,9 +406,5 @@ fn film_side(p: &mut Props, name: &'static str, default: u32) -> Res<u32> {
 
 /// Emitted quantities must be non-negative.
 fn nonnegative(p: &Props, name: &str, c: Rgb) -> Res<Rgb> {
-    if c.is_valid_radiance() {
-        Ok(c)
-    } else {
-        Err(Fail::at(p.loc_of(name), format!("`{name}` must be non-negative, got ({}, {}, {})", c.r, c.g, c.b)))
-    }
+    if c.is_valid_radiance() { Ok(c) } else { Err(Fail::at(p.loc_of(name), format!("`{name}` must be non-negative, got ({}, {}, {})", c.r, c.g, c.b))) }
 }

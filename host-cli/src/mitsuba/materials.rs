@@ -115,10 +115,7 @@ impl Ctx<'_> {
                     [ref c] => c.obj,
                     [] => return Err(Fail::at(obj.loc, "`twosided` needs one nested <bsdf> (or <ref>)")),
                     [_, ref second, ..] => {
-                        return Err(Fail::at(
-                            second.loc,
-                            "`twosided` with different front and back BSDFs is not supported: give one nested <bsdf>",
-                        ));
+                        return Err(Fail::at(second.loc, "`twosided` with different front and back BSDFs is not supported: give one nested <bsdf>"));
                     }
                 };
                 let m = self.bsdf(inner, depth + 1)?;
@@ -189,10 +186,7 @@ fn ior(p: &mut Props, name: &'static str, default: f64) -> Res<f32> {
             Some(&(_, v)) => v,
             None => {
                 let names: Vec<&str> = IORS.iter().map(|i| i.0).collect();
-                return Err(Fail::at(
-                    p.loc_of(name),
-                    format!("unknown index of refraction \"{s}\" (a number or one of: {})", names.join(", ")),
-                ));
+                return Err(Fail::at(p.loc_of(name), format!("unknown index of refraction \"{s}\" (a number or one of: {})", names.join(", "))));
             }
         }
     } else {

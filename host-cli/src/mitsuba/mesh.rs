@@ -100,9 +100,5 @@ fn fetch(p: &[Vec3], tri: &[u32; 3]) -> Option<[DVec3; 3]> {
 
 /// The angle between two unit vectors, accurate near 0 and π (Mitsuba's `unit_angle`).
 fn unit_angle(a: DVec3, b: DVec3) -> f64 {
-    if a.dot(b) < 0.0 {
-        std::f64::consts::PI - 2.0 * ((a + b).length() / 2.0).min(1.0).asin()
-    } else {
-        2.0 * ((a - b).length() / 2.0).min(1.0).asin()
-    }
+    if a.dot(b) < 0.0 { std::f64::consts::PI - 2.0 * ((a + b).length() / 2.0).min(1.0).asin() } else { 2.0 * ((a - b).length() / 2.0).min(1.0).asin() }
 }

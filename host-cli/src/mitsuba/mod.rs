@@ -145,15 +145,10 @@ pub(crate) type Res<T> = Result<T, Fail>;
 
 /// Read a Mitsuba 3 scene file; see the module documentation for the subset accepted.
 pub fn load_scene(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneFileError> {
-    let wrap = |f: Fail| SceneFileError {
-        file: path.to_path_buf(),
-        line: f.loc.map(|l| l.line),
-        column: f.loc.map(|l| l.col),
-        message: f.message,
-    };
+    let wrap = |f: Fail| SceneFileError { file: path.to_path_buf(), line: f.loc.map(|l| l.line), column: f.loc.map(|l| l.col), message: f.message };
     let bytes = std::fs::read(path).map_err(|e| wrap(Fail::nowhere(format!("cannot read the scene file: {e}"))))?;
-    let text = String::from_utf8(bytes)
-        .map_err(|e| wrap(Fail::nowhere(format!("the scene file is not valid UTF-8 (byte {})", e.utf8_error().valid_up_to()))))?;
+    let text =
+        String::from_utf8(bytes).map_err(|e| wrap(Fail::nowhere(format!("the scene file is not valid UTF-8 (byte {})", e.utf8_error().valid_up_to()))))?;
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     load_str(&text, &base_dir, options).map_err(wrap)
 }

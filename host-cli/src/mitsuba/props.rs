@@ -139,10 +139,7 @@ impl<'a> Props<'a> {
         for (p, used) in self.obj.props.iter().zip(&self.used) {
             if !used {
                 let accepted = if self.known.is_empty() { "no properties".to_string() } else { self.known.join(", ") };
-                return Err(Fail::at(
-                    p.loc,
-                    format!("unreferenced property `{}` in {} (it accepts: {accepted})", p.name, self.obj.label()),
-                ));
+                return Err(Fail::at(p.loc, format!("unreferenced property `{}` in {} (it accepts: {accepted})", p.name, self.obj.label())));
             }
         }
         Ok(())

@@ -73,9 +73,8 @@ impl Ctx<'_> {
             }
             _ => {
                 let file_loc = p.loc_of("filename");
-                let filename = p
-                    .string_opt("filename")?
-                    .ok_or_else(|| Fail::at(obj.loc, format!("<shape type=\"{}\"> needs a `filename` string", obj.kind)))?;
+                let filename =
+                    p.string_opt("filename")?.ok_or_else(|| Fail::at(obj.loc, format!("<shape type=\"{}\"> needs a `filename` string", obj.kind)))?;
                 let face_normals = p.bool("face_normals", false)?;
                 Geometry::Mesh { filename, file_loc, face_normals }
             }
@@ -129,10 +128,7 @@ impl Ctx<'_> {
             }
             Geometry::Sphere { center, radius } => {
                 let scale = transform::similarity_scale(&to_world, 1e-4).ok_or_else(|| {
-                    Fail::at(
-                        obj.loc,
-                        "a sphere's `to_world` must be a rotation, uniform scale and translation (ellipsoids are not supported)",
-                    )
+                    Fail::at(obj.loc, "a sphere's `to_world` must be a rotation, uniform scale and translation (ellipsoids are not supported)")
                 })?;
                 if flip && emission.is_some() {
                     return Err(Fail::at(obj.loc, "an emitting sphere with flip_normals (emitting inward) is not supported"));
@@ -146,12 +142,8 @@ impl Ctx<'_> {
             }
             Geometry::Mesh { filename, file_loc, face_normals } => {
                 let path = self.base_dir.join(filename);
-                let data = if obj.kind == "obj" {
-                    mesh::load_obj(&path)
-                } else {
-                    std::fs::read(&path).map_err(|e| e.to_string()).and_then(|b| ply::parse(&b))
-                }
-                .map_err(|e| Fail::at(file_loc, format!("cannot load the {} mesh \"{}\": {e}", obj.kind, path.display())))?;
+                let data = if obj.kind == "obj" { mesh::load_obj(&path) } else { std::fs::read(&path).map_err(|e| e.to_string()).and_then(|b| ply::parse(&b)) }
+                    .map_err(|e| Fail::at(file_loc, format!("cannot load the {} mesh \"{}\": {e}", obj.kind, path.display())))?;
                 self.place_mesh(obj, file_loc, filename, data, &to_world, flip, face_normals, material, emission)?;
             }
         }
@@ -197,14 +189,11 @@ impl Ctx<'_> {
             (false, Some(ns)) => {
                 let bad = ns.iter().filter(|n| !(n.is_finite() && n.length_squared() > 0.0)).count();
                 if bad > 0 {
-                    self.warnings.push(format!(
-                        "{}: \"{filename}\": {bad} vertex normals are zero or not finite; triangles using them get face normals",
-                        label(obj)
-                    ));
+                    self.warnings
+                        .push(format!("{}: \"{filename}\": {bad} vertex normals are zero or not finite; triangles using them get face normals", label(obj)));
                 }
                 // A singular to_world flattens the mesh: its triangles are dropped anyway.
-                transform::normal_matrix(to_world)
-                    .map(|nm| ns.iter().map(|n| (nm * n.as_dvec3()).normalize_or_zero().as_vec3()).collect::<Vec<_>>())
+                transform::normal_matrix(to_world).map(|nm| ns.iter().map(|n| (nm * n.as_dvec3()).normalize_or_zero().as_vec3()).collect::<Vec<_>>())
             }
             (false, None) => Some(mesh::vertex_normals(&positions, &data.triangles)),
         };

@@ -58,10 +58,7 @@ fn every_suite_scene_loads_with_sensible_counts() {
         ("spot_mirror", 320, 240, Some(-1), None),
         ("window_env", 320, 240, Some(-1), None),
     ];
-    let found = std::fs::read_dir(suite_dir())
-        .expect("suite dir")
-        .filter(|e| e.as_ref().is_ok_and(|e| e.path().join("scene.xml").exists()))
-        .count();
+    let found = std::fs::read_dir(suite_dir()).expect("suite dir").filter(|e| e.as_ref().is_ok_and(|e| e.path().join("scene.xml").exists())).count();
     assert_eq!(found, expected.len(), "every suite scene is listed here");
     for (name, w, h, depth, spp) in expected {
         let path = suite_dir().join(name).join("scene.xml");

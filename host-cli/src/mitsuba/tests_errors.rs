@@ -81,28 +81,14 @@ fn missing_and_broken_mesh_files_are_errors() {
     let e = fail("missing", c);
     check(&e, 5, col(c, 5, "<string"), &["cannot load the obj mesh", "nothere.obj"]);
     let nan = b"v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n";
-    let e = fail_with(
-        "nan",
-        "<shape type=\"obj\">\n <string name=\"filename\" value=\"nan.obj\"/></shape>",
-        &[("nan.obj", nan)],
-        &LoadOptions::default(),
-    );
+    let e = fail_with("nan", "<shape type=\"obj\">\n <string name=\"filename\" value=\"nan.obj\"/></shape>", &[("nan.obj", nan)], &LoadOptions::default());
     check(&e, 5, 2, &["nan.obj", "vertex 2 is not finite"]);
     let ply = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\x00\x00";
-    let e = fail_with(
-        "ply",
-        "<shape type=\"ply\">\n <string name=\"filename\" value=\"t.ply\"/></shape>",
-        &[("t.ply", ply)],
-        &LoadOptions::default(),
-    );
+    let e = fail_with("ply", "<shape type=\"ply\">\n <string name=\"filename\" value=\"t.ply\"/></shape>", &[("t.ply", ply)], &LoadOptions::default());
     check(&e, 5, 2, &["cannot load the ply mesh", "unexpected end of data"]);
     let bad_index = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 x\n3 0 1 2\n";
-    let e = fail_with(
-        "ply_ascii",
-        "<shape type=\"ply\">\n <string name=\"filename\" value=\"t.ply\"/></shape>",
-        &[("t.ply", bad_index)],
-        &LoadOptions::default(),
-    );
+    let e =
+        fail_with("ply_ascii", "<shape type=\"ply\">\n <string name=\"filename\" value=\"t.ply\"/></shape>", &[("t.ply", bad_index)], &LoadOptions::default());
     check(&e, 5, 2, &["line 12: malformed number \"x\""]);
 }
 
@@ -149,11 +135,8 @@ fn broken_references_and_wrong_tags_are_errors() {
     let dir = temp_dir("int_for_float");
     let path = dir.join("scene.xml");
     let c = "<film type=\"hdrfilm\"><float name=\"width\" value=\"3\"/></film>";
-    std::fs::write(
-        &path,
-        format!("<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" value=\"1\"/>\n\n{c}</sensor></scene>"),
-    )
-    .unwrap();
+    std::fs::write(&path, format!("<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" value=\"1\"/>\n\n{c}</sensor></scene>"))
+        .unwrap();
     let e = load_scene(&path, &LoadOptions::default()).unwrap_err();
     check(&e, 4, col(c, 4, "<float"), &["must be an <integer>, not <float>"]);
     let c = "<shape type=\"cube\" kind=\"x\"/>";
@@ -240,12 +223,7 @@ fn garbage_never_panics() {
     std::fs::write(&path, deep).unwrap();
     let e = load_scene(&path, &LoadOptions::default()).unwrap_err();
     assert!(e.to_string().contains("nested more than"), "{e}");
-    for junk in [
-        &b"ply\nformat ascii 1.0\nelement vertex 18446744073709551615\nproperty float x\nend_header\n"[..],
-        b"ply\n",
-        b"",
-        b"f 1 2 3\nv 1 2",
-    ] {
+    for junk in [&b"ply\nformat ascii 1.0\nelement vertex 18446744073709551615\nproperty float x\nend_header\n"[..], b"ply\n", b"", b"f 1 2 3\nv 1 2"] {
         let _ = super::ply::parse(junk);
         std::fs::write(dir.join("j.obj"), junk).unwrap();
         let _ = super::mesh::load_obj(&dir.join("j.obj"));

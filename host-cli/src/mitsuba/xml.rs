@@ -251,9 +251,7 @@ impl<'a, 'input> Parser<'a, 'input> {
             } else {
                 return Err(Fail::at(
                     loc,
-                    format!(
-                        "undefined parameter `${name}` (declare it with <default name=\"{name}\" value=\"...\"/> before use, or pass it with -D)"
-                    ),
+                    format!("undefined parameter `${name}` (declare it with <default name=\"{name}\" value=\"...\"/> before use, or pass it with -D)"),
                 ));
             };
             out.push_str(&value);
@@ -266,20 +264,13 @@ impl<'a, 'input> Parser<'a, 'input> {
     fn scene(&mut self, root: Node) -> Res<()> {
         let loc = self.loc(root);
         if root.tag_name().name() != "scene" || root.tag_name().namespace().is_some() {
-            return Err(Fail::at(
-                loc,
-                format!("the root element is <{}>; a Mitsuba scene file starts with <scene version=\"3.0.0\">", root.tag_name().name()),
-            ));
+            return Err(Fail::at(loc, format!("the root element is <{}>; a Mitsuba scene file starts with <scene version=\"3.0.0\">", root.tag_name().name())));
         }
         self.check_attrs(root, &["version"])?;
-        let version =
-            self.attr(root, "version")?.ok_or_else(|| Fail::at(loc, "<scene> needs a `version` attribute (e.g. version=\"3.0.0\")"))?;
+        let version = self.attr(root, "version")?.ok_or_else(|| Fail::at(loc, "<scene> needs a `version` attribute (e.g. version=\"3.0.0\")"))?;
         let major = version.split('.').next().unwrap_or("");
         if major != "2" && major != "3" {
-            return Err(Fail::at(
-                self.attr_loc(root, "version"),
-                format!("scene version \"{version}\" is not supported (2.x and 3.x are)"),
-            ));
+            return Err(Fail::at(self.attr_loc(root, "version"), format!("scene version \"{version}\" is not supported (2.x and 3.x are)")));
         }
         for child in root.children() {
             let Some(elem) = self.element(child)? else { continue };
@@ -363,17 +354,11 @@ impl<'a, 'input> Parser<'a, 'input> {
             } else if is_value_tag(name) {
                 let prop = self.property(elem)?;
                 if let Some(prev) = obj.props.iter().find(|p| p.name == prop.name) {
-                    return Err(Fail::at(
-                        prop.loc,
-                        format!("property `{}` is given twice in {} (first at line {})", prop.name, obj.label(), prev.loc.line),
-                    ));
+                    return Err(Fail::at(prop.loc, format!("property `{}` is given twice in {} (first at line {})", prop.name, obj.label(), prev.loc.line)));
                 }
                 obj.props.push(prop);
             } else {
-                return Err(Fail::at(
-                    self.loc(elem),
-                    format!("unsupported element <{name}> in {}; allowed: {VALUE_TAGS}, ref, {OBJECT_TAGS}", obj.label()),
-                ));
+                return Err(Fail::at(self.loc(elem), format!("unsupported element <{name}> in {}; allowed: {VALUE_TAGS}, ref, {OBJECT_TAGS}", obj.label())));
             }
         }
         let idx = self.out.objs.len();
@@ -430,9 +415,7 @@ impl<'a, 'input> Parser<'a, 'input> {
                 let vloc = self.attr_loc(node, "value");
                 match tag {
                     "float" => Value::Float(parse_float(&raw, vloc)?),
-                    "integer" => {
-                        Value::Integer(raw.trim().parse::<i64>().map_err(|_| Fail::at(vloc, format!("malformed integer \"{raw}\"")))?)
-                    }
+                    "integer" => Value::Integer(raw.trim().parse::<i64>().map_err(|_| Fail::at(vloc, format!("malformed integer \"{raw}\"")))?),
                     "boolean" => match raw.trim().to_ascii_lowercase().as_str() {
                         "true" => Value::Boolean(true),
                         "false" => Value::Boolean(false),
@@ -449,10 +432,7 @@ impl<'a, 'input> Parser<'a, 'input> {
                     }
                     "spectrum" => {
                         if raw.contains(':') {
-                            return Err(Fail::at(
-                                vloc,
-                                "wavelength:value spectra are not supported; give one value (a grey spectrum) or use <rgb>",
-                            ));
+                            return Err(Fail::at(vloc, "wavelength:value spectra are not supported; give one value (a grey spectrum) or use <rgb>"));
                         }
                         match parse_list(&raw, vloc)?[..] {
                             [v] => Value::Spectrum(v),
@@ -527,9 +507,8 @@ impl<'a, 'input> Parser<'a, 'input> {
                 let raw = self.required_attr(node, "value")?;
                 let vloc = self.attr_loc(node, "value");
                 let v = parse_list(&raw, vloc)?;
-                let arr: [f64; 16] = v
-                    .try_into()
-                    .map_err(|v: Vec<f64>| Fail::at(vloc, format!("<matrix> needs 16 values (row-major 4×4), got {}", v.len())))?;
+                let arr: [f64; 16] =
+                    v.try_into().map_err(|v: Vec<f64>| Fail::at(vloc, format!("<matrix> needs 16 values (row-major 4×4), got {}", v.len())))?;
                 DMat4::from_cols_array(&arr).transpose()
             }
             "lookat" => {

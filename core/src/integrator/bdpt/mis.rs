@@ -31,7 +31,15 @@ pub fn mis_weight(scene: &Scene, light: &[Vertex], camera: &[Vertex], sampled: O
 /// (LVCBPT, SPCBPT): `count(s', t')` is the number of samples strategy (s', t') takes per
 /// camera sample, and w_{s,t} = n_{s,t} p_{s,t} / Σ n_i p_i. With every count 1 (BDPT)
 /// each ratio is multiplied by exactly 1.0, so BDPT's weights are unchanged bit for bit.
-pub fn mis_weight_counted<C: Fn(usize, usize) -> f64>(scene: &Scene, light: &[Vertex], camera: &[Vertex], sampled: Option<&Vertex>, s: usize, t: usize, count: &C) -> f32 {
+pub fn mis_weight_counted<C: Fn(usize, usize) -> f64>(
+    scene: &Scene,
+    light: &[Vertex],
+    camera: &[Vertex],
+    sampled: Option<&Vertex>,
+    s: usize,
+    t: usize,
+    count: &C,
+) -> f32 {
     if s + t == 2 {
         return 1.0;
     }
@@ -48,7 +56,15 @@ pub fn mis_weight_counted<C: Fn(usize, usize) -> f64>(scene: &Scene, light: &[Ve
 /// Visit every OTHER strategy (s', t') able to produce the path of strategy (s, t) with
 /// the density ratio p_{s'} / p_{s,t} (f64), by the walk of [`mis_weight`]. SPCBPT's
 /// training set reads the ratios one by one (its Γ-dependent counts are path-dependent).
-pub fn for_each_strategy_ratio<V: FnMut(usize, usize, f64)>(scene: &Scene, light: &[Vertex], camera: &[Vertex], sampled: Option<&Vertex>, s: usize, t: usize, visit: &mut V) {
+pub fn for_each_strategy_ratio<V: FnMut(usize, usize, f64)>(
+    scene: &Scene,
+    light: &[Vertex],
+    camera: &[Vertex],
+    sampled: Option<&Vertex>,
+    s: usize,
+    t: usize,
+    visit: &mut V,
+) {
     // The strategy's own endpoints.
     let light_at = |i: usize| -> &Vertex {
         match sampled {

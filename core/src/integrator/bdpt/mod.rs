@@ -8,6 +8,7 @@
 //!   estimation, whose density is taken as the light's position density in the weights);
 //! - t = 1: the light vertex connects to the pinhole and splats to the pixel it sees;
 //! - s, t ≥ 2: the two end vertices are joined by a shadow ray.
+//!
 //! (s, t) = (1, 1) is skipped: (0, 2) already sees emitters directly.
 //!
 //! Strategies are combined by the balance heuristic, w_{s,t} = p_{s,t} / Σ p_{i,j} over
@@ -48,7 +49,15 @@ pub fn vertex_budgets(params: &RenderParams) -> (usize, usize) {
 /// The camera sub-path of pixel `pixel`'s sample in pass `pass`: a jittered film position
 /// and the walk, both from the pixel's camera stream (the draws every estimator of the
 /// BDPT family makes, so their camera paths coincide).
-pub fn pixel_camera_subpath<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, pixel: u32, pass: u32, max_camera: usize, counters: &mut Counters) -> SubPath {
+pub fn pixel_camera_subpath<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    pixel: u32,
+    pass: u32,
+    max_camera: usize,
+    counters: &mut Counters,
+) -> SubPath {
     let width = scene.camera.width().max(1);
     let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
     let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
@@ -57,7 +66,15 @@ pub fn pixel_camera_subpath<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, par
 
 /// Render one BDPT sample for each pixel in `pixels` of pass `pass`; camera-side
 /// estimates go to `out`, t = 1 splats to `splat`.
-pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, pass: u32, pixels: Range<u32>, out: &mut [Rgb], splat: &mut dyn FnMut(Splat)) -> Counters {
+pub fn render_pixels<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    pass: u32,
+    pixels: Range<u32>,
+    out: &mut [Rgb],
+    splat: &mut dyn FnMut(Splat),
+) -> Counters {
     let mut counters = Counters::default();
     let (max_camera, max_light) = vertex_budgets(params);
     for (slot, pixel) in out.iter_mut().zip(pixels) {

@@ -52,15 +52,51 @@ pub struct Vertex {
 
 impl Vertex {
     pub fn camera(p: Vec3, beta: Rgb) -> Self {
-        Self { kind: VertexKind::Camera, p, ng: Vec3::ZERO, frame: Frame::from_normal(Vec3::Z), wo: Vec3::ZERO, material: 0, emitter: None, beta, delta: false, pdf_fwd: 0.0, pdf_rev: 0.0 }
+        Self {
+            kind: VertexKind::Camera,
+            p,
+            ng: Vec3::ZERO,
+            frame: Frame::from_normal(Vec3::Z),
+            wo: Vec3::ZERO,
+            material: 0,
+            emitter: None,
+            beta,
+            delta: false,
+            pdf_fwd: 0.0,
+            pdf_rev: 0.0,
+        }
     }
 
     pub fn light(id: LightId, p: Vec3, n: Vec3, beta: Rgb, pdf_fwd: f32, delta: bool) -> Self {
-        Self { kind: VertexKind::Light(id), p, ng: n, frame: Frame::from_normal(if n == Vec3::ZERO { Vec3::Z } else { n }), wo: Vec3::ZERO, material: 0, emitter: Some(id), beta, delta, pdf_fwd, pdf_rev: 0.0 }
+        Self {
+            kind: VertexKind::Light(id),
+            p,
+            ng: n,
+            frame: Frame::from_normal(if n == Vec3::ZERO { Vec3::Z } else { n }),
+            wo: Vec3::ZERO,
+            material: 0,
+            emitter: Some(id),
+            beta,
+            delta,
+            pdf_fwd,
+            pdf_rev: 0.0,
+        }
     }
 
     pub fn infinite(p: Vec3, beta: Rgb, pdf_fwd: f32) -> Self {
-        Self { kind: VertexKind::InfiniteLight, p, ng: Vec3::ZERO, frame: Frame::from_normal(Vec3::Z), wo: Vec3::ZERO, material: 0, emitter: None, beta, delta: false, pdf_fwd, pdf_rev: 0.0 }
+        Self {
+            kind: VertexKind::InfiniteLight,
+            p,
+            ng: Vec3::ZERO,
+            frame: Frame::from_normal(Vec3::Z),
+            wo: Vec3::ZERO,
+            material: 0,
+            emitter: None,
+            beta,
+            delta: false,
+            pdf_fwd,
+            pdf_rev: 0.0,
+        }
     }
 
     #[inline]

@@ -2,8 +2,8 @@
 
 use heapless::Vec as FixedVec;
 
-use super::vertex::{Vertex, VertexKind, infinite_light_density};
 use super::MAX_VERTICES;
+use super::vertex::{Vertex, VertexKind, infinite_light_density};
 use crate::bsdf::{TransportMode, shading_normal_correction};
 use crate::geometry::{Ray, RayQuery, spawn_ray};
 use crate::integrator::{Counters, RenderParams, survives_roulette};
@@ -20,7 +20,15 @@ const DIMS_PER_BOUNCE: u32 = 4;
 
 /// Camera sub-path through continuous film position `film`, at most `max_vertices`
 /// vertices including the camera.
-pub fn camera_subpath<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, film: Vec2, max_vertices: usize, rng: &mut SampleStream, counters: &mut Counters) -> SubPath {
+pub fn camera_subpath<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    film: Vec2,
+    max_vertices: usize,
+    rng: &mut SampleStream,
+    counters: &mut Counters,
+) -> SubPath {
     let mut path = SubPath::new();
     if max_vertices == 0 {
         return path;
@@ -32,7 +40,14 @@ pub fn camera_subpath<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &
 }
 
 /// Light sub-path with at most `max_vertices` vertices including the light.
-pub fn light_subpath<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, max_vertices: usize, rng: &mut SampleStream, counters: &mut Counters) -> SubPath {
+pub fn light_subpath<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    max_vertices: usize,
+    rng: &mut SampleStream,
+    counters: &mut Counters,
+) -> SubPath {
     let mut path = SubPath::new();
     let (u_light, u_pos, u_dir) = (rng.next_f32(), rng.next_2d(), rng.next_2d());
     if max_vertices == 0 {

@@ -135,7 +135,15 @@ pub fn is_cacheable(scene: &Scene, v: &Vertex) -> bool {
 }
 
 /// Trace the light sub-path of light-path index `index` (its own random stream).
-pub fn trace_light_subpath<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, stream: Stream, index: u32, pass: u32, counters: &mut Counters) -> bdpt::SubPath {
+pub fn trace_light_subpath<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    stream: Stream,
+    index: u32,
+    pass: u32,
+    counters: &mut Counters,
+) -> bdpt::SubPath {
     let (_, max_light) = bdpt::vertex_budgets(params);
     let mut rng = SampleStream::for_sample(params.seed, stream, index, pass, 0);
     light_subpath(scene, tracer, params, max_light, &mut rng, counters)
@@ -144,7 +152,16 @@ pub fn trace_light_subpath<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, para
 /// Trace light paths `paths` of pass `pass` into `out` (appended) and splat their
 /// pinhole connections (t = 1, weighted with `counts`) to `splat`; the host scales the
 /// pass's splats by 1/M.
-pub fn trace_light_paths<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, counts: &StrategyCounts, pass: u32, paths: Range<u32>, out: &mut LightPaths, splat: &mut dyn FnMut(Splat)) -> Counters {
+pub fn trace_light_paths<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    counts: &StrategyCounts,
+    pass: u32,
+    paths: Range<u32>,
+    out: &mut LightPaths,
+    splat: &mut dyn FnMut(Splat),
+) -> Counters {
     let mut counters = Counters::default();
     let count = |s: usize, t: usize| counts.count(s, t);
     for index in paths {
@@ -204,14 +221,23 @@ pub struct PassInputs<'a> {
 
 /// One LVCBPT sample for each pixel in `pixels` of pass `pass` into `out` (strategies
 /// with t ≥ 2; t = 1 is splatted by [`trace_light_paths`]).
-pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, inputs: &PassInputs, pass: u32, pixels: Range<u32>, out: &mut [Rgb]) -> Counters {
+pub fn render_pixels<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    inputs: &PassInputs,
+    pass: u32,
+    pixels: Range<u32>,
+    out: &mut [Rgb],
+) -> Counters {
     let mut counters = Counters::default();
     let (max_camera, _) = bdpt::vertex_budgets(params);
     let counts = inputs.counts;
     let count = |s: usize, t: usize| counts.count(s, t);
     let cache_len = inputs.cache.len();
     // Each connection's estimate is divided by its selection probability N/|C| and by M.
-    let connection_scale = if inputs.connections > 0 && inputs.light_paths > 0 { cache_len as f32 / (inputs.connections as f32 * inputs.light_paths as f32) } else { 0.0 };
+    let connection_scale =
+        if inputs.connections > 0 && inputs.light_paths > 0 { cache_len as f32 / (inputs.connections as f32 * inputs.light_paths as f32) } else { 0.0 };
     for (slot, pixel) in out.iter_mut().zip(pixels) {
         let camera = bdpt::pixel_camera_subpath(scene, tracer, params, pixel, pass, max_camera, &mut counters);
         let mut aux = SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, 0);

@@ -83,7 +83,13 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Lvcbpt {
                 out.counters = trace_light_paths(scene, tracer, params, &self.counts, pass, items, paths, &mut |s| splats.push(s));
             }
             (_, Some(pass)) => {
-                let inputs = PassInputs { paths: &self.paths, cache: &self.cache, light_paths: self.light_paths, connections: self.config.connections, counts: self.counts };
+                let inputs = PassInputs {
+                    paths: &self.paths,
+                    cache: &self.cache,
+                    light_paths: self.light_paths,
+                    connections: self.config.connections,
+                    counts: self.counts,
+                };
                 out.counters = render_pixels(scene, tracer, params, &inputs, pass, items, out.pixel_buffer());
             }
             _ => {}

@@ -125,7 +125,6 @@ fn geometry(a: &Vertex, b: &Vertex) -> f32 {
     bdpt::vertex::cosines_over_distance2(a, a.frame.n, b, b.ng)
 }
 
-
 /// Subspace labels of a camera sub-path's own vertices, computed once per camera path:
 /// `eye[i]` = κ_E(z_i) seen from z_{i−1}, `light[i]` = κ_L(z_i) seen from z_{i+1}
 /// (u32::MAX where undefined). A split whose two classified vertices and their
@@ -176,12 +175,24 @@ pub fn path_counts_labelled(scene: &Scene, model: &Model, light_tracing: f64, x:
     // Camera index of full-path vertex j (j ≥ s): x[j] = camera[n − 1 − j].
     let eye_of = |j: usize| -> u32 {
         // Seen from x[j + 1]: both on the camera path, or both on the light prefix.
-        let known_label = if j >= s_known { known.camera.and_then(|c| read(c.eye.get(n - 1 - j))) } else if j + 1 < s_known { read(memo.get(j).map(|m| &m.eye)) } else { None };
+        let known_label = if j >= s_known {
+            known.camera.and_then(|c| read(c.eye.get(n - 1 - j)))
+        } else if j + 1 < s_known {
+            read(memo.get(j).map(|m| &m.eye))
+        } else {
+            None
+        };
         known_label.unwrap_or_else(|| model.classifier.eye_of(&x[j], x[j + 1].p))
     };
     let light_of = |j: usize| -> u32 {
         // Seen from x[j − 1]: both on the camera path, or both on the light prefix.
-        let known_label = if j > s_known { known.camera.and_then(|c| read(c.light.get(n - 1 - j))) } else if j >= 1 && j < s_known { read(memo.get(j).map(|m| &m.light)) } else { None };
+        let known_label = if j > s_known {
+            known.camera.and_then(|c| read(c.light.get(n - 1 - j)))
+        } else if j >= 1 && j < s_known {
+            read(memo.get(j).map(|m| &m.light))
+        } else {
+            None
+        };
         known_label.unwrap_or_else(|| model.classifier.light_of(&x[j], x[j - 1].p))
     };
     let mut w = [0.0f32; 2 * bdpt::MAX_VERTICES + 1];

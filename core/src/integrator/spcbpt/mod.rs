@@ -13,6 +13,7 @@
 //!    sampling the restricted one is the public code's error);
 //! 2. a vertex y of subspace l with probability P_r(y) = f_y/p_y / S_l, S_l the sum of
 //!    f/p (RGB sum of the sub-path throughput β) over the subspace's vertices.
+//!
 //! The resampled estimate of the connection is f(ȲZ̄) / (p(Z̄) p(Ȳ) · N · M · Γ' · P_r):
 //! BOTH sub-path pdfs (eq. 10 as printed omits p(Ȳ)); β of each sub-path already holds
 //! its f/p, so the code divides the joined value by N·M·Γ'·P_r.
@@ -76,8 +77,8 @@ pub mod prepare;
 
 pub use phases::{Spcbpt, SpcbptReport};
 
-pub use counts::{CameraLabels, KnownLabels, PrefixMemo, light_prefix_weights, memoize_light_path, path_counts, path_counts_labelled, scalar};
 use counts::finite;
+pub use counts::{CameraLabels, KnownLabels, PrefixMemo, light_prefix_weights, memoize_light_path, path_counts, path_counts_labelled, scalar};
 
 use alloc::boxed::Box;
 use alloc::collections::VecDeque;
@@ -202,7 +203,13 @@ impl Model {
 pub fn cache_weight(prefix: &[Vertex]) -> f32 {
     match prefix {
         [] => 0.0,
-        [y0] => if y0.pdf_fwd > 0.0 { finite(scalar(y0.beta) / y0.pdf_fwd) } else { 0.0 },
+        [y0] => {
+            if y0.pdf_fwd > 0.0 {
+                finite(scalar(y0.beta) / y0.pdf_fwd)
+            } else {
+                0.0
+            }
+        }
         [.., last] => finite(scalar(last.beta)),
     }
 }
@@ -239,7 +246,11 @@ impl Retained {
     }
     pub fn size_bytes(&self) -> usize {
         let per_vertex = core::mem::size_of::<Vertex>() + core::mem::size_of::<PrefixMemo>();
-        let prefixes: usize = self.fifos.iter().map(|f| f.capacity() * core::mem::size_of::<RetainedPrefix>() + f.iter().map(|p| p.vertices.len() * per_vertex).sum::<usize>()).sum();
+        let prefixes: usize = self
+            .fifos
+            .iter()
+            .map(|f| f.capacity() * core::mem::size_of::<RetainedPrefix>() + f.iter().map(|p| p.vertices.len() * per_vertex).sum::<usize>())
+            .sum();
         prefixes + self.fifos.capacity() * core::mem::size_of::<VecDeque<RetainedPrefix>>() + self.generated.capacity() * 8
     }
     /// Fold in one pass whose cacheable vertices are `entries[start[k]..start[k+1]]` for
@@ -321,8 +332,18 @@ impl PassCache {
         if self.is_empty_subspace(l) || !(norm > 0.0) { 0.0 } else { model.gamma.get(l, e) / norm }
     }
     pub fn size_bytes(&self) -> usize {
-        let tables = |t: &Vec<Option<AliasTable>>| t.iter().map(|a| a.as_ref().map_or(0, |a| a.len() * 12)).sum::<usize>() + t.capacity() * core::mem::size_of::<Option<AliasTable>>();
-        self.paths.size_bytes() + self.memo.capacity() * core::mem::size_of::<PrefixMemo>() + self.entries.capacity() * 8 + self.start.capacity() * 4 + tables(&self.vertex_tables) + tables(&self.gamma_tables) + self.gamma_norm.capacity() * 4 + self.retained.size_bytes() + self.effective_paths.capacity() * 8
+        let tables = |t: &Vec<Option<AliasTable>>| {
+            t.iter().map(|a| a.as_ref().map_or(0, |a| a.len() * 12)).sum::<usize>() + t.capacity() * core::mem::size_of::<Option<AliasTable>>()
+        };
+        self.paths.size_bytes()
+            + self.memo.capacity() * core::mem::size_of::<PrefixMemo>()
+            + self.entries.capacity() * 8
+            + self.start.capacity() * 4
+            + tables(&self.vertex_tables)
+            + tables(&self.gamma_tables)
+            + self.gamma_norm.capacity() * 4
+            + self.retained.size_bytes()
+            + self.effective_paths.capacity() * 8
     }
 }
 
@@ -330,7 +351,16 @@ impl PassCache {
 /// `memo` (both appended; no splats yet: their weights need the iteration's non-empty
 /// subspaces).
 #[allow(clippy::too_many_arguments)]
-pub fn trace_light_paths<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, model: &Model, pass: u32, paths: Range<u32>, out: &mut LightPaths, memo: &mut Vec<PrefixMemo>) -> Counters {
+pub fn trace_light_paths<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    model: &Model,
+    pass: u32,
+    paths: Range<u32>,
+    out: &mut LightPaths,
+    memo: &mut Vec<PrefixMemo>,
+) -> Counters {
     let mut counters = Counters::default();
     for index in paths {
         let light = trace_light_subpath(scene, tracer, params, Stream::Light, index, pass, &mut counters);
@@ -445,14 +475,41 @@ pub fn join(light: &[Vertex], camera: &[Vertex], sampled: Option<Vertex>, s: usi
 /// Evaluate strategy (s, t) with SPCBPT's path-dependent counts: connect once with unit
 /// counts to get the unweighted value and the resampled endpoint, then weigh.
 #[allow(clippy::too_many_arguments)]
-fn weighted<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model: &Model, light_tracing: f64, light: &[Vertex], camera: &[Vertex], labels: Option<&CameraLabels>, light_memo: &[PrefixMemo], s: usize, t: usize, u_light: f32, u_point: Vec2, counters: &mut Counters) -> Option<(Rgb, Option<Vec2>, f32)> {
-    strategy_labelled(scene, tracer, model, light_tracing, light, camera, labels, light_memo, s, t, u_light, u_point, counters).map(|c| (c.value, c.film, c.weight))
+fn weighted<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    model: &Model,
+    light_tracing: f64,
+    light: &[Vertex],
+    camera: &[Vertex],
+    labels: Option<&CameraLabels>,
+    light_memo: &[PrefixMemo],
+    s: usize,
+    t: usize,
+    u_light: f32,
+    u_point: Vec2,
+    counters: &mut Counters,
+) -> Option<(Rgb, Option<Vec2>, f32)> {
+    strategy_labelled(scene, tracer, model, light_tracing, light, camera, labels, light_memo, s, t, u_light, u_point, counters)
+        .map(|c| (c.value, c.film, c.weight))
 }
 
 /// Strategy (s, t) with SPCBPT's MIS weight (`value` weighted, not divided by any
 /// selection probability); `sampled` is the resampled endpoint (s = 1 or t = 1).
 #[allow(clippy::too_many_arguments)]
-pub fn strategy<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model: &Model, light_tracing: f64, light: &[Vertex], camera: &[Vertex], s: usize, t: usize, u_light: f32, u_point: Vec2, counters: &mut Counters) -> Option<bdpt::Connection> {
+pub fn strategy<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    model: &Model,
+    light_tracing: f64,
+    light: &[Vertex],
+    camera: &[Vertex],
+    s: usize,
+    t: usize,
+    u_light: f32,
+    u_point: Vec2,
+    counters: &mut Counters,
+) -> Option<bdpt::Connection> {
     strategy_labelled(scene, tracer, model, light_tracing, light, camera, None, &[], s, t, u_light, u_point, counters)
 }
 
@@ -460,7 +517,21 @@ pub fn strategy<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model: &Model, 
 /// of the path the labels were computed on) and the light prefix's memo (`light_memo`,
 /// one entry per vertex of `light[..s]`; ignored unless it has exactly s entries).
 #[allow(clippy::too_many_arguments)]
-pub fn strategy_labelled<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model: &Model, light_tracing: f64, light: &[Vertex], camera: &[Vertex], labels: Option<&CameraLabels>, light_memo: &[PrefixMemo], s: usize, t: usize, u_light: f32, u_point: Vec2, counters: &mut Counters) -> Option<bdpt::Connection> {
+pub fn strategy_labelled<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    model: &Model,
+    light_tracing: f64,
+    light: &[Vertex],
+    camera: &[Vertex],
+    labels: Option<&CameraLabels>,
+    light_memo: &[PrefixMemo],
+    s: usize,
+    t: usize,
+    u_light: f32,
+    u_point: Vec2,
+    counters: &mut Counters,
+) -> Option<bdpt::Connection> {
     // s = 1 with the light path's own first vertex (a cached light-source vertex), not a
     // fresh light sample: the full path is known before connecting, like s ≥ 2.
     let cached_source = s == 1 && light.len() == 1 && model.caches_light_sources();
@@ -501,7 +572,16 @@ pub fn strategy_labelled<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, model:
 
 /// Splat the t = 1 strategies of light paths `paths` (indices into `cache.paths`) to
 /// `splat`; the host scales by 1/M.
-pub fn splat_light_paths<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, model: &Model, cache: &PassCache, light_tracing: f64, paths: Range<u32>, splat: &mut dyn FnMut(Splat)) -> Counters {
+pub fn splat_light_paths<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    model: &Model,
+    cache: &PassCache,
+    light_tracing: f64,
+    paths: Range<u32>,
+    splat: &mut dyn FnMut(Splat),
+) -> Counters {
     let mut counters = Counters::default();
     for i in paths {
         let light = cache.paths.path(i as usize);
@@ -511,7 +591,9 @@ pub fn splat_light_paths<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params
             if !params.max_depth.allows(s as u32) {
                 break;
             }
-            if let Some((value, Some(film), _)) = weighted(scene, tracer, model, light_tracing, &light[..s], &[], None, memo.get(..s).unwrap_or(&[]), s, 1, 0.0, Vec2::ZERO, &mut counters) {
+            if let Some((value, Some(film), _)) =
+                weighted(scene, tracer, model, light_tracing, &light[..s], &[], None, memo.get(..s).unwrap_or(&[]), s, 1, 0.0, Vec2::ZERO, &mut counters)
+            {
                 splat(Splat { film, value: counters.sanitize(value) });
             }
         }
@@ -520,7 +602,17 @@ pub fn splat_light_paths<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params
 }
 
 /// One SPCBPT sample for each pixel of `pixels` into `out` (t ≥ 2 strategies).
-pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, model: &Model, cache: &PassCache, light_paths: u32, pass: u32, pixels: Range<u32>, out: &mut [Rgb]) -> Counters {
+pub fn render_pixels<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    model: &Model,
+    cache: &PassCache,
+    light_paths: u32,
+    pass: u32,
+    pixels: Range<u32>,
+    out: &mut [Rgb],
+) -> Counters {
     let mut counters = Counters::default();
     let width = scene.camera.width().max(1);
     let n_pixels = width * scene.camera.height().max(1);
@@ -541,7 +633,9 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &R
                 if s == 1 && (!params.max_depth.allows(t as u32) || model.caches_light_sources()) {
                     continue;
                 }
-                if let Some((v, _, _)) = weighted(scene, tracer, model, light_tracing, &[], &camera[..t], Some(&labels), &[], s, t, u_light, u_point, &mut counters) {
+                if let Some((v, _, _)) =
+                    weighted(scene, tracer, model, light_tracing, &[], &camera[..t], Some(&labels), &[], s, t, u_light, u_point, &mut counters)
+                {
                     l += counters.sanitize(v);
                 }
             }
@@ -566,7 +660,9 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &R
                 if !(probability > 0.0) {
                     continue;
                 }
-                if let Some((v, _, _)) = weighted(scene, tracer, model, light_tracing, light, &camera[..t], Some(&labels), memo, s, t, 0.0, Vec2::ZERO, &mut counters) {
+                if let Some((v, _, _)) =
+                    weighted(scene, tracer, model, light_tracing, light, &camera[..t], Some(&labels), memo, s, t, 0.0, Vec2::ZERO, &mut counters)
+                {
                     l += counters.sanitize(v / probability);
                 }
             }

@@ -19,10 +19,10 @@ use alloc::vec::Vec;
 use core::ops::Range;
 
 use super::{Classifier, FullPath, cache_weight, join, light_prefix_weights, scalar};
+use crate::geometry::RayQuery;
 use crate::integrator::bdpt::{self, Vertex, VertexKind, camera_subpath, connect_counted, mis::for_each_strategy_ratio};
 use crate::integrator::lvcbpt::{is_cacheable, trace_light_subpath};
 use crate::integrator::{Counters, RenderParams};
-use crate::geometry::RayQuery;
 use crate::math::Vec2;
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
@@ -39,7 +39,14 @@ pub const BLOCK: u32 = 10;
 pub const WEIGHT_CLAMP: f64 = 1e6;
 
 /// Features (and f/p weights) of the cacheable vertices of light paths `paths`.
-pub fn light_features<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, paths: Range<u32>, features: &mut Vec<SubpathFeature>, weights: &mut Vec<f32>) -> Counters {
+pub fn light_features<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    paths: Range<u32>,
+    features: &mut Vec<SubpathFeature>,
+    weights: &mut Vec<f32>,
+) -> Counters {
     let mut counters = Counters::default();
     for i in paths {
         let light = trace_light_subpath(scene, tracer, params, Stream::Preprocess, LIGHT_FEATURES_BASE.wrapping_add(i), 0, &mut counters);
@@ -67,7 +74,14 @@ pub fn fit_side(features: &[SubpathFeature], weights: &[f32], count: usize, k_d:
 /// Add Σ f/p of light paths `paths`' cacheable vertices into `q[κ_L]` (the host divides
 /// by M'), and of their light-source vertices into their bins when the classifier has
 /// them. Every path of the range is traced: the loop never stops early.
-pub fn accumulate_q<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, classifier: &Classifier, paths: Range<u32>, q: &mut [f64]) -> Counters {
+pub fn accumulate_q<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    classifier: &Classifier,
+    paths: Range<u32>,
+    q: &mut [f64],
+) -> Counters {
     let mut counters = Counters::default();
     for i in paths {
         let light = trace_light_subpath(scene, tracer, params, Stream::Preprocess, Q_BASE.wrapping_add(i), 0, &mut counters);
@@ -88,9 +102,13 @@ pub fn accumulate_q<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Re
     counters
 }
 
+/// Receives (pixel, camera sub-path, t, sampled light vertex, unweighted f/p₁) per NEE
+/// full path of a dataset sample.
+type DatasetVisit<'a> = dyn FnMut(u32, &[Vertex], usize, Vertex, Rgb) + 'a;
+
 /// Trace dataset sample `i`: its pixel, camera path and each NEE full path (t, sampled
 /// light vertex, unweighted f/p₁) handed to `visit`.
-fn dataset_sample<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, i: u32, counters: &mut Counters, visit: &mut dyn FnMut(u32, &[Vertex], usize, Vertex, Rgb)) {
+fn dataset_sample<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, i: u32, counters: &mut Counters, visit: &mut DatasetVisit<'_>) {
     let width = scene.camera.width().max(1);
     let pixels = width * scene.camera.height().max(1);
     let pixel = i % pixels;
@@ -117,7 +135,16 @@ fn dataset_sample<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Rend
 /// First pass over dataset samples `samples`: eye features of camera vertices (weighted
 /// by the camera path's total contribution) and per-block brightness sums (`blocks`,
 /// (⌈W/10⌉·⌈H/10⌉) entries) and sample counts.
-pub fn dataset_features<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, samples: Range<u32>, features: &mut Vec<SubpathFeature>, weights: &mut Vec<f32>, blocks: &mut [f64], block_samples: &mut [u32]) -> Counters {
+pub fn dataset_features<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    samples: Range<u32>,
+    features: &mut Vec<SubpathFeature>,
+    weights: &mut Vec<f32>,
+    blocks: &mut [f64],
+    block_samples: &mut [u32],
+) -> Counters {
     let mut counters = Counters::default();
     let width = scene.camera.width().max(1);
     let bw = width.div_ceil(BLOCK);
@@ -157,7 +184,18 @@ pub fn dataset_features<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params:
 /// Second pass over dataset samples `samples`: training records into `set`.
 /// `block_mean[b]` is block b's mean brightness per sample; `q` the normalised Q.
 #[allow(clippy::too_many_arguments)]
-pub fn dataset_records<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, classifier: &Classifier, q: &[f32], connections: u32, light_tracing: f64, block_mean: &[f64], samples: Range<u32>, set: &mut TrainingSet) -> Counters {
+pub fn dataset_records<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    classifier: &Classifier,
+    q: &[f32],
+    connections: u32,
+    light_tracing: f64,
+    block_mean: &[f64],
+    samples: Range<u32>,
+    set: &mut TrainingSet,
+) -> Counters {
     let mut counters = Counters::default();
     let width = scene.camera.width().max(1);
     let bw = width.div_ceil(BLOCK);
