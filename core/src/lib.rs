@@ -24,6 +24,7 @@ pub mod light;
 pub mod math;
 pub mod measure;
 pub mod mmis;
+pub mod path;
 pub mod render;
 pub mod rng;
 pub mod scene;

@@ -18,8 +18,8 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use ember_core::bsdf::{Material, MicrofacetKind};
-use ember_core::integrator::bdpt::mis::mis_weight;
-use ember_core::integrator::bdpt::{Vertex, VertexKind, camera_subpath, connect, light_subpath};
+use ember_core::path::mis::mis_weight;
+use ember_core::path::{Vertex, VertexKind, camera_subpath, connect, light_subpath};
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::mmis::{Mmis, Pair, Technique, product_of_sums, tuple_weight};
 use ember_core::rng::{SampleStream, Stream};

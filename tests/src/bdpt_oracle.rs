@@ -9,8 +9,8 @@
 //! factor to every strategy able to produce the path, so it cancels (taken as 1).
 
 use ember_core::bsdf::TransportMode;
-use ember_core::integrator::bdpt::{Vertex, VertexKind};
 use ember_core::math::Frame;
+use ember_core::path::{Vertex, VertexKind};
 use ember_core::scene::Scene;
 use glam::Vec3;
 

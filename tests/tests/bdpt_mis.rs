@@ -18,9 +18,9 @@
 //! the forward instead of the reverse density as `pdf_rev` in the walk fails (1)
 //! (0.625 vs 0.639 at (3, 1)).
 
-use ember_core::integrator::bdpt::mis::mis_weight;
-use ember_core::integrator::bdpt::{Vertex, VertexKind, camera_subpath, connect, light_subpath};
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
+use ember_core::path::mis::mis_weight;
+use ember_core::path::{Vertex, VertexKind, camera_subpath, connect, light_subpath};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::Scene;
 use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split};

@@ -18,10 +18,10 @@
 //! so their β agree; the end-to-end test (`spcbpt_agreement.rs`) is what guards that
 //! the counts do not depend on how a path was sampled (it fails on this bug at z = −25.4).
 
-use ember_core::integrator::bdpt::mis::mis_weight_counted;
-use ember_core::integrator::bdpt::{Vertex, VertexKind, camera_subpath, light_subpath};
 use ember_core::integrator::spcbpt::{self, KnownLabels, Model, join, memoize_light_path, path_counts, path_counts_labelled};
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
+use ember_core::path::mis::mis_weight_counted;
+use ember_core::path::{Vertex, VertexKind, camera_subpath, light_subpath};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::Scene;
 use ember_core::spectrum::Rgb;

@@ -46,9 +46,9 @@ use core::ops::Range;
 
 use crate::alias::AliasTable;
 use crate::geometry::RayQuery;
-use crate::integrator::lvcbpt::LightPaths;
 use crate::integrator::spcbpt::PrefixMemo;
 use crate::integrator::{Counters, Splat};
+use crate::path::LightPaths;
 use crate::scene::Scene;
 use crate::spcbpt::{SubpathFeature, TrainingSet};
 use crate::spectrum::Rgb;

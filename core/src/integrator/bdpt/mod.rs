@@ -13,56 +13,18 @@
 //!
 //! Strategies are combined by the balance heuristic, w_{s,t} = p_{s,t} / Σ p_{i,j} over
 //! the strategies producing the same path, computed in O(s + t) from per-vertex ratios
-//! of reverse and forward area densities ([`mis`]). Camera paths and light paths are
+//! of reverse and forward area densities ([`crate::path::mis`]). Camera paths and light paths are
 //! traced one each per pixel sample, so every strategy has sample count one; splats
 //! from t = 1 are divided by the number of light paths per pass (W·H) by the host.
-
-pub mod connect;
-pub mod mis;
-pub mod vertex;
-pub mod walk;
 
 use core::ops::Range;
 
 use super::{Counters, RenderParams, Splat};
 use crate::geometry::RayQuery;
-use crate::math::Vec2;
+use crate::path::{connect, light_subpath, pixel_camera_subpath, vertex_budgets};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
-
-pub use connect::{Connection, connect, connect_counted, connect_light_source};
-pub use vertex::{Vertex, VertexKind};
-pub use walk::{SubPath, camera_subpath, light_subpath};
-
-/// Capacity of a sub-path (vertices); unbounded depth truncates here (counted).
-pub const MAX_VERTICES: usize = 34;
-
-/// Sub-path vertex budgets implied by `max_depth`: a path of s + t vertices has
-/// s + t − 1 segments.
-pub fn vertex_budgets(params: &RenderParams) -> (usize, usize) {
-    let segments = params.max_depth.capped(MAX_VERTICES as u32 - 1) as usize;
-    // Camera: up to segments + 1 vertices (s = 0); light: up to `segments` (t = 1).
-    (segments + 1, segments)
-}
-
-/// The camera sub-path of pixel `pixel`'s sample in pass `pass`: a jittered film position
-/// and the walk, both from the pixel's camera stream (the draws every estimator of the
-/// BDPT family makes, so their camera paths coincide).
-pub fn pixel_camera_subpath<Q: RayQuery + ?Sized>(
-    scene: &Scene,
-    tracer: &Q,
-    params: &RenderParams,
-    pixel: u32,
-    pass: u32,
-    max_camera: usize,
-    counters: &mut Counters,
-) -> SubPath {
-    let width = scene.camera.width().max(1);
-    let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
-    let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
-    camera_subpath(scene, tracer, params, film, max_camera, &mut rng, counters)
-}
 
 /// Render one BDPT sample for each pixel in `pixels` of pass `pass`; camera-side
 /// estimates go to `out`, t = 1 splats to `splat`.

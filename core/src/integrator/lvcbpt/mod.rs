@@ -16,7 +16,7 @@
 //!   per camera sample would. The effective count of this strategy is N·M/|C|.
 //!
 //! MIS is the balance heuristic with those counts (Veach's n_i p_i / Σ n_j p_j),
-//! computed in O(s + t) by BDPT's ratio walk ([`bdpt::mis::mis_weight_counted`]).
+//! computed in O(s + t) by BDPT's ratio walk ([`path::mis::mis_weight_counted`]).
 //! The connection count uses the EXPECTED cache size, N/c̄ with c̄ the mean number of
 //! cacheable vertices per light path, measured once before rendering
 //! ([`count_cacheable`], on the preprocessing stream). Using the pass's own |C| would
@@ -35,10 +35,10 @@ pub use phases::Lvcbpt;
 use alloc::vec::Vec;
 use core::ops::Range;
 
-use super::bdpt::{self, Vertex, VertexKind, connect_counted, light_subpath};
 use super::{Counters, RenderParams, Splat};
 use crate::geometry::RayQuery;
 use crate::math::Vec2;
+use crate::path::{self, CacheEntry, LightPaths, VertexKind, connect_counted, is_cacheable, trace_light_subpath};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -70,83 +70,6 @@ impl StrategyCounts {
             self.connection
         }
     }
-}
-
-/// Light sub-paths of one pass (or of one chunk of it), vertices stored contiguously.
-#[derive(Clone, Debug, Default)]
-pub struct LightPaths {
-    pub vertices: Vec<Vertex>,
-    /// Index of each path's first vertex in `vertices`.
-    pub starts: Vec<u32>,
-}
-
-impl LightPaths {
-    pub fn new() -> Self {
-        Self::default()
-    }
-    pub fn clear(&mut self) {
-        self.vertices.clear();
-        self.starts.clear();
-    }
-    /// Number of paths held.
-    pub fn len(&self) -> usize {
-        self.starts.len()
-    }
-    pub fn is_empty(&self) -> bool {
-        self.starts.is_empty()
-    }
-    /// Append another store's paths (chunks merged in index order by the host).
-    pub fn append(&mut self, other: &LightPaths) {
-        let base = self.vertices.len() as u32;
-        self.vertices.extend_from_slice(&other.vertices);
-        self.starts.extend(other.starts.iter().map(|s| s + base));
-    }
-    /// Vertices of path `i`.
-    pub fn path(&self, i: usize) -> &[Vertex] {
-        let start = self.starts[i] as usize;
-        let end = self.starts.get(i + 1).map_or(self.vertices.len(), |&e| e as usize);
-        &self.vertices[start..end]
-    }
-    pub fn size_bytes(&self) -> usize {
-        self.vertices.capacity() * core::mem::size_of::<Vertex>() + self.starts.capacity() * 4
-    }
-}
-
-/// A cached light vertex: the prefix `vertices[start .. start + s]` of a light path,
-/// whose last vertex is the one connected to (s ≥ 2).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct CacheEntry {
-    pub start: u32,
-    pub s: u32,
-}
-
-impl CacheEntry {
-    /// The light sub-path y₀…y_{s−1} of this entry.
-    #[inline]
-    pub fn subpath<'a>(&self, paths: &'a LightPaths) -> &'a [Vertex] {
-        &paths.vertices[self.start as usize..(self.start + self.s) as usize]
-    }
-}
-
-/// May light vertex `v` (not the light-source vertex) be cached for connections?
-#[inline]
-pub fn is_cacheable(scene: &Scene, v: &Vertex) -> bool {
-    v.kind == VertexKind::Surface && v.is_connectible(scene)
-}
-
-/// Trace the light sub-path of light-path index `index` (its own random stream).
-pub fn trace_light_subpath<Q: RayQuery + ?Sized>(
-    scene: &Scene,
-    tracer: &Q,
-    params: &RenderParams,
-    stream: Stream,
-    index: u32,
-    pass: u32,
-    counters: &mut Counters,
-) -> bdpt::SubPath {
-    let (_, max_light) = bdpt::vertex_budgets(params);
-    let mut rng = SampleStream::for_sample(params.seed, stream, index, pass, 0);
-    light_subpath(scene, tracer, params, max_light, &mut rng, counters)
 }
 
 /// Trace light paths `paths` of pass `pass` into `out` (appended) and splat their
@@ -231,7 +154,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
     out: &mut [Rgb],
 ) -> Counters {
     let mut counters = Counters::default();
-    let (max_camera, _) = bdpt::vertex_budgets(params);
+    let (max_camera, _) = path::vertex_budgets(params);
     let counts = inputs.counts;
     let count = |s: usize, t: usize| counts.count(s, t);
     let cache_len = inputs.cache.len();
@@ -239,7 +162,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
     let connection_scale =
         if inputs.connections > 0 && inputs.light_paths > 0 { cache_len as f32 / (inputs.connections as f32 * inputs.light_paths as f32) } else { 0.0 };
     for (slot, pixel) in out.iter_mut().zip(pixels) {
-        let camera = bdpt::pixel_camera_subpath(scene, tracer, params, pixel, pass, max_camera, &mut counters);
+        let camera = path::pixel_camera_subpath(scene, tracer, params, pixel, pass, max_camera, &mut counters);
         let mut aux = SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, 0);
         let mut l = Rgb::ZERO;
         for t in 2..=camera.len() {

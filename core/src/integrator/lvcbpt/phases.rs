@@ -8,9 +8,10 @@
 
 use alloc::vec::Vec;
 
-use super::{CacheEntry, LightPaths, PassInputs, StrategyCounts, build_cache, count_cacheable, render_pixels, trace_light_paths};
+use super::{PassInputs, StrategyCounts, build_cache, count_cacheable, render_pixels, trace_light_paths};
 use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;
+use crate::path::{CacheEntry, LightPaths};
 use crate::render::{ChunkOutput, Context, Cursor, Film, LvcbptConfig, Phase, PhaseData, Phased, Stage};
 
 /// Light paths per chunk.

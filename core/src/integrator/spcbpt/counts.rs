@@ -8,7 +8,7 @@
 
 use super::Model;
 use crate::bsdf::TransportMode;
-use crate::integrator::bdpt::{self, Vertex, VertexKind};
+use crate::path::{self, Vertex, VertexKind};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 
@@ -93,8 +93,8 @@ pub struct PrefixMemo {
 /// Append the memo of light path `path` (one entry per vertex) to `out`.
 pub fn memoize_light_path(scene: &Scene, model: &Model, path: &[Vertex], out: &mut alloc::vec::Vec<PrefixMemo>) {
     let first = out.len();
-    let mut w = [0.0f32; 2 * bdpt::MAX_VERTICES + 1];
-    let mut rgb = [None; 2 * bdpt::MAX_VERTICES];
+    let mut w = [0.0f32; 2 * path::MAX_VERTICES + 1];
+    let mut rgb = [None; 2 * path::MAX_VERTICES];
     light_prefix_weights_from(scene, path, &[], &mut w, &mut |k, v| {
         if let Some(slot) = rgb.get_mut(k) {
             *slot = v;
@@ -122,7 +122,7 @@ pub(super) fn finite(x: f32) -> f32 {
 
 /// |cos| |cos| / d² with shading normals (what β carries along a segment).
 fn geometry(a: &Vertex, b: &Vertex) -> f32 {
-    bdpt::vertex::cosines_over_distance2(a, a.frame.n, b, b.ng)
+    path::vertex::cosines_over_distance2(a, a.frame.n, b, b.ng)
 }
 
 /// Subspace labels of a camera sub-path's own vertices, computed once per camera path:
@@ -132,8 +132,8 @@ fn geometry(a: &Vertex, b: &Vertex) -> f32 {
 /// trees again (same features, so the same labels: the counts do not change).
 #[derive(Clone, Debug, Default)]
 pub struct CameraLabels {
-    pub eye: heapless::Vec<u32, { bdpt::MAX_VERTICES }>,
-    pub light: heapless::Vec<u32, { bdpt::MAX_VERTICES }>,
+    pub eye: heapless::Vec<u32, { path::MAX_VERTICES }>,
+    pub light: heapless::Vec<u32, { path::MAX_VERTICES }>,
 }
 
 impl CameraLabels {
@@ -195,7 +195,7 @@ pub fn path_counts_labelled(scene: &Scene, model: &Model, light_tracing: f64, x:
         };
         known_label.unwrap_or_else(|| model.classifier.light_of(&x[j], x[j - 1].p))
     };
-    let mut w = [0.0f32; 2 * bdpt::MAX_VERTICES + 1];
+    let mut w = [0.0f32; 2 * path::MAX_VERTICES + 1];
     light_prefix_weights_from(scene, x, memo, &mut w, &mut |_, _| {});
     for s in 0..=n.min(out.len() - 1) {
         let t = n - s;

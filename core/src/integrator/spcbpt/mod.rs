@@ -33,7 +33,7 @@
 //! ([`LightSourceBins`]: per light ∝ power, cells of the inverse of its position
 //! sampler), each light path's first vertex y₀ is cached in its bin with stage-2 weight
 //! Le/p(y₀) ([`cache_weight`]), and s = 1 is a Γ-sampled connection to a cached y₀
-//! ([`bdpt::connect_light_source`]) instead of next-event estimation: Γ learns which
+//! ([`path::connect_light_source`]) instead of next-event estimation: Γ learns which
 //! parts of which lights each eye subspace sees. With a point, spot or infinite light
 //! (no position to bin or no surface to connect to) s = 1 stays next-event estimation.
 //!
@@ -47,7 +47,7 @@
 //! prefix's f/p. W is recomputed for every split from the path itself ([`light_prefix_weights`];
 //! Dirac vertices count 1, no Russian roulette) so that all strategies of one path
 //! see the same counts and the weights sum to one exactly. Ratios of the sub-path
-//! densities come from BDPT's O(n) walk ([`bdpt::mis::mis_weight_counted`]); the count
+//! densities come from BDPT's O(n) walk ([`path::mis::mis_weight_counted`]); the count
 //! table of a path costs O(n) density evaluations and tree look-ups. It is built lazily
 //! inside the one connection of a strategy with no sampled endpoint (nothing for an
 //! occluded connection); the labels of the camera sub-path's own vertices are
@@ -85,19 +85,18 @@ use alloc::collections::VecDeque;
 use alloc::vec::Vec;
 use core::ops::Range;
 
-use super::bdpt::{self, Vertex, VertexKind, connect_counted};
-use super::lvcbpt::{CacheEntry, LightPaths, is_cacheable, trace_light_subpath};
 use super::{Counters, RenderParams, Splat};
 use crate::alias::AliasTable;
 use crate::geometry::RayQuery;
 use crate::math::{Vec2, Vec3};
+use crate::path::{self, CacheEntry, LightPaths, Vertex, VertexKind, connect_counted, is_cacheable, trace_light_subpath};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::spcbpt::{DecisionTree, LightSourceBins, SubpathFeature, SubspaceMatrix};
 use crate::spectrum::Rgb;
 
 /// Vertices of a full path (light end first), bounded like BDPT's sub-paths.
-pub type FullPath = heapless::Vec<Vertex, { 2 * bdpt::MAX_VERTICES }>;
+pub type FullPath = heapless::Vec<Vertex, { 2 * path::MAX_VERTICES }>;
 
 /// κ_E and κ_L. Light subspaces 0..`n_light_surface` are the tree's (surface vertices
 /// seen from their predecessor); with `sources`, ids `n_light_surface..n_light` are the
@@ -509,7 +508,7 @@ pub fn strategy<Q: RayQuery + ?Sized>(
     u_light: f32,
     u_point: Vec2,
     counters: &mut Counters,
-) -> Option<bdpt::Connection> {
+) -> Option<path::Connection> {
     strategy_labelled(scene, tracer, model, light_tracing, light, camera, None, &[], s, t, u_light, u_point, counters)
 }
 
@@ -531,7 +530,7 @@ pub fn strategy_labelled<Q: RayQuery + ?Sized>(
     u_light: f32,
     u_point: Vec2,
     counters: &mut Counters,
-) -> Option<bdpt::Connection> {
+) -> Option<path::Connection> {
     // s = 1 with the light path's own first vertex (a cached light-source vertex), not a
     // fresh light sample: the full path is known before connecting, like s ≥ 2.
     let cached_source = s == 1 && light.len() == 1 && model.caches_light_sources();
@@ -547,14 +546,14 @@ pub fn strategy_labelled<Q: RayQuery + ?Sized>(
         let count = |s2: usize, _t2: usize| {
             let counts = table.get_or_init(|| {
                 let x = join(light, camera, None, s, t);
-                let mut counts = [0.0f64; 2 * bdpt::MAX_VERTICES + 1];
+                let mut counts = [0.0f64; 2 * path::MAX_VERTICES + 1];
                 path_counts_labelled(scene, model, light_tracing, &x, labels, &mut counts);
                 counts
             });
             counts.get(s2).copied().unwrap_or(0.0)
         };
         if cached_source {
-            return bdpt::connect_light_source(scene, tracer, &light[0], camera, t, counters, &count);
+            return path::connect_light_source(scene, tracer, &light[0], camera, t, counters, &count);
         }
         return connect_counted(scene, tracer, light, camera, s, t, u_light, u_point, counters, &count);
     }
@@ -563,11 +562,11 @@ pub fn strategy_labelled<Q: RayQuery + ?Sized>(
     let c = connect_counted(scene, tracer, light, camera, s, t, u_light, u_point, counters, &|_, _| 1.0)?;
     let unweighted = if c.weight > 0.0 { c.value / c.weight } else { return None };
     let x = join(light, camera, c.sampled, s, t);
-    let mut counts = [0.0f64; 2 * bdpt::MAX_VERTICES + 1];
+    let mut counts = [0.0f64; 2 * path::MAX_VERTICES + 1];
     path_counts_labelled(scene, model, light_tracing, &x, labels, &mut counts);
     let count = |s2: usize, _t2: usize| counts[s2];
-    let weight = bdpt::mis::mis_weight_counted(scene, light, camera, c.sampled.as_ref(), s, t, &count);
-    Some(bdpt::Connection { value: unweighted * weight, film: c.film, weight, sampled: c.sampled })
+    let weight = path::mis::mis_weight_counted(scene, light, camera, c.sampled.as_ref(), s, t, &count);
+    Some(path::Connection { value: unweighted * weight, film: c.film, weight, sampled: c.sampled })
 }
 
 /// Splat the t = 1 strategies of light paths `paths` (indices into `cache.paths`) to
@@ -617,9 +616,9 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
     let width = scene.camera.width().max(1);
     let n_pixels = width * scene.camera.height().max(1);
     let light_tracing = light_paths as f64 / n_pixels as f64;
-    let (max_camera, _) = bdpt::vertex_budgets(params);
+    let (max_camera, _) = path::vertex_budgets(params);
     for (slot, pixel) in out.iter_mut().zip(pixels) {
-        let camera = bdpt::pixel_camera_subpath(scene, tracer, params, pixel, pass, max_camera, &mut counters);
+        let camera = path::pixel_camera_subpath(scene, tracer, params, pixel, pass, max_camera, &mut counters);
         let labels = CameraLabels::new(model, &camera);
         let mut aux = SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, 0);
         let mut l = Rgb::ZERO;

@@ -20,10 +20,9 @@ use core::ops::Range;
 
 use super::{Classifier, FullPath, cache_weight, join, light_prefix_weights, scalar};
 use crate::geometry::RayQuery;
-use crate::integrator::bdpt::{self, Vertex, VertexKind, camera_subpath, connect_counted, mis::for_each_strategy_ratio};
-use crate::integrator::lvcbpt::{is_cacheable, trace_light_subpath};
 use crate::integrator::{Counters, RenderParams};
 use crate::math::Vec2;
+use crate::path::{self, Vertex, VertexKind, camera_subpath, connect_counted, is_cacheable, mis::for_each_strategy_ratio, trace_light_subpath};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::spcbpt::{DecisionTree, DistanceParams, SubpathFeature, TrainingSet, TrainingSplit, TreeParams, nearest_centroid, sample_centroids};
@@ -112,7 +111,7 @@ fn dataset_sample<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Rend
     let width = scene.camera.width().max(1);
     let pixels = width * scene.camera.height().max(1);
     let pixel = i % pixels;
-    let (max_camera, _) = bdpt::vertex_budgets(params);
+    let (max_camera, _) = path::vertex_budgets(params);
     let mut rng = SampleStream::for_sample(params.seed, Stream::Preprocess, DATASET_BASE.wrapping_add(i), 0, 0);
     let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
     let camera = camera_subpath(scene, tracer, params, film, max_camera, &mut rng, counters);
@@ -150,7 +149,7 @@ pub fn dataset_features<Q: RayQuery + ?Sized>(
     let bw = width.div_ceil(BLOCK);
     for i in samples {
         let mut total = 0.0f32;
-        let mut last: Option<(u32, heapless::Vec<SubpathFeature, { bdpt::MAX_VERTICES }>)> = None;
+        let mut last: Option<(u32, heapless::Vec<SubpathFeature, { path::MAX_VERTICES }>)> = None;
         dataset_sample(scene, tracer, params, i, &mut counters, &mut |pixel, camera, _t, _y, value| {
             total += scalar(value);
             if last.is_none() {
@@ -211,7 +210,7 @@ pub fn dataset_records<Q: RayQuery + ?Sized>(
             }
             let light = [y];
             let x: FullPath = join(&light, camera, Some(y), 1, t);
-            let mut w = [0.0f32; 2 * bdpt::MAX_VERTICES + 1];
+            let mut w = [0.0f32; 2 * path::MAX_VERTICES + 1];
             light_prefix_weights(scene, &x, &mut w);
             splits.clear();
             // The sampling technique's own strategy (1, t): next-event estimation counts
