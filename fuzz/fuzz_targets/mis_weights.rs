@@ -19,7 +19,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use ember_core::bsdf::{Material, MicrofacetKind};
 use ember_core::path::mis::mis_weight;
-use ember_core::path::{Vertex, VertexKind, camera_subpath, connect, light_subpath};
+use ember_core::path::{LightPointSample, Vertex, VertexKind, camera_subpath, connect, light_subpath};
+use ember_core::scene::Context;
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::mmis::{Mmis, Pair, Technique, product_of_sums, tuple_weight};
 use ember_core::rng::{SampleStream, Stream};
@@ -97,7 +98,9 @@ fn paths_of_one_sample(b: &mut Bytes, scene: &Scene, tracer: &BruteForce, params
             if (s == 1 && t == 1) || s + t < 2 || s + t > n_max {
                 continue;
             }
-            let Some(c) = connect(scene, tracer, &light, &cam, s, t, b.unit(), b.unit2(), &mut counters) else { continue };
+            let u = LightPointSample { u_light: b.unit(), u_point: b.unit2() };
+            let Some(c) = connect(&Context { scene, tracer }, &light, &cam, s, t, u, &mut counters) else { continue };
+            let c = c.weighted(mis_weight(scene, &light, &cam, c.sampled.as_ref(), s, t));
             check_weight(c.weight as f64, &format!("BDPT connection (s, t) = ({s}, {t})"));
             assert!(c.value.is_finite(), "BDPT ({s}, {t}) value {:?}", c.value);
             if s < 2 || t < 2 || cam[t - 1].kind == VertexKind::InfiniteLight {

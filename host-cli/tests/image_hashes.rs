@@ -11,7 +11,10 @@
 //! prints the current table.
 //!
 //! Recorded on the code before the render-protocol change (commit e5412a9) and seen
-//! passing there.
+//! passing there. Updated once since, for SPCBPT only, when connections started returning
+//! unweighted values: SPCBPT no longer divides by BDPT's weight to un-weight them, a
+//! change of the last f32 bit (measured at 64×64/64×48, 32 passes, the same settings:
+//! max relative pixel difference 1.2e-7, 36-69 pixels differing, means equal to 1e-10).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -107,17 +110,17 @@ const GOLDEN: &[(&str, &str, u64)] = &[
     ("builtin", "lt", 0x4698e34bbffdd7c7),
     ("builtin", "bdpt", 0x2a170f1eef90e281),
     ("builtin", "lvcbpt", 0x48cc7907c9c06132),
-    ("builtin", "spcbpt", 0x46619e438bc6a4d8),
+    ("builtin", "spcbpt", 0xc6cad77e922910d5),
     ("ajar", "pt", 0x34d3ff88304dfbfd),
     ("ajar", "lt", 0x405569d79484bc7f),
     ("ajar", "bdpt", 0xe16524b810d32b8e),
     ("ajar", "lvcbpt", 0x27f2104a103e9b56),
-    ("ajar", "spcbpt", 0xc2ec77388b87e487),
+    ("ajar", "spcbpt", 0x40bb3a17ef8c2824),
     ("veach-mis", "pt", 0xfe87655efec906b5),
     ("veach-mis", "lt", 0xaa51f60cbb891409),
     ("veach-mis", "bdpt", 0x4b1e7def24a986a5),
     ("veach-mis", "lvcbpt", 0x2a76d653e4028f7e),
-    ("veach-mis", "spcbpt", 0x5bc7f58f56d0e318),
+    ("veach-mis", "spcbpt", 0xc766062a533dbe23),
 ];
 
 const SCENES: [&str; 3] = ["builtin", "ajar", "veach-mis"];

@@ -20,8 +20,9 @@
 
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::path::mis::mis_weight;
-use ember_core::path::{Vertex, VertexKind, camera_subpath, connect, light_subpath};
+use ember_core::path::{LightPointSample, Vertex, VertexKind, camera_subpath, connect, light_subpath};
 use ember_core::rng::{SampleStream, Stream};
+use ember_core::scene::Context;
 use ember_core::scene::Scene;
 use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split};
 use ember_tests::scenes::cornell_with_spheres;
@@ -41,6 +42,7 @@ fn recursive_weights_equal_brute_force() {
     let mut worst = 0.0f64;
     for i in 0..3000u32 {
         let mut counters = Counters::default();
+        let ctx = Context { scene: &scene, tracer: &tracer };
         let mut rng = SampleStream::for_sample(1, Stream::Camera, i, 0, 0);
         let film = rng.next_2d() * Vec2::splat(24.0);
         let cam = camera_subpath(&scene, &tracer, &params, film, 9, &mut rng, &mut counters);
@@ -51,7 +53,9 @@ fn recursive_weights_equal_brute_force() {
                 if (s == 1 && t == 1) || s + t < 2 || s + t > 9 {
                     continue;
                 }
-                let Some(c) = connect(&scene, &tracer, &light, &cam, s, t, lrng.next_f32(), lrng.next_2d(), &mut counters) else { continue };
+                let u = LightPointSample { u_light: lrng.next_f32(), u_point: lrng.next_2d() };
+                let Some(c) = connect(&ctx, &light, &cam, s, t, u, &mut counters) else { continue };
+                let c = c.weighted(mis_weight(&scene, &light, &cam, c.sampled.as_ref(), s, t));
                 // Assemble the full path, light end first.
                 let mut x: Vec<Vertex> = light[..s].to_vec();
                 let mut cpart: Vec<Vertex> = cam[..t].to_vec();
@@ -89,6 +93,7 @@ fn recursive_weights_of_one_path_sum_to_one() {
     let (mut paths, mut worst) = (0usize, 0.0f64);
     for i in 0..1500u32 {
         let mut counters = Counters::default();
+        let ctx = Context { scene: &scene, tracer: &tracer };
         let mut rng = SampleStream::for_sample(2, Stream::Camera, i, 0, 0);
         let film = rng.next_2d() * Vec2::splat(24.0);
         let cam = camera_subpath(&scene, &tracer, &params, film, 9, &mut rng, &mut counters);
@@ -97,7 +102,7 @@ fn recursive_weights_of_one_path_sum_to_one() {
         // Full paths from the light sub-path joined to the camera path at a diffuse vertex.
         for s in 2..=light.len() {
             for t in 2..=cam.len() {
-                if s + t > 9 || connect(&scene, &tracer, &light, &cam, s, t, 0.5, Vec2::splat(0.5), &mut counters).is_none() {
+                if s + t > 9 || connect(&ctx, &light, &cam, s, t, LightPointSample { u_light: 0.5, u_point: Vec2::splat(0.5) }, &mut counters).is_none() {
                     continue;
                 }
                 let mut x: Vec<Vertex> = light[..s].to_vec();

@@ -5,12 +5,12 @@
 //! The brute force is `lvcbpt_mis.rs`'s (primitive densities only) with each strategy's
 //! density product multiplied by the count `path_counts` gives for that split. Checked
 //! on the Cornell box with a rough gold and a smooth glass sphere with a trained model:
-//! (1) every weight `spcbpt::strategy` applies equals the brute force within 1e-5;
+//! (1) every weight `spcbpt::Strategies::evaluate` applies equals the brute force within 1e-5;
 //! (2) re-splitting one full path at every split, the recursive weights (counts from the
 //!     joined path of each split) sum to 1 within 1e-5 — which holds only if the counts
 //!     are a function of the path alone, not of how it was sampled.
 //! Injected-bug checks (each done once, reverted): indexing the count table by t′
-//! instead of s′ in `spcbpt::strategy` fails (1) ((1, 2): 0.670 vs 0.934); reading
+//! instead of s′ in `spcbpt::Strategies::evaluate` fails (1) ((1, 2): 0.670 vs 0.934); reading
 //! the camera-label memo at the wrong camera index (`n − j` instead of `n − 1 − j` for
 //! κ_E in `path_counts_labelled`) fails (1) ((6, 2): 0.0411 vs 0.0277).
 //! Not caught: taking W from the stored β of x_{s′−1} instead of
@@ -21,8 +21,9 @@
 use ember_core::integrator::spcbpt::{self, KnownLabels, Model, join, memoize_light_path, path_counts, path_counts_labelled};
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::path::mis::mis_weight_counted;
-use ember_core::path::{Vertex, VertexKind, camera_subpath, light_subpath};
+use ember_core::path::{LightPointSample, Vertex, VertexKind, camera_subpath, light_subpath};
 use ember_core::rng::{SampleStream, Stream};
+use ember_core::scene::Context;
 use ember_core::scene::Scene;
 use ember_core::spectrum::Rgb;
 use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split};
@@ -71,23 +72,9 @@ fn check_weights(scene: &Scene, tracer: &BruteForce, params: &RenderParams, mode
                 // per-vertex memo (read for `light[..s]`).
                 let labels = (i % 2 == 1).then(|| spcbpt::CameraLabels::new(model, &cam));
                 let memo = if i % 2 == 1 { &light_memo[..s] } else { &[][..] };
-                let Some(c) = spcbpt::strategy_labelled(
-                    scene,
-                    tracer,
-                    model,
-                    LIGHT_TRACING,
-                    &light[..s],
-                    &cam[..t],
-                    labels.as_ref(),
-                    memo,
-                    s,
-                    t,
-                    lrng.next_f32(),
-                    lrng.next_2d(),
-                    &mut counters,
-                ) else {
-                    continue;
-                };
+                let strategies = spcbpt::Strategies { ctx: Context { scene, tracer }, model, light_tracing: LIGHT_TRACING };
+                let u = LightPointSample { u_light: lrng.next_f32(), u_point: lrng.next_2d() };
+                let Some(c) = strategies.evaluate_labelled(&light[..s], &cam[..t], labels.as_ref(), memo, s, t, u, &mut counters) else { continue };
                 let x = join(&light, &cam, c.sampled, s, t);
                 if x.last().unwrap().kind == VertexKind::InfiniteLight {
                     continue;

@@ -1,57 +1,72 @@
 //! Evaluation of one (s, t) strategy: join the first s light vertices and the first t
-//! camera vertices (pbrt-v3's `ConnectBDPT`).
+//! camera vertices (pbrt-v3's `ConnectBDPT`) into the UNWEIGHTED contribution f/p of the
+//! full path. Weighting is a separate step ([`super::mis`], or an estimator's own
+//! counts), applied with [`Connection::weighted`].
 
-use super::mis::mis_weight_counted;
 use super::vertex::{Vertex, VertexKind};
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, RayQuery, spawn_ray_to};
 use crate::integrator::Counters;
 use crate::math::{Vec2, Vec3};
-use crate::scene::Scene;
+use crate::scene::Context;
 use crate::spectrum::Rgb;
 
-/// Result of a strategy: its weighted contribution and, for t = 1, the film position.
+/// The random numbers of a resampled light point (strategy s = 1): which light, and where
+/// on it. Other strategies ignore them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LightPointSample {
+    /// Chooses the light.
+    pub u_light: f32,
+    /// Chooses the point on it.
+    pub u_point: Vec2,
+}
+
+/// A strategy's full path, connected but not weighted.
 #[derive(Clone, Copy, Debug)]
 pub struct Connection {
+    /// f/p of the full path (no MIS weight).
     pub value: Rgb,
+    /// The film position, for t = 1.
     pub film: Option<Vec2>,
-    /// The MIS weight that was applied.
-    pub weight: f32,
     /// The endpoint resampled at connection time (the light point for s = 1, the
     /// camera for t = 1), which replaces the sub-path's own endpoint in the full path.
     pub sampled: Option<Vertex>,
 }
 
-/// Evaluate strategy (s, t). `u_light`, `u_point` drive the light resampling of s = 1.
-pub fn connect<Q: RayQuery + ?Sized>(
-    scene: &Scene,
-    tracer: &Q,
-    light: &[Vertex],
-    camera: &[Vertex],
-    s: usize,
-    t: usize,
-    u_light: f32,
-    u_point: Vec2,
-    counters: &mut Counters,
-) -> Option<Connection> {
-    connect_counted(scene, tracer, light, camera, s, t, u_light, u_point, counters, &|_, _| 1.0)
+/// A connection with its MIS weight applied.
+#[derive(Clone, Copy, Debug)]
+pub struct Weighted {
+    /// weight · f/p.
+    pub value: Rgb,
+    /// The film position, for t = 1.
+    pub film: Option<Vec2>,
+    /// The MIS weight that was applied.
+    pub weight: f32,
+    /// See [`Connection::sampled`].
+    pub sampled: Option<Vertex>,
 }
 
-/// [`connect`] with per-strategy sample counts in the MIS weight (see
-/// [`super::mis::mis_weight_counted`]); the returned value is weighted but not divided by
-/// the strategy's own count, which the caller applies with its selection probability.
-pub fn connect_counted<Q: RayQuery + ?Sized, C: Fn(usize, usize) -> f64>(
-    scene: &Scene,
-    tracer: &Q,
+impl Connection {
+    /// Apply MIS weight `weight`.
+    #[inline]
+    pub fn weighted(self, weight: f32) -> Weighted {
+        Weighted { value: self.value * weight, film: self.film, weight, sampled: self.sampled }
+    }
+}
+
+/// Connect strategy (s, t): the full path's unweighted f/p, its film position (t = 1)
+/// and its resampled endpoint (s = 1, t = 1). `u` drives the light resampling of s = 1.
+pub fn connect<Q: RayQuery + ?Sized>(
+    ctx: &Context<'_, Q>,
     light: &[Vertex],
     camera: &[Vertex],
     s: usize,
     t: usize,
-    u_light: f32,
-    u_point: Vec2,
+    u: LightPointSample,
     counters: &mut Counters,
-    count: &C,
 ) -> Option<Connection> {
+    let (scene, tracer) = (ctx.scene, ctx.tracer);
+    let (u_light, u_point) = (u.u_light, u.u_point);
     // An escaped camera path can only be used as is (s = 0).
     if t > 1 && s != 0 && camera[t - 1].kind == VertexKind::InfiniteLight {
         return None;
@@ -147,25 +162,23 @@ pub fn connect_counted<Q: RayQuery + ?Sized, C: Fn(usize, usize) -> f64>(
     if value.is_black() {
         return None;
     }
-    let weight = mis_weight_counted(scene, light, camera, sampled.as_ref(), s, t, count);
-    Some(Connection { value: value * weight, film, weight, sampled })
+    Some(Connection { value, film, sampled })
 }
 
 /// Strategy (1, t) with a GIVEN light-source vertex `y0` (the first vertex of a light
 /// path, e.g. one kept in SPCBPT's cache) instead of a fresh light sample:
 /// f/p = Le(y₀→z) · G(y₀, z) · f(z) · β(z) / p(y₀), p(y₀) = `y0.pdf_fwd` (light selection ×
-/// position density per area, as `light_subpath` sets it). The MIS weight, with
-/// `count`, is [`mis_weight_counted`]'s for the light sub-path [y₀] (its density as a
-/// path origin is the same p(y₀) that next-event estimation reports).
-pub fn connect_light_source<Q: RayQuery + ?Sized, C: Fn(usize, usize) -> f64>(
-    scene: &Scene,
-    tracer: &Q,
+/// position density per area, as `light_subpath` sets it). Its MIS weight is that of the
+/// light sub-path [y₀] (its density as a path origin is the same p(y₀) that next-event
+/// estimation reports).
+pub fn connect_light_source<Q: RayQuery + ?Sized>(
+    ctx: &Context<'_, Q>,
     y0: &Vertex,
     camera: &[Vertex],
     t: usize,
     counters: &mut Counters,
-    count: &C,
 ) -> Option<Connection> {
+    let (scene, tracer) = (ctx.scene, ctx.tracer);
     if t < 2 || !matches!(y0.kind, VertexKind::Light(_)) || !(y0.pdf_fwd > 0.0) {
         return None;
     }
@@ -181,9 +194,7 @@ pub fn connect_light_source<Q: RayQuery + ?Sized, C: Fn(usize, usize) -> f64>(
     if tracer.occluded(&spawn_ray_to(pt.p, pt.ng, y0.p, y0.ng)) {
         return None;
     }
-    let light = [*y0];
-    let weight = mis_weight_counted(scene, &light, camera, None, 1, t, count);
-    Some(Connection { value: value * weight, film: None, weight, sampled: None })
+    Some(Connection { value, film: None, sampled: None })
 }
 
 /// G = |cos θ_q| |cos θ_p| / d² with shading cosines left to the BSDF factors (the

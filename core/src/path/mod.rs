@@ -25,7 +25,7 @@ use crate::math::Vec2;
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 
-pub use connect::{Connection, connect, connect_counted, connect_light_source};
+pub use connect::{Connection, LightPointSample, Weighted, connect, connect_light_source};
 pub use store::{CacheEntry, LightPaths, is_cacheable, trace_light_subpath};
 pub use vertex::{Vertex, VertexKind};
 pub use walk::{SubPath, camera_subpath, light_subpath};

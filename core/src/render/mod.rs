@@ -37,6 +37,8 @@ mod config;
 mod film;
 mod renderer;
 
+/// What every phase reads: the scene and the ray queries (defined with the scene).
+pub use crate::scene::Context;
 pub use config::{ConfigError, EstimatorConfig, EstimatorKind, LvcbptConfig, MAX_DATASET, MAX_LIGHT_PATHS, SpcbptConfig};
 pub use film::Film;
 pub use renderer::Renderer;
@@ -49,25 +51,8 @@ use crate::geometry::RayQuery;
 use crate::integrator::spcbpt::PrefixMemo;
 use crate::integrator::{Counters, Splat};
 use crate::path::LightPaths;
-use crate::scene::Scene;
 use crate::spcbpt::{SubpathFeature, TrainingSet};
 use crate::spectrum::Rgb;
-
-/// What every phase reads: the scene and the ray queries.
-#[derive(Debug)]
-pub struct Context<'a, Q: ?Sized> {
-    /// The scene the estimators read.
-    pub scene: &'a Scene,
-    /// The host's ray queries over the same scene.
-    pub tracer: &'a Q,
-}
-
-impl<Q: ?Sized> Clone for Context<'_, Q> {
-    fn clone(&self) -> Self {
-        *self
-    }
-}
-impl<Q: ?Sized> Copy for Context<'_, Q> {}
 
 /// One phase: a map over `0..items` in chunks of `chunk`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

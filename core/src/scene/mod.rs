@@ -20,6 +20,23 @@ use crate::geometry::{LightId, MaterialId};
 use crate::light::Light;
 use crate::math::{Bounds3, Mat4, Vec3};
 pub use crate::shapes::{SceneGeometry, Sphere, Triangle};
+
+/// A scene with the host's ray queries over it: what every estimator reads, passed as
+/// one value.
+#[derive(Debug)]
+pub struct Context<'a, Q: ?Sized> {
+    /// The scene the estimators read.
+    pub scene: &'a Scene,
+    /// The host's ray queries over the same scene.
+    pub tracer: &'a Q,
+}
+
+impl<Q: ?Sized> Clone for Context<'_, Q> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<Q: ?Sized> Copy for Context<'_, Q> {}
 use crate::spectrum::Rgb;
 
 /// What the estimators read.

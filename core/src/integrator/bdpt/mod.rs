@@ -21,8 +21,9 @@ use core::ops::Range;
 
 use super::{Counters, RenderParams, Splat};
 use crate::geometry::RayQuery;
-use crate::path::{connect, light_subpath, pixel_camera_subpath, vertex_budgets};
+use crate::path::{LightPointSample, connect, light_subpath, mis::mis_weight, pixel_camera_subpath, vertex_budgets};
 use crate::rng::{SampleStream, Stream};
+use crate::scene::Context;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 
@@ -38,6 +39,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
     splat: &mut dyn FnMut(Splat),
 ) -> Counters {
     let mut counters = Counters::default();
+    let ctx = Context { scene, tracer };
     let (max_camera, max_light) = vertex_budgets(params);
     for (slot, pixel) in out.iter_mut().zip(pixels) {
         let camera = pixel_camera_subpath(scene, tracer, params, pixel, pass, max_camera, &mut counters);
@@ -51,9 +53,11 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
                 if (s == 1 && t == 1) || segments < 2 || !params.max_depth.allows(segments as u32 - 1) {
                     continue;
                 }
-                let (u_light, u_point) = (connect_rng.next_f32(), connect_rng.next_2d());
-                let Some(c) = connect(scene, tracer, &light, &camera, s, t, u_light, u_point, &mut counters) else { continue };
-                let value = counters.sanitize(c.value);
+                let u = LightPointSample { u_light: connect_rng.next_f32(), u_point: connect_rng.next_2d() };
+                let Some(c) = connect(&ctx, &light, &camera, s, t, u, &mut counters) else { continue };
+                // Weighting, a separate step: the balance heuristic over unit counts.
+                let weight = mis_weight(scene, &light, &camera, c.sampled.as_ref(), s, t);
+                let value = counters.sanitize(c.weighted(weight).value);
                 match c.film {
                     Some(film) => splat(Splat { film, value }),
                     None => l += value,

@@ -37,9 +37,11 @@ use core::ops::Range;
 
 use super::{Counters, RenderParams, Splat};
 use crate::geometry::RayQuery;
-use crate::math::Vec2;
-use crate::path::{self, CacheEntry, LightPaths, VertexKind, connect_counted, is_cacheable, trace_light_subpath};
+use crate::path::{
+    self, CacheEntry, LightPaths, LightPointSample, Vertex, VertexKind, Weighted, connect, is_cacheable, mis::mis_weight_counted, trace_light_subpath,
+};
 use crate::rng::{SampleStream, Stream};
+use crate::scene::Context;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 
@@ -86,7 +88,7 @@ pub fn trace_light_paths<Q: RayQuery + ?Sized>(
     splat: &mut dyn FnMut(Splat),
 ) -> Counters {
     let mut counters = Counters::default();
-    let count = |s: usize, t: usize| counts.count(s, t);
+    let ctx = Context { scene, tracer };
     for index in paths {
         let light = trace_light_subpath(scene, tracer, params, Stream::Light, index, pass, &mut counters);
         out.starts.push(out.vertices.len() as u32);
@@ -96,7 +98,7 @@ pub fn trace_light_paths<Q: RayQuery + ?Sized>(
             if !params.max_depth.allows(s as u32) {
                 break;
             }
-            if let Some(c) = connect_counted(scene, tracer, &light[..s], &[], s, 1, 0.0, Vec2::ZERO, &mut counters, &count) {
+            if let Some(c) = strategy(&ctx, &light[..s], &[], s, 1, LightPointSample::default(), counts, &mut counters) {
                 if let Some(film) = c.film {
                     splat(Splat { film, value: counters.sanitize(c.value) });
                 }
@@ -104,6 +106,23 @@ pub fn trace_light_paths<Q: RayQuery + ?Sized>(
         }
     }
     counters
+}
+
+/// Strategy (s, t) with LVCBPT's sample counts: connect, then weight (balance heuristic
+/// over the counts).
+fn strategy<Q: RayQuery + ?Sized>(
+    ctx: &Context<'_, Q>,
+    light: &[Vertex],
+    camera: &[Vertex],
+    s: usize,
+    t: usize,
+    u: LightPointSample,
+    counts: &StrategyCounts,
+    counters: &mut Counters,
+) -> Option<Weighted> {
+    let c = connect(ctx, light, camera, s, t, u, counters)?;
+    let weight = mis_weight_counted(ctx.scene, light, camera, c.sampled.as_ref(), s, t, &|s2, t2| counts.count(s2, t2));
+    Some(c.weighted(weight))
 }
 
 /// Append to `cache` every cacheable vertex of `paths` (in path order).
@@ -156,7 +175,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
     let mut counters = Counters::default();
     let (max_camera, _) = path::vertex_budgets(params);
     let counts = inputs.counts;
-    let count = |s: usize, t: usize| counts.count(s, t);
+    let ctx = Context { scene, tracer };
     let cache_len = inputs.cache.len();
     // Each connection's estimate is divided by its selection probability N/|C| and by M.
     let connection_scale =
@@ -175,7 +194,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
                 if s == 1 && !params.max_depth.allows(t as u32) {
                     continue;
                 }
-                if let Some(c) = connect_counted(scene, tracer, &[], &camera, s, t, u_light, u_point, &mut counters, &count) {
+                if let Some(c) = strategy(&ctx, &[], &camera, s, t, LightPointSample { u_light, u_point }, &counts, &mut counters) {
                     l += counters.sanitize(c.value);
                 }
             }
@@ -192,7 +211,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
                     continue;
                 }
                 let light = entry.subpath(inputs.paths);
-                if let Some(c) = connect_counted(scene, tracer, light, &camera, s, t, 0.0, Vec2::ZERO, &mut counters, &count) {
+                if let Some(c) = strategy(&ctx, light, &camera, s, t, LightPointSample::default(), &counts, &mut counters) {
                     l += counters.sanitize(c.value * connection_scale);
                 }
             }

@@ -88,10 +88,10 @@ use core::ops::Range;
 use super::{Counters, RenderParams, Splat};
 use crate::alias::AliasTable;
 use crate::geometry::RayQuery;
-use crate::math::{Vec2, Vec3};
-use crate::path::{self, CacheEntry, LightPaths, Vertex, VertexKind, connect_counted, is_cacheable, trace_light_subpath};
+use crate::math::Vec3;
+use crate::path::{self, CacheEntry, LightPaths, LightPointSample, Vertex, VertexKind, Weighted, is_cacheable, trace_light_subpath};
 use crate::rng::{SampleStream, Stream};
-use crate::scene::Scene;
+use crate::scene::{Context, Scene};
 use crate::spcbpt::{DecisionTree, LightSourceBins, SubpathFeature, SubspaceMatrix};
 use crate::spectrum::Rgb;
 
@@ -471,102 +471,64 @@ pub fn join(light: &[Vertex], camera: &[Vertex], sampled: Option<Vertex>, s: usi
     x
 }
 
-/// Evaluate strategy (s, t) with SPCBPT's path-dependent counts: connect once with unit
-/// counts to get the unweighted value and the resampled endpoint, then weigh.
-#[allow(clippy::too_many_arguments)]
-fn weighted<Q: RayQuery + ?Sized>(
-    scene: &Scene,
-    tracer: &Q,
-    model: &Model,
-    light_tracing: f64,
-    light: &[Vertex],
-    camera: &[Vertex],
-    labels: Option<&CameraLabels>,
-    light_memo: &[PrefixMemo],
-    s: usize,
-    t: usize,
-    u_light: f32,
-    u_point: Vec2,
-    counters: &mut Counters,
-) -> Option<(Rgb, Option<Vec2>, f32)> {
-    strategy_labelled(scene, tracer, model, light_tracing, light, camera, labels, light_memo, s, t, u_light, u_point, counters)
-        .map(|c| (c.value, c.film, c.weight))
+/// What SPCBPT's strategies read: the scene and ray queries, the model, and the light
+/// tracing strategy's count M/(W·H).
+#[derive(Debug)]
+pub struct Strategies<'a, Q: ?Sized> {
+    /// Scene and ray queries.
+    pub ctx: Context<'a, Q>,
+    /// κ, Q, Γ.
+    pub model: &'a Model,
+    /// M/(W·H).
+    pub light_tracing: f64,
 }
 
-/// Strategy (s, t) with SPCBPT's MIS weight (`value` weighted, not divided by any
-/// selection probability); `sampled` is the resampled endpoint (s = 1 or t = 1).
-#[allow(clippy::too_many_arguments)]
-pub fn strategy<Q: RayQuery + ?Sized>(
-    scene: &Scene,
-    tracer: &Q,
-    model: &Model,
-    light_tracing: f64,
-    light: &[Vertex],
-    camera: &[Vertex],
-    s: usize,
-    t: usize,
-    u_light: f32,
-    u_point: Vec2,
-    counters: &mut Counters,
-) -> Option<path::Connection> {
-    strategy_labelled(scene, tracer, model, light_tracing, light, camera, None, &[], s, t, u_light, u_point, counters)
-}
-
-/// [`strategy`] with the camera sub-path's precomputed labels (`camera` must be a prefix
-/// of the path the labels were computed on) and the light prefix's memo (`light_memo`,
-/// one entry per vertex of `light[..s]`; ignored unless it has exactly s entries).
-#[allow(clippy::too_many_arguments)]
-pub fn strategy_labelled<Q: RayQuery + ?Sized>(
-    scene: &Scene,
-    tracer: &Q,
-    model: &Model,
-    light_tracing: f64,
-    light: &[Vertex],
-    camera: &[Vertex],
-    labels: Option<&CameraLabels>,
-    light_memo: &[PrefixMemo],
-    s: usize,
-    t: usize,
-    u_light: f32,
-    u_point: Vec2,
-    counters: &mut Counters,
-) -> Option<path::Connection> {
-    // s = 1 with the light path's own first vertex (a cached light-source vertex), not a
-    // fresh light sample: the full path is known before connecting, like s ≥ 2.
-    let cached_source = s == 1 && light.len() == 1 && model.caches_light_sources();
-    // The memo describes light[..s]; a resampled light endpoint (NEE) is not in it.
-    let memo_applies = light_memo.len() == s && (s != 1 || cached_source);
-    let labels = KnownLabels { camera: if t >= 2 { labels } else { None }, light: if memo_applies { light_memo } else { &[] }, s };
-    if (s != 1 || cached_source) && t != 1 {
-        // No endpoint is sampled: the full path is known before connecting, so one
-        // connection computes the weight with the path's counts, evaluated lazily (only
-        // once the connection is known to carry light: an occluded or black connection
-        // costs no count table; one MIS walk instead of two).
-        let table = core::cell::OnceCell::new();
-        let count = |s2: usize, _t2: usize| {
-            let counts = table.get_or_init(|| {
-                let x = join(light, camera, None, s, t);
-                let mut counts = [0.0f64; 2 * path::MAX_VERTICES + 1];
-                path_counts_labelled(scene, model, light_tracing, &x, labels, &mut counts);
-                counts
-            });
-            counts.get(s2).copied().unwrap_or(0.0)
-        };
-        if cached_source {
-            return path::connect_light_source(scene, tracer, &light[0], camera, t, counters, &count);
-        }
-        return connect_counted(scene, tracer, light, camera, s, t, u_light, u_point, counters, &count);
+impl<Q: RayQuery + ?Sized> Strategies<'_, Q> {
+    /// Strategy (s, t) with SPCBPT's MIS weight (`value` weighted, not divided by any
+    /// selection probability); `sampled` is the resampled endpoint (s = 1 or t = 1).
+    pub fn evaluate(&self, light: &[Vertex], camera: &[Vertex], s: usize, t: usize, u: LightPointSample, counters: &mut Counters) -> Option<Weighted> {
+        self.evaluate_labelled(light, camera, None, &[], s, t, u, counters)
     }
-    // A sampled endpoint (s = 1 or t = 1) is only known after connecting: first the
-    // unweighted contribution (counts all 1 only affect `weight`), then the weight.
-    let c = connect_counted(scene, tracer, light, camera, s, t, u_light, u_point, counters, &|_, _| 1.0)?;
-    let unweighted = if c.weight > 0.0 { c.value / c.weight } else { return None };
-    let x = join(light, camera, c.sampled, s, t);
-    let mut counts = [0.0f64; 2 * path::MAX_VERTICES + 1];
-    path_counts_labelled(scene, model, light_tracing, &x, labels, &mut counts);
-    let count = |s2: usize, _t2: usize| counts[s2];
-    let weight = path::mis::mis_weight_counted(scene, light, camera, c.sampled.as_ref(), s, t, &count);
-    Some(path::Connection { value: unweighted * weight, film: c.film, weight, sampled: c.sampled })
+
+    /// [`Self::evaluate`] with the camera sub-path's precomputed labels (`camera` must be
+    /// a prefix of the path the labels were computed on) and the light prefix's memo
+    /// (`light_memo`, one entry per vertex of `light[..s]`; ignored unless it has exactly
+    /// s entries).
+    ///
+    /// Connecting and weighting are separate steps: the connection gives the unweighted
+    /// f/p and the resampled endpoint; only a connection that carries light pays for the
+    /// path's count table (an occluded or black one costs none), and the weight is one
+    /// MIS walk with those counts.
+    pub fn evaluate_labelled(
+        &self,
+        light: &[Vertex],
+        camera: &[Vertex],
+        labels: Option<&CameraLabels>,
+        light_memo: &[PrefixMemo],
+        s: usize,
+        t: usize,
+        u: LightPointSample,
+        counters: &mut Counters,
+    ) -> Option<Weighted> {
+        let (scene, model) = (self.ctx.scene, self.model);
+        // s = 1 with the light path's own first vertex (a cached light-source vertex), not
+        // a fresh light sample.
+        let cached_source = s == 1 && light.len() == 1 && model.caches_light_sources();
+        // The memo describes light[..s]; a resampled light endpoint (NEE) is not in it.
+        let memo_applies = light_memo.len() == s && (s != 1 || cached_source);
+        let labels = KnownLabels { camera: if t >= 2 { labels } else { None }, light: if memo_applies { light_memo } else { &[] }, s };
+        let c = if cached_source {
+            path::connect_light_source(&self.ctx, &light[0], camera, t, counters)?
+        } else {
+            path::connect(&self.ctx, light, camera, s, t, u, counters)?
+        };
+        let x = join(light, camera, c.sampled, s, t);
+        let mut counts = [0.0f64; 2 * path::MAX_VERTICES + 1];
+        path_counts_labelled(scene, model, self.light_tracing, &x, labels, &mut counts);
+        let count = |s2: usize, _t2: usize| counts.get(s2).copied().unwrap_or(0.0);
+        let weight = path::mis::mis_weight_counted(scene, light, camera, c.sampled.as_ref(), s, t, &count);
+        Some(c.weighted(weight))
+    }
 }
 
 /// Splat the t = 1 strategies of light paths `paths` (indices into `cache.paths`) to
@@ -582,6 +544,7 @@ pub fn splat_light_paths<Q: RayQuery + ?Sized>(
     splat: &mut dyn FnMut(Splat),
 ) -> Counters {
     let mut counters = Counters::default();
+    let strategies = Strategies { ctx: Context { scene, tracer }, model, light_tracing };
     for i in paths {
         let light = cache.paths.path(i as usize);
         let start = cache.paths.starts[i as usize] as usize;
@@ -590,9 +553,8 @@ pub fn splat_light_paths<Q: RayQuery + ?Sized>(
             if !params.max_depth.allows(s as u32) {
                 break;
             }
-            if let Some((value, Some(film), _)) =
-                weighted(scene, tracer, model, light_tracing, &light[..s], &[], None, memo.get(..s).unwrap_or(&[]), s, 1, 0.0, Vec2::ZERO, &mut counters)
-            {
+            let c = strategies.evaluate_labelled(&light[..s], &[], None, memo.get(..s).unwrap_or(&[]), s, 1, LightPointSample::default(), &mut counters);
+            if let Some(Weighted { value, film: Some(film), .. }) = c {
                 splat(Splat { film, value: counters.sanitize(value) });
             }
         }
@@ -616,6 +578,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
     let width = scene.camera.width().max(1);
     let n_pixels = width * scene.camera.height().max(1);
     let light_tracing = light_paths as f64 / n_pixels as f64;
+    let strategies = Strategies { ctx: Context { scene, tracer }, model, light_tracing };
     let (max_camera, _) = path::vertex_budgets(params);
     for (slot, pixel) in out.iter_mut().zip(pixels) {
         let camera = path::pixel_camera_subpath(scene, tracer, params, pixel, pass, max_camera, &mut counters);
@@ -632,10 +595,9 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
                 if s == 1 && (!params.max_depth.allows(t as u32) || model.caches_light_sources()) {
                     continue;
                 }
-                if let Some((v, _, _)) =
-                    weighted(scene, tracer, model, light_tracing, &[], &camera[..t], Some(&labels), &[], s, t, u_light, u_point, &mut counters)
+                if let Some(c) = strategies.evaluate_labelled(&[], &camera[..t], Some(&labels), &[], s, t, LightPointSample { u_light, u_point }, &mut counters)
                 {
-                    l += counters.sanitize(v);
+                    l += counters.sanitize(c.value);
                 }
             }
             let z = &camera[t - 1];
@@ -659,10 +621,8 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
                 if !(probability > 0.0) {
                     continue;
                 }
-                if let Some((v, _, _)) =
-                    weighted(scene, tracer, model, light_tracing, light, &camera[..t], Some(&labels), memo, s, t, 0.0, Vec2::ZERO, &mut counters)
-                {
-                    l += counters.sanitize(v / probability);
+                if let Some(c) = strategies.evaluate_labelled(light, &camera[..t], Some(&labels), memo, s, t, LightPointSample::default(), &mut counters) {
+                    l += counters.sanitize(c.value / probability);
                 }
             }
         }

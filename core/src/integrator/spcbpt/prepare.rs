@@ -22,9 +22,9 @@ use super::{Classifier, FullPath, cache_weight, join, light_prefix_weights, scal
 use crate::geometry::RayQuery;
 use crate::integrator::{Counters, RenderParams};
 use crate::math::Vec2;
-use crate::path::{self, Vertex, VertexKind, camera_subpath, connect_counted, is_cacheable, mis::for_each_strategy_ratio, trace_light_subpath};
+use crate::path::{self, LightPointSample, Vertex, VertexKind, camera_subpath, connect, is_cacheable, mis::for_each_strategy_ratio, trace_light_subpath};
 use crate::rng::{SampleStream, Stream};
-use crate::scene::Scene;
+use crate::scene::{Context, Scene};
 use crate::spcbpt::{DecisionTree, DistanceParams, SubpathFeature, TrainingSet, TrainingSplit, TreeParams, nearest_centroid, sample_centroids};
 use crate::spectrum::Rgb;
 
@@ -116,14 +116,14 @@ fn dataset_sample<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Rend
     let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
     let camera = camera_subpath(scene, tracer, params, film, max_camera, &mut rng, counters);
     let mut aux = SampleStream::for_sample(params.seed, Stream::Preprocess, DATASET_BASE.wrapping_add(i), 1, 0);
-    // Counts selecting the NEE strategy alone: its weight is exactly 1 (unweighted value).
-    let only_nee = |s: usize, _t: usize| if s == 1 { 1.0 } else { 0.0 };
+    let ctx = Context { scene, tracer };
     for t in 2..=camera.len() {
         let (u_light, u_point) = (aux.next_f32(), aux.next_2d());
         if !params.max_depth.allows(t as u32) {
             break;
         }
-        if let Some(c) = connect_counted(scene, tracer, &[], &camera[..t], 1, t, u_light, u_point, counters, &only_nee) {
+        // The unweighted f/p₁ of the NEE full path.
+        if let Some(c) = connect(&ctx, &[], &camera[..t], 1, t, LightPointSample { u_light, u_point }, counters) {
             if let Some(y) = c.sampled {
                 visit(pixel, &camera, t, y, c.value);
             }
