@@ -10,6 +10,7 @@
 
 use ember_core::bsdf::TransportMode;
 use ember_core::math::Frame;
+use ember_core::measure::VertexPdf;
 use ember_core::path::{Vertex, VertexKind};
 use ember_core::scene::Scene;
 use glam::Vec3;
@@ -108,10 +109,10 @@ pub fn split(scene: &Scene, x: &[Vertex], s: usize) -> (Vec<Vertex>, Vec<Vertex>
     let mut cam: Vec<Vertex> = x[s..].iter().rev().copied().collect();
     for path in [&mut light, &mut cam] {
         for i in 0..path.len() {
-            path[i].pdf_rev = 0.0;
+            path[i].pdf_rev = VertexPdf::ZERO;
             path[i].pdf_fwd = match i {
-                0 if path[0].kind == VertexKind::Camera => 0.0,
-                0 => path.get(1).or(x.get(1)).map_or(0.0, |next| path[0].pdf_light_origin(scene, next)),
+                0 if path[0].kind == VertexKind::Camera => VertexPdf::ZERO,
+                0 => path.get(1).or(x.get(1)).map_or(VertexPdf::ZERO, |next| path[0].pdf_light_origin(scene, next)),
                 1 => path[0].pdf(scene, None, &path[1]),
                 _ => path[i - 1].pdf(scene, Some(&path[i - 2]), &path[i]),
             };

@@ -20,6 +20,7 @@
 
 use ember_core::integrator::spcbpt::{self, KnownLabels, Model, join, memoize_light_path, path_counts, path_counts_labelled};
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
+use ember_core::measure::VertexPdf;
 use ember_core::path::mis::mis_weight_counted;
 use ember_core::path::{LightPointSample, Vertex, VertexKind, camera_subpath, light_subpath};
 use ember_core::rng::{SampleStream, Stream};
@@ -101,7 +102,7 @@ fn check_weights(scene: &Scene, tracer: &BruteForce, params: &RenderParams, mode
                 if s == 0 && bins > 0 {
                     let y = &x[0];
                     let id = y.emitter.expect("an s = 0 path ends on an emitter");
-                    let as_light = Vertex::light(id, y.p, y.ng, Rgb::ZERO, 1.0, false);
+                    let as_light = Vertex::light(id, y.p, y.ng, Rgb::ZERO, VertexPdf::discrete(1.0), false);
                     let (a, b) = (model.classifier.light_source_of(scene, y), model.classifier.light_source_of(scene, &as_light));
                     assert!(a.is_some() && a == b, "emitter hit at {:?}: bin {a:?}, as a light vertex {b:?}", y.p);
                     emitter_hits += 1;
@@ -143,7 +144,7 @@ fn check_weights(scene: &Scene, tracer: &BruteForce, params: &RenderParams, mode
         for _ in 0..2000 {
             let id = ((rng.next_f32() * scene.lights.len() as f32) as usize).min(scene.lights.len() - 1);
             let Some(es) = scene.lights[id].sample_le(rng.next_2d(), rng.next_2d()) else { continue };
-            let y = Vertex::light(id as u32, es.p, es.n, Rgb::ZERO, 1.0, false);
+            let y = Vertex::light(id as u32, es.p, es.n, Rgb::ZERO, VertexPdf::discrete(1.0), false);
             let mut hit = y;
             hit.kind = VertexKind::Surface;
             let (a, b) = (model.classifier.light_source_of(scene, &y), model.classifier.light_source_of(scene, &hit));

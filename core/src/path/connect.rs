@@ -8,6 +8,7 @@ use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, RayQuery, spawn_ray_to};
 use crate::integrator::Counters;
 use crate::math::{Vec2, Vec3};
+use crate::measure::VertexPdf;
 use crate::scene::Context;
 use crate::spectrum::Rgb;
 
@@ -117,12 +118,12 @@ pub fn connect<Q: RayQuery + ?Sized>(
         }
         let beta_l = ls.radiance / (ls.pdf.0 * chosen.pmf);
         let mut lv = if light_ref.is_infinite() {
-            let mut v = Vertex::infinite(ls.p, beta_l, 0.0);
+            let mut v = Vertex::infinite(ls.p, beta_l, VertexPdf::ZERO);
             // A directional light is a Dirac in direction: no other strategy reaches it.
             v.delta = light_ref.is_delta();
             v
         } else {
-            Vertex::light(id, ls.p, ls.n, beta_l, 0.0, light_ref.is_delta())
+            Vertex::light(id, ls.p, ls.n, beta_l, VertexPdf::ZERO, light_ref.is_delta())
         };
         lv.pdf_fwd = lv.pdf_light_origin(scene, pt);
         let mut v = pt.beta * pt.f(scene, &lv, TransportMode::Radiance) * lv.beta;
@@ -179,14 +180,14 @@ pub fn connect_light_source<Q: RayQuery + ?Sized>(
     counters: &mut Counters,
 ) -> Option<Connection> {
     let (scene, tracer) = (ctx.scene, ctx.tracer);
-    if t < 2 || !matches!(y0.kind, VertexKind::Light(_)) || !(y0.pdf_fwd > 0.0) {
+    if t < 2 || !matches!(y0.kind, VertexKind::Light(_)) || !y0.pdf_fwd.is_positive() {
         return None;
     }
     let pt = &camera[t - 1];
     if pt.kind != VertexKind::Surface || !pt.is_connectible(scene) {
         return None;
     }
-    let value = pt.beta * pt.f(scene, y0, TransportMode::Radiance) * y0.le(scene, pt) * (geometry_term(y0, pt) / y0.pdf_fwd);
+    let value = pt.beta * pt.f(scene, y0, TransportMode::Radiance) * y0.le(scene, pt) * (geometry_term(y0, pt) / y0.pdf_fwd.value());
     if value.is_black() || !value.is_finite() {
         return None;
     }

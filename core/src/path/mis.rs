@@ -9,11 +9,14 @@
 //! reverse densities depend on the strategy, so they are recomputed here on copies.
 
 use super::vertex::{Vertex, VertexKind};
+use crate::measure::VertexPdf;
 use crate::scene::Scene;
 
-/// pdf ratios treat 0 as 1 so Dirac vertices (density 0 both ways) pass through.
+/// pdf ratios treat 0 as 1 so Dirac vertices (density 0 both ways) pass through. Both
+/// densities of a ratio belong to the same vertex, so their measure cancels.
 #[inline]
-fn remap0(x: f32) -> f64 {
+fn remap0(x: VertexPdf) -> f64 {
+    let x = x.value();
     if x != 0.0 { x as f64 } else { 1.0 }
 }
 
@@ -84,16 +87,16 @@ pub fn for_each_strategy_ratio<V: FnMut(usize, usize, f64)>(
     let pt_minus = (t > 1).then(|| camera_at(t - 2));
 
     // Reverse densities around the connection, recomputed for this strategy.
-    let mut pt_rev = 0.0;
-    let mut pt_minus_rev = 0.0;
-    let mut qs_rev = 0.0;
-    let mut qs_minus_rev = 0.0;
+    let mut pt_rev = VertexPdf::ZERO;
+    let mut pt_minus_rev = VertexPdf::ZERO;
+    let mut qs_rev = VertexPdf::ZERO;
+    let mut qs_minus_rev = VertexPdf::ZERO;
     if let Some(pt) = pt {
         // pt's reverse density: from qs (connection), or as a light-path origin (s = 0).
         pt_rev = match (qs, pt_minus) {
             (Some(q), _) => q.pdf(scene, qs_minus, pt),
             (None, Some(pm)) => pt.pdf_light_origin(scene, pm),
-            (None, None) => 0.0,
+            (None, None) => VertexPdf::ZERO,
         };
         if let Some(pm) = pt_minus {
             pt_minus_rev = match qs {

@@ -2,14 +2,15 @@
 //! typed conventions).
 //!
 //! Every vertex stores `pdf_fwd`, the density with which its own sub-path generated it,
-//! and `pdf_rev`, the density with which the opposite sub-path would have generated it;
-//! both per unit AREA at the vertex (infinite-light vertices: per solid angle). The
-//! conversion from the sampler's solid-angle density is [`Vertex::convert_density`].
+//! and `pdf_rev`, the density with which the opposite sub-path would have generated it,
+//! both as [`VertexPdf`]: per unit area at a point, per unit solid angle at a vertex at
+//! infinity (the type's constructors name the measure). The conversion from a sampler's
+//! solid-angle density is [`Vertex::convert_density`].
 
 use crate::bsdf::{TransportMode, shading_normal_correction};
 use crate::geometry::LightId;
 use crate::math::{Frame, Vec3};
-use crate::measure::SolidAnglePdf;
+use crate::measure::{AreaPdf, SolidAnglePdf, VertexPdf};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 
@@ -46,8 +47,8 @@ pub struct Vertex {
     pub beta: Rgb,
     /// Reached by (or, for lights, emitted from) a Dirac distribution.
     pub delta: bool,
-    pub pdf_fwd: f32,
-    pub pdf_rev: f32,
+    pub pdf_fwd: VertexPdf,
+    pub pdf_rev: VertexPdf,
 }
 
 impl Vertex {
@@ -62,12 +63,12 @@ impl Vertex {
             emitter: None,
             beta,
             delta: false,
-            pdf_fwd: 0.0,
-            pdf_rev: 0.0,
+            pdf_fwd: VertexPdf::ZERO,
+            pdf_rev: VertexPdf::ZERO,
         }
     }
 
-    pub fn light(id: LightId, p: Vec3, n: Vec3, beta: Rgb, pdf_fwd: f32, delta: bool) -> Self {
+    pub fn light(id: LightId, p: Vec3, n: Vec3, beta: Rgb, pdf_fwd: VertexPdf, delta: bool) -> Self {
         Self {
             kind: VertexKind::Light(id),
             p,
@@ -79,11 +80,11 @@ impl Vertex {
             beta,
             delta,
             pdf_fwd,
-            pdf_rev: 0.0,
+            pdf_rev: VertexPdf::ZERO,
         }
     }
 
-    pub fn infinite(p: Vec3, beta: Rgb, pdf_fwd: f32) -> Self {
+    pub fn infinite(p: Vec3, beta: Rgb, pdf_fwd: VertexPdf) -> Self {
         Self {
             kind: VertexKind::InfiniteLight,
             p,
@@ -95,7 +96,7 @@ impl Vertex {
             beta,
             delta: false,
             pdf_fwd,
-            pdf_rev: 0.0,
+            pdf_rev: VertexPdf::ZERO,
         }
     }
 
@@ -140,26 +141,25 @@ impl Vertex {
         m.eval(self.frame.to_local(self.wo), self.frame.to_local(wi), mode) * shading_normal_correction(mode, self.wo, wi, self.ng, self.frame.n)
     }
 
-    /// Convert a solid-angle density of sampling `next` from here into an area density
-    /// at `next` (an infinite-light vertex keeps the solid-angle density).
-    pub fn convert_density(&self, pdf: SolidAnglePdf, next: &Vertex) -> f32 {
+    /// Convert a solid-angle density of sampling `next` from here into `next`'s vertex
+    /// density: per area at a point, unchanged for a vertex at infinity.
+    pub fn convert_density(&self, pdf: SolidAnglePdf, next: &Vertex) -> VertexPdf {
         if next.kind == VertexKind::InfiniteLight {
-            return pdf.0;
+            return VertexPdf::of_direction(pdf);
         }
-        // In f64: near-grazing cosines lose most of their digits in f32, and these
-        // densities feed ratios that must match a brute-force evaluation to 1e-5.
+        // In f64 (`to_area_f64`): near-grazing cosines lose most of their digits in f32.
         let w = next.p.as_dvec3() - self.p.as_dvec3();
         let d2 = w.length_squared();
         if !(d2 > 0.0) {
-            return 0.0;
+            return VertexPdf::ZERO;
         }
         let cos = if next.is_on_surface() { next.ng.as_dvec3().dot(w).abs() / crate::math::sqrt_f64(d2) } else { 1.0 };
-        (pdf.0 as f64 * cos / d2) as f32
+        VertexPdf::at_point(pdf.to_area_f64(cos, d2))
     }
 
     /// Area density of sampling `next` from this vertex, given it was reached from
     /// `prev` (pbrt-v3's `Vertex::Pdf`).
-    pub fn pdf(&self, scene: &Scene, prev: Option<&Vertex>, next: &Vertex) -> f32 {
+    pub fn pdf(&self, scene: &Scene, prev: Option<&Vertex>, next: &Vertex) -> VertexPdf {
         match self.kind {
             VertexKind::Light(_) | VertexKind::InfiniteLight => return self.pdf_light(scene, next),
             _ => {}
@@ -168,7 +168,7 @@ impl Vertex {
         let pdf = match self.kind {
             VertexKind::Camera => scene.camera.pdf_dir(wn),
             _ => {
-                let Some(prev) = prev else { return 0.0 };
+                let Some(prev) = prev else { return VertexPdf::ZERO };
                 let wp = (prev.p - self.p).normalize_or_zero();
                 let m = &scene.materials[self.material as usize];
                 m.pdf(self.frame.to_local(wp), self.frame.to_local(wn), TransportMode::Radiance)
@@ -178,11 +178,11 @@ impl Vertex {
     }
 
     /// Area density at `next` of a light path leaving this light vertex toward it.
-    pub fn pdf_light(&self, scene: &Scene, next: &Vertex) -> f32 {
+    pub fn pdf_light(&self, scene: &Scene, next: &Vertex) -> VertexPdf {
         let wd = next.p.as_dvec3() - self.p.as_dvec3();
         let d2 = wd.length_squared();
         if !(d2 > 0.0) {
-            return 0.0;
+            return VertexPdf::ZERO;
         }
         let wd = wd / crate::math::sqrt_f64(d2);
         let w = wd.as_vec3();
@@ -202,18 +202,18 @@ impl Vertex {
         if next.is_on_surface() {
             pdf *= next.ng.as_dvec3().dot(wd).abs();
         }
-        pdf as f32
+        VertexPdf::at_point(AreaPdf(pdf as f32))
     }
 
     /// Density of this light vertex as the origin of a light path (light selection ×
     /// position density; for infinite lights, the selection-weighted direction density).
-    pub fn pdf_light_origin(&self, scene: &Scene, next: &Vertex) -> f32 {
+    pub fn pdf_light_origin(&self, scene: &Scene, next: &Vertex) -> VertexPdf {
         let w = (next.p - self.p).normalize_or_zero();
         match self.kind {
-            VertexKind::InfiniteLight => infinite_light_density(scene, -w),
+            VertexKind::InfiniteLight => VertexPdf::of_direction(infinite_light_density(scene, -w)),
             VertexKind::Light(id) => light_origin(scene, id, self.p, self.ng, w),
-            VertexKind::Surface => self.emitter.map_or(0.0, |id| light_origin(scene, id, self.p, self.ng, w)),
-            VertexKind::Camera => 0.0,
+            VertexKind::Surface => self.emitter.map_or(VertexPdf::ZERO, |id| light_origin(scene, id, self.p, self.ng, w)),
+            VertexKind::Camera => VertexPdf::ZERO,
         }
     }
 
@@ -244,16 +244,18 @@ pub fn cosines_over_distance2(a: &Vertex, na: Vec3, b: &Vertex, nb: Vec3) -> f32
     ca * cb / d2
 }
 
-fn light_origin(scene: &Scene, id: LightId, p: Vec3, n: Vec3, w: Vec3) -> f32 {
+/// Light selection × position density of a point on light `id` (a point light's position
+/// is a Dirac: its selection probability alone).
+fn light_origin(scene: &Scene, id: LightId, p: Vec3, n: Vec3, w: Vec3) -> VertexPdf {
     let light = &scene.lights[id as usize];
     let pmf = scene.light_pmf(id);
     if light.is_delta_position() {
-        return pmf;
+        return VertexPdf::discrete(pmf);
     }
-    pmf * light.pdf_le(p, n, w).0.0
+    VertexPdf::at_point(light.pdf_le(p, n, w).0 * pmf)
 }
 
 /// Σ over infinite lights of P(light) · p_light(ω), ω pointing toward the sky.
-pub fn infinite_light_density(scene: &Scene, dir_to_sky: Vec3) -> f32 {
-    scene.infinite_lights().map(|(id, l)| scene.light_pmf(id) * l.pdf_li(Vec3::ZERO, dir_to_sky, Vec3::ZERO, Vec3::ZERO).0).sum()
+pub fn infinite_light_density(scene: &Scene, dir_to_sky: Vec3) -> SolidAnglePdf {
+    SolidAnglePdf(scene.infinite_lights().map(|(id, l)| scene.light_pmf(id) * l.pdf_li(Vec3::ZERO, dir_to_sky, Vec3::ZERO, Vec3::ZERO).0).sum())
 }

@@ -8,6 +8,7 @@ use crate::bsdf::{TransportMode, shading_normal_correction};
 use crate::geometry::{Ray, RayQuery, spawn_ray};
 use crate::integrator::{Counters, RenderParams, survives_roulette};
 use crate::math::{Frame, Vec2, Vec3};
+use crate::measure::{AreaPdf, VertexPdf};
 use crate::rng::SampleStream;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -66,16 +67,19 @@ pub fn light_subpath<Q: RayQuery + ?Sized>(
     let beta = es.radiance * (cos0 / (chosen.pmf * pdf_pos * es.pdf_dir.0));
     let ray = if es.n == Vec3::ZERO { Ray::new(es.p, es.dir, f32::INFINITY) } else { spawn_ray(es.p, es.n, es.dir) };
     if light.is_infinite() {
-        let mut v0 = Vertex::infinite(es.p - es.dir, es.radiance, infinite_light_density(scene, -es.dir));
+        let mut v0 = Vertex::infinite(es.p - es.dir, es.radiance, VertexPdf::of_direction(infinite_light_density(scene, -es.dir)));
         v0.delta = light.is_delta();
         let _ = path.push(v0);
         random_walk(scene, tracer, params, ray, beta, max_vertices, TransportMode::Importance, rng, counters, &mut path);
         // The second vertex's forward density is the disk's position density, per area.
         if let Some(v1) = path.get_mut(1) {
-            v1.pdf_fwd = pdf_pos * if v1.is_on_surface() { v1.ng.dot(es.dir).abs() } else { 1.0 };
+            v1.pdf_fwd = VertexPdf::at_point(AreaPdf(pdf_pos * if v1.is_on_surface() { v1.ng.dot(es.dir).abs() } else { 1.0 }));
         }
     } else {
-        let _ = path.push(Vertex::light(id, es.p, es.n, es.radiance, chosen.pmf * pdf_pos, light.is_delta()));
+        // A point or spot light's position is a Dirac: its origin density is the
+        // selection probability alone.
+        let origin = if es.delta_pos { VertexPdf::discrete(chosen.pmf) } else { VertexPdf::at_point(es.pdf_pos * chosen.pmf) };
+        let _ = path.push(Vertex::light(id, es.p, es.n, es.radiance, origin, light.is_delta()));
         random_walk(scene, tracer, params, ray, beta, max_vertices, TransportMode::Importance, rng, counters, &mut path);
     }
     path
@@ -115,7 +119,7 @@ fn random_walk<Q: RayQuery + ?Sized>(
         let Some(hit) = tracer.intersect(&ray) else {
             // Camera paths that escape end on the infinite lights.
             if mode == TransportMode::Radiance && scene.infinite_lights().next().is_some() {
-                let mut v = Vertex::infinite(prev.p + ray.dir, beta, 0.0);
+                let mut v = Vertex::infinite(prev.p + ray.dir, beta, VertexPdf::ZERO);
                 v.pdf_fwd = prev.pdf(scene, n.checked_sub(2).map(|i| &path[i]), &v);
                 if n >= 2 {
                     path[n - 2].pdf_rev = prev.pdf(scene, Some(&v), &path[n - 2]);
@@ -135,8 +139,8 @@ fn random_walk<Q: RayQuery + ?Sized>(
             emitter: hit.emitter,
             beta,
             delta: false,
-            pdf_fwd: 0.0,
-            pdf_rev: 0.0,
+            pdf_fwd: VertexPdf::ZERO,
+            pdf_rev: VertexPdf::ZERO,
         };
         v.pdf_fwd = prev.pdf(scene, n.checked_sub(2).map(|i| &path[i]), &v);
         if n >= 2 {

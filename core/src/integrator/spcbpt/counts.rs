@@ -46,10 +46,11 @@ fn light_prefix_weights_from(scene: &Scene, x: &[Vertex], known: &[PrefixMemo], 
         }
     } else {
         let (x0, x1) = (&x[0], &x[1]);
-        let position = x0.pdf_light_origin(scene, x1);
+        let position = x0.pdf_light_origin(scene, x1).value();
         let le = x0.le(scene, x1);
         out[1] = if position > 0.0 { finite(scalar(le) / position) } else { 0.0 };
-        let origin = position * x0.pdf_light(scene, x1);
+        // The two-vertex light prefix's density: origin × the next vertex's area density.
+        let origin = position * x0.pdf_light(scene, x1).value();
         let w = if origin > 0.0 { le * (geometry(x0, x1) / origin) } else { Rgb::ZERO };
         out[2] = finite(scalar(w));
         each(1, Some(w));
@@ -64,7 +65,7 @@ fn light_prefix_weights_from(scene: &Scene, x: &[Vertex], known: &[PrefixMemo], 
         if !scene.materials[v.material as usize].is_delta() {
             let mut turned = *v;
             turned.wo = (prev.p - v.p).normalize_or_zero();
-            let pdf = turned.pdf(scene, Some(prev), next);
+            let pdf = turned.pdf(scene, Some(prev), next).value();
             w = if pdf > 0.0 { w * turned.f(scene, next, TransportMode::Importance) * (geometry(v, next) / pdf) } else { Rgb::ZERO };
         }
         out[k + 2] = finite(scalar(w));

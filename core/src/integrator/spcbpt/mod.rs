@@ -203,8 +203,8 @@ pub fn cache_weight(prefix: &[Vertex]) -> f32 {
     match prefix {
         [] => 0.0,
         [y0] => {
-            if y0.pdf_fwd > 0.0 {
-                finite(scalar(y0.beta) / y0.pdf_fwd)
+            if y0.pdf_fwd.is_positive() {
+                finite(scalar(y0.beta) / y0.pdf_fwd.value())
             } else {
                 0.0
             }
