@@ -5,31 +5,34 @@
 //! the module needs nothing from JavaScript, and JavaScript reads the results straight
 //! out of the module's linear memory.
 //!
-//! # Protocol (one module instance per Web Worker)
+//! # Protocol
+//! Workers (one module instance each):
 //! 1. `ember_setup(scene, estimator, width, height, max_depth, seed_hi, seed_lo)` builds
 //!    the scene and the BVH; 0 on success, a negative [`SetupError`] code otherwise.
+//!    Scene and estimator are indices into [`SCENES`] and `EstimatorKind::ALL` (the page
+//!    reads both lists from the module: [`page`]).
 //! 2. Each pass, `ember_render(pass, pixel_start, pixel_end, path_start, path_end)` renders
 //!    the camera samples of pixels `pixel_start..pixel_end` (PT, BDPT) and the light
 //!    paths `path_start..path_end` (LT; `ember_light_paths_per_pass` of them per pass):
-//!    * camera values, 3 × f32 per pixel of the band, at `ember_camera_ptr()`; values
-//!      that are not valid radiance (NaN, ∞, negative) are written as 0 and counted, as
-//!      the CLI's film discards them;
-//!    * the splats of the call (LT's light paths, BDPT's t = 1 strategy), already scaled
-//!      by 1 / (W·H) like the CLI's `splat_scale`, summed into a full W × H × 3 f64 film at
-//!      `ember_splat_ptr()` (zeroed at the start of every call; `ember_splat_count()`
-//!      tells whether there is anything to send).
+//!    camera values, 3 × f32 per band pixel, at `ember_camera_ptr()`, and the call's
+//!    splats, 5 × f32 each (film x, y, r, g, b), at `ember_splat_ptr()`
+//!    (`ember_splat_count()` of them), both raw.
 //!
-//!    The page adds the camera bands and every worker's splat film into one f64 sum per
-//!    pixel and divides by the pass count: exactly the CLI's `Film`, up to the order of
-//!    the f64 additions of splats.
+//! The page's own instance holds the core's [`ember_core::render::Film`] ([`page`]): per
+//! pass it stages every band's camera values, then every worker's splats in worker
+//! order (that is, in pixel or light-path order, as the CLI's driver reduces them), and
+//! commits the pass with `ember_splat_scale()`. Invalid values are discarded and counted
+//! there, as in the CLI, and the image is the CLI's bit for bit up to ray-query
+//! differences between the two BVHs.
 //!
 //! Random numbers derive from (seed, pixel or path index, pass) only
 //! (`SampleStream::for_sample`), so how the page cuts the image into bands, and how
-//! many workers it runs, changes nothing but summation order.
+//! many workers it runs, changes nothing.
 
 pub mod accel;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod compare;
+pub mod page;
 #[cfg(test)]
 mod tests;
 
@@ -37,7 +40,7 @@ use core::cell::RefCell;
 
 use ember_core::Rgb;
 use ember_core::integrator::{Counters, Heuristic, MaxDepth, RenderParams, Splat, bdpt, lt, pt};
-use ember_core::render::{EstimatorKind, Film};
+use ember_core::render::EstimatorKind;
 use ember_core::scene::{Scene, SceneBuilder, builtin, builtin_glass};
 
 pub use accel::WasmAccel;
@@ -88,12 +91,9 @@ pub struct Renderer {
     pub params: RenderParams,
     camera: Vec<Rgb>,
     camera_out: Vec<f32>,
-    /// The call's splats, then summed by the core's film (one pass, scaled by 1/(W·H)).
-    splats: Vec<Splat>,
-    splat_film: Film,
-    splat_count: u32,
+    /// The call's splats as plain floats, 5 per splat (film x, y, r, g, b).
+    splats: Vec<f32>,
     pub last: Counters,
-    pub discarded: u64,
 }
 
 impl Renderer {
@@ -108,19 +108,7 @@ impl Renderer {
         let accel = WasmAccel::new(&geometry);
         // As the CLI: PT with the power heuristic; BDPT's weights are balance by construction.
         let params = RenderParams { max_depth: MaxDepth(max_depth), seed, heuristic: Heuristic::Power, ..RenderParams::default() };
-        Ok(Self {
-            scene,
-            accel,
-            estimator,
-            params,
-            camera: Vec::new(),
-            camera_out: Vec::new(),
-            splats: Vec::new(),
-            splat_film: Film::new(width, height),
-            splat_count: 0,
-            last: Counters::default(),
-            discarded: 0,
-        })
+        Ok(Self { scene, accel, estimator, params, camera: Vec::new(), camera_out: Vec::new(), splats: Vec::new(), last: Counters::default() })
     }
 
     pub fn width(&self) -> u32 {
@@ -149,7 +137,7 @@ impl Renderer {
         self.camera.clear();
         self.camera.resize(pixels.len(), Rgb::ZERO);
         let splats = &mut self.splats;
-        let mut splat = |s: Splat| splats.push(s);
+        let mut splat = |s: Splat| splats.extend_from_slice(&[s.film.x, s.film.y, s.value.r, s.value.g, s.value.b]);
         let (scene, accel, params) = (&self.scene, &self.accel, &self.params);
         self.last = match self.estimator {
             EstimatorKind::Pt => pt::render_pixels(scene, accel, params, pass, pixels, &mut self.camera),
@@ -157,33 +145,26 @@ impl Renderer {
             EstimatorKind::Lt => lt::trace_paths(scene, accel, params, pass, paths, &mut splat),
             _ => Counters::default(),
         };
-        // The core's film sums the splats (scaled by 1/(W·H), as the CLI's) and counts
-        // the invalid ones.
-        self.splat_film.clear();
-        self.splat_film.push_splats(&self.splats);
-        self.splat_film.end_pass(1.0 / self.pixels() as f64);
-        self.discarded += self.splat_film.discarded();
-        self.splat_count = (self.splats.len() as u64 - self.splat_film.discarded() - self.splat_film.splats_outside()) as u32;
+        // Raw values: the page's film (the core's) discards and counts invalid ones.
         self.camera_out.clear();
-        for v in &self.camera {
-            if v.is_valid_radiance() {
-                self.camera_out.extend_from_slice(&[v.r, v.g, v.b]);
-            } else {
-                self.discarded += 1;
-                self.camera_out.extend_from_slice(&[0.0; 3]);
-            }
-        }
+        self.camera_out.extend(self.camera.iter().flat_map(|v| [v.r, v.g, v.b]));
         Ok(())
     }
 
-    /// Camera values of the last call, 3 × f32 per pixel of its band.
+    /// The factor the page's film multiplies this estimator's splats by: 1/(W·H) (LT traces
+    /// W·H light paths per pass; BDPT one per pixel).
+    pub fn splat_scale(&self) -> f64 {
+        1.0 / self.pixels().max(1) as f64
+    }
+
+    /// Camera values of the last call, 3 × f32 per pixel of its band (not sanitised).
     pub fn camera_values(&self) -> &[f32] {
         &self.camera_out
     }
 
-    /// Scaled splats of the last call, 3 × f64 per pixel of the whole film.
-    pub fn splat_film(&self) -> &[f64] {
-        self.splat_film.sums().as_flattened()
+    /// Splats of the last call, 5 × f32 each (film x, y, r, g, b), in emission order.
+    pub fn splat_values(&self) -> &[f32] {
+        &self.splats
     }
 }
 
@@ -247,18 +228,25 @@ pub extern "C" fn ember_camera_ptr() -> usize {
     with_renderer(0, |r| r.camera_values().as_ptr() as usize)
 }
 
-/// Address of the last call's splat film (3 × f64 per pixel, W·H pixels).
+/// Address of the last call's splats (5 × f32 each: film x, y, r, g, b).
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn ember_splat_ptr() -> usize {
-    with_renderer(0, |r| r.splat_film().as_ptr() as usize)
+    with_renderer(0, |r| r.splat_values().as_ptr() as usize)
 }
 
-/// Splats that landed on the film in the last call.
+/// Splats made in the last call.
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn ember_splat_count() -> u32 {
-    with_renderer(0, |r| r.splat_count)
+    with_renderer(0, |r| (r.splat_values().len() / 5) as u32)
+}
+
+/// The factor the page's film multiplies this estimator's splats by; 0 before setup.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_splat_scale() -> f64 {
+    with_renderer(0.0, |r| r.splat_scale())
 }
 
 /// Rays traced in the last call (f64: exact up to 2⁵³).
@@ -266,11 +254,4 @@ pub extern "C" fn ember_splat_count() -> u32 {
 #[unsafe(no_mangle)]
 pub extern "C" fn ember_last_rays() -> f64 {
     with_renderer(0.0, |r| r.last.rays as f64)
-}
-
-/// Samples discarded as invalid radiance since setup.
-#[allow(unsafe_code)]
-#[unsafe(no_mangle)]
-pub extern "C" fn ember_discarded() -> f64 {
-    with_renderer(0.0, |r| r.discarded as f64)
 }

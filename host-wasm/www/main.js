@@ -1,13 +1,15 @@
 // The page: compiles the module once, starts one worker per core, hands each a band of
-// every pass (pixels for PT/BDPT camera samples, light paths for LT), sums the bands and
-// every worker's splat film into one f64 film, tone-maps it onto the canvas, and writes
-// the linear mean as PFM. Random numbers depend on (seed, pixel/path, pass) only, so the
-// image does not depend on the number of workers (up to f64 summation order).
+// every pass (pixels for PT/BDPT camera samples, light paths for LT), and feeds the bands
+// and then every worker's splats, in worker order, to the core's film in its own module
+// instance; tone-maps the film's mean onto the canvas and writes it as PFM. The scene and
+// estimator lists come from the module. Random numbers depend on (seed, pixel/path, pass)
+// only and the film reduces in index order, so the image does not depend on the number
+// of workers at all.
 //
 // Automation (scripts/test-browser.sh): URL parameters scene, estimator, width, height,
 // passes, seed, workers, autostart=1 fill the form and start; window.ember exposes the
 // state (passes done, errors, samples/s) and the linear image.
-import { SCENES, ESTIMATORS, compileModule } from './ember.js';
+import { Core, compileModule } from './ember.js';
 
 const $ = (id) => document.getElementById(id);
 const canvas = $('canvas');
@@ -16,7 +18,7 @@ const ctx = canvas.getContext('2d');
 const ember = {
   loaded: false, running: false, finished: false, passes: 0, errors: [],
   elapsedMs: 0, samples: 0, rays: 0, samplesPerSecond: 0, workers: 0, discarded: 0,
-  width: 0, height: 0, sum: null,
+  width: 0, height: 0, image: null,
   linear: () => linearImage(),
   pfm: () => pfmBytes(),
 };
@@ -30,13 +32,27 @@ function fail(message) {
 }
 
 let module = null;
+let core = null;
+let scenes = [];
+let estimators = [];
 let workers = [];
 let generation = 0;
-
-// Form ← URL parameters.
 const params = new URLSearchParams(location.search);
-for (const key of ['scene', 'estimator', 'width', 'height', 'passes', 'seed', 'workers']) {
-  if (params.has(key)) $(key).value = params.get(key);
+
+// The lists from the module, then the form ← URL parameters.
+function fillForm() {
+  scenes = core.scenes();
+  estimators = core.estimators();
+  $('scene').replaceChildren(...scenes.map((name, i) => new Option(name, i)));
+  $('estimator').replaceChildren(...estimators.map((e, i) => {
+    const o = new Option(e.supported ? e.name : `${e.name} (not in the browser yet)`, i);
+    o.disabled = !e.supported;
+    return o;
+  }));
+  $('estimator').value = String(estimators.findIndex((e) => e.name === 'bdpt'));
+  for (const key of ['scene', 'estimator', 'width', 'height', 'passes', 'seed', 'workers']) {
+    if (params.has(key)) $(key).value = params.get(key);
+  }
 }
 
 function stop() {
@@ -63,7 +79,8 @@ async function start() {
   const seed = $('seed').value || '0';
   const count = Number($('workers').value) || Math.min(navigator.hardwareConcurrency || 1, 16);
   Object.assign(ember, { running: true, finished: false, passes: 0, elapsedMs: 0, samples: 0, rays: 0,
-    samplesPerSecond: 0, workers: count, width, height, discarded: 0, sum: new Float64Array(3 * width * height) });
+    samplesPerSecond: 0, workers: count, width, height, discarded: 0, image: null });
+  core.newFilm(width, height);
   canvas.width = width;
   canvas.height = height;
   canvas.style.width = `${Math.min(512, 4 * width)}px`;
@@ -75,8 +92,9 @@ async function start() {
   const lightPaths = ready[0].lightPaths;
   const pixels = width * height;
   const cut = (total, k) => Math.floor((total * k) / count);
-  const samplesPerPass = estimator === 1 ? lightPaths : pixels;
-  const label = `${SCENES[scene]} / ${ESTIMATORS[estimator]} / ${width}×${height} / ${count} worker${count > 1 ? 's' : ''} / ${ready[0].triangles} triangles`;
+  const samplesPerPass = lightPaths > 0 ? lightPaths : pixels;
+  const splatScale = ready[0].splatScale;
+  const label = `${scenes[scene]} / ${estimators[estimator].name} / ${width}×${height} / ${count} worker${count > 1 ? 's' : ''} / ${ready[0].triangles} triangles`;
 
   for (let pass = 0; pass < maxPasses; pass++) {
     const t0 = performance.now();
@@ -85,15 +103,16 @@ async function start() {
       l0: cut(lightPaths, k), l1: cut(lightPaths, k + 1),
     })));
     if (gen !== generation) return;
-    // Sum in worker order, whatever order they finished in.
-    const sum = ember.sum;
+    // The core's film: every band's camera values, then the splats in worker order
+    // (pixel or light-path order), whatever order the workers finished in.
     for (const r of results) {
-      const base = 3 * r.p0;
-      for (let i = 0; i < r.camera.length; i++) sum[base + i] += r.camera[i];
-      if (r.splats) for (let i = 0; i < sum.length; i++) sum[i] += r.splats[i];
+      core.camera(r.p0, r.camera);
       ember.rays += r.rays;
     }
-    ember.discarded = results.reduce((a, r) => a + r.discarded, 0);
+    for (const r of results) if (r.splats) core.splats(r.splats);
+    core.endPass(splatScale);
+    ember.image = core.image();
+    ember.discarded = core.discarded();
     ember.elapsedMs += performance.now() - t0;
     ember.passes = pass + 1;
     ember.samples += samplesPerPass;
@@ -106,12 +125,9 @@ async function start() {
   ember.finished = true;
 }
 
-// The mean over passes as f32, row 0 at the top (what the CLI's Film::to_rgb_f32 gives).
+// The mean over passes as f32, row 0 at the top (the core film's to_rgb_f32).
 function linearImage() {
-  const out = new Float32Array(ember.sum ? ember.sum.length : 0);
-  const inv = ember.passes > 0 ? 1 / ember.passes : 0;
-  for (let i = 0; i < out.length; i++) out[i] = ember.sum[i] * inv;
-  return out;
+  return ember.image ? ember.image.slice() : new Float32Array(0);
 }
 
 // Portable Float Map: "PF\n<w> <h>\n-1.0\n" (negative scale: little-endian), then RGB f32
@@ -133,13 +149,13 @@ function pfmBytes() {
 const srgb = (v) => (v <= 0.0031308 ? 12.92 * v : 1.055 * Math.pow(v, 1 / 2.4) - 0.055);
 
 function draw() {
-  if (!ember.sum) return;
+  if (!ember.image) return;
   const { width, height } = ember;
-  const scale = Math.pow(2, Number($('exposure').value)) / Math.max(ember.passes, 1);
+  const scale = Math.pow(2, Number($('exposure').value));
   const image = ctx.createImageData(width, height);
-  const sum = ember.sum, px = image.data;
+  const mean = ember.image, px = image.data;
   for (let i = 0, j = 0; i < width * height; i++, j += 3) {
-    for (let c = 0; c < 3; c++) px[4 * i + c] = Math.round(255 * srgb(Math.min(Math.max(sum[j + c] * scale, 0), 1)));
+    for (let c = 0; c < 3; c++) px[4 * i + c] = Math.round(255 * srgb(Math.min(Math.max(mean[j + c] * scale, 0), 1)));
     px[4 * i + 3] = 255;
   }
   ctx.putImageData(image, 0, 0);
@@ -152,13 +168,15 @@ $('download').onclick = () => {
   if (!ember.passes) return;
   const a = document.createElement('a');
   a.href = URL.createObjectURL(new Blob([pfmBytes()], { type: 'application/octet-stream' }));
-  a.download = `ember-${SCENES[Number($('scene').value)]}-${ESTIMATORS[Number($('estimator').value)]}-${ember.passes}pass.pfm`;
+  a.download = `ember-${scenes[Number($('scene').value)]}-${estimators[Number($('estimator').value)].name}-${ember.passes}pass.pfm`;
   a.click();
   setTimeout(() => URL.revokeObjectURL(a.href), 10000);
 };
 
 try {
   module = await compileModule('ember_wasm.wasm');
+  core = new Core(module);
+  fillForm();
   ember.loaded = true;
   $('status').textContent = 'module loaded';
   if (params.get('autostart') === '1') start().catch((e) => fail(String(e && e.stack || e)));
