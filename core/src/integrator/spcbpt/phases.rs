@@ -170,9 +170,15 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
             }
             3 => {
                 let Some(classifier) = &self.setup.classifier else { return };
-                let (q, block_mean, connections, lt) = (&self.setup.q, &self.setup.block_mean, self.config.connections, self.light_tracing());
+                let inputs = prepare::RecordInputs {
+                    classifier,
+                    q: &self.setup.q,
+                    connections: self.config.connections,
+                    light_tracing: self.light_tracing(),
+                    block_mean: &self.setup.block_mean,
+                };
                 let set = out.training();
-                out.counters = prepare::dataset_records(scene, tracer, params, classifier, q, connections, lt, block_mean, items, set);
+                out.counters = prepare::dataset_records(ctx, params, &inputs, items, set);
             }
             _ => {
                 let Some(model) = &self.model else { return };

@@ -180,21 +180,29 @@ pub fn dataset_features<Q: RayQuery + ?Sized>(
     counters
 }
 
+/// What the training records read besides the scene: the classifier, the normalised Q,
+/// N, the light-tracing count M/(W·H) and each pixel block's mean brightness.
+#[derive(Clone, Copy, Debug)]
+pub struct RecordInputs<'a> {
+    pub classifier: &'a Classifier,
+    pub q: &'a [f32],
+    pub connections: u32,
+    pub light_tracing: f64,
+    pub block_mean: &'a [f64],
+}
+
 /// Second pass over dataset samples `samples`: training records into `set`.
-/// `block_mean[b]` is block b's mean brightness per sample; `q` the normalised Q.
-#[allow(clippy::too_many_arguments)]
+/// `inputs.block_mean[b]` is block b's mean brightness per sample; `inputs.q` the
+/// normalised Q.
 pub fn dataset_records<Q: RayQuery + ?Sized>(
-    scene: &Scene,
-    tracer: &Q,
+    ctx: &Context<'_, Q>,
     params: &RenderParams,
-    classifier: &Classifier,
-    q: &[f32],
-    connections: u32,
-    light_tracing: f64,
-    block_mean: &[f64],
+    inputs: &RecordInputs<'_>,
     samples: Range<u32>,
     set: &mut TrainingSet,
 ) -> Counters {
+    let (scene, tracer) = (ctx.scene, ctx.tracer);
+    let RecordInputs { classifier, q, connections, light_tracing, block_mean } = *inputs;
     let mut counters = Counters::default();
     let width = scene.camera.width().max(1);
     let bw = width.div_ceil(BLOCK);
