@@ -29,8 +29,8 @@ pub mod render;
 pub mod rng;
 pub mod scene;
 pub mod shapes;
-pub mod spcbpt;
 pub mod spectrum;
+pub mod subspace;
 pub mod warp;
 
 pub use math::{Vec2, Vec3};

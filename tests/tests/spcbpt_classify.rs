@@ -1,11 +1,11 @@
-//! SPCBPT classification (`ember_core::spcbpt::classify`): the distance of eq. 18 and its
+//! SPCBPT classification (`ember_core::subspace::classify`): the distance of eq. 18 and its
 //! σ², centroid sampling ∝ contribution, the decision tree fitted to nearest-centroid
 //! labels on a Cornell-box-like point set, and the light-source (u, v) bins.
 //!
 //! Statistical test: `centroids_are_drawn_in_proportion_to_weight` is the file's only one
 //! (a χ² goodness-of-fit, α = 1e-3 per test, Šidák over 1). Everything else is
 //! deterministic. Injected-bug checks (each done once, seen failing, reverted), in
-//! `core/src/spcbpt/classify.rs`:
+//! `core/src/subspace/classify.rs`:
 //! - bug A, "centroids drawn uniformly" (key `ln(u)` without `/w`): the χ² test failed
 //!   (χ² = 5.4e4, p = 0).
 //! - bug B, "bounds start at the smallest positive float" (the public code's bug: `lo`
@@ -20,8 +20,8 @@
 use ember_core::Vec2;
 use ember_core::Vec3;
 use ember_core::rng::{SampleStream, Stream};
-use ember_core::spcbpt::classify::{DecisionTree, DistanceParams, LightSourceBins, TreeParams, nearest_centroid, sample_centroids};
-use ember_core::spcbpt::features::SubpathFeature;
+use ember_core::subspace::classify::{DecisionTree, DistanceParams, LightSourceBins, TreeParams, nearest_centroid, sample_centroids};
+use ember_core::subspace::features::SubpathFeature;
 use ember_tests::chi2::sidak;
 use ember_tests::stats::chi2_survival;
 

@@ -1,11 +1,11 @@
-//! SPCBPT training (`ember_core::spcbpt::{subspace_matrix, loss, adam, train}`): Γ from Θ,
+//! SPCBPT training (`ember_core::subspace::{subspace_matrix, loss, adam, train}`): Γ from Θ,
 //! the analytic gradient of the MIS-aware loss against central finite differences in f64,
 //! Adam recovering optima known in closed form or solved by another method, robustness
 //! against outliers and saturated sigmoids, and determinism.
 //!
 //! No statistical test here: every check is deterministic (fixed seeds) with a stated
 //! tolerance. Injected-bug checks (each done once, seen failing, reverted), in
-//! `core/src/spcbpt/`:
+//! `core/src/subspace/`:
 //! - bug A, "mixture factor (1 − m) dropped from the gradient" (`loss.rs`,
 //!   `one_minus_m = 1.0`): `gradient_matches_central_differences` failed (relative error
 //!   0.11 = m/(1 − m) at m = 0.1, and 0.43 at m = 0.3).
@@ -18,10 +18,10 @@
 //!   `adam_minimises_a_quadratic` failed (first step ≠ α).
 
 use ember_core::rng::{SampleStream, Stream};
-use ember_core::spcbpt::adam::{Adam, AdamParams};
-use ember_core::spcbpt::loss::{TrainingSet, TrainingSplit, loss_and_gradient, loss_only};
-use ember_core::spcbpt::subspace_matrix::{SubspaceMatrix, gamma_from_theta};
-use ember_core::spcbpt::train::{TrainParams, train};
+use ember_core::subspace::adam::{Adam, AdamParams};
+use ember_core::subspace::loss::{TrainingSet, TrainingSplit, loss_and_gradient, loss_only};
+use ember_core::subspace::subspace_matrix::{SubspaceMatrix, gamma_from_theta};
+use ember_core::subspace::train::{TrainParams, train};
 
 fn rng(index: u32) -> SampleStream {
     SampleStream::for_sample(0x5bc9, Stream::Aux, index, 0, 0)
@@ -385,7 +385,7 @@ fn epoch_time_at_paper_scale() {
     let gamma_ms = min_ms(&mut || gamma_from_theta(&theta, n_light, n_eye, 0.1, &mut gamma));
     let batch: Vec<u32> = (0..10_000u32).map(|i| i.wrapping_mul(2_654_435_761) % 1_000_000).collect();
     let lg_ms = min_ms(&mut || {
-        ember_core::spcbpt::loss_and_gradient_indexed(&set, &batch, &theta, &gamma, n_light, n_eye, 0.1, &mut grad);
+        ember_core::subspace::loss_and_gradient_indexed(&set, &batch, &theta, &gamma, n_light, n_eye, 0.1, &mut grad);
     });
     let mut adam = Adam::new(n_light * n_eye, AdamParams::default());
     let adam_ms = min_ms(&mut || adam.step(&mut theta, &grad));

@@ -51,8 +51,8 @@ use crate::geometry::RayQuery;
 use crate::integrator::spcbpt::PrefixMemo;
 use crate::integrator::{Counters, Splat};
 use crate::path::LightPaths;
-use crate::spcbpt::{SubpathFeature, TrainingSet};
 use crate::spectrum::Rgb;
+use crate::subspace::{SubpathFeature, TrainingSet};
 
 /// One phase: a map over `0..items` in chunks of `chunk`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

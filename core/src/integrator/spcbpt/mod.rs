@@ -3,7 +3,7 @@
 //!
 //! Eye and light sub-paths are classified by their end vertices into subspaces
 //! (κ_E, κ_L: nearest of contribution-sampled centroids under the distance of eq. 18,
-//! fitted by decision trees, [`crate::spcbpt`]). Per iteration M light paths are traced
+//! fitted by decision trees, [`crate::subspace`]). Per iteration M light paths are traced
 //! and their cacheable vertices (index ≥ 1, non-Dirac surfaces, and with light-source
 //! bins their first vertices) are bucketed by κ_L.
 //! Each camera vertex z (t ≥ 2) makes N connections by two-stage sampling (section 6.1):
@@ -92,8 +92,8 @@ use crate::math::Vec3;
 use crate::path::{self, CacheEntry, LightPaths, LightPointSample, Vertex, VertexKind, Weighted, is_cacheable, trace_light_subpath};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::{Context, Scene};
-use crate::spcbpt::{DecisionTree, LightSourceBins, SubpathFeature, SubspaceMatrix};
 use crate::spectrum::Rgb;
+use crate::subspace::{DecisionTree, LightSourceBins, SubpathFeature, SubspaceMatrix};
 
 /// Vertices of a full path (light end first), bounded like BDPT's sub-paths.
 pub type FullPath = heapless::Vec<Vertex, { 2 * path::MAX_VERTICES }>;

@@ -22,7 +22,7 @@ use super::{Classifier, Model, PassCache, build_buckets, build_gamma_tables, lig
 use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;
 use crate::render::{ChunkOutput, Context, Cursor, Film, Phase, PhaseData, Phased, SpcbptConfig, Stage};
-use crate::spcbpt::{AdamParams, DecisionTree, LightSourceBins, SubpathFeature, SubspaceMatrix, TrainParams, TrainingSet};
+use crate::subspace::{AdamParams, DecisionTree, LightSourceBins, SubpathFeature, SubspaceMatrix, TrainParams, TrainingSet};
 
 /// Light paths and dataset samples per chunk.
 const CHUNK: u32 = 1024;
@@ -287,7 +287,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
                     mixture: self.config.mixture,
                     seed: self.params.seed ^ 0x33,
                 };
-                self.report.losses = crate::spcbpt::train(&set, &mut theta, nl, ne, &train);
+                self.report.losses = crate::subspace::train(&set, &mut theta, nl, ne, &train);
                 drop(set); // D is freed once Γ is trained.
                 let gamma = SubspaceMatrix::from_theta(&theta, nl, ne, self.config.mixture);
                 self.report.tree_bytes = classifier.size_bytes();

@@ -11,7 +11,7 @@
 //! brightness, clamped), the Γ-independent part Σ n_i p_i/p₁ and, per split s' ≥ 2 with
 //! t' ≥ 2, coef = N · (p_{s'}/p₁) · W_{s'} / Q(κ_L) with its (κ_L, κ_E). Then
 //! F(x|Γ)/p₁ = fixed + Σ coef·Γ(κ_L | κ_E) and the loss Σ f²/(p₁ F) is what
-//! [`crate::spcbpt::train`] minimises. D is traced twice from the same random numbers
+//! [`crate::subspace::train`] minimises. D is traced twice from the same random numbers
 //! (first for the eye features and block brightness, then for the records), so no path
 //! is stored.
 
@@ -25,8 +25,8 @@ use crate::math::Vec2;
 use crate::path::{self, LightPointSample, Vertex, VertexKind, camera_subpath, connect, is_cacheable, mis::for_each_strategy_ratio, trace_light_subpath};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::{Context, Scene};
-use crate::spcbpt::{DecisionTree, DistanceParams, SubpathFeature, TrainingSet, TrainingSplit, TreeParams, nearest_centroid, sample_centroids};
 use crate::spectrum::Rgb;
+use crate::subspace::{DecisionTree, DistanceParams, SubpathFeature, TrainingSet, TrainingSplit, TreeParams, nearest_centroid, sample_centroids};
 
 /// Index offsets keeping the preprocessing phases' random streams apart.
 const LIGHT_FEATURES_BASE: u32 = 0x1000_0000;
