@@ -26,7 +26,9 @@ const DIMS_PER_BOUNCE: u32 = 8;
 /// by BSDF sampling.
 #[derive(Clone, Copy, Debug)]
 struct PrevBounce {
-    p: Vec3,
+    /// The origin of the BSDF-sampled ray (offset off the surface): light densities are
+    /// evaluated from the point the ray was tested from.
+    origin: Vec3,
     bsdf_pdf: f32,
     is_delta: bool,
 }
@@ -109,15 +111,15 @@ pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Render
         if !survives_roulette(params, segments, &mut beta, rng) {
             break;
         }
-        prev = Some(PrevBounce { p: hit.p, bsdf_pdf: bs.pdf.0, is_delta: bs.is_delta });
         ray = sp.spawn(wi);
+        prev = Some(PrevBounce { origin: ray.origin, bsdf_pdf: bs.pdf.0, is_delta: bs.is_delta });
     }
     l
 }
 
 #[inline]
 fn prev_p(prev: Option<PrevBounce>) -> Vec3 {
-    prev.map_or(Vec3::ZERO, |p| p.p)
+    prev.map_or(Vec3::ZERO, |p| p.origin)
 }
 
 /// MIS weight of emission reached by the BSDF-sampled segment from `prev`.
@@ -144,7 +146,8 @@ fn next_event<Q: RayQuery + ?Sized>(
     let Some(table) = scene.light_selection.as_ref() else { return Rgb::ZERO };
     let chosen = table.sample(u_light);
     let light = &scene.lights[chosen.index];
-    let Some(ls) = light.sample_li(sp.p(), u_point) else { return Rgb::ZERO };
+    // Seen from where reflected rays start (see `SurfacePoint::reflection_origin`).
+    let Some(ls) = light.sample_li(sp.reflection_origin(), u_point) else { return Rgb::ZERO };
     if !ls.pdf.is_positive() || ls.radiance.is_black() {
         return Rgb::ZERO;
     }
