@@ -6,16 +6,25 @@
 //! contribution β_i f(y_{i−1} → y_i → c) |cos θ_i| · W_e |cos θ_c| / d² lands on the pixel
 //! the connection passes through. BSDFs are evaluated in their adjoint form
 //! (`TransportMode::Importance`, Veach 1997 ch. 5) with the shading-normal correction.
-//! With M paths per pass, the host divides the pass's splats by M.
+//! With M = W·H paths per pass, the host divides the pass's splats by M.
+//!
+//! Lights at infinity seen directly: a light path cannot connect a vertex at infinity to
+//! the pinhole, so that term is estimated from the camera side, once per light path: a
+//! film position uniform over the whole film (density 1/(W·H) per unit pixel area) and
+//! its camera ray; if the ray escapes, it splats L_∞(ω)·W·H at that position, which the
+//! host's 1/M makes an unbiased estimate of every pixel's directly visible sky
+//! (Mitsuba's particle tracer also renders the visible environment). Its random numbers
+//! come from a stream of their own, so the light paths are unchanged.
 
 use core::ops::Range;
 
 use super::{Counters, RenderParams, Splat, SurfacePoint, survives_roulette};
 use crate::bsdf::TransportMode;
 use crate::geometry::{RayQuery, spawn_ray_to};
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
+use crate::spectrum::Rgb;
 
 const DIMS_PER_BOUNCE: u32 = 4;
 
@@ -31,9 +40,29 @@ pub fn trace_paths<Q: RayQuery + ?Sized>(
     let mut counters = Counters::default();
     for path in paths {
         let mut rng = SampleStream::for_sample(params.seed, Stream::Light, path, pass, 0);
-        trace_one(scene, tracer, params, &mut rng, &mut counters, splat);
+        let mut sky = SampleStream::for_sample(params.seed, Stream::Aux, path, pass, SKY_KEY);
+        trace_one(scene, tracer, params, &mut rng, &mut sky, &mut counters, splat);
     }
     counters
+}
+
+/// Last key of the visible-sky stream, keeping it apart from every other `Stream::Aux` stream.
+const SKY_KEY: u32 = 0x5c00;
+
+/// The directly visible lights at infinity, from one camera ray through a film position
+/// uniform over the whole film (see the module notes).
+fn visible_sky<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, rng: &mut SampleStream, counters: &mut Counters, splat: &mut dyn FnMut(Splat)) {
+    let (w, h) = (scene.camera.width() as f32, scene.camera.height() as f32);
+    let film = rng.next_2d() * Vec2::new(w, h);
+    let ray = scene.camera.generate_ray(film);
+    counters.rays += 1;
+    if tracer.intersect(&ray).is_some() {
+        return;
+    }
+    let sky = scene.infinite_lights().fold(Rgb::ZERO, |acc, (_, l)| acc + l.environment_radiance(ray.dir));
+    if !sky.is_black() {
+        splat(Splat { film, value: counters.sanitize(sky * (w * h)) });
+    }
 }
 
 fn trace_one<Q: RayQuery + ?Sized>(
@@ -41,10 +70,14 @@ fn trace_one<Q: RayQuery + ?Sized>(
     tracer: &Q,
     params: &RenderParams,
     rng: &mut SampleStream,
+    sky_rng: &mut SampleStream,
     counters: &mut Counters,
     splat: &mut dyn FnMut(Splat),
 ) {
     let Some(table) = scene.light_selection.as_ref() else { return };
+    if params.max_depth.allows(1) && scene.infinite_lights().next().is_some() {
+        visible_sky(scene, tracer, sky_rng, counters, splat);
+    }
     // Sample the light path's first vertex and direction.
     let chosen = table.sample(rng.next_f32());
     let light = &scene.lights[chosen.index];

@@ -51,6 +51,10 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &R
 /// Radiance arriving along `ray` (a camera ray), estimated by one path.
 pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, mut ray: Ray, rng: &mut SampleStream, counters: &mut Counters) -> Rgb {
     let mut l = Rgb::ZERO;
+    // max_depth 0 allows no segment at all: not even the camera ray (black, as Mitsuba).
+    if !params.max_depth.allows(1) {
+        return l;
+    }
     let mut beta = Rgb::ONE;
     let mut prev: Option<PrevBounce> = None;
     let first_dim = rng.dimension();
