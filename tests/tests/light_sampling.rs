@@ -12,7 +12,7 @@ use ember_core::rng::SampleStream;
 use ember_core::spectrum::Rgb;
 use ember_tests::chi2::{Chi2Config, Chi2Result, SphereBinning, chi2_sphere, chi2_square, sidak};
 
-const TESTS: usize = 16;
+const TESTS: usize = 17;
 
 fn alpha() -> f64 {
     sidak(0.01, TESTS)
@@ -183,6 +183,15 @@ fn sphere_far_narrow_cone() {
     let c = Vec3::new(1.0, 2.0, 3.0);
     let p_ref = c + 10.0 * Vec3::new(0.48, -0.6, 0.64);
     sphere_li("sphere far", c, 0.02, p_ref, 5.0, cfg(6));
+}
+
+// veach-mis's smallest light (r = 0.05) as its plates see it, 2.4 units away: θ_max ≈ 0.021
+// rad; the binning concentrates on the cone, so the silhouette's bins are resolved.
+#[test]
+fn sphere_small_at_veach_mis_distance() {
+    let c = Vec3::new(-28.2792, 3.0, 2.7);
+    let p_ref = Vec3::new(-27.8, 0.65, 2.5);
+    sphere_li("sphere veach-mis", c, 0.05, p_ref, 5.0, cfg(8));
 }
 
 // Injected bug: dropping the cosine at the sphere in `pdf_inside` (`to_solid_angle(1.0, t*t)`)
