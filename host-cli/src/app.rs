@@ -55,6 +55,7 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
             println!("MAPE       {:.4} %", m.mape);
             println!("MAE        {:.6e}", m.mae);
             println!("mean ratio {:.6} (test / reference)", m.mean_ratio);
+            println!("worst {}    {:.1} % of the relative squared error (fireflies)", metrics::WORST_PIXELS, 100.0 * m.worst8_share);
             Ok(())
         }
         Command::Convergence(args) => run_convergence(args),

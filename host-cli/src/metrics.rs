@@ -16,27 +16,42 @@ pub struct ErrorMetrics {
     pub mape: f64,
     pub mae: f64,
     pub mean_ratio: f64,
+    /// Share of the relative squared error (relMSE's sum) held by the 8 worst pixels:
+    /// near 1 when a few fireflies dominate the error (per-block means can still agree).
+    pub worst8_share: f64,
 }
+
+/// Pixels counted by [`ErrorMetrics::worst8_share`].
+pub const WORST_PIXELS: usize = 8;
 
 /// Metrics of `test` against `reference` (same size, checked by the caller).
 pub fn compare(test: &[[f32; 3]], reference: &[[f32; 3]]) -> ErrorMetrics {
     assert_eq!(test.len(), reference.len(), "images must have the same size");
     let n = test.len().max(1) as f64;
     let (mut rel, mut ape, mut ae, mut sa, mut sb) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let mut worst = [0.0f64; WORST_PIXELS];
     for (a, b) in test.iter().zip(reference) {
         let mut pixel_ape = 0.0f64;
+        let mut pixel_rel = 0.0f64;
         for c in 0..3 {
             let (a, b) = (a[c] as f64, b[c] as f64);
             let d = a - b;
-            rel += d * d / (b * b + 0.01);
+            pixel_rel += d * d / (b * b + 0.01);
             pixel_ape += d.abs() / (b + 0.01);
             ae += d.abs();
             sa += a;
             sb += b;
         }
         ape += (pixel_ape / 3.0).clamp(0.0, 10.0);
+        rel += pixel_rel;
+        // Keep the largest few (sorted descending; NaN never enters).
+        if pixel_rel > worst[WORST_PIXELS - 1] {
+            worst[WORST_PIXELS - 1] = pixel_rel;
+            worst.sort_by(|x, y| y.total_cmp(x));
+        }
     }
-    ErrorMetrics { rel_mse: rel / (3.0 * n), mape: 100.0 * ape / n, mae: ae / (3.0 * n), mean_ratio: if sb != 0.0 { sa / sb } else { f64::NAN } }
+    let worst8_share = if rel > 0.0 { worst.iter().sum::<f64>() / rel } else { 0.0 };
+    ErrorMetrics { rel_mse: rel / (3.0 * n), mape: 100.0 * ape / n, mae: ae / (3.0 * n), mean_ratio: if sb != 0.0 { sa / sb } else { f64::NAN }, worst8_share }
 }
 
 /// Per-pixel relative error |a − b| / (b + 0.01) averaged over channels (MAPE's d),
@@ -83,6 +98,21 @@ mod tests {
         assert!((m.mape - 100.0 * ape).abs() < 1e-4, "{} vs {}", m.mape, 100.0 * ape);
         assert!((m.mae - (0.01 + 2.0) / 3.0).abs() < 1e-6);
         assert!((m.mean_ratio - 4.0 / 1.99).abs() < 1e-6);
+    }
+
+    #[test]
+    fn worst_pixels_share_of_the_error() {
+        let reference = vec![[1.0f32; 3]; 100];
+        // Every pixel off by the same amount: the 8 worst hold 8 %.
+        let even: Vec<[f32; 3]> = reference.iter().map(|_| [1.1f32; 3]).collect();
+        assert!((compare(&even, &reference).worst8_share - 0.08).abs() < 1e-9);
+        // One firefly among tiny errors holds nearly all of it.
+        let mut firefly = reference.clone();
+        firefly[37] = [50.0; 3];
+        firefly[3] = [1.001; 3];
+        let m = compare(&firefly, &reference);
+        assert!(m.worst8_share > 0.999 && m.worst8_share <= 1.0, "{}", m.worst8_share);
+        assert_eq!(compare(&reference, &reference).worst8_share, 0.0);
     }
 
     #[test]
