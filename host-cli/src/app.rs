@@ -65,7 +65,8 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
             // As a user would type it from the repository root.
             let command = format!("cargo run --release -p ember-cli -- {}", std::env::args().skip(1).collect::<Vec<_>>().join(" "));
             let report = suite::report(args, threads, &results, &command);
-            std::fs::write(&args.output, &report).map_err(|e| AppError::Output(format!("{}: {e}", args.output.display())))?;
+            let write = |temp: &std::path::Path| std::fs::write(temp, &report);
+            image_io::write_atomically(&args.output, write, |e| e).map_err(|e| AppError::Output(format!("{}: {e}", args.output.display())))?;
             println!("{report}");
             println!("wrote {}", args.output.display());
             Ok(())
@@ -106,6 +107,12 @@ fn run_convergence(args: &ConvergenceArgs) -> Result<(), AppError> {
 /// `ember compare`: read both images, check their sizes, compute the metrics and
 /// optionally write the false-colour error image.
 pub fn compare_files(args: &CompareArgs) -> Result<ErrorMetrics, AppError> {
+    // Never overwrite an input.
+    if let Some(png) = &args.error_image {
+        if [&args.test, &args.reference].iter().any(|input| same_file(png, input)) {
+            return Err(AppError::Output(format!("--error-image '{}' is one of the images being compared; choose another file", png.display())));
+        }
+    }
     let test = image_io::read_exr(&args.test).map_err(AppError::Image)?;
     let reference = image_io::read_exr(&args.reference).map_err(AppError::Image)?;
     if (test.width, test.height) != (reference.width, reference.height) {
@@ -218,6 +225,11 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     image_io::write_png(&png, width, height, &image, args.exposure).map_err(AppError::Image)?;
 
     Ok(RenderReport { scene: built.scene, estimator: args.estimator.name(), width, height, max_depth: built.max_depth, seed: args.seed, summary, exr, png })
+}
+
+/// Do two paths name the same file (the same path, or the same existing file)?
+fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
+    a == b || matches!((std::fs::canonicalize(a), std::fs::canonicalize(b)), (Ok(x), Ok(y)) if x == y)
 }
 
 /// `1234567.0` → `"1.23 M"`.

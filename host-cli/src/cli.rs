@@ -44,19 +44,19 @@ pub struct ConvergenceArgs {
     #[arg(short, long, value_parser = estimator_parser(), value_delimiter = ',', default_values_t = [EstimatorKind::Pt, EstimatorKind::Bdpt])]
     pub estimators: Vec<EstimatorKind>,
     /// Wall-clock budget per estimator and seed, in seconds (preprocessing included).
-    #[arg(long, default_value_t = 16.0, value_name = "SECONDS")]
+    #[arg(long, default_value_t = 16.0, value_name = "SECONDS", value_parser = parse_seconds)]
     pub budget: f64,
     /// Independent runs (seeds 0..N) averaged at each checkpoint.
-    #[arg(long, default_value_t = 2, value_name = "N")]
+    #[arg(long, default_value_t = 2, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub seeds: u32,
     /// Reference EXR (default: reference.exr beside the scene file).
     #[arg(long, value_name = "EXR")]
     pub reference: Option<PathBuf>,
-    /// Render threads (default: every core).
-    #[arg(long, value_name = "N")]
+    /// Render threads (default: every core; at most 4 × the cores, and 1024).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub threads: Option<u32>,
-    /// Override the scene file's max_depth.
-    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    /// Override the scene file's max_depth (-1: unbounded).
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = clap::value_parser!(i32).range(-1..))]
     pub max_depth: Option<i32>,
     /// Output folder for NAME.csv, NAME-relmse.svg and NAME-mape.svg.
     #[arg(short, long, default_value = "convergence", value_name = "DIR")]
@@ -76,13 +76,13 @@ pub struct SuiteArgs {
     #[arg(short, long, value_parser = estimator_parser(), value_delimiter = ',', default_values_t = [EstimatorKind::Pt, EstimatorKind::Lt, EstimatorKind::Bdpt])]
     pub estimators: Vec<EstimatorKind>,
     /// Seconds per estimator, scene and seed (preprocessing included).
-    #[arg(long, default_value_t = 30.0, value_name = "SECONDS")]
+    #[arg(long, default_value_t = 30.0, value_name = "SECONDS", value_parser = parse_seconds)]
     pub budget: f64,
     /// Seeds per estimator and scene.
-    #[arg(long, default_value_t = 2, value_name = "N")]
+    #[arg(long, default_value_t = 2, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub seeds: u32,
-    /// Render threads (default: every core).
-    #[arg(long, value_name = "N")]
+    /// Render threads (default: every core; at most 4 × the cores, and 1024).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub threads: Option<u32>,
     /// The markdown report; plots and CSVs go to a folder of the same stem beside it.
     #[arg(short, long, default_value = "docs/results.md", value_name = "FILE")]
@@ -302,11 +302,20 @@ fn parse_exposure(s: &str) -> Result<f32, String> {
     if v.is_finite() && v.abs() <= 64.0 { Ok(v) } else { Err(format!("exposure must lie in [-64, 64] stops, got {s}")) }
 }
 
-/// `--threads N` where given, else every core.
+/// `--threads N` where given (capped at 4 × the cores and at 1024, with a warning: more
+/// threads than that only add start-up time, and a huge count ran for minutes with no
+/// output), else every core.
 pub fn thread_count(option: Option<u32>) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     match option {
-        Some(n) => n as usize,
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        Some(n) => {
+            let cap = (4 * cores).min(1024);
+            if n as usize > cap {
+                eprintln!("warning: --threads {n} capped at {cap} (4 × {cores} cores, at most 1024)");
+            }
+            (n as usize).min(cap)
+        }
+        None => cores,
     }
 }
 

@@ -243,7 +243,7 @@ pub fn write_outputs(
     let mut written = Vec::new();
     for (file, body) in files {
         let path = dir.join(file);
-        std::fs::write(&path, body).map_err(|e| format!("{}: {e}", path.display()))?;
+        crate::image_io::write_atomically(&path, |temp| std::fs::write(temp, &body), |e| e).map_err(|e| format!("{}: {e}", path.display()))?;
         written.push(path);
     }
     Ok(written)

@@ -74,6 +74,23 @@ fn check_size(path: &Path, width: u32, height: u32, pixels: &[[f32; 3]]) -> Resu
     Ok(())
 }
 
+/// Write `path` atomically: `write` fills a temporary file beside it (same directory, so
+/// the rename cannot cross file systems), which then replaces `path` in one rename. A
+/// failed or interrupted write leaves the previous file as it was and no temporary file
+/// behind.
+pub fn write_atomically<E>(path: &Path, write: impl FnOnce(&Path) -> Result<(), E>, io_error: impl Fn(std::io::Error) -> E) -> Result<(), E> {
+    let name = path.file_name().map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
+    let temp = path.with_file_name(format!(".{name}.{}.partial", std::process::id()));
+    if let Err(e) = write(&temp) {
+        let _ = std::fs::remove_file(&temp);
+        return Err(e);
+    }
+    std::fs::rename(&temp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&temp);
+        io_error(e)
+    })
+}
+
 /// Write linear RGB as 32-bit float channels R, G, B (RLE compression, as the exr crate
 /// defaults to). Values round-trip bit-exactly through [`read_exr`]. Chunks are
 /// compressed on this thread, in order, so the same image gives the same bytes (the
@@ -86,7 +103,12 @@ pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[[f32; 3]]) -> R
         let p = pixels[y * w + x];
         (p[0], p[1], p[2])
     });
-    Image::from_channels((w, height as usize), channels).write().non_parallel().to_file(path).map_err(|e| ImageError::new(path, ImageErrorKind::Exr(e)))
+    let image = Image::from_channels((w, height as usize), channels);
+    write_atomically(
+        path,
+        |temp| image.write().non_parallel().to_file(temp).map_err(|e| ImageError::new(path, ImageErrorKind::Exr(e))),
+        |e| ImageError::new(path, ImageErrorKind::Io(e)),
+    )
 }
 
 /// Read the first layer with R, G and B channels of an EXR file as f32 (alpha, if any,
@@ -190,15 +212,21 @@ pub fn write_png(path: &Path, width: u32, height: u32, pixels: &[[f32; 3]], expo
     check_size(path, width, height, pixels)?;
     let scale = exposure.exp2();
     let bytes: Vec<u8> = pixels.iter().flat_map(|p| p.map(|v| srgb_encode(v * scale))).collect();
-    let file = File::create(path).map_err(|e| ImageError::new(path, ImageErrorKind::Io(e)))?;
-    let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-    let png_err = |e| ImageError::new(path, ImageErrorKind::Png(e));
-    let mut writer = encoder.write_header().map_err(png_err)?;
-    writer.write_image_data(&bytes).map_err(png_err)?;
-    writer.finish().map_err(png_err)
+    write_atomically(
+        path,
+        |temp| {
+            let file = File::create(temp).map_err(|e| ImageError::new(path, ImageErrorKind::Io(e)))?;
+            let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
+            encoder.set_color(png::ColorType::Rgb);
+            encoder.set_depth(png::BitDepth::Eight);
+            encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+            let png_err = |e| ImageError::new(path, ImageErrorKind::Png(e));
+            let mut writer = encoder.write_header().map_err(png_err)?;
+            writer.write_image_data(&bytes).map_err(png_err)?;
+            writer.finish().map_err(png_err)
+        },
+        |e| ImageError::new(path, ImageErrorKind::Io(e)),
+    )
 }
 
 #[cfg(test)]
@@ -209,6 +237,35 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("ember-cli-test-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         dir.join(name)
+    }
+
+    /// A write that fails half-way (the closure writes garbage, then errs) keeps the old
+    /// file byte for byte and leaves no temporary file. Seen failing with the closure
+    /// writing to `path` itself (no temporary file).
+    #[test]
+    fn a_failed_write_keeps_the_old_file() {
+        let path = temp("atomic.exr");
+        write_exr(&path, 2, 1, &[[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]).unwrap();
+        let before = std::fs::read(&path).unwrap();
+        let r: Result<(), String> = write_atomically(
+            &path,
+            |temp| {
+                std::fs::write(temp, b"half an image").unwrap();
+                Err("disk full".into())
+            },
+            |e| e.to_string(),
+        );
+        assert_eq!(r, Err("disk full".into()));
+        assert_eq!(std::fs::read(&path).unwrap(), before, "the old file is intact");
+        let leftovers: Vec<_> = std::fs::read_dir(path.parent().unwrap())
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().contains(".partial"))
+            .collect();
+        assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+        // A successful write replaces it.
+        write_exr(&path, 1, 1, &[[7.0, 8.0, 9.0]]).unwrap();
+        assert_eq!(read_exr(&path).unwrap().pixels, vec![[7.0, 8.0, 9.0]]);
     }
 
     #[test]

@@ -32,6 +32,23 @@ fn bad_input_exits_one_with_a_message() {
         (&["render", "no-such-scene.xml"], "no-such-scene.xml"),
         (&["render", "-o", "picture.png"], ".exr"),
         (&["render", "-o", "/nonexistent-ember-dir/a.exr"], "does not exist"),
+        // convergence and suite validate what render validates (a NaN budget looped
+        // until memory ran out).
+        (&["convergence", "scene.xml", "--budget", "nan"], "time budget"),
+        (&["convergence", "scene.xml", "--budget=-3"], "time budget"),
+        (&["convergence", "scene.xml", "--seeds", "0"], "--seeds"),
+        (&["convergence", "scene.xml", "--threads", "0"], "--threads"),
+        (&["convergence", "scene.xml", "--max-depth", "-2"], "--max-depth"),
+        (&["suite", "--budget", "inf"], "time budget"),
+        (&["suite", "--seeds", "0"], "--seeds"),
+        (&["suite", "--threads", "0"], "--threads"),
+        // SPCBPT/LVCBPT settings are checked by the core (a NaN mixture rendered 0.44× the
+        // right mean).
+        (&["render", "-e", "spcbpt", "--mixture", "nan", "--spp", "1"], "mixture"),
+        (&["render", "-e", "spcbpt", "--learning-rate", "0", "--spp", "1"], "learning-rate"),
+        (&["render", "-e", "lvcbpt", "--connections", "0", "--spp", "1"], "connections"),
+        // compare never overwrites an input.
+        (&["compare", "a.exr", "b.exr", "--error-image", "a.exr"], "one of the images"),
     ] {
         let o = ember(args);
         let err = stderr(&o);
@@ -39,4 +56,16 @@ fn bad_input_exits_one_with_a_message() {
         assert!(err.contains(needle), "{args:?}: stderr lacks {needle:?}:\n{err}");
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
+}
+
+/// A thread count far beyond the machine is capped with a warning, and the render runs.
+#[test]
+fn huge_thread_counts_are_capped() {
+    let out = std::env::temp_dir().join(format!("ember-cli-threads-{}.exr", std::process::id()));
+    let o = ember(&["render", "--threads", "100000", "--spp", "1", "--width", "8", "--height", "8", "-o", out.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.contains("capped at"), "{err}");
+    let _ = std::fs::remove_file(&out);
+    let _ = std::fs::remove_file(out.with_extension("png"));
 }
