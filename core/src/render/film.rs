@@ -164,34 +164,10 @@ impl Film {
         }
     }
 
-    /// Add another film's sums, passes and tallies to this one (partial renders of
-    /// disjoint passes of one image; the sum is exact up to f64 rounding in that order).
-    /// Films of different sizes are not merged: returns false.
-    pub fn merge(&mut self, other: &Film) -> bool {
-        if (self.width, self.height) != (other.width, other.height) {
-            return false;
-        }
-        for (a, b) in self.sum.iter_mut().zip(&other.sum) {
-            for c in 0..3 {
-                a[c] += b[c];
-            }
-        }
-        self.passes += other.passes;
-        self.discarded += other.discarded;
-        self.splats_outside += other.splats_outside;
-        true
-    }
-
     /// The image: the mean over passes (black before the first pass).
     pub fn to_rgb_f32(&self) -> Vec<[f32; 3]> {
         let inv = if self.passes == 0 { 0.0 } else { 1.0 / self.passes as f64 };
         self.sum.iter().map(|s| [(s[0] * inv) as f32, (s[1] * inv) as f32, (s[2] * inv) as f32]).collect()
-    }
-
-    /// The image in f64 (the mean over passes).
-    pub fn to_rgb_f64(&self) -> Vec<[f64; 3]> {
-        let inv = if self.passes == 0 { 0.0 } else { 1.0 / self.passes as f64 };
-        self.sum.iter().map(|s| [s[0] * inv, s[1] * inv, s[2] * inv]).collect()
     }
 }
 

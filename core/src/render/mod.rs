@@ -324,10 +324,6 @@ impl Cursor {
             CursorState::Idle => None,
         }
     }
-    /// Has setup finished?
-    pub fn set_up(&self) -> bool {
-        !matches!(self.state, CursorState::At(Stage::Setup(_)))
-    }
     /// Queue pass `pass` (after setup, if setup is still pending).
     pub fn start_pass(&mut self, pass: u32) {
         match self.state {

@@ -72,16 +72,11 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Lvcbpt {
                 out.counters = counters;
             }
             (1, Some(pass)) => {
-                let splats = &mut out.splats;
-                let (paths, _) = match &mut out.data {
-                    PhaseData::LightPaths { paths, memo } => (paths, memo),
-                    data => {
-                        *data = PhaseData::LightPaths { paths: LightPaths::new(), memo: Vec::new() };
-                        let PhaseData::LightPaths { paths, memo } = data else { unreachable!("set just above") };
-                        (paths, memo)
-                    }
-                };
+                // The splat list is taken out while the light-path store is borrowed.
+                let mut splats = core::mem::take(&mut out.splats);
+                let (paths, _) = out.light_paths();
                 out.counters = trace_light_paths(scene, tracer, params, &self.counts, pass, items, paths, &mut |s| splats.push(s));
+                out.splats = splats;
             }
             (_, Some(pass)) => {
                 let inputs = PassInputs {
