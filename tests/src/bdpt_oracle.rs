@@ -96,10 +96,19 @@ pub fn brute_force_weights(scene: &Scene, x: &[Vertex], count: impl Fn(usize, us
 }
 
 /// Can strategy s (light prefix x₀…x_{s−1}, camera suffix x_s…) produce full path `x`?
-/// s = 0 needs x₀ to emit; otherwise x_{s−1} and x_s are joined by a connection, which
+/// s = 0 needs x₀ to emit and not be a Dirac light; otherwise x_{s−1} and x_s are joined by a connection, which
 /// neither may be Dirac for.
 pub fn strategy_can_produce(scene: &Scene, x: &[Vertex], s: usize) -> bool {
-    if s == 0 { x[0].kind != VertexKind::Camera && x[0].emitter.is_some() } else { !is_delta_surface(scene, &x[s - 1]) && !is_delta_surface(scene, &x[s]) }
+    if s == 0 {
+        // Emission hits reach neither a point or spot light's position nor a directional light.
+        let hittable = match x[0].kind {
+            VertexKind::Light(id) => !scene.lights[id as usize].is_delta(),
+            _ => true,
+        };
+        x[0].kind != VertexKind::Camera && x[0].emitter.is_some() && hittable
+    } else {
+        !is_delta_surface(scene, &x[s - 1]) && !is_delta_surface(scene, &x[s])
+    }
 }
 
 /// The sub-paths strategy (s, n − s) would have generated for full path `x`, with their

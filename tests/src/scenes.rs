@@ -41,6 +41,15 @@ pub fn cornell_with_spheres(width: u32, height: u32) -> SceneBuilder {
     b
 }
 
+/// [`cornell_with_spheres`] lit also by a point light and a spot light: Dirac light
+/// positions, which next-event estimation reaches and emission hits cannot.
+pub fn cornell_with_delta_lights(width: u32, height: u32) -> SceneBuilder {
+    let mut b = cornell_with_spheres(width, height);
+    b.add_light(ember_core::light::Light::point(Vec3::new(0.3, 1.5, 0.2), Rgb::new(0.8, 0.6, 0.4)));
+    b.add_light(ember_core::light::Light::spot(Vec3::new(-0.5, 1.6, -0.3), Vec3::new(0.3, -1.0, 0.4), Rgb::splat(1.5), 35.0, 25.0));
+    b
+}
+
 /// A closed diffuse room [−1.5, 1.5] × [0, 2.5] × [−1.5, 1.5] with a 1 × 0.6 window in
 /// its back wall, lit only by a constant environment through the window (the suite's
 /// window_env, built here without the parser). Camera paths that escape end on an

@@ -121,9 +121,13 @@ pub fn for_each_strategy_ratio<V: FnMut(usize, usize, f64)>(
         _ if i + 2 == s => qs_minus_rev,
         _ => light_at(i).pdf_rev,
     };
-    // The connection vertices are joined deterministically: never Dirac here.
+    // The connection vertices are joined deterministically: never Dirac here. Nor is
+    // the light source as a connection end: next-event estimation reaches point, spot
+    // and directional lights too (its flag only bars s = 0, `is_delta_light` below).
+    // Counting it as Dirac dropped s = 1 from the other strategies' sums, and BDPT read
+    // 1.6× too bright under a point light.
     let cam_delta = |i: usize| i + 1 != t && camera_at(i).delta;
-    let light_delta = |i: usize| i + 1 != s && light_at(i).delta;
+    let light_delta = |i: usize| i > 0 && i + 1 != s && light_at(i).delta;
 
     // Ratios are accumulated in f64: they span many magnitudes along long paths.
     // Strategies with more light vertices: move camera vertices to the light side.
