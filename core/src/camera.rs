@@ -137,6 +137,12 @@ impl PerspectiveCamera {
     pub fn position(&self) -> Vec3 {
         self.position
     }
+    /// tan of half the horizontal field of view (the film's half-width on the plane
+    /// at unit distance).
+    #[inline]
+    pub fn tan_half_x(&self) -> f32 {
+        self.tan_half.x
+    }
     /// Unit viewing direction (camera +z in world space).
     #[inline]
     pub fn forward(&self) -> Vec3 {

@@ -23,6 +23,7 @@ pub mod integrator;
 pub mod light;
 pub mod math;
 pub mod measure;
+pub mod merge;
 pub mod mmis;
 pub mod path;
 pub mod render;

@@ -90,6 +90,10 @@ pub fn powf(x: f32, y: f32) -> f32 {
     libm::powf(x, y)
 }
 #[inline]
+pub fn pow_f64(x: f64, y: f64) -> f64 {
+    libm::pow(x, y)
+}
+#[inline]
 pub fn floor(x: f32) -> f32 {
     libm::floorf(x)
 }

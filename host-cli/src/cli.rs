@@ -106,9 +106,10 @@ pub struct CompareArgs {
     pub error_max: f32,
 }
 
+use ember_core::merge::RadiusRule;
 /// The light-transport algorithm: the core's one list of estimators.
 pub use ember_core::render::EstimatorKind;
-use ember_core::render::{EstimatorConfig, LvcbptConfig, SpcbptConfig};
+use ember_core::render::{EstimatorConfig, LvcbptConfig, MergingConfig, SpcbptConfig};
 
 /// Parses an estimator name; `--help` lists each with its summary.
 fn estimator_parser() -> impl clap::builder::TypedValueParser<Value = EstimatorKind> {
@@ -186,9 +187,9 @@ pub struct RenderArgs {
 /// [`LvcbptConfig`] and [`SpcbptConfig`], whose documentation holds the defaults and the
 /// scaling rule for small images; the core validates the ranges.
 #[derive(Args, Debug, Clone, PartialEq)]
-#[command(next_help_heading = "LVCBPT / SPCBPT")]
+#[command(next_help_heading = "LVCBPT / SPCBPT / PPM / BPM / VCM")]
 pub struct CacheArgs {
-    /// Light paths per pass, M [default: min(100000, W·H)].
+    /// Light paths per pass, M [default: min(100000, W·H); PPM, BPM, VCM: N_L = W·H].
     #[arg(long, value_name = "M", value_parser = clap::value_parser!(u32).range(1..))]
     pub light_paths: Option<u32>,
     /// Connections per camera vertex, N.
@@ -229,6 +230,19 @@ pub struct CacheArgs {
     /// SPCBPT: light paths estimating Q per light subspace, M' [default: min(2000000, 2·W·H)].
     #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..))]
     pub q_paths: Option<u32>,
+    /// PPM/BPM/VCM: initial merging radius r₀ in scene units [default: 4 pixel footprints].
+    #[arg(long, value_name = "R", conflicts_with_all = ["radius_footprints", "radius_scene"])]
+    pub radius: Option<f32>,
+    /// PPM/BPM/VCM: r₀ as a multiple of the mean pixel footprint (hit distance × pixel
+    /// angle, averaged over the image; the segment paper's 4) [default: 4].
+    #[arg(long, value_name = "K", conflicts_with = "radius_scene")]
+    pub radius_footprints: Option<f32>,
+    /// PPM/BPM/VCM: r₀ as a fraction of the scene's bounding-sphere radius (SmallVCM's 0.003).
+    #[arg(long, value_name = "F")]
+    pub radius_scene: Option<f32>,
+    /// PPM/BPM/VCM: radius reduction α in (0, 1]: r_i = r₀ (i + 1)^((α − 1)/2); 1 keeps r fixed.
+    #[arg(long, value_name = "ALPHA", default_value_t = MergingConfig::DEFAULT.alpha)]
+    pub alpha: f32,
 }
 
 impl Default for CacheArgs {
@@ -247,6 +261,10 @@ impl Default for CacheArgs {
             k_d: d.k_d,
             light_source_share: d.light_source_share,
             q_paths: d.q_paths,
+            radius: None,
+            radius_footprints: None,
+            radius_scene: None,
+            alpha: MergingConfig::DEFAULT.alpha,
         }
     }
 }
@@ -273,12 +291,24 @@ impl CacheArgs {
             q_paths: self.q_paths,
         }
     }
-    /// The configuration of `estimator` (these options apply to LVCBPT and SPCBPT only).
+    /// The merging estimators' configuration from these options.
+    pub fn merging(&self) -> MergingConfig {
+        let radius = match (self.radius, self.radius_footprints, self.radius_scene) {
+            (Some(r), _, _) => RadiusRule::Absolute(r),
+            (_, Some(k), _) => RadiusRule::Footprints(k),
+            (_, _, Some(f)) => RadiusRule::SceneFraction(f),
+            _ => MergingConfig::DEFAULT.radius,
+        };
+        MergingConfig { light_paths: self.light_paths, radius, alpha: self.alpha, ..MergingConfig::DEFAULT }
+    }
+    /// The configuration of `estimator` (these options apply to the cache-based and
+    /// merging estimators only).
     pub fn config_for(&self, estimator: EstimatorKind) -> EstimatorConfig {
-        match estimator {
-            EstimatorKind::Lvcbpt => EstimatorConfig::Lvcbpt(self.lvcbpt()),
-            EstimatorKind::Spcbpt => EstimatorConfig::Spcbpt(self.spcbpt()),
-            other => other.default_config(),
+        match (estimator, estimator.default_config()) {
+            (EstimatorKind::Lvcbpt, _) => EstimatorConfig::Lvcbpt(self.lvcbpt()),
+            (EstimatorKind::Spcbpt, _) => EstimatorConfig::Spcbpt(self.spcbpt()),
+            (_, EstimatorConfig::Merging(mode, _)) => EstimatorConfig::Merging(mode, self.merging()),
+            (_, other) => other,
         }
     }
 }

@@ -146,6 +146,18 @@ impl CoreRenderer {
                     cache.retained.capacity
                 )]
             }
+            Renderer::Merging(m) => {
+                let paths = m.paths.size_bytes() + m.prefix.capacity() * 8;
+                vec![format!(
+                    "{:<10} memory per pass: light paths {:.1} MiB, photons + grid {:.1} MiB ({} photons); radius r0 = {:.4e}, last pass {:.4e}",
+                    self.renderer.kind().name(),
+                    mib(paths),
+                    mib(m.size_bytes() - paths),
+                    m.photons.len(),
+                    m.r0,
+                    m.grid.radius()
+                )]
+            }
             Renderer::OnePhase(_) => Vec::new(),
         }
     }

@@ -5,6 +5,8 @@
 //! - [`lt`]: light tracing (particle tracing splatted to the film).
 //! - [`bdpt`]: bidirectional path tracing with every (s, t) strategy and recursive
 //!   balance-heuristic weights.
+//! - [`lvcbpt`], [`spcbpt`]: connections to cached light vertices.
+//! - [`vcm`]: vertex merging: PPM, BPM and VCM/UPS.
 //!
 //! Depth follows Mitsuba's `max_depth`: the largest number of path segments (edges)
 //! from the camera to the emitter; 1 = emitters seen directly, 2 = direct lighting,
@@ -16,6 +18,7 @@ pub mod lvcbpt;
 pub mod pt;
 pub mod spcbpt;
 mod surface;
+pub mod vcm;
 
 pub use surface::SurfacePoint;
 

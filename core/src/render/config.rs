@@ -5,6 +5,9 @@
 
 use core::fmt;
 
+pub use crate::integrator::vcm::MergeMode;
+use crate::merge::RadiusRule;
+
 /// The light-transport estimators, in the order hosts list them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum EstimatorKind {
@@ -20,11 +23,18 @@ pub enum EstimatorKind {
     /// Subspace-based probabilistic connections (Su, Li, Wang 2022): Γ-guided
     /// connections to cached light vertices, Γ trained by Adam before rendering.
     Spcbpt,
+    /// Progressive photon mapping: photons merged at the first non-Dirac camera vertex.
+    Ppm,
+    /// Bidirectional photon mapping: merges at every camera vertex, balance heuristic.
+    Bpm,
+    /// Vertex connection and merging (UPS): BDPT's connections and every merge under
+    /// one balance heuristic (Georgiev et al. 2012).
+    Vcm,
 }
 
 impl EstimatorKind {
     /// Every estimator, in listing order (its index is the browser's and the C ABI's id).
-    pub const ALL: [EstimatorKind; 5] = [Self::Pt, Self::Lt, Self::Bdpt, Self::Lvcbpt, Self::Spcbpt];
+    pub const ALL: [EstimatorKind; 8] = [Self::Pt, Self::Lt, Self::Bdpt, Self::Lvcbpt, Self::Spcbpt, Self::Ppm, Self::Bpm, Self::Vcm];
 
     /// The name as typed on a command line.
     pub fn name(self) -> &'static str {
@@ -34,6 +44,9 @@ impl EstimatorKind {
             Self::Bdpt => "bdpt",
             Self::Lvcbpt => "lvcbpt",
             Self::Spcbpt => "spcbpt",
+            Self::Ppm => "ppm",
+            Self::Bpm => "bpm",
+            Self::Vcm => "vcm",
         }
     }
 
@@ -45,6 +58,9 @@ impl EstimatorKind {
             Self::Bdpt => "bidirectional path tracing with every (s, t) strategy and balance-heuristic MIS",
             Self::Lvcbpt => "light-vertex-cache BDPT: N uniform connections to M cached light paths per pass",
             Self::Spcbpt => "subspace-based probabilistic connections: Γ-guided connections, Γ trained before rendering",
+            Self::Ppm => "progressive photon mapping: photons merged at the first non-specular camera vertex, shrinking radius",
+            Self::Bpm => "bidirectional photon mapping: merges at every camera vertex under the balance heuristic",
+            Self::Vcm => "vertex connection and merging (UPS): BDPT's connections and photon merges under one balance heuristic",
         }
     }
 
@@ -66,6 +82,9 @@ impl EstimatorKind {
             Self::Bdpt => EstimatorConfig::Bdpt,
             Self::Lvcbpt => EstimatorConfig::Lvcbpt(LvcbptConfig::DEFAULT),
             Self::Spcbpt => EstimatorConfig::Spcbpt(SpcbptConfig::DEFAULT),
+            Self::Ppm => EstimatorConfig::Merging(MergeMode::Ppm, MergingConfig::DEFAULT),
+            Self::Bpm => EstimatorConfig::Merging(MergeMode::Bpm, MergingConfig::DEFAULT),
+            Self::Vcm => EstimatorConfig::Merging(MergeMode::Vcm, MergingConfig::DEFAULT),
         }
     }
 }
@@ -89,6 +108,8 @@ pub enum EstimatorConfig {
     Lvcbpt(LvcbptConfig),
     /// SPCBPT.
     Spcbpt(SpcbptConfig),
+    /// PPM, BPM or VCM.
+    Merging(MergeMode, MergingConfig),
 }
 
 impl EstimatorConfig {
@@ -100,6 +121,9 @@ impl EstimatorConfig {
             Self::Bdpt => EstimatorKind::Bdpt,
             Self::Lvcbpt(_) => EstimatorKind::Lvcbpt,
             Self::Spcbpt(_) => EstimatorKind::Spcbpt,
+            Self::Merging(MergeMode::Ppm, _) => EstimatorKind::Ppm,
+            Self::Merging(MergeMode::Bpm, _) => EstimatorKind::Bpm,
+            Self::Merging(MergeMode::Vcm, _) => EstimatorKind::Vcm,
         }
     }
 
@@ -109,6 +133,7 @@ impl EstimatorConfig {
             Self::Pt | Self::Lt | Self::Bdpt => Ok(()),
             Self::Lvcbpt(c) => c.validate(),
             Self::Spcbpt(c) => c.validate(),
+            Self::Merging(_, c) => c.validate(),
         }
     }
 }
@@ -182,6 +207,54 @@ impl LvcbptConfig {
 }
 
 impl Default for LvcbptConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// The vertex-merging estimators' settings (PPM, BPM, VCM).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MergingConfig {
+    /// Light paths per pass, N_L [default: W·H, at most 4 000 000].
+    pub light_paths: Option<u32>,
+    /// How the initial radius r₀ is chosen (default: 4 pixel footprints, the segment
+    /// paper's heuristic).
+    pub radius: RadiusRule,
+    /// Radius reduction α ∈ (0, 1]: r_i = r₀ (i + 1)^((α − 1)/2) (default 0.67, as in
+    /// the segment paper; 1 keeps the radius fixed).
+    pub alpha: f32,
+    /// VCM: merge (off: BDPT's techniques only, for checks).
+    pub merging: bool,
+    /// VCM: connect (off: BPM's techniques only, for checks).
+    pub connections: bool,
+}
+
+impl MergingConfig {
+    /// The defaults.
+    pub const DEFAULT: Self = Self { light_paths: None, radius: RadiusRule::DEFAULT, alpha: 0.67, merging: true, connections: true };
+
+    /// N_L for a film of `pixels` pixels.
+    pub fn light_paths_for(&self, pixels: u32) -> u32 {
+        self.light_paths.unwrap_or(pixels.clamp(1, MAX_LIGHT_PATHS))
+    }
+
+    /// Check every field against its range.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        if let Some(m) = self.light_paths {
+            check_u32("light-paths", m, 1..=MAX_LIGHT_PATHS, "1..=4000000")?;
+        }
+        let r = self.radius.value();
+        let field = match self.radius {
+            RadiusRule::Footprints(_) => "radius-footprints",
+            RadiusRule::SceneFraction(_) => "radius-scene",
+            RadiusRule::Absolute(_) => "radius",
+        };
+        check_f32(field, r, r > 0.0 && r <= 1e30, "(0, 1e30]")?;
+        check_f32("alpha", self.alpha, self.alpha > 0.0 && self.alpha <= 1.0, "(0, 1]")
+    }
+}
+
+impl Default for MergingConfig {
     fn default() -> Self {
         Self::DEFAULT
     }
@@ -324,6 +397,17 @@ mod tests {
         }
         let e = LvcbptConfig { connections: 0, ..LvcbptConfig::DEFAULT }.validate().unwrap_err();
         assert_eq!(e.field, "connections");
+        let m = MergingConfig::DEFAULT;
+        assert!(m.validate().is_ok());
+        for (c, field) in [
+            (MergingConfig { alpha: 0.0, ..m }, "alpha"),
+            (MergingConfig { alpha: f32::NAN, ..m }, "alpha"),
+            (MergingConfig { radius: RadiusRule::Absolute(-1.0), ..m }, "radius"),
+            (MergingConfig { radius: RadiusRule::Footprints(f32::INFINITY), ..m }, "radius-footprints"),
+            (MergingConfig { radius: RadiusRule::SceneFraction(0.0), ..m }, "radius-scene"),
+        ] {
+            assert_eq!(c.validate().map_err(|e| e.field), Err(field));
+        }
     }
 
     #[test]

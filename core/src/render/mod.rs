@@ -39,7 +39,7 @@ mod renderer;
 
 /// What every phase reads: the scene and the ray queries (defined with the scene).
 pub use crate::scene::Context;
-pub use config::{ConfigError, EstimatorConfig, EstimatorKind, LvcbptConfig, MAX_DATASET, MAX_LIGHT_PATHS, SpcbptConfig};
+pub use config::{ConfigError, EstimatorConfig, EstimatorKind, LvcbptConfig, MAX_DATASET, MAX_LIGHT_PATHS, MergeMode, MergingConfig, SpcbptConfig};
 pub use film::Film;
 pub use renderer::Renderer;
 
@@ -98,6 +98,13 @@ pub enum PhaseData {
         /// One SPCBPT prefix memo per vertex (empty for LVCBPT).
         memo: Vec<PrefixMemo>,
     },
+    /// Light sub-paths with one f64 per vertex (VCM's prefix sums of its MIS weights).
+    PathsWithSums {
+        /// The paths' vertices, contiguous.
+        paths: LightPaths,
+        /// One value per vertex, parallel to `paths.vertices`.
+        sums: Vec<f64>,
+    },
     /// A count (LVCBPT's cacheable vertices).
     Count(u64),
     /// Classification features with their weights, per-block brightness sums and
@@ -153,6 +160,10 @@ impl ChunkOutput {
                 paths.clear();
                 memo.clear();
             }
+            PhaseData::PathsWithSums { paths, sums } => {
+                paths.clear();
+                sums.clear();
+            }
             PhaseData::Count(n) => *n = 0,
             PhaseData::Features { features, weights, blocks, block_samples } => {
                 features.clear();
@@ -183,6 +194,18 @@ impl ChunkOutput {
         }
         match &mut self.data {
             PhaseData::LightPaths { paths, memo } => (paths, memo),
+            _ => unreachable!("set just above"),
+        }
+    }
+
+    /// The light paths and per-vertex sums of this chunk (switching the data to them if
+    /// needed).
+    pub fn paths_with_sums(&mut self) -> (&mut LightPaths, &mut Vec<f64>) {
+        if !matches!(self.data, PhaseData::PathsWithSums { .. }) {
+            self.data = PhaseData::PathsWithSums { paths: LightPaths::new(), sums: Vec::new() };
+        }
+        match &mut self.data {
+            PhaseData::PathsWithSums { paths, sums } => (paths, sums),
             _ => unreachable!("set just above"),
         }
     }

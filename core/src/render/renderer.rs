@@ -1,10 +1,11 @@
 //! The estimators behind one value: [`Renderer`] dispatches the protocol to PT, LT,
-//! BDPT (one phase per pass each, written here) and to LVCBPT and SPCBPT (whose phases
-//! live in their modules).
+//! BDPT (one phase per pass each, written here) and to LVCBPT, SPCBPT and the merging
+//! estimators (whose phases live in their modules).
 
 use crate::geometry::RayQuery;
 use crate::integrator::lvcbpt::Lvcbpt;
 use crate::integrator::spcbpt::Spcbpt;
+use crate::integrator::vcm::Vcm;
 use crate::integrator::{RenderParams, bdpt, lt, pt};
 use crate::scene::Scene;
 
@@ -85,6 +86,8 @@ pub enum Renderer {
     Lvcbpt(Lvcbpt),
     /// SPCBPT (boxed: its model is large).
     Spcbpt(alloc::boxed::Box<Spcbpt>),
+    /// PPM, BPM or VCM.
+    Merging(alloc::boxed::Box<Vcm>),
 }
 
 impl Renderer {
@@ -99,6 +102,7 @@ impl Renderer {
             EstimatorConfig::Bdpt => Self::OnePhase(OnePhase::new(Simple::Bdpt, params, pixels)),
             EstimatorConfig::Lvcbpt(c) => Self::Lvcbpt(Lvcbpt::new(params, c, pixels)),
             EstimatorConfig::Spcbpt(c) => Self::Spcbpt(alloc::boxed::Box::new(Spcbpt::new(params, c, scene.camera.width(), scene.camera.height()))),
+            EstimatorConfig::Merging(mode, c) => Self::Merging(alloc::boxed::Box::new(Vcm::new(params, mode, c, pixels))),
         })
     }
 
@@ -112,6 +116,7 @@ impl Renderer {
             },
             Self::Lvcbpt(_) => EstimatorKind::Lvcbpt,
             Self::Spcbpt(_) => EstimatorKind::Spcbpt,
+            Self::Merging(m) => EstimatorConfig::Merging(m.mode, m.config).kind(),
         }
     }
 
@@ -121,6 +126,7 @@ impl Renderer {
             Self::OnePhase(o) => &o.params,
             Self::Lvcbpt(l) => &l.params,
             Self::Spcbpt(s) => &s.params,
+            Self::Merging(m) => &m.params,
         }
     }
 }
@@ -131,6 +137,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::OnePhase(o) => Phased::<Q>::next_phase(o),
             Self::Lvcbpt(l) => Phased::<Q>::next_phase(l),
             Self::Spcbpt(s) => Phased::<Q>::next_phase(&**s),
+            Self::Merging(m) => Phased::<Q>::next_phase(&**m),
         }
     }
     fn start_pass(&mut self, pass: u32) {
@@ -138,6 +145,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::OnePhase(o) => Phased::<Q>::start_pass(o, pass),
             Self::Lvcbpt(l) => Phased::<Q>::start_pass(l, pass),
             Self::Spcbpt(s) => Phased::<Q>::start_pass(&mut **s, pass),
+            Self::Merging(m) => Phased::<Q>::start_pass(&mut **m, pass),
         }
     }
     fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput) {
@@ -145,6 +153,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::OnePhase(o) => o.map(ctx, phase, out),
             Self::Lvcbpt(l) => l.map(ctx, phase, out),
             Self::Spcbpt(s) => s.map(ctx, phase, out),
+            Self::Merging(m) => m.map(ctx, phase, out),
         }
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
@@ -152,6 +161,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::OnePhase(o) => o.reduce(ctx, phase, outputs, film),
             Self::Lvcbpt(l) => l.reduce(ctx, phase, outputs, film),
             Self::Spcbpt(s) => s.reduce(ctx, phase, outputs, film),
+            Self::Merging(m) => m.reduce(ctx, phase, outputs, film),
         }
     }
 }
