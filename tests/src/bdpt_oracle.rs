@@ -147,3 +147,48 @@ pub fn for_each_strategy_split(scene: &Scene, x: &[Vertex], mut f: impl FnMut(us
         f(s, t, &light, &camera);
     }
 }
+
+/// Density (f64) with which the camera side generates x_i of full path `x` (i < n − 1).
+fn camera_side_density(scene: &Scene, x: &[Vertex], i: usize) -> f64 {
+    let n = x.len();
+    if i + 1 == n - 1 { area_density(scene, None, &x[n - 1], &x[i]) } else { area_density(scene, Some(&x[i + 2]), &x[i + 1], &x[i]) }
+}
+
+/// Density (f64) with which the light side generates x_i.
+fn light_side_density(scene: &Scene, x: &[Vertex], i: usize) -> f64 {
+    match i {
+        0 => origin_density(scene, &x[0]),
+        1 => area_density(scene, None, &x[0], &x[1]),
+        _ => area_density(scene, Some(&x[i - 2]), &x[i - 1], &x[i]),
+    }
+}
+
+/// VCM's balance weights for full path `x`: connection techniques (index s, counts
+/// `count(s, t)`) and merges at each x_j (index j; density η · p_{j+1} · p←(x_j), where
+/// p_{j+1} is the formal product of technique j + 1's densities even where that
+/// connection is impossible). `None` where a technique cannot produce the path.
+pub fn brute_force_vcm_weights(scene: &Scene, x: &[Vertex], count: impl Fn(usize, usize) -> f64, eta: f64) -> (Vec<Option<f64>>, Vec<Option<f64>>) {
+    let n = x.len();
+    let mut conn = vec![None; n + 1];
+    let mut merge = vec![None; n];
+    if n == 2 {
+        conn[0] = Some(1.0);
+        return (conn, merge);
+    }
+    let fwd: Vec<f64> = (0..n - 1).map(|i| light_side_density(scene, x, i)).collect();
+    let rev: Vec<f64> = (0..n - 1).map(|i| camera_side_density(scene, x, i)).collect();
+    let product = |s: usize| -> f64 { (0..s).map(|i| fwd[i]).product::<f64>() * (s..n - 1).map(|i| rev[i]).product::<f64>() };
+    for s in 0..n {
+        if strategy_can_produce(scene, x, s) && !(s == 1 && n == 2) {
+            conn[s] = Some(product(s) * count(s, n - s));
+        }
+    }
+    for j in 1..n - 1 {
+        let v = &x[j];
+        if v.kind == VertexKind::Surface && !is_delta_surface(scene, v) {
+            merge[j] = Some(eta * product(j + 1) * rev[j]);
+        }
+    }
+    let total: f64 = conn.iter().chain(merge.iter()).flatten().sum();
+    (conn.iter().map(|v| v.map(|v| v / total)).collect(), merge.iter().map(|v| v.map(|v| v / total)).collect())
+}

@@ -21,9 +21,11 @@ use crate::math::Vec3;
 pub struct HashGrid {
     radius: f32,
     inv_cell: f32,
-    /// Bucket b's points are `indices[starts[b] .. starts[b + 1]]`.
+    /// Bucket b's points are `indices[starts[b] .. starts[b + 1]]`, at `points[…]`
+    /// (copied in bucket order, so a query reads positions contiguously).
     starts: Vec<u32>,
     indices: Vec<u32>,
+    points: Vec<Vec3>,
     /// Each point's bucket (kept to fill the buckets without hashing twice).
     buckets_of: Vec<u32>,
     mask: u32,
@@ -52,7 +54,7 @@ impl HashGrid {
 
     /// Bytes held (capacity, not length).
     pub fn size_bytes(&self) -> usize {
-        (self.starts.capacity() + self.indices.capacity() + self.buckets_of.capacity()) * 4
+        (self.starts.capacity() + self.indices.capacity() + self.buckets_of.capacity()) * 4 + self.points.capacity() * 12
     }
 
     /// Rebuild over `points` for queries of radius `radius` (> 0 and finite; otherwise
@@ -60,6 +62,7 @@ impl HashGrid {
     pub fn build(&mut self, points: impl ExactSizeIterator<Item = Vec3> + Clone, radius: f32) {
         self.starts.clear();
         self.indices.clear();
+        self.points.clear();
         self.buckets_of.clear();
         self.radius = radius;
         let n = points.len();
@@ -71,31 +74,38 @@ impl HashGrid {
         self.inv_cell = 0.5 / radius;
         let buckets = n.next_power_of_two().max(16);
         self.mask = buckets as u32 - 1;
+        // Counting sort: counts, exclusive prefix sums, then each point at its bucket's
+        // cursor; the cursors end at the bucket ends, shifted back into starts.
         self.starts.resize(buckets + 1, 0);
         for p in points.clone() {
             let b = self.bucket(self.cell_of(p));
             self.buckets_of.push(b);
-            self.starts[b as usize + 1] += 1;
+            self.starts[b as usize] += 1;
         }
+        let mut sum = 0u32;
         for b in 0..buckets {
-            self.starts[b + 1] += self.starts[b];
+            let count = self.starts[b];
+            self.starts[b] = sum;
+            sum += count;
         }
-        // Fill each bucket from its end (counting sort; `starts` ends up as bucket starts).
+        self.starts[buckets] = sum;
         self.indices.resize(n, 0);
-        for i in (0..n).rev() {
-            let b = self.buckets_of[i] as usize + 1;
-            self.starts[b] -= 1;
-            self.indices[self.starts[b] as usize] = i as u32;
+        self.points.resize(n, Vec3::ZERO);
+        for (i, p) in points.enumerate() {
+            let b = self.buckets_of[i] as usize;
+            let k = self.starts[b] as usize;
+            self.indices[k] = i as u32;
+            self.points[k] = p;
+            self.starts[b] += 1;
         }
-        // starts[b + 1] was decremented to bucket b's start; shift back into place.
-        self.starts.rotate_left(1);
-        self.starts[buckets] = n as u32;
+        for b in (1..=buckets).rev() {
+            self.starts[b] = self.starts[b - 1];
+        }
+        self.starts[0] = 0;
     }
 
-    /// Call `visit(i)` for every point i whose bucket the ball of radius `radius()`
-    /// around `p` may touch; `position(i)` gives point i, and only points within the
-    /// radius are visited.
-    pub fn query(&self, p: Vec3, position: impl Fn(u32) -> Vec3, mut visit: impl FnMut(u32)) {
+    /// Call `visit(i)` for every point i within distance `radius()` of `p`, once each.
+    pub fn query(&self, p: Vec3, mut visit: impl FnMut(u32)) {
         if self.indices.is_empty() || !p.is_finite() {
             return;
         }
@@ -117,8 +127,8 @@ impl HashGrid {
                     seen[n_seen] = b;
                     n_seen += 1;
                     let range = self.starts[b as usize] as usize..self.starts[b as usize + 1] as usize;
-                    for &i in &self.indices[range] {
-                        if (position(i) - p).length_squared() <= r2 {
+                    for (q, &i) in self.points[range.clone()].iter().zip(&self.indices[range]) {
+                        if (*q - p).length_squared() <= r2 {
                             visit(i);
                         }
                     }
@@ -168,7 +178,7 @@ mod tests {
                 let scale = if q % 4 == 0 { 3.0 } else { 1.0 };
                 let p = (Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * spread - Vec3::splat(0.3)) * scale;
                 let mut found = vec![0u32; n];
-                g.query(p, |i| pts[i as usize], |i| found[i as usize] += 1);
+                g.query(p, |i| found[i as usize] += 1);
                 for (i, &c) in found.iter().enumerate() {
                     let inside = (pts[i] - p).length_squared() <= r * r;
                     assert_eq!(c, inside as u32, "point {i} of {n}, r = {r}");
@@ -187,9 +197,9 @@ mod tests {
         g.build([Vec3::ONE; 50].into_iter(), 0.5);
         assert_eq!(g.size_bytes(), bytes, "a smaller rebuild reuses the storage");
         let mut hits = 0;
-        g.query(Vec3::ONE, |_| Vec3::ONE, |_| hits += 1);
+        g.query(Vec3::ONE, |_| hits += 1);
         assert_eq!(hits, 50);
-        g.query(Vec3::splat(f32::NAN), |_| Vec3::ONE, |_| hits += 1);
+        g.query(Vec3::splat(f32::NAN), |_| hits += 1);
         assert_eq!(hits, 50);
     }
 }

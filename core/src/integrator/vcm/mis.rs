@@ -100,7 +100,7 @@ fn light_is_hittable(scene: &Scene, v: &Vertex) -> bool {
 fn cut(scene: &Scene, path: &[Vertex], side: Side, tech: &Techniques, i: usize) -> f64 {
     match side {
         Side::Light => {
-            let ok = if i == 0 { light_is_hittable(scene, &path[0]) } else { !(i > 1 && path[i - 1].delta) && !path[i].delta };
+            let ok = if i == 0 { light_is_hittable(scene, &path[0]) } else { !(path[i].delta || (i > 1 && path[i - 1].delta)) };
             if ok { tech.count(i, 2) } else { 0.0 }
         }
         Side::Camera => {

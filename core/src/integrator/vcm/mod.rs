@@ -230,37 +230,33 @@ fn merge_at(
     let wo = y.frame.to_local(y.wo);
     let paths = inputs.paths;
     let mut sum = Rgb::ZERO;
-    inputs.grid.query(
-        y.p,
-        |i| photon_position(paths, &inputs.photons[i as usize]),
-        |i| {
-            let e = inputs.photons[i as usize];
-            let j = e.s as usize - 1;
-            if !params.max_depth.allows((j + t - 1) as u32) {
-                return;
+    inputs.grid.query(y.p, |i| {
+        let e = inputs.photons[i as usize];
+        let j = e.s as usize - 1;
+        if !params.max_depth.allows((j + t - 1) as u32) {
+            return;
+        }
+        let start = e.start as usize;
+        let light = &paths.vertices[start..start + j + 1];
+        let x = &light[j];
+        let wi = y.frame.to_local(x.wo);
+        let f = material.eval(wo, wi, TransportMode::Radiance);
+        if f.is_black() {
+            return;
+        }
+        let cos_g = y.ng.dot(x.wo).abs();
+        let correction = if cos_g > 0.0 { wi.z.abs() / cos_g } else { 0.0 };
+        let w = match mode {
+            MergeMode::Ppm => 1.0,
+            _ => {
+                let d = MergeDensities {
+                    toward_light: material.pdf(wo, wi, TransportMode::Radiance),
+                    toward_camera: material.pdf(wi, wo, TransportMode::Radiance),
+                };
+                merge_weight(scene, &inputs.tech, light, &inputs.prefix[start..start + j + 1], j, camera, camera_b, t, d)
             }
-            let start = e.start as usize;
-            let light = &paths.vertices[start..start + j + 1];
-            let x = &light[j];
-            let wi = y.frame.to_local(x.wo);
-            let f = material.eval(wo, wi, TransportMode::Radiance);
-            if f.is_black() {
-                return;
-            }
-            let cos_g = y.ng.dot(x.wo).abs();
-            let correction = if cos_g > 0.0 { wi.z.abs() / cos_g } else { 0.0 };
-            let w = match mode {
-                MergeMode::Ppm => 1.0,
-                _ => {
-                    let d = MergeDensities {
-                        toward_light: material.pdf(wo, wi, TransportMode::Radiance),
-                        toward_camera: material.pdf(wi, wo, TransportMode::Radiance),
-                    };
-                    merge_weight(scene, &inputs.tech, light, &inputs.prefix[start..start + j + 1], j, camera, camera_b, t, d)
-                }
-            };
-            sum += counters.sanitize(y.beta * f * x.beta * (correction * kernel * w));
-        },
-    );
+        };
+        sum += counters.sanitize(y.beta * f * x.beta * (correction * kernel * w));
+    });
     sum
 }
