@@ -104,8 +104,19 @@ impl HashGrid {
         self.starts[0] = 0;
     }
 
+    /// The original index of the point in each slot (bucket order): hosts of per-point
+    /// data reorder it by this to read it contiguously in [`Self::query_slots`].
+    pub fn order(&self) -> &[u32] {
+        &self.indices
+    }
+
     /// Call `visit(i)` for every point i within distance `radius()` of `p`, once each.
     pub fn query(&self, p: Vec3, mut visit: impl FnMut(u32)) {
+        self.query_slots(p, |k| visit(self.indices[k as usize]));
+    }
+
+    /// [`Self::query`] reporting slots (positions in bucket order, see [`Self::order`]).
+    pub fn query_slots(&self, p: Vec3, mut visit: impl FnMut(u32)) {
         if self.indices.is_empty() || !p.is_finite() {
             return;
         }
@@ -126,10 +137,10 @@ impl HashGrid {
                     }
                     seen[n_seen] = b;
                     n_seen += 1;
-                    let range = self.starts[b as usize] as usize..self.starts[b as usize + 1] as usize;
-                    for (q, &i) in self.points[range.clone()].iter().zip(&self.indices[range]) {
+                    let (lo, hi) = (self.starts[b as usize], self.starts[b as usize + 1]);
+                    for (k, q) in (lo..hi).zip(&self.points[lo as usize..hi as usize]) {
                         if (*q - p).length_squared() <= r2 {
-                            visit(i);
+                            visit(k);
                         }
                     }
                 }

@@ -303,3 +303,91 @@ pub fn merge_weight(
 pub fn camera_vertex_merges(scene: &Scene, camera: &[Vertex], t: usize) -> bool {
     t >= 2 && mergeable(scene, &camera[t - 1])
 }
+
+/// A photon's part of [`merge_weight`], computed once per pass: the light-side sum is
+/// S_L = η R + (R / p→(x_j)) (n_j ν_j + a · p←(x_{j−1})), where R is the camera side's
+/// density of the merge point and p←(x_{j−1}) = p_ω · `g_prev` the only factor that
+/// depends on the camera vertex (through its BSDF density p_ω toward x_{j−1}).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhotonSums {
+    /// p→(x_j), Dirac taken as 1.
+    pub fwd: f32,
+    /// n_j ν_j: the technique connecting x_{j−1} to the camera side's x_j.
+    pub cut: f32,
+    /// Converts a solid-angle density at x_j toward x_{j−1} to x_{j−1}'s vertex density.
+    pub g_prev: f32,
+    /// η μ_{j−1} + B_{j−1} / p→(x_{j−1}).
+    pub a: f64,
+}
+
+impl PhotonSums {
+    /// The sums of light vertex `light[j]` (j ≥ 1) with prefix sums `light_b`.
+    pub fn new(scene: &Scene, tech: &Techniques, light: &[Vertex], light_b: &[f64], j: usize) -> Self {
+        let (x, x_prev) = (&light[j], &light[j - 1]);
+        let mu = if mergeable(scene, x_prev) { tech.merge } else { 0.0 };
+        Self {
+            fwd: remap0(x.pdf_fwd) as f32,
+            cut: if j > 1 && x_prev.delta { 0.0 } else { tech.count(j, 2) as f32 },
+            g_prev: x.convert_density(SolidAnglePdf(1.0), x_prev).value(),
+            a: mu + light_b[j - 1] / remap0(x_prev.pdf_fwd),
+        }
+    }
+}
+
+/// A camera vertex's part of [`merge_weight`] (t ≥ 2), computed once per camera vertex.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CameraSums {
+    /// R: the camera side's density of the merge point, p→ of z_{t−1} (Dirac as 1).
+    pub r: f64,
+    /// n ν of the technique connecting x_j to z_{t−2}.
+    pub base: f64,
+    /// Whether z_{t−2} is a scattering vertex (t ≥ 3): otherwise no camera-side sum.
+    pub has_side: bool,
+    /// Converts a solid-angle density at z_{t−1} toward z_{t−2} to its vertex density.
+    pub g_prev: f32,
+    /// p← of z_{t−2} as its own side generated it (Dirac as 1).
+    pub fwd_prev: f64,
+    /// η μ_{t−2}.
+    pub merge_prev: f64,
+    /// n ν of the technique cutting before z_{t−2}, plus η μ_{t−3} p(z_{t−3}) + ρ_{t−3} B_{t−3}.
+    pub inner: f64,
+}
+
+impl CameraSums {
+    /// The sums of camera vertex `camera[t − 1]` with prefix sums `camera_b`.
+    pub fn new(scene: &Scene, tech: &Techniques, camera: &[Vertex], camera_b: &[f64], t: usize) -> Self {
+        let (y, y_prev) = (&camera[t - 1], &camera[t - 2]);
+        let mut sums = Self { r: remap0(y.pdf_fwd), base: if y_prev.delta { 0.0 } else { tech.count(3, t - 1) }, ..Self::default() };
+        if t >= 3 {
+            let z = &camera[t - 3];
+            let cut = if z.delta || y_prev.delta { 0.0 } else { tech.count(4, t - 2) };
+            let merge_z = if mergeable(scene, z) { tech.merge * remap0(z.pdf_rev) } else { 0.0 };
+            sums.has_side = true;
+            sums.g_prev = y.convert_density(SolidAnglePdf(1.0), y_prev).value();
+            sums.fwd_prev = remap0(y_prev.pdf_fwd);
+            sums.merge_prev = if mergeable(scene, y_prev) { tech.merge } else { 0.0 };
+            sums.inner = cut + merge_z + remap0(z.pdf_rev) / remap0(z.pdf_fwd) * camera_b[t - 3];
+        }
+        sums
+    }
+}
+
+/// [`merge_weight`] from the precomputed sums: O(1) and no vertex reads.
+#[inline]
+pub fn merge_weight_from_sums(tech: &Techniques, photon: &PhotonSums, camera: &CameraSums, d: MergeDensities) -> f32 {
+    let eta = tech.merge;
+    let rev_prev = {
+        let v = d.toward_light.value() * photon.g_prev;
+        if v != 0.0 { v as f64 } else { 1.0 }
+    };
+    let light = eta * camera.r + camera.r / photon.fwd as f64 * (photon.cut as f64 + photon.a * rev_prev);
+    let side = if camera.has_side {
+        let v = d.toward_camera.value() * camera.g_prev;
+        let rev = if v != 0.0 { v as f64 } else { 1.0 };
+        camera.merge_prev * rev + rev / camera.fwd_prev * camera.inner
+    } else {
+        0.0
+    };
+    let w = (eta * camera.r / (camera.base + light + side)) as f32;
+    if w.is_finite() { w.clamp(0.0, 1.0) } else { 0.0 }
+}

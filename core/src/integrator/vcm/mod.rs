@@ -37,7 +37,7 @@ pub use phases::Vcm;
 use alloc::vec::Vec;
 use core::ops::Range;
 
-use self::mis::{MergeDensities, Side, Techniques, connection_weight, merge_weight, mergeable, prefix};
+use self::mis::{CameraSums, MergeDensities, PhotonSums, Side, Techniques, connection_weight, merge_weight_from_sums, mergeable, prefix};
 use super::{Counters, RenderParams, Splat};
 use crate::bsdf::TransportMode;
 use crate::geometry::RayQuery;
@@ -65,8 +65,8 @@ pub struct PassInputs<'a> {
     pub paths: &'a LightPaths,
     /// Prefix sums B per light vertex ([`mis::prefix`]), parallel to `paths.vertices`.
     pub prefix: &'a [f64],
-    /// The photons: prefixes of `paths` ending at a mergeable vertex.
-    pub photons: &'a [CacheEntry],
+    /// What merges read of each photon, in the grid's slot order.
+    pub photons: &'a [Photon],
     /// The grid over the photons' end points, built for this pass's radius.
     pub grid: &'a HashGrid,
     /// Technique counts (η included).
@@ -115,6 +115,30 @@ pub fn trace_light_paths<Q: RayQuery + ?Sized>(
         }
     }
     counters
+}
+
+/// What a merge reads of a light vertex x_j (compact, stored in the grid's slot order
+/// so that a query reads its photons contiguously).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Photon {
+    /// Unit direction toward x_{j−1} (where the light came from).
+    pub wo: crate::math::Vec3,
+    /// Throughput of the light path on arrival.
+    pub beta: Rgb,
+    /// j: segments of the light path.
+    pub depth: u32,
+    /// Its part of the merge weight.
+    pub sums: PhotonSums,
+}
+
+impl Photon {
+    /// The record of photon `e` of `paths` (prefix sums `prefix`).
+    pub fn new(scene: &Scene, tech: &Techniques, paths: &LightPaths, prefix: &[f64], e: &CacheEntry) -> Self {
+        let (start, j) = (e.start as usize, e.s as usize - 1);
+        let light = &paths.vertices[start..start + j + 1];
+        let x = &light[j];
+        Self { wo: x.wo, beta: x.beta, depth: j as u32, sums: PhotonSums::new(scene, tech, light, &prefix[start..start + j + 1], j) }
+    }
 }
 
 /// Append to `photons` every mergeable light vertex after the light source.
@@ -228,23 +252,19 @@ fn merge_at(
     let y = &camera[t - 1];
     let material = &scene.materials[y.material as usize];
     let wo = y.frame.to_local(y.wo);
-    let paths = inputs.paths;
+    let sums = CameraSums::new(scene, &inputs.tech, camera, camera_b, t);
     let mut sum = Rgb::ZERO;
-    inputs.grid.query(y.p, |i| {
-        let e = inputs.photons[i as usize];
-        let j = e.s as usize - 1;
-        if !params.max_depth.allows((j + t - 1) as u32) {
+    inputs.grid.query_slots(y.p, |k| {
+        let photon = &inputs.photons[k as usize];
+        if !params.max_depth.allows(photon.depth + t as u32 - 1) {
             return;
         }
-        let start = e.start as usize;
-        let light = &paths.vertices[start..start + j + 1];
-        let x = &light[j];
-        let wi = y.frame.to_local(x.wo);
+        let wi = y.frame.to_local(photon.wo);
         let f = material.eval(wo, wi, TransportMode::Radiance);
         if f.is_black() {
             return;
         }
-        let cos_g = y.ng.dot(x.wo).abs();
+        let cos_g = y.ng.dot(photon.wo).abs();
         let correction = if cos_g > 0.0 { wi.z.abs() / cos_g } else { 0.0 };
         let w = match mode {
             MergeMode::Ppm => 1.0,
@@ -253,10 +273,10 @@ fn merge_at(
                     toward_light: material.pdf(wo, wi, TransportMode::Radiance),
                     toward_camera: material.pdf(wi, wo, TransportMode::Radiance),
                 };
-                merge_weight(scene, &inputs.tech, light, &inputs.prefix[start..start + j + 1], j, camera, camera_b, t, d)
+                merge_weight_from_sums(&inputs.tech, &photon.sums, &sums, d)
             }
         };
-        sum += counters.sanitize(y.beta * f * x.beta * (correction * kernel * w));
+        sum += counters.sanitize(y.beta * f * photon.beta * (correction * kernel * w));
     });
     sum
 }

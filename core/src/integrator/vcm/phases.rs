@@ -9,7 +9,7 @@
 use alloc::vec::Vec;
 
 use super::mis::Techniques;
-use super::{MergeMode, PassInputs, collect_photons, photon_position, render_pixels, trace_light_paths};
+use super::{MergeMode, PassInputs, Photon, collect_photons, photon_position, render_pixels, trace_light_paths};
 use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;
 use crate::merge::{Footprint, HashGrid, progressive_radius};
@@ -42,6 +42,8 @@ pub struct Vcm {
     pub photons: Vec<CacheEntry>,
     /// The grid over them.
     pub grid: HashGrid,
+    /// What merges read of them, in the grid's slot order.
+    pub records: Vec<Photon>,
     cursor: Cursor,
 }
 
@@ -59,6 +61,7 @@ impl Vcm {
             prefix: Vec::new(),
             photons: Vec::new(),
             grid: HashGrid::new(),
+            records: Vec::new(),
             cursor: Cursor::new(1, 2),
         }
     }
@@ -90,6 +93,7 @@ impl Vcm {
             + self.prefix.capacity() * core::mem::size_of::<f64>()
             + self.photons.capacity() * core::mem::size_of::<CacheEntry>()
             + self.grid.size_bytes()
+            + self.records.capacity() * core::mem::size_of::<Photon>()
     }
 }
 
@@ -128,7 +132,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
                 let inputs = PassInputs {
                     paths: &self.paths,
                     prefix: &self.prefix,
-                    photons: &self.photons,
+                    photons: &self.records,
                     grid: &self.grid,
                     tech: self.techniques(pass),
                     light_paths: self.light_paths,
@@ -162,8 +166,13 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
                 }
                 collect_photons(ctx.scene, &self.paths, &mut self.photons);
                 let paths = &self.paths;
-                let r = self.radius(pass.unwrap_or(0));
-                self.grid.build(self.photons.iter().map(|e| photon_position(paths, e)), r);
+                let pass = pass.unwrap_or(0);
+                self.grid.build(self.photons.iter().map(|e| photon_position(paths, e)), self.radius(pass));
+                let tech = self.techniques(pass);
+                self.records.clear();
+                for &i in self.grid.order() {
+                    self.records.push(Photon::new(ctx.scene, &tech, &self.paths, &self.prefix, &self.photons[i as usize]));
+                }
             }
             _ => {
                 for out in outputs.iter() {
