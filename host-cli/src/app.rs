@@ -126,6 +126,18 @@ pub fn compare_files(args: &CompareArgs) -> Result<ErrorMetrics, AppError> {
             reference.height
         )));
     }
+    let (mut test, mut reference) = (test, reference);
+    if let Some([x0, y0, x1, y1]) = args.region {
+        if x1 > test.width || y1 > test.height {
+            return Err(AppError::Output(format!("--region {x0},{y0},{x1},{y1} reaches outside the {}x{} images", test.width, test.height)));
+        }
+        let crop = |pixels: &[[f32; 3]], width: u32| -> Vec<[f32; 3]> {
+            (y0..y1).flat_map(|y| (x0..x1).map(move |x| (y * width + x) as usize)).map(|i| pixels[i]).collect()
+        };
+        test.pixels = crop(&test.pixels, test.width);
+        reference.pixels = crop(&reference.pixels, reference.width);
+        (test.width, test.height, reference.width, reference.height) = (x1 - x0, y1 - y0, x1 - x0, y1 - y0);
+    }
     if let Some(png) = &args.error_image {
         let err = metrics::per_pixel_relative_error(&test.pixels, &reference.pixels);
         let colours: Vec<[f32; 3]> = err.iter().map(|&e| metrics::false_colour(e, args.error_max)).collect();

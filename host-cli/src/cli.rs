@@ -104,6 +104,22 @@ pub struct CompareArgs {
     /// Relative error shown as full red in the false-colour image (log scale over three decades).
     #[arg(long, default_value_t = 1.0, value_name = "ERR")]
     pub error_max: f32,
+    /// Compare only the pixels x0 ≤ x < x1, y0 ≤ y < y1 (a half-open rectangle, (0, 0)
+    /// the top-left pixel): e.g. a caustic seen through glass.
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_region)]
+    pub region: Option<[u32; 4]>,
+}
+
+/// `x0,y0,x1,y1` with x0 < x1 and y0 < y1.
+fn parse_region(text: &str) -> Result<[u32; 4], String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let values: Vec<u32> =
+        parts.iter().map(|p| p.parse::<u32>()).collect::<Result<_, _>>().map_err(|_| format!("'{text}' is not four non-negative integers x0,y0,x1,y1"))?;
+    match values[..] {
+        [x0, y0, x1, y1] if x0 < x1 && y0 < y1 => Ok([x0, y0, x1, y1]),
+        [_, _, _, _] => Err(format!("'{text}' is empty: need x0 < x1 and y0 < y1")),
+        _ => Err(format!("'{text}' is not four integers x0,y0,x1,y1")),
+    }
 }
 
 use ember_core::merge::RadiusRule;
@@ -231,17 +247,17 @@ pub struct CacheArgs {
     #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..))]
     pub q_paths: Option<u32>,
     /// PPM/BPM/VCM: initial merging radius r₀ in scene units [default: 4 pixel footprints].
-    #[arg(long, value_name = "R", conflicts_with_all = ["radius_footprints", "radius_scene"])]
+    #[arg(long, value_name = "R", allow_negative_numbers = true, conflicts_with_all = ["radius_footprints", "radius_scene"])]
     pub radius: Option<f32>,
     /// PPM/BPM/VCM: r₀ as a multiple of the mean pixel footprint (hit distance × pixel
     /// angle, averaged over the image; the segment paper's 4) [default: 4].
-    #[arg(long, value_name = "K", conflicts_with = "radius_scene")]
+    #[arg(long, value_name = "K", allow_negative_numbers = true, conflicts_with = "radius_scene")]
     pub radius_footprints: Option<f32>,
     /// PPM/BPM/VCM: r₀ as a fraction of the scene's bounding-sphere radius (SmallVCM's 0.003).
-    #[arg(long, value_name = "F")]
+    #[arg(long, value_name = "F", allow_negative_numbers = true)]
     pub radius_scene: Option<f32>,
     /// PPM/BPM/VCM: radius reduction α in (0, 1]: r_i = r₀ (i + 1)^((α − 1)/2); 1 keeps r fixed.
-    #[arg(long, value_name = "ALPHA", default_value_t = MergingConfig::DEFAULT.alpha)]
+    #[arg(long, value_name = "ALPHA", allow_negative_numbers = true, default_value_t = MergingConfig::DEFAULT.alpha)]
     pub alpha: f32,
 }
 

@@ -47,6 +47,14 @@ fn bad_input_exits_one_with_a_message() {
         (&["render", "-e", "spcbpt", "--mixture", "nan", "--spp", "1"], "mixture"),
         (&["render", "-e", "spcbpt", "--learning-rate", "0", "--spp", "1"], "learning-rate"),
         (&["render", "-e", "lvcbpt", "--connections", "0", "--spp", "1"], "connections"),
+        // Merging settings (issue 23): radius and α outside their ranges, conflicting radii.
+        (&["render", "-e", "vcm", "--radius", "-1", "--spp", "1"], "radius"),
+        (&["render", "-e", "ppm", "--radius-footprints", "nan", "--spp", "1"], "radius-footprints"),
+        (&["render", "-e", "bpm", "--radius-scene", "0", "--spp", "1"], "radius-scene"),
+        (&["render", "-e", "vcm", "--alpha", "0", "--spp", "1"], "alpha"),
+        (&["render", "-e", "vcm", "--alpha", "1.5", "--spp", "1"], "alpha"),
+        (&["render", "-e", "vcm", "--radius", "0.1", "--radius-scene", "0.01"], "cannot be used with"),
+        (&["compare", "a.exr", "b.exr", "--region", "5,5,5,9"], "x0 < x1"),
         // compare never overwrites an input.
         (&["compare", "a.exr", "b.exr", "--error-image", "a.exr"], "one of the images"),
     ] {

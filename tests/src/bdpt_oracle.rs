@@ -5,8 +5,9 @@
 //!
 //! For a full path x₀ (light end) … x_{n−1} (camera), strategy s builds x₀…x_{s−1} from
 //! the light and x_s…x_{n−1} from the camera; its density is the product of the
-//! per-vertex densities of both sub-paths. Dirac vertices contribute the same symbolic
-//! factor to every strategy able to produce the path, so it cancels (taken as 1).
+//! per-vertex densities of both sub-paths. A Dirac vertex contributes the unit Dirac in
+//! solid angle once to every strategy able to produce the path, so that symbol cancels
+//! (taken as 1); its conversion to area, cos/d² of the segment it samples, stays.
 
 use ember_core::bsdf::TransportMode;
 use ember_core::math::Frame;
@@ -33,7 +34,9 @@ pub fn area_density(scene: &Scene, prev: Option<&Vertex>, from: &Vertex, to: &Ve
         VertexKind::Surface => {
             let m = &scene.materials[from.material as usize];
             if m.is_delta() {
-                return 1.0; // Dirac: the same symbolic factor for every strategy.
+                // Dirac: the unit Dirac in solid angle, the same symbolic factor once per
+                // specular vertex in every strategy; its area conversion stays.
+                return cos_to / d2;
             }
             let frame = Frame::from_normal(from.frame.n);
             let wp = (prev.unwrap().p - from.p).normalize();

@@ -120,6 +120,10 @@ fn protocol_passes_do_not_allocate_in_steady_state() {
         EstimatorKind::Lt.default_config(),
         EstimatorKind::Bdpt.default_config(),
         EstimatorConfig::Lvcbpt(LvcbptConfig { probe_paths: 500, ..LvcbptConfig::DEFAULT }),
+        // Light paths, prefix sums, photons, grid and photon records reuse their storage.
+        EstimatorKind::Ppm.default_config(),
+        EstimatorKind::Bpm.default_config(),
+        EstimatorKind::Vcm.default_config(),
     ];
     for config in configs {
         let mut renderer = Renderer::new(&scene, params, config).unwrap();

@@ -34,6 +34,9 @@ fn every_estimator_renders_black_at_max_depth_0() {
         EstimatorKind::Bdpt.default_config(),
         EstimatorConfig::Lvcbpt(LvcbptConfig { probe_paths: 200, ..LvcbptConfig::DEFAULT }),
         EstimatorConfig::Spcbpt(spcbpt_config(16, 4, 400, 400, 64, 0.1)),
+        EstimatorKind::Ppm.default_config(),
+        EstimatorKind::Bpm.default_config(),
+        EstimatorKind::Vcm.default_config(),
     ];
     assert_eq!(configs.len(), EstimatorKind::ALL.len(), "every estimator is checked");
     for config in configs {

@@ -70,6 +70,31 @@ fn full_paths(scene: &Scene, tracer: &BruteForce, count: u32) -> Vec<Vec<Vertex>
         let cam = camera_subpath(scene, tracer, &params, film, 9, &mut rng, &mut counters);
         let mut lrng = SampleStream::for_sample(4, Stream::Light, i, 0, 0);
         let light = light_subpath(scene, tracer, &params, 8, &mut lrng, &mut counters);
+        // Camera paths that reach an emitter by themselves (s = 0), including through glass:
+        // the specular-diffuse-specular paths connections cannot make.
+        for t in 3..=cam.len() {
+            let e = &cam[t - 1];
+            let emits = e.le(scene, &cam[t - 2]).max_component() > 0.0;
+            if t <= 9 && emits && e.kind == VertexKind::Surface && !cam[1..t - 1].iter().any(|v| v.emitter.is_some()) {
+                if let Some(id) = e.emitter {
+                    // As a light sub-path would have started there.
+                    let mut x: Vec<Vertex> = cam[..t].iter().rev().copied().collect();
+                    // Its normal on the emitting side (the side the camera path came from).
+                    let n = if e.ng.dot(cam[t - 2].p - e.p) < 0.0 { -e.ng } else { e.ng };
+                    x[0] = Vertex::light(id, e.p, n, e.beta, e.pdf_fwd, false);
+                    out.push(x);
+                }
+            }
+        }
+        // Light paths connected to the pinhole (t = 1), including caustics through glass.
+        for s in 2..=light.len() {
+            let u = LightPointSample::default();
+            if let Some(c) = connect(&ctx, &light, &cam, s, 1, u, &mut counters) {
+                let mut x: Vec<Vertex> = light[..s].to_vec();
+                x.push(c.sampled.expect("t = 1 resamples the camera"));
+                out.push(x);
+            }
+        }
         for s in 1..=light.len() {
             for t in 2..=cam.len() {
                 if s + t > 9 || cam[t - 1].kind == VertexKind::InfiniteLight {
@@ -106,10 +131,13 @@ fn weights_equal_brute_force_and_sum_to_one() {
     let eta = LIGHT_PATHS as f64 * core::f64::consts::PI * (R0 as f64).powi(2);
     // Light tracing's count N_L/(W·H) differs from 1 here.
     assert_eq!(tech.light_tracing, LIGHT_PATHS as f64 / (24.0 * 24.0));
-    let (mut checked, mut merges, mut worst) = (0usize, 0usize, 0.0f64);
+    let (mut checked, mut merges, mut worst, mut sds) = (0usize, 0usize, 0.0f64, 0usize);
     for x in full_paths(&scene, &tracer, 600) {
         let n = x.len();
         let (bf_conn, bf_merge) = brute_force_vcm_weights(&scene, &x, |s, t| tech.count(s, t), eta);
+        if (1..n - 1).any(|j| !x[j].delta && x[j - 1].delta && x[j + 1].delta) {
+            sds += 1;
+        }
         let mut sum = 0.0f64;
         for s in 0..n {
             let t = n - s;
@@ -121,7 +149,12 @@ fn weights_equal_brute_force_and_sum_to_one() {
             let w = connection_weight(&scene, &tech, &light, &lb, &camera, &cb, None, s, t) as f64;
             let expected = bf_conn[s].expect("possible technique");
             worst = worst.max((w - expected).abs());
-            assert!((w - expected).abs() <= 1e-5, "connection ({s}, {t}) of {n} vertices: {w} vs {expected}; merges {bf_merge:?}");
+            assert!(
+                (w - expected).abs() <= 1e-5,
+                "connection ({s}, {t}) of {n} vertices: {w} vs {expected}; conn {bf_conn:?} merges {bf_merge:?} kinds {:?} bdpt {}",
+                x.iter().map(|v| (v.kind, v.material, v.delta, v.emitter)).collect::<Vec<_>>(),
+                mis_weight(&scene, &light, &camera, None, s, t)
+            );
             sum += w;
             checked += 1;
         }
@@ -144,7 +177,7 @@ fn weights_equal_brute_force_and_sum_to_one() {
         }
         assert!((sum - 1.0).abs() <= 1e-5, "weights of a {n}-vertex path sum to {sum}");
     }
-    println!("{checked} connection and {merges} merge weights, worst |Δw| = {worst:e}");
+    println!("{checked} connection and {merges} merge weights ({sds} on paths with a diffuse vertex between Dirac ones), worst |Δw| = {worst:e}");
     assert!(checked > 3000 && merges > 2000, "too few techniques exercised: {checked} connections, {merges} merges");
 }
 

@@ -169,8 +169,18 @@ impl Vertex {
             VertexKind::Camera => scene.camera.pdf_dir(wn),
             _ => {
                 let Some(prev) = prev else { return VertexPdf::ZERO };
-                let wp = (prev.p - self.p).normalize_or_zero();
                 let m = &scene.materials[self.material as usize];
+                if m.is_delta() {
+                    // A Dirac lobe: the unit Dirac in solid angle, which every technique able
+                    // to produce the path has once per specular vertex (it cancels in their
+                    // ratios), converted to area like any density, so the segment's
+                    // cos/d² stays. Zeroing it instead (pbrt-v3's convention, ours before)
+                    // drops that factor from the ratios: BDPT and VCM then weighted a
+                    // caustic seen on the floor 0.01 below a glass sphere 0.68 toward
+                    // hitting the light through the glass instead of ≈ 0.
+                    return self.convert_density(SolidAnglePdf(1.0), next);
+                }
+                let wp = (prev.p - self.p).normalize_or_zero();
                 m.pdf(self.frame.to_local(wp), self.frame.to_local(wn), TransportMode::Radiance)
             }
         };

@@ -127,7 +127,8 @@ pub fn prefix(scene: &Scene, path: &[Vertex], side: Side, tech: &Techniques, out
             }
         } else {
             let prev = &path[i - 1];
-            let merge = if mergeable(scene, prev) { tech.merge * remap0(prev.pdf_rev) } else { 0.0 };
+            // Merging at an endpoint (the light source, the camera) is no technique.
+            let merge = if i > 1 && mergeable(scene, prev) { tech.merge * remap0(prev.pdf_rev) } else { 0.0 };
             cut(scene, path, side, tech, i) + merge + remap0(prev.pdf_rev) / remap0(prev.pdf_fwd) * out[i - 1]
         };
     }
@@ -142,14 +143,16 @@ struct Junction<'a> {
     merge: bool,
     /// n_m ν_m: the technique cutting just before the junction vertex.
     cut: f64,
-    prev: Option<(&'a Vertex, VertexPdf, f64)>,
+    /// The vertex before, its reverse density and prefix sum, and whether merging at it
+    /// is a technique (not at a sub-path's first vertex).
+    prev: Option<(&'a Vertex, VertexPdf, f64, bool)>,
 }
 
 /// S(m) = η μ_m p←(v_m) + ρ_m (n_m ν_m + η μ_{m−1} p←(v_{m−1}) + ρ_{m−1} B_{m−1}).
 fn side_sum(scene: &Scene, tech: &Techniques, j: &Junction) -> f64 {
     let mut inner = j.cut;
-    if let Some((v, rev, b)) = j.prev {
-        if mergeable(scene, v) {
+    if let Some((v, rev, b, can_merge)) = j.prev {
+        if can_merge && mergeable(scene, v) {
             inner += tech.merge * remap0(rev);
         }
         inner += remap0(rev) / remap0(v.pdf_fwd) * b;
@@ -201,7 +204,7 @@ pub fn connection_weight(
             Some(pm) => pt.pdf_light_origin(scene, pm),
             None => VertexPdf::ZERO,
         };
-        let prev = pt_minus.map(|pm| (pm, pt.pdf_light(scene, pm), camera_b[t - 2]));
+        let prev = pt_minus.map(|pm| (pm, pt.pdf_light(scene, pm), camera_b[t - 2], t > 2));
         let cut = if pt_minus.is_some_and(|pm| !pm.delta) { tech.count(1, t - 1) } else { 0.0 };
         side_sum(scene, tech, &Junction { vertex: pt, rev, merge: false, cut, prev })
     } else {
@@ -222,7 +225,7 @@ pub fn connection_weight(
             rev: qs_rev,
             merge: s > 1 && mergeable(scene, qs),
             cut: light_cut,
-            prev: qs_minus.map(|qm| (qm, qs.pdf(scene, Some(pt), qm), light_b[s - 2])),
+            prev: qs_minus.map(|qm| (qm, qs.pdf(scene, Some(pt), qm), light_b[s - 2], s > 2)),
         };
         let camera_cut = if t > 1 && !pt_minus.is_some_and(|p| p.delta) { tech.count(s + 1, t - 1) } else { 0.0 };
         let camera_side = Junction {
@@ -230,7 +233,7 @@ pub fn connection_weight(
             rev: pt_rev,
             merge: t > 1 && mergeable(scene, pt),
             cut: camera_cut,
-            prev: pt_minus.map(|pm| (pm, pt.pdf(scene, Some(qs), pm), camera_b[t - 2])),
+            prev: pt_minus.map(|pm| (pm, pt.pdf(scene, Some(qs), pm), camera_b[t - 2], t > 2)),
         };
         side_sum(scene, tech, &light_side) + side_sum(scene, tech, &camera_side)
     };
@@ -276,14 +279,14 @@ pub fn merge_weight(
         rev: x_rev,
         merge: true,
         cut: if j > 1 && x_prev.delta { 0.0 } else { tech.count(j, t) },
-        prev: Some((x_prev, x.convert_density(d.toward_light, x_prev), light_b[j - 1])),
+        prev: Some((x_prev, x.convert_density(d.toward_light, x_prev), light_b[j - 1], j > 1)),
     };
     // The technique connecting x_j to z_{t−2}, relative to which both sums are taken.
     let base = if y_prev.delta { 0.0 } else { tech.count(j + 1, t - 1) };
     let camera_side = if t >= 3 {
         let y_prev_rev = y.convert_density(d.toward_camera, y_prev);
         // z_{t−3}'s density from z_{t−2} given z_{t−1}: stored by the walk.
-        let prev = Some((&camera[t - 3], camera[t - 3].pdf_rev, camera_b[t - 3]));
+        let prev = Some((&camera[t - 3], camera[t - 3].pdf_rev, camera_b[t - 3], t > 3));
         let cut = if camera[t - 3].delta || y_prev.delta { 0.0 } else { tech.count(j + 2, t - 2) };
         Junction { vertex: y_prev, rev: y_prev_rev, merge: mergeable(scene, y_prev), cut, prev }
     } else {
@@ -324,7 +327,7 @@ impl PhotonSums {
     /// The sums of light vertex `light[j]` (j ≥ 1) with prefix sums `light_b`.
     pub fn new(scene: &Scene, tech: &Techniques, light: &[Vertex], light_b: &[f64], j: usize) -> Self {
         let (x, x_prev) = (&light[j], &light[j - 1]);
-        let mu = if mergeable(scene, x_prev) { tech.merge } else { 0.0 };
+        let mu = if j > 1 && mergeable(scene, x_prev) { tech.merge } else { 0.0 };
         Self {
             fwd: remap0(x.pdf_fwd) as f32,
             cut: if j > 1 && x_prev.delta { 0.0 } else { tech.count(j, 2) as f32 },
