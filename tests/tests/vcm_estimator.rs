@@ -2,7 +2,8 @@
 //! small radius, and consistency (bias ∝ r²) where the radiance is known in closed form.
 //!
 //! 1. VCM with merging off agrees with BDPT per 8×8 block (z-test, Šidák-corrected) on
-//!    the Cornell box with glass and gold spheres and a point and a spot light.
+//!    the Cornell box with glass and gold spheres and a point and a spot light; with
+//!    connections off it renders BPM's image bit for bit.
 //! 2. BPM, PPM and VCM at a fixed radius of 0.04 (α = 1; the box is 2 wide) agree with
 //!    BDPT on the Cornell box per block within 5σ plus 4 % (the kernel's bias near edges
 //!    and corners, where the ball takes in photons of the other wall) and in the image
@@ -75,6 +76,22 @@ fn vcm_without_merging_agrees_with_bdpt() {
     let alpha = sidak(0.01, BLOCKS * 3);
     let min_p = assert_blocks_agree("VCM without merging vs BDPT", &b, &v, alpha);
     println!("smallest p = {min_p:.4}");
+}
+
+/// With connections off VCM is BPM: the same techniques and weights, the same image.
+#[test]
+fn vcm_without_connections_is_bpm() {
+    let (scene, geometry, _) = cornell_with_delta_lights(16, 16).build().expect("scene");
+    let tracer = BruteForce::new(geometry);
+    let params = RenderParams { max_depth: MaxDepth(6), seed: 5, ..RenderParams::default() };
+    let vcm = MergingConfig { connections: false, ..MergingConfig::DEFAULT };
+    let mut a = Passes::new(&scene, &tracer, &params, EstimatorConfig::Merging(MergeMode::Vcm, vcm));
+    let mut b = Passes::new(&scene, &tracer, &params, EstimatorConfig::Merging(MergeMode::Bpm, MergingConfig::DEFAULT));
+    for pass in 0..3 {
+        let (x, y) = (a.pass_image(pass).0, b.pass_image(pass).0);
+        assert!(x.iter().any(|p| p[1] > 0.0));
+        assert_eq!(x, y, "pass {pass}");
+    }
 }
 
 #[test]

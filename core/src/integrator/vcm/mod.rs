@@ -58,6 +58,15 @@ pub enum MergeMode {
     Vcm,
 }
 
+/// Photons on surfaces turned more than about 37° from the camera vertex's are not
+/// merged: within a ball of radius r they lie on another surface (the other wall of a
+/// corner, a small sphere and the wall behind it), whose photons the disk kernel would
+/// count as if they were on this one. Measured on the Cornell box, PPM at 10 s: relMSE
+/// 2.82e-3 → 1.78e-3, image mean 1.0036 → 0.9955 of the reference (the corners' excess
+/// becomes a small deficit: the disk is normalised as if whole). As r → 0 on a smooth
+/// surface every photon passes, so the estimator stays consistent.
+pub const MIN_NORMAL_COSINE: f32 = 0.8;
+
 /// What the camera phase of one pass reads.
 #[derive(Clone, Copy, Debug)]
 pub struct PassInputs<'a> {
@@ -125,6 +134,8 @@ pub struct Photon {
     pub wo: crate::math::Vec3,
     /// Throughput of the light path on arrival.
     pub beta: Rgb,
+    /// Geometric normal at the photon (either orientation).
+    pub n: crate::math::Vec3,
     /// j: segments of the light path.
     pub depth: u32,
     /// Its part of the merge weight.
@@ -137,7 +148,7 @@ impl Photon {
         let (start, j) = (e.start as usize, e.s as usize - 1);
         let light = &paths.vertices[start..start + j + 1];
         let x = &light[j];
-        Self { wo: x.wo, beta: x.beta, depth: j as u32, sums: PhotonSums::new(scene, tech, light, &prefix[start..start + j + 1], j) }
+        Self { wo: x.wo, beta: x.beta, n: x.ng, depth: j as u32, sums: PhotonSums::new(scene, tech, light, &prefix[start..start + j + 1], j) }
     }
 }
 
@@ -256,7 +267,7 @@ fn merge_at(
     let mut sum = Rgb::ZERO;
     inputs.grid.query_slots(y.p, |k| {
         let photon = &inputs.photons[k as usize];
-        if !params.max_depth.allows(photon.depth + t as u32 - 1) {
+        if !params.max_depth.allows(photon.depth + t as u32 - 1) || photon.n.dot(y.ng).abs() < MIN_NORMAL_COSINE {
             return;
         }
         let wi = y.frame.to_local(photon.wo);
