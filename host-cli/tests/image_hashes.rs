@@ -19,7 +19,10 @@
 //! fireflies; `tests/tests/pt_small_lights.rs`). And BDPT, LVCBPT and SPCBPT on the
 //! built-in Cornell box when the CWBVH stopped losing hits closer than 10⁻⁴ along a ray
 //! and the triangle test stopped rejecting hits below its rounding bound on t
-//! (`host-cli/tests/closed_room.rs`).
+//! (`host-cli/tests/closed_room.rs`). And LT, BDPT, LVCBPT and SPCBPT on the built-in box
+//! and veach-mis when light paths' Russian roulette became scale-free (issue 14,
+//! docs/stability.md: relMSE per pass unchanged to 1–2 %); ajar's are unchanged: at the
+//! test's depth 6 its light paths survive with q = 0.95 under both rules.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -112,20 +115,20 @@ fn serial_hash(scene: &str, estimator: EstimatorKind) -> u64 {
 /// (scene, estimator, hash).
 const GOLDEN: &[(&str, &str, u64)] = &[
     ("builtin", "pt", 0x5ee9ba4bad0e3b01),
-    ("builtin", "lt", 0x4698e34bbffdd7c7),
-    ("builtin", "bdpt", 0x71e640015990dd33),
-    ("builtin", "lvcbpt", 0xf1205bdf5f0c6f17),
-    ("builtin", "spcbpt", 0x54231ecd074f07c7),
+    ("builtin", "lt", 0xcc31ea0b8dad427c),
+    ("builtin", "bdpt", 0xe3019f59a4af75ed),
+    ("builtin", "lvcbpt", 0x50d39ebecd7118b7),
+    ("builtin", "spcbpt", 0x237fb75ff1141e62),
     ("ajar", "pt", 0xdbdbcf1cc913a6cb),
     ("ajar", "lt", 0x405569d79484bc7f),
     ("ajar", "bdpt", 0xe16524b810d32b8e),
     ("ajar", "lvcbpt", 0x27f2104a103e9b56),
     ("ajar", "spcbpt", 0x40bb3a17ef8c2824),
     ("veach-mis", "pt", 0xb95ec211c091cec7),
-    ("veach-mis", "lt", 0xaa51f60cbb891409),
-    ("veach-mis", "bdpt", 0x4b1e7def24a986a5),
-    ("veach-mis", "lvcbpt", 0x2a76d653e4028f7e),
-    ("veach-mis", "spcbpt", 0xc766062a533dbe23),
+    ("veach-mis", "lt", 0xeefd4eaba57333b0),
+    ("veach-mis", "bdpt", 0x4dcc63a5d41d5236),
+    ("veach-mis", "lvcbpt", 0x6eecd9af7426819b),
+    ("veach-mis", "spcbpt", 0x34bcbfe1b6c665dd),
 ];
 
 const SCENES: [&str; 3] = ["builtin", "ajar", "veach-mis"];

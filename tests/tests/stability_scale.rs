@@ -1,5 +1,5 @@
 //! Scale and translation invariance of the Cornell box (issue 8): scaled by 1e-4 … 1e4,
-//! and translated by 1e5, the rendered image mean stays within 1 % of the unit-scale one.
+//! and translated by 1e5, the rendered image mean stays within 1e-4 of the unit-scale one.
 //!
 //! f32 cannot hold the box far from the origin: at 1e5 its ulp is 0.0078, so the light's
 //! 0.02 gap below the ceiling is two ulps, and a 256-ulp ray offset is 2 units, the size
@@ -11,9 +11,12 @@
 //! does not depend on units.
 //!
 //! Same seeds at every scale, so the renders are correlated and the comparison is tight:
-//! the check is |mean_s / mean_1 − 1| ≤ 1 % for PT and BDPT, and no sample is discarded
-//! as non-finite. The unit-scale mean's standard error is printed to show 1 % is well
-//! above noise.
+//! the check is |mean_s / mean_1 − 1| ≤ 1e-4 for PT and BDPT, and no sample is discarded
+//! as non-finite (the bound was 1 % while light paths' Russian roulette compared their
+//! power with 1: BDPT moved by −0.5 % at scales ≤ 1e-2; seen failing with that rule
+//! restored, issue 14). The unit-scale mean's standard error (about 8 %) is printed: with the
+//! same random numbers at every scale, agreement to 1e-4, far below it, means the same
+//! paths are sampled, not merely the same integral.
 //!
 //! Injected bug (run once, reverted): building the translated box in world coordinates
 //! (no camera-centred frame): PT's mean at translation 1e5 drops by 46.5 %.
@@ -88,7 +91,7 @@ fn cornell_box_mean_is_invariant_under_scale_and_translation() {
             let (mean, _) = image_mean(est, &scene, &tracer);
             let rel = mean / reference - 1.0;
             report.push(format!("{est:?} scale {scale:e}, translation {shift:e}: mean {mean:.5} ({:+.3} %)", 100.0 * rel));
-            assert!(rel.abs() <= 0.01, "{}", report.join("\n"));
+            assert!(rel.abs() <= 1e-4, "{}", report.join("\n"));
         }
     }
     println!("{}", report.join("\n"));

@@ -105,6 +105,7 @@ fn trace_one<Q: RayQuery + ?Sized>(
 
     let cos0 = if es.n == Vec3::ZERO { 1.0 } else { es.n.dot(es.dir).abs() };
     let mut beta = es.radiance * (cos0 / (pdf_pos * es.pdf_dir.0));
+    let reference = super::light_roulette_reference(beta);
     let mut ray = if es.n == Vec3::ZERO { crate::geometry::Ray::new(es.p, es.dir, f32::INFINITY) } else { crate::geometry::spawn_ray(es.p, es.n, es.dir) };
     let first_dim = rng.dimension();
     let mut segments = 1u32;
@@ -145,7 +146,7 @@ fn trace_one<Q: RayQuery + ?Sized>(
             break;
         }
         segments += 1;
-        if !survives_roulette(params, segments, &mut beta, rng) {
+        if !survives_roulette(params, segments, &mut beta, reference, rng) {
             break;
         }
         ray = sp.spawn(wi);

@@ -112,7 +112,7 @@ pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Render
             break;
         }
         segments += 1;
-        if !survives_roulette(params, segments, &mut beta, rng) {
+        if !survives_roulette(params, segments, &mut beta, 1.0, rng) {
             break;
         }
         ray = sp.spawn(wi);

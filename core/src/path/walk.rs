@@ -6,7 +6,7 @@ use super::MAX_VERTICES;
 use super::vertex::{Vertex, VertexKind, infinite_light_density};
 use crate::bsdf::{TransportMode, shading_normal_correction};
 use crate::geometry::{Ray, RayQuery, spawn_ray};
-use crate::integrator::{Counters, RenderParams, survives_roulette};
+use crate::integrator::{Counters, RenderParams, light_roulette_reference, survives_roulette};
 use crate::math::{Frame, Vec2, Vec3};
 use crate::measure::{AreaPdf, VertexPdf};
 use crate::rng::SampleStream;
@@ -106,6 +106,7 @@ fn random_walk<Q: RayQuery + ?Sized>(
     path: &mut SubPath,
 ) {
     let first_dim = rng.dimension();
+    let reference = if mode == TransportMode::Importance { light_roulette_reference(beta) } else { 1.0 };
     loop {
         if path.len() >= max_vertices {
             if params.max_depth.0 < 0 {
@@ -167,7 +168,7 @@ fn random_walk<Q: RayQuery + ?Sized>(
         if bs.is_delta {
             path[n].delta = true;
         }
-        if !survives_roulette(params, (n + 1) as u32, &mut beta, rng) {
+        if !survives_roulette(params, (n + 1) as u32, &mut beta, reference, rng) {
             return;
         }
         ray = spawn_ray(hit.p, hit.ng, wi);
