@@ -191,6 +191,11 @@ pub struct RenderArgs {
     /// written beside it.
     #[arg(short, long, value_name = "FILE", default_value = "out.exr")]
     pub output: PathBuf,
+    /// Refuse a render whose estimated memory exceeds this many bytes (suffixes K, M, G,
+    /// T: binary) [default: the memory available: the smaller of MemAvailable and the
+    /// cgroup's remaining limit].
+    #[arg(long, value_name = "BYTES", value_parser = crate::memory::parse_size)]
+    pub memory_limit: Option<u64>,
 
     /// Exposure of the PNG in stops (the PNG is linear × 2^STOPS, clamped, sRGB-encoded;
     /// the EXR is never scaled).

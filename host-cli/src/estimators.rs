@@ -175,6 +175,32 @@ pub fn make_built(args: &RenderArgs) -> Result<Built, String> {
     Ok(Built { scene: r.prepared.name.clone(), max_depth: r.renderer.params().max_depth.0, file_spp: r.prepared.spp, renderer: Box::new(r) })
 }
 
+/// Refuse, before anything large is allocated, a render whose estimated memory exceeds
+/// `limit` or, without one, the memory available ([`crate::memory`]).
+pub fn check_memory(prepared: &PreparedScene, config: &EstimatorConfig, limit: Option<u64>) -> Result<(), String> {
+    let camera = &prepared.scene.camera;
+    let pixels = camera.width() as u64 * camera.height() as u64;
+    let estimate = config.memory_estimate(pixels.min(u32::MAX as u64) as u32);
+    let bytes = estimate.bytes.max(pixels * 36);
+    let (available, source) = match limit {
+        Some(l) => (Some(l), "--memory-limit"),
+        None => (crate::memory::available_bytes(), "available memory"),
+    };
+    match available {
+        Some(a) if bytes > a => Err(format!(
+            "{} would need about {} ({} at {}×{} is the largest part), more than the {} of {source}; lower {} or raise --memory-limit",
+            config.kind(),
+            crate::memory::human(bytes),
+            estimate.largest,
+            camera.width(),
+            camera.height(),
+            crate::memory::human(a),
+            estimate.lower
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// The renderer a `render` command asks for, its setup run and reported on stderr.
 pub fn make_core_renderer(args: &RenderArgs) -> Result<CoreRenderer, String> {
     let prepared = prepare(args)?;
@@ -183,6 +209,7 @@ pub fn make_core_renderer(args: &RenderArgs) -> Result<CoreRenderer, String> {
     }
     let max_depth = args.max_depth.or(prepared.max_depth).unwrap_or(-1);
     let config = args.cache.config_for(args.estimator);
+    check_memory(&prepared, &config, args.memory_limit)?;
     let r = CoreRenderer::with_config(prepared, config, max_depth, args.seed, args.thread_count())?;
     if let Renderer::Lvcbpt(l) = &r.renderer {
         eprintln!(

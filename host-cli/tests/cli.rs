@@ -55,6 +55,12 @@ fn bad_input_exits_one_with_a_message() {
         (&["render", "-e", "vcm", "--alpha", "1.5", "--spp", "1"], "alpha"),
         (&["render", "-e", "vcm", "--radius", "0.1", "--radius-scene", "0.01"], "cannot be used with"),
         (&["compare", "a.exr", "b.exr", "--region", "5,5,5,9"], "x0 < x1"),
+        // The memory check (issue 13): refused before any large allocation, naming what
+        // to lower (a 65536² film aborted with "memory allocation failed", rc 134).
+        (&["render", "-e", "vcm", "--memory-limit", "1M", "--spp", "1"], "lower --light-paths"),
+        (&["render", "--width", "65536", "--height", "65536", "--memory-limit", "1G"], "lower --width/--height"),
+        (&["render", "--memory-limit", "0"], "at least 1 byte"),
+        (&["render", "--memory-limit", "12Q"], "not a size"),
         // compare never overwrites an input.
         (&["compare", "a.exr", "b.exr", "--error-image", "a.exr"], "one of the images"),
     ] {

@@ -138,6 +138,54 @@ impl EstimatorConfig {
     }
 }
 
+/// What an estimator is expected to hold for one film, estimated before anything is
+/// allocated, so a host can refuse a render that cannot fit instead of aborting in the
+/// middle of it (the estimate, not a bound: light-path lengths are only known after
+/// tracing; 8 vertices per path are assumed, the suite's scenes average 3–25).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MemoryEstimate {
+    /// Estimated bytes: the film plus the estimator's per-pass stores and setup data.
+    pub bytes: u64,
+    /// The largest part, in words.
+    pub largest: &'static str,
+    /// What to lower to shrink it, as the command line spells it.
+    pub lower: &'static str,
+}
+
+/// Bytes per pixel of the film: f64 sums and the staged f32 camera sample.
+const FILM_BYTES_PER_PIXEL: u64 = 24 + 12;
+/// Assumed vertices per light path for the estimate.
+const VERTICES_PER_PATH: u64 = 8;
+
+impl EstimatorConfig {
+    /// The [`MemoryEstimate`] for a film of `pixels` pixels.
+    pub fn memory_estimate(&self, pixels: u32) -> MemoryEstimate {
+        let film = pixels as u64 * FILM_BYTES_PER_PIXEL;
+        let vertex = core::mem::size_of::<crate::path::Vertex>() as u64;
+        let (part, largest, lower) = match self {
+            Self::Pt | Self::Lt | Self::Bdpt => (0, "the film", "--width/--height"),
+            Self::Lvcbpt(c) => (c.light_paths_for(pixels) as u64 * VERTICES_PER_PATH * (vertex + 8), "the light paths of a pass", "--light-paths"),
+            Self::Spcbpt(c) => {
+                let paths = c.light_paths_for(pixels) as u64 * VERTICES_PER_PATH * (vertex + 32);
+                let dataset = c.dataset_for(pixels) as u64 * 2 * VERTICES_PER_PATH * 48;
+                let n = c.subspaces_for(c.dataset_for(pixels)) as u64;
+                let gamma = n * n * 4 * 2;
+                if dataset >= paths {
+                    (paths + dataset + gamma, "the training dataset", "--dataset")
+                } else {
+                    (paths + dataset + gamma, "the light paths of a pass", "--light-paths")
+                }
+            }
+            Self::Merging(_, c) => {
+                let photon = core::mem::size_of::<crate::integrator::vcm::Photon>() as u64 + 4 * 3 + 12 + 8;
+                (c.light_paths_for(pixels) as u64 * VERTICES_PER_PATH * (vertex + 8 + photon), "the light paths and photons of a pass", "--light-paths")
+            }
+        };
+        let (largest, lower) = if part >= film { (largest, lower) } else { ("the film", "--width/--height") };
+        MemoryEstimate { bytes: film + part, largest, lower }
+    }
+}
+
 /// A configuration value outside its allowed range.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ConfigError {
@@ -408,6 +456,15 @@ mod tests {
         ] {
             assert_eq!(c.validate().map_err(|e| e.field), Err(field));
         }
+    }
+
+    #[test]
+    fn memory_estimates_grow_with_what_they_name() {
+        let small = EstimatorKind::Vcm.default_config().memory_estimate(64 * 64);
+        let large = EstimatorKind::Vcm.default_config().memory_estimate(4096 * 4096);
+        assert!(large.bytes > 1000 * small.bytes && large.lower == "--light-paths");
+        let film = EstimatorKind::Pt.default_config().memory_estimate(u32::MAX);
+        assert_eq!((film.bytes, film.lower), (u32::MAX as u64 * 36, "--width/--height"));
     }
 
     #[test]

@@ -39,7 +39,9 @@ mod renderer;
 
 /// What every phase reads: the scene and the ray queries (defined with the scene).
 pub use crate::scene::Context;
-pub use config::{ConfigError, EstimatorConfig, EstimatorKind, LvcbptConfig, MAX_DATASET, MAX_LIGHT_PATHS, MergeMode, MergingConfig, SpcbptConfig};
+pub use config::{
+    ConfigError, EstimatorConfig, EstimatorKind, LvcbptConfig, MAX_DATASET, MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig, SpcbptConfig,
+};
 pub use film::Film;
 pub use renderer::Renderer;
 
