@@ -43,7 +43,7 @@ pub fn parse_size(text: &str) -> Result<u64, String> {
     };
     let v: f64 = number.parse().map_err(|_| format!("'{text}' is not a size: a number with an optional K, M, G or T suffix"))?;
     let bytes = v * scale as f64;
-    if bytes.is_finite() && bytes >= 1.0 && bytes < 1.8e19 { Ok(bytes as u64) } else { Err(format!("memory limit '{text}' must be at least 1 byte")) }
+    if (1.0..1.8e19).contains(&bytes) { Ok(bytes as u64) } else { Err(format!("memory limit '{text}' must be at least 1 byte")) }
 }
 
 /// `12345678` → `"11.8 MiB"`.
