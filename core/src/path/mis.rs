@@ -15,7 +15,7 @@ use crate::scene::Scene;
 /// pdf ratios treat 0 as 1 so Dirac vertices (density 0 both ways) pass through. Both
 /// densities of a ratio belong to the same vertex, so their measure cancels.
 #[inline]
-fn remap0(x: VertexPdf) -> f64 {
+pub(crate) fn remap0(x: VertexPdf) -> f64 {
     let x = x.value();
     if x != 0.0 { x as f64 } else { 1.0 }
 }
@@ -69,18 +69,8 @@ pub fn for_each_strategy_ratio<V: FnMut(usize, usize, f64)>(
     visit: &mut V,
 ) {
     // The strategy's own endpoints.
-    let light_at = |i: usize| -> &Vertex {
-        match sampled {
-            Some(v) if s == 1 && i == 0 => v,
-            _ => &light[i],
-        }
-    };
-    let camera_at = |i: usize| -> &Vertex {
-        match sampled {
-            Some(v) if t == 1 && i == 0 => v,
-            _ => &camera[i],
-        }
-    };
+    let light_at = |i: usize| strategy_vertex(light, s, sampled, i);
+    let camera_at = |i: usize| strategy_vertex(camera, t, sampled, i);
     let qs = (s > 0).then(|| light_at(s - 1));
     let qs_minus = (s > 1).then(|| light_at(s - 2));
     let pt = (t > 0).then(|| camera_at(t - 1));
@@ -149,7 +139,20 @@ pub fn for_each_strategy_ratio<V: FnMut(usize, usize, f64)>(
     }
 }
 
-fn is_delta_light(scene: &Scene, v: &Vertex) -> bool {
+/// Vertex `i` of a strategy's sub-path `path` of which it uses `n` vertices: `sampled`
+/// replaces the first one where n = 1 (the light point of s = 1, the camera of t = 1,
+/// resampled at connection time).
+#[inline]
+pub(crate) fn strategy_vertex<'a>(path: &'a [Vertex], n: usize, sampled: Option<&'a Vertex>, i: usize) -> &'a Vertex {
+    match sampled {
+        Some(v) if n == 1 && i == 0 => v,
+        _ => &path[i],
+    }
+}
+
+/// Is `v` a light no path can hit (point, spot, directional)? Strategies ending with an
+/// emission hit on it (s = 0) are impossible.
+pub(crate) fn is_delta_light(scene: &Scene, v: &Vertex) -> bool {
     match v.kind {
         VertexKind::Light(id) => scene.lights[id as usize].is_delta(),
         VertexKind::InfiniteLight => v.delta,

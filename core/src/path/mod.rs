@@ -26,7 +26,7 @@ use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 
 pub use connect::{Connection, LightPointSample, Weighted, connect, connect_light_source};
-pub use store::{CacheEntry, LightPaths, is_cacheable, trace_light_subpath};
+pub use store::{CacheEntry, LightPaths, cacheable_entries, is_cacheable, trace_light_subpath};
 pub use vertex::{Vertex, VertexKind};
 pub use walk::{SubPath, camera_subpath, light_subpath};
 

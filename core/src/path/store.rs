@@ -32,6 +32,11 @@ impl LightPaths {
     pub fn is_empty(&self) -> bool {
         self.starts.is_empty()
     }
+    /// Append one path.
+    pub fn push(&mut self, path: &[Vertex]) {
+        self.starts.push(self.vertices.len() as u32);
+        self.vertices.extend_from_slice(path);
+    }
     /// Append another store's paths (chunks merged in index order by the host).
     pub fn append(&mut self, other: &LightPaths) {
         let base = self.vertices.len() as u32;
@@ -65,7 +70,21 @@ impl CacheEntry {
     }
 }
 
-/// May light vertex `v` (not the light-source vertex) be cached for connections?
+/// Append to `out` an entry for every cacheable vertex of `paths` after the light
+/// source, in path order: LVCBPT's connection cache, VCM's photons.
+pub fn cacheable_entries(scene: &Scene, paths: &LightPaths, out: &mut Vec<CacheEntry>) {
+    for i in 0..paths.len() {
+        let start = paths.starts[i];
+        for (k, v) in paths.path(i).iter().enumerate().skip(1) {
+            if is_cacheable(scene, v) {
+                out.push(CacheEntry { start, s: k as u32 + 1 });
+            }
+        }
+    }
+}
+
+/// May light vertex `v` (not the light-source vertex) be cached for connections, or
+/// merged at (a non-Dirac surface point)?
 #[inline]
 pub fn is_cacheable(scene: &Scene, v: &Vertex) -> bool {
     v.kind == VertexKind::Surface && v.is_connectible(scene)

@@ -26,13 +26,13 @@
 //! still divides by its true selection probability, and the sum is unbiased.
 //!
 //! Each phase is a function over an index range writing into caller storage:
-//! [`trace_light_paths`] (vertices + t = 1 splats), [`build_cache`], [`render_pixels`].
+//! [`trace_light_paths`] (vertices + t = 1 splats), the cache
+//! ([`path::cacheable_entries`]), [`render_pixels`].
 
 mod phases;
 
 pub use phases::Lvcbpt;
 
-use alloc::vec::Vec;
 use core::ops::Range;
 
 use super::{Counters, RenderParams, Splat};
@@ -91,8 +91,7 @@ pub fn trace_light_paths<Q: RayQuery + ?Sized>(
     let ctx = Context { scene, tracer };
     for index in paths {
         let light = trace_light_subpath(scene, tracer, params, Stream::Light, index, pass, &mut counters);
-        out.starts.push(out.vertices.len() as u32);
-        out.vertices.extend_from_slice(&light);
+        out.push(&light);
         // (1, 1) is covered by (0, 2), as in BDPT.
         for s in 2..=light.len() {
             if !params.max_depth.allows(s as u32) {
@@ -123,18 +122,6 @@ fn strategy<Q: RayQuery + ?Sized>(
     let c = connect(ctx, light, camera, s, t, u, counters)?;
     let weight = mis_weight_counted(ctx.scene, light, camera, c.sampled.as_ref(), s, t, &|s2, t2| counts.count(s2, t2));
     Some(c.weighted(weight))
-}
-
-/// Append to `cache` every cacheable vertex of `paths` (in path order).
-pub fn build_cache(scene: &Scene, paths: &LightPaths, cache: &mut Vec<CacheEntry>) {
-    for i in 0..paths.len() {
-        let start = paths.starts[i];
-        for (k, v) in paths.path(i).iter().enumerate().skip(1) {
-            if is_cacheable(scene, v) {
-                cache.push(CacheEntry { start, s: k as u32 + 1 });
-            }
-        }
-    }
 }
 
 /// Number of cacheable vertices on light paths `paths` of the preprocessing stream

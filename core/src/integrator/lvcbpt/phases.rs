@@ -8,7 +8,7 @@
 
 use alloc::vec::Vec;
 
-use super::{PassInputs, StrategyCounts, build_cache, count_cacheable, render_pixels, trace_light_paths};
+use super::{PassInputs, StrategyCounts, count_cacheable, render_pixels, trace_light_paths};
 use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;
 use crate::path::{CacheEntry, LightPaths};
@@ -107,7 +107,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Lvcbpt {
                     }
                     film.push_splats(&out.splats);
                 }
-                build_cache(ctx.scene, &self.paths, &mut self.cache);
+                crate::path::cacheable_entries(ctx.scene, &self.paths, &mut self.cache);
             }
             _ => {
                 for out in outputs.iter() {

@@ -363,8 +363,7 @@ pub fn trace_light_paths<Q: RayQuery + ?Sized>(
     let mut counters = Counters::default();
     for index in paths {
         let light = trace_light_subpath(scene, tracer, params, Stream::Light, index, pass, &mut counters);
-        out.starts.push(out.vertices.len() as u32);
-        out.vertices.extend_from_slice(&light);
+        out.push(&light);
         memoize_light_path(scene, model, &light, memo);
     }
     counters

@@ -31,8 +31,12 @@
 //! photon mapping's.
 
 use crate::measure::{SolidAnglePdf, VertexPdf};
-use crate::path::{Vertex, VertexKind};
+use crate::path::Vertex;
+use crate::path::mis::{is_delta_light, remap0, strategy_vertex};
 use crate::scene::Scene;
+
+/// May a path be merged at `v`? The vertices LVCBPT caches: non-Dirac surface points.
+pub use crate::path::is_cacheable as mergeable;
 
 /// Sample counts, per camera sample, of the techniques of one pass.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,33 +78,13 @@ pub enum Side {
     Camera,
 }
 
-#[inline]
-fn remap0(x: VertexPdf) -> f64 {
-    let x = x.value();
-    if x != 0.0 { x as f64 } else { 1.0 }
-}
-
-/// May a path be merged at `v` (a non-Dirac surface point)?
-#[inline]
-pub fn mergeable(scene: &Scene, v: &Vertex) -> bool {
-    v.kind == VertexKind::Surface && v.is_connectible(scene)
-}
-
-fn light_is_hittable(scene: &Scene, v: &Vertex) -> bool {
-    match v.kind {
-        VertexKind::Light(id) => !scene.lights[id as usize].is_delta(),
-        VertexKind::InfiniteLight => !v.delta,
-        _ => true,
-    }
-}
-
 /// Count × validity of the technique that cuts `path` before vertex `i` (i vertices
 /// from this side), for a path whose junction lies beyond i (so the technique uses a
 /// connection or, on the light side at i ≤ 1, emission or next-event estimation).
 fn cut(scene: &Scene, path: &[Vertex], side: Side, tech: &Techniques, i: usize) -> f64 {
     match side {
         Side::Light => {
-            let ok = if i == 0 { light_is_hittable(scene, &path[0]) } else { !(path[i].delta || (i > 1 && path[i - 1].delta)) };
+            let ok = if i == 0 { !is_delta_light(scene, &path[0]) } else { !(path[i].delta || (i > 1 && path[i - 1].delta)) };
             if ok { tech.count(i, 2) } else { 0.0 }
         }
         Side::Camera => {
@@ -121,10 +105,7 @@ pub fn prefix(scene: &Scene, path: &[Vertex], side: Side, tech: &Techniques, out
         out[i] = if i + 1 == n {
             f64::NAN
         } else if i == 0 {
-            match side {
-                Side::Light => cut(scene, path, side, tech, 0),
-                Side::Camera => 0.0,
-            }
+            cut(scene, path, side, tech, 0)
         } else {
             let prev = &path[i - 1];
             // Merging at an endpoint (the light source, the camera) is no technique.
@@ -183,18 +164,8 @@ pub fn connection_weight(
     if !(own > 0.0) {
         return 0.0;
     }
-    let light_at = |i: usize| -> &Vertex {
-        match sampled {
-            Some(v) if s == 1 && i == 0 => v,
-            _ => &light[i],
-        }
-    };
-    let camera_at = |i: usize| -> &Vertex {
-        match sampled {
-            Some(v) if t == 1 && i == 0 => v,
-            _ => &camera[i],
-        }
-    };
+    let light_at = |i: usize| strategy_vertex(light, s, sampled, i);
+    let camera_at = |i: usize| strategy_vertex(camera, t, sampled, i);
     let pt = camera_at(t - 1);
     let pt_minus = (t > 1).then(|| camera_at(t - 2));
     let sum = if s == 0 {
@@ -214,7 +185,7 @@ pub fn connection_weight(
         let pt_rev = qs.pdf(scene, qs_minus, pt);
         let qs_rev = pt.pdf(scene, pt_minus, qs);
         let light_cut = if s == 1 {
-            if light_is_hittable(scene, qs) { tech.count(0, t + 1) } else { 0.0 }
+            if is_delta_light(scene, qs) { 0.0 } else { tech.count(0, t + 1) }
         } else if s > 2 && qs_minus.is_some_and(|q| q.delta) {
             0.0
         } else {
@@ -250,61 +221,6 @@ pub struct MergeDensities {
     pub toward_light: SolidAnglePdf,
     /// p(ω_photon → ω_o): the light side continuing toward the camera path.
     pub toward_camera: SolidAnglePdf,
-}
-
-/// The weight of merging light vertex `light[j]` (j ≥ 1, prefix sums `light_b`) at
-/// camera vertex `camera[t − 1]` (t ≥ 2, prefix sums `camera_b`), with the camera
-/// vertex's BSDF densities `d`.
-pub fn merge_weight(
-    scene: &Scene,
-    tech: &Techniques,
-    light: &[Vertex],
-    light_b: &[f64],
-    j: usize,
-    camera: &[Vertex],
-    camera_b: &[f64],
-    t: usize,
-    d: MergeDensities,
-) -> f32 {
-    if !(tech.merge > 0.0) || j == 0 || t < 2 {
-        return 0.0;
-    }
-    let (x, x_prev) = (&light[j], &light[j - 1]);
-    let (y, y_prev) = (&camera[t - 1], &camera[t - 2]);
-    // The merged path is x₀ … x_j, z_{t−2} … z₀ with x_j standing for z_{t−1}: the camera
-    // side's density of x_j is that of z_{t−1}.
-    let x_rev = y.pdf_fwd;
-    let light_side = Junction {
-        vertex: x,
-        rev: x_rev,
-        merge: true,
-        cut: if j > 1 && x_prev.delta { 0.0 } else { tech.count(j, t) },
-        prev: Some((x_prev, x.convert_density(d.toward_light, x_prev), light_b[j - 1], j > 1)),
-    };
-    // The technique connecting x_j to z_{t−2}, relative to which both sums are taken.
-    let base = if y_prev.delta { 0.0 } else { tech.count(j + 1, t - 1) };
-    let camera_side = if t >= 3 {
-        let y_prev_rev = y.convert_density(d.toward_camera, y_prev);
-        // z_{t−3}'s density from z_{t−2} given z_{t−1}: stored by the walk.
-        let prev = Some((&camera[t - 3], camera[t - 3].pdf_rev, camera_b[t - 3], t > 3));
-        let cut = if camera[t - 3].delta || y_prev.delta { 0.0 } else { tech.count(j + 2, t - 2) };
-        Junction { vertex: y_prev, rev: y_prev_rev, merge: mergeable(scene, y_prev), cut, prev }
-    } else {
-        // z_{t−2} is the camera: no technique has fewer camera vertices.
-        Junction { vertex: y_prev, rev: VertexPdf::ZERO, merge: false, cut: 0.0, prev: None }
-    };
-    let own = tech.merge * remap0(x_rev);
-    let sum = base + side_sum(scene, tech, &light_side) + if t >= 3 { side_sum(scene, tech, &camera_side) } else { 0.0 };
-    // `sum` includes the merge itself (the light side's own-merge term).
-    let w = (own / sum) as f32;
-    if w.is_finite() { w.clamp(0.0, 1.0) } else { 0.0 }
-}
-
-/// Whether camera vertex index `t − 1` may merge under `tech` (a hook for PPM, which
-/// merges at the first non-Dirac vertex only).
-#[inline]
-pub fn camera_vertex_merges(scene: &Scene, camera: &[Vertex], t: usize) -> bool {
-    t >= 2 && mergeable(scene, &camera[t - 1])
 }
 
 /// A photon's part of [`merge_weight`], computed once per pass: the light-side sum is
@@ -375,7 +291,31 @@ impl CameraSums {
     }
 }
 
-/// [`merge_weight`] from the precomputed sums: O(1) and no vertex reads.
+/// The weight of merging light vertex `light[j]` (j ≥ 1, prefix sums `light_b`) at
+/// camera vertex `camera[t − 1]` (t ≥ 2, prefix sums `camera_b`), with the camera
+/// vertex's BSDF densities `d`: [`merge_weight_from_sums`] of the two sides' sums (the
+/// estimator computes them once per photon and per camera vertex).
+#[allow(clippy::too_many_arguments)]
+pub fn merge_weight(
+    scene: &Scene,
+    tech: &Techniques,
+    light: &[Vertex],
+    light_b: &[f64],
+    j: usize,
+    camera: &[Vertex],
+    camera_b: &[f64],
+    t: usize,
+    d: MergeDensities,
+) -> f32 {
+    if j == 0 || t < 2 {
+        return 0.0;
+    }
+    merge_weight_from_sums(tech, &PhotonSums::new(scene, tech, light, light_b, j), &CameraSums::new(scene, tech, camera, camera_b, t), d)
+}
+
+/// The merge weight from the precomputed sums: O(1) and no vertex reads. The merged
+/// path is x₀ … x_j, z_{t−2} … z₀ with x_j standing for z_{t−1} (its camera-side density
+/// is z_{t−1}'s); it is taken relative to the technique joining x_j to z_{t−2}.
 #[inline]
 pub fn merge_weight_from_sums(tech: &Techniques, photon: &PhotonSums, camera: &CameraSums, d: MergeDensities) -> f32 {
     let eta = tech.merge;

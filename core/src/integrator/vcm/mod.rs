@@ -106,8 +106,7 @@ pub fn trace_light_paths<Q: RayQuery + ?Sized>(
         let light = trace_light_subpath(scene, tracer, params, Stream::Light, index, pass, &mut counters);
         let b = &mut b[..light.len()];
         prefix(scene, &light, Side::Light, tech, b);
-        out.starts.push(out.vertices.len() as u32);
-        out.vertices.extend_from_slice(&light);
+        out.push(&light);
         prefix_out.extend_from_slice(b);
         if !(tech.light_tracing > 0.0) {
             continue;
@@ -145,29 +144,17 @@ pub struct Photon {
 impl Photon {
     /// The record of photon `e` of `paths` (prefix sums `prefix`).
     pub fn new(scene: &Scene, tech: &Techniques, paths: &LightPaths, prefix: &[f64], e: &CacheEntry) -> Self {
-        let (start, j) = (e.start as usize, e.s as usize - 1);
-        let light = &paths.vertices[start..start + j + 1];
+        let (light, j) = (e.subpath(paths), e.s as usize - 1);
         let x = &light[j];
-        Self { wo: x.wo, beta: x.beta, n: x.ng, depth: j as u32, sums: PhotonSums::new(scene, tech, light, &prefix[start..start + j + 1], j) }
-    }
-}
-
-/// Append to `photons` every mergeable light vertex after the light source.
-pub fn collect_photons(scene: &Scene, paths: &LightPaths, photons: &mut Vec<CacheEntry>) {
-    for i in 0..paths.len() {
-        let start = paths.starts[i];
-        for (k, v) in paths.path(i).iter().enumerate().skip(1) {
-            if mergeable(scene, v) {
-                photons.push(CacheEntry { start, s: k as u32 + 1 });
-            }
-        }
+        let light_b = &prefix[e.start as usize..][..light.len()];
+        Self { wo: x.wo, beta: x.beta, n: x.ng, depth: j as u32, sums: PhotonSums::new(scene, tech, light, light_b, j) }
     }
 }
 
 /// The end point of photon `e`.
 #[inline]
 pub fn photon_position(paths: &LightPaths, e: &CacheEntry) -> crate::math::Vec3 {
-    paths.vertices[(e.start + e.s - 1) as usize].p
+    e.subpath(paths)[e.s as usize - 1].p
 }
 
 /// One sample of `mode` for each pixel in `pixels` of pass `pass` into `out`.
@@ -194,14 +181,12 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
         let camera_b = &mut camera_b[..camera.len()];
         prefix(scene, &camera, Side::Camera, tech, camera_b);
         // The pixel's own light path, for connections.
-        let own = if inputs.paths.is_empty() { None } else { Some((pixel % inputs.light_paths.max(1)) as usize).filter(|&i| i < inputs.paths.len()) };
-        let (light, light_b): (&[Vertex], &[f64]) = match own {
-            Some(i) => {
-                let start = inputs.paths.starts[i] as usize;
-                let len = inputs.paths.path(i).len();
-                (&inputs.paths.vertices[start..start + len], &inputs.prefix[start..start + len])
-            }
-            None => (&[], &[]),
+        let own = (pixel % inputs.light_paths.max(1)) as usize;
+        let (light, light_b): (&[Vertex], &[f64]) = if own < inputs.paths.len() {
+            let light = inputs.paths.path(own);
+            (light, &inputs.prefix[inputs.paths.starts[own] as usize..][..light.len()])
+        } else {
+            (&[], &[])
         };
         let mut aux = SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, 0);
         let mut l = Rgb::ZERO;

@@ -9,7 +9,7 @@
 use alloc::vec::Vec;
 
 use super::mis::Techniques;
-use super::{MergeMode, PassInputs, Photon, collect_photons, photon_position, render_pixels, trace_light_paths};
+use super::{MergeMode, PassInputs, Photon, photon_position, render_pixels, trace_light_paths};
 use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;
 use crate::merge::{Footprint, HashGrid, progressive_radius};
@@ -164,7 +164,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
                     }
                     film.push_splats(&out.splats);
                 }
-                collect_photons(ctx.scene, &self.paths, &mut self.photons);
+                crate::path::cacheable_entries(ctx.scene, &self.paths, &mut self.photons);
                 let paths = &self.paths;
                 let pass = pass.unwrap_or(0);
                 self.grid.build(self.photons.iter().map(|e| photon_position(paths, e)), self.radius(pass));
