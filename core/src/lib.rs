@@ -29,6 +29,7 @@ pub mod path;
 pub mod render;
 pub mod rng;
 pub mod scene;
+pub mod segment;
 pub mod shapes;
 pub mod spectrum;
 pub mod subspace;

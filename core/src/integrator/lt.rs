@@ -41,13 +41,13 @@ pub fn trace_paths<Q: RayQuery + ?Sized>(
     for path in paths {
         let mut rng = SampleStream::for_sample(params.seed, Stream::Light, path, pass, 0);
         let mut sky = SampleStream::for_sample(params.seed, Stream::Aux, path, pass, SKY_KEY);
-        trace_one(scene, tracer, params, &mut rng, &mut sky, &mut counters, splat);
+        trace_one(scene, tracer, params, &mut rng, &mut sky, None, &mut counters, splat);
     }
     counters
 }
 
 /// Last key of the visible-sky stream, keeping it apart from every other `Stream::Aux` stream.
-const SKY_KEY: u32 = 0x5c00;
+pub(crate) const SKY_KEY: u32 = 0x5c00;
 
 /// The directly visible lights at infinity, from one camera ray through a film position
 /// uniform over the whole film (see the module notes).
@@ -65,12 +65,18 @@ fn visible_sky<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, rng: &mut Sample
     }
 }
 
-fn trace_one<Q: RayQuery + ?Sized>(
+/// One light path of LT, or of segment LT ([`crate::segment::slt`]) when `junctions` is
+/// given: then at every surface the path reaches, the next segment starts at a point the
+/// kernel draws around it, and the shading point (BSDF, camera connection, continuation)
+/// moves there, which is where eq. (6) evaluates f_r in light order.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn trace_one<Q: RayQuery + ?Sized>(
     scene: &Scene,
     tracer: &Q,
     params: &RenderParams,
     rng: &mut SampleStream,
     sky_rng: &mut SampleStream,
+    mut junctions: Option<&mut crate::segment::Junctions>,
     counters: &mut Counters,
     splat: &mut dyn FnMut(Splat),
 ) {
@@ -111,7 +117,15 @@ fn trace_one<Q: RayQuery + ?Sized>(
     let mut segments = 1u32;
     loop {
         counters.rays += 1;
-        let Some(hit) = tracer.intersect(&ray) else { break };
+        let Some(arrived) = tracer.intersect(&ray) else { break };
+        // The next segment starts here, or where the kernel puts it.
+        let hit = match junctions.as_deref_mut() {
+            Some(j) => {
+                counters.rays += 1;
+                *j.sample(tracer, &arrived, -ray.dir).moved().unwrap_or(&arrived)
+            }
+            None => arrived,
+        };
         let sp = SurfacePoint::new(hit, -ray.dir);
         let material = sp.material(scene);
         rng.set_dimension(first_dim + segments * DIMS_PER_BOUNCE);

@@ -13,10 +13,11 @@ use core::ops::Range;
 
 use super::{Counters, RenderParams, SurfacePoint, survives_roulette};
 use crate::bsdf::TransportMode;
-use crate::geometry::{Ray, RayQuery};
+use crate::geometry::{Ray, RayQuery, SurfaceHit, spawn_ray, spawn_ray_to};
 use crate::math::{Vec2, Vec3};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
+use crate::segment::{Junctions, KernelSample, throughput_cos};
 use crate::spectrum::Rgb;
 
 /// Random dimensions used per bounce (light choice 1, light point 2, lobe 1, direction 2, roulette 1).
@@ -49,7 +50,24 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &R
 }
 
 /// Radiance arriving along `ray` (a camera ray), estimated by one path.
-pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, mut ray: Ray, rng: &mut SampleStream, counters: &mut Counters) -> Rgb {
+pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, ray: Ray, rng: &mut SampleStream, counters: &mut Counters) -> Rgb {
+    walk(scene, tracer, params, ray, rng, None, counters)
+}
+
+/// The camera walk of PT and of segment PT ([`crate::segment::spt`]): with `junctions`
+/// `None` (the Dirac kernel) each segment starts where the previous one ended, which is
+/// path tracing; otherwise each next segment starts at a point the kernel draws around
+/// the end of the previous one (eq. 15's p_K), from a random stream of its own, so the
+/// walk's own random numbers keep PT's layout.
+pub(crate) fn walk<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    mut ray: Ray,
+    rng: &mut SampleStream,
+    mut junctions: Option<&mut Junctions>,
+    counters: &mut Counters,
+) -> Rgb {
     let mut l = Rgb::ZERO;
     // max_depth 0 allows no segment at all: not even the camera ray (black, as Mitsuba).
     if !params.max_depth.allows(1) {
@@ -92,11 +110,21 @@ pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Render
         let material = sp.material(scene);
         let wo_local = sp.frame.to_local(sp.wo);
 
+        // Start the next segment: at this vertex, or where the kernel puts it.
+        let moved = match junctions.as_deref_mut() {
+            Some(j) => {
+                counters.rays += 1;
+                j.sample(tracer, &hit, sp.wo)
+            }
+            None => KernelSample::AtEnd,
+        };
+        let start = moved.moved();
+
         // Sample a light (next-event estimation) unless the BSDF is all Dirac.
         let u_light = rng.next_f32();
         let u_point = rng.next_2d();
         if !material.is_delta() {
-            l += beta * next_event(scene, tracer, params, &sp, u_light, u_point, counters);
+            l += beta * next_event(scene, tracer, params, &sp, start, u_light, u_point, counters);
         }
 
         // Sample the BSDF to continue the path.
@@ -107,7 +135,12 @@ pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Render
         if !bs.pdf.is_positive() {
             break;
         }
-        beta *= bs.f * (bs.wi.z.abs() / bs.pdf.0);
+        // f_r |cos| / p_ω, the cosine at the segment's start (eq. 6, 15).
+        let cos = match start {
+            None => bs.wi.z.abs(),
+            Some(x) => x.ns.dot(wi).abs(),
+        };
+        beta *= bs.f * (cos / bs.pdf.0);
         if beta.is_black() || !beta.is_finite() {
             break;
         }
@@ -115,7 +148,10 @@ pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Render
         if !survives_roulette(params, segments, &mut beta, 1.0, rng) {
             break;
         }
-        ray = sp.spawn(wi);
+        ray = match start {
+            None => sp.spawn(wi),
+            Some(x) => spawn_ray(x.p, x.ng, wi),
+        };
         prev = Some(PrevBounce { origin: ray.origin, bsdf_pdf: bs.pdf.0, is_delta: bs.is_delta });
     }
     l
@@ -138,11 +174,15 @@ fn emission_weight(params: &RenderParams, prev: Option<PrevBounce>, light_pdf: i
 
 /// One light sample from `sp`: choose a light ∝ power, sample a point on it, trace the
 /// shadow ray, weight against BSDF sampling. Returns the weighted contribution (without β).
+/// With a kernel-moved `start` (segment PT) the light is sampled from there, the BSDF is
+/// still the one of `sp` (eq. 6) and the cosine the one at `start`.
+#[allow(clippy::too_many_arguments)]
 fn next_event<Q: RayQuery + ?Sized>(
     scene: &Scene,
     tracer: &Q,
     params: &RenderParams,
     sp: &SurfacePoint,
+    start: Option<&SurfaceHit>,
     u_light: f32,
     u_point: Vec2,
     counters: &mut Counters,
@@ -151,16 +191,25 @@ fn next_event<Q: RayQuery + ?Sized>(
     let chosen = table.sample(u_light);
     let light = &scene.lights[chosen.index];
     // Seen from where reflected rays start (see `SurfacePoint::reflection_origin`).
-    let Some(ls) = light.sample_li(sp.reflection_origin(), u_point) else { return Rgb::ZERO };
+    let origin = match start {
+        None => sp.reflection_origin(),
+        Some(x) => spawn_ray(x.p, x.ng, sp.wo).origin,
+    };
+    let Some(ls) = light.sample_li(origin, u_point) else { return Rgb::ZERO };
     if !ls.pdf.is_positive() || ls.radiance.is_black() {
         return Rgb::ZERO;
     }
-    let f = sp.f_cos(scene, ls.wi, TransportMode::Radiance);
+    let f = throughput_cos(scene, sp, start, ls.wi, TransportMode::Radiance);
     if f.is_black() {
         return Rgb::ZERO;
     }
     counters.rays += 1;
-    let shadow = if ls.dist.is_finite() { sp.spawn_to(ls.p, ls.n) } else { sp.spawn(ls.wi) };
+    let shadow = match (start, ls.dist.is_finite()) {
+        (None, true) => sp.spawn_to(ls.p, ls.n),
+        (None, false) => sp.spawn(ls.wi),
+        (Some(x), true) => spawn_ray_to(x.p, x.ng, ls.p, ls.n),
+        (Some(x), false) => spawn_ray(x.p, x.ng, ls.wi),
+    };
     if tracer.occluded(&shadow) {
         return Rgb::ZERO;
     }

@@ -1,0 +1,117 @@
+//! The kernel K(s_i, s_{i+1}) that joins two segments (eq. 5): how the start x_{i+1} of
+//! the next segment is spread around the end y_i of the previous one.
+//!
+//! - **Dirac**: x_{i+1} = y_i. The segment path is an ordinary path (eq. 1).
+//! - **Disk** of radius r: a point d uniform on the disk of radius r in the tangent plane
+//!   of y_i (area density 1/(πr²)), then the first surface below it, found by a ray from
+//!   d + r·n toward −n (n: y_i's geometric normal on the side the path arrived from) over
+//!   a length 2r. On a plane this is exactly the uniform disk kernel,
+//!   K = 1/(πr²) = (∫_{𝒦(y_i)} dx)⁻¹ (§3.1); on a curved or folded surface the density at
+//!   x is |n_x·n|/(πr²) over the points that ray finds first, and where the ray finds
+//!   nothing (beyond an edge) x_{i+1} = y_i. So K is exactly what is sampled,
+//!   ∫ K dx_{i+1} = 1 holds for every y_i (the miss mass sits on y_i), and a sequential
+//!   sampler's K / p_K is 1. The kernel depends on the side of arrival, which eq. (4)
+//!   allows (K is a function of two segments, not of two points).
+//!
+//! [`Kernel::density`] evaluates the continuous part for a given x (for the brute-force
+//! tests and for estimators that reuse segments across kernels); it does not test the
+//! first-hit condition, which holds on the planar neighbourhoods it is used on.
+
+use crate::geometry::{Ray, RayQuery, SurfaceHit};
+use crate::math::{Frame, Vec2, Vec3};
+use crate::measure::AreaPdf;
+use crate::warp::sample_concentric_disk;
+
+/// The kernel joining consecutive segments.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Kernel {
+    /// x_{i+1} = y_i: the vertex formulation.
+    Dirac,
+    /// Uniform over the surface within a disk of this radius around y_i.
+    Disk { radius: f32 },
+}
+
+/// Where the next segment starts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum KernelSample {
+    /// At y_i itself (the Dirac kernel, or the disk kernel's miss mass).
+    AtEnd,
+    /// At another surface point within the kernel's support.
+    Moved(SurfaceHit),
+}
+
+impl KernelSample {
+    /// The moved start, if any.
+    #[inline]
+    pub fn moved(&self) -> Option<&SurfaceHit> {
+        match self {
+            Self::AtEnd => None,
+            Self::Moved(h) => Some(h),
+        }
+    }
+}
+
+impl Kernel {
+    /// Does sampling the kernel need random numbers (and rays)?
+    #[inline]
+    pub fn is_dirac(&self) -> bool {
+        matches!(self, Self::Dirac)
+    }
+
+    /// The side normal: y's geometric normal turned toward `toward` (the direction back
+    /// along the arriving segment).
+    #[inline]
+    fn side(y: &SurfaceHit, toward: Vec3) -> Vec3 {
+        if y.ng.dot(toward) < 0.0 { -y.ng } else { y.ng }
+    }
+
+    /// Sample x_{i+1} around `y` (= y_i), the path having arrived from direction
+    /// `toward` (unit, pointing from y_i back to x_i), with `u` uniform on [0, 1)².
+    pub fn sample<Q: RayQuery + ?Sized>(&self, tracer: &Q, y: &SurfaceHit, toward: Vec3, u: Vec2) -> KernelSample {
+        let Self::Disk { radius } = *self else { return KernelSample::AtEnd };
+        let n = Self::side(y, toward);
+        let frame = Frame::from_normal(n);
+        let d = sample_concentric_disk(u) * radius;
+        let origin = y.p + frame.to_world(Vec3::new(d.x, d.y, 0.0)) + n * radius;
+        match tracer.intersect(&Ray::new(origin, -n, 2.0 * radius)) {
+            Some(hit) => KernelSample::Moved(hit),
+            None => KernelSample::AtEnd,
+        }
+    }
+
+    /// Continuous density of x (position `x`, geometric normal `nx`) around `y` for a path
+    /// that arrived from `toward`, per unit area at x: |n_x · n| / (π r²) inside the
+    /// projected disk and within r of the tangent plane, else 0. The Dirac kernel has no
+    /// continuous part (returns 0).
+    pub fn density(&self, y: &SurfaceHit, toward: Vec3, x: Vec3, nx: Vec3) -> AreaPdf {
+        let Self::Disk { radius } = *self else { return AreaPdf::ZERO };
+        let n = Self::side(y, toward);
+        let d = x - y.p;
+        let h = d.dot(n);
+        let tangential = d - n * h;
+        if tangential.length_squared() >= radius * radius || h.abs() > radius {
+            return AreaPdf::ZERO;
+        }
+        AreaPdf(nx.dot(n).abs() / (core::f32::consts::PI * radius * radius))
+    }
+}
+
+/// The kernel with the random stream its samples come from: one per camera or light
+/// path, kept apart from the path's own stream so that the walk's random-number layout is
+/// the vertex estimator's.
+#[derive(Clone, Debug)]
+pub struct Junctions {
+    pub kernel: Kernel,
+    rng: crate::rng::SampleStream,
+}
+
+impl Junctions {
+    pub fn new(kernel: Kernel, rng: crate::rng::SampleStream) -> Self {
+        Self { kernel, rng }
+    }
+    /// The start of the next segment around `y`, the path having arrived from `toward`.
+    pub fn sample<Q: RayQuery + ?Sized>(&mut self, tracer: &Q, y: &SurfaceHit, toward: Vec3) -> KernelSample {
+        let u = self.rng.next_2d();
+        self.kernel.sample(tracer, y, toward, u)
+    }
+}
