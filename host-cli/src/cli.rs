@@ -125,7 +125,7 @@ fn parse_region(text: &str) -> Result<[u32; 4], String> {
 use ember_core::merge::RadiusRule;
 /// The light-transport algorithm: the core's one list of estimators.
 pub use ember_core::render::EstimatorKind;
-use ember_core::render::{EstimatorConfig, LvcbptConfig, MergingConfig, SpcbptConfig};
+use ember_core::render::{EstimatorConfig, KernelChoice, LvcbptConfig, MergingConfig, SegmentConfig, SpcbptConfig};
 
 /// Parses an estimator name; `--help` lists each with its summary.
 fn estimator_parser() -> impl clap::builder::TypedValueParser<Value = EstimatorKind> {
@@ -251,7 +251,13 @@ pub struct CacheArgs {
     /// SPCBPT: light paths estimating Q per light subspace, M' [default: min(2000000, 2·W·H)].
     #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..))]
     pub q_paths: Option<u32>,
-    /// PPM/BPM/VCM: initial merging radius r₀ in scene units [default: 4 pixel footprints].
+    /// SPT/SLT: the kernel joining consecutive segments: dirac (x_{i+1} = y_i, the vertex
+    /// formulation: spt = pt, slt = lt) or disk (uniform over the surface within a disk of
+    /// the radius below around y_i; its radius stays fixed over passes).
+    #[arg(long, value_name = "KERNEL", value_parser = ["dirac", "disk"], default_value = "dirac")]
+    pub kernel: String,
+    /// PPM/BPM/VCM: initial merging radius r₀ in scene units; SPT/SLT: the disk kernel's
+    /// radius [default: 4 pixel footprints].
     #[arg(long, value_name = "R", allow_negative_numbers = true, conflicts_with_all = ["radius_footprints", "radius_scene"])]
     pub radius: Option<f32>,
     /// PPM/BPM/VCM: r₀ as a multiple of the mean pixel footprint (hit distance × pixel
@@ -282,6 +288,7 @@ impl Default for CacheArgs {
             k_d: d.k_d,
             light_source_share: d.light_source_share,
             q_paths: d.q_paths,
+            kernel: "dirac".into(),
             radius: None,
             radius_footprints: None,
             radius_scene: None,
@@ -312,15 +319,23 @@ impl CacheArgs {
             q_paths: self.q_paths,
         }
     }
-    /// The merging estimators' configuration from these options.
-    pub fn merging(&self) -> MergingConfig {
-        let radius = match (self.radius, self.radius_footprints, self.radius_scene) {
+    /// The radius rule from --radius, --radius-footprints or --radius-scene.
+    fn radius_rule(&self) -> RadiusRule {
+        match (self.radius, self.radius_footprints, self.radius_scene) {
             (Some(r), _, _) => RadiusRule::Absolute(r),
             (_, Some(k), _) => RadiusRule::Footprints(k),
             (_, _, Some(f)) => RadiusRule::SceneFraction(f),
-            _ => MergingConfig::DEFAULT.radius,
-        };
-        MergingConfig { light_paths: self.light_paths, radius, alpha: self.alpha, ..MergingConfig::DEFAULT }
+            _ => RadiusRule::DEFAULT,
+        }
+    }
+    /// The merging estimators' configuration from these options.
+    pub fn merging(&self) -> MergingConfig {
+        MergingConfig { light_paths: self.light_paths, radius: self.radius_rule(), alpha: self.alpha, ..MergingConfig::DEFAULT }
+    }
+    /// The segment estimators' configuration from these options.
+    pub fn segment(&self) -> SegmentConfig {
+        let kernel = if self.kernel == "disk" { KernelChoice::Disk } else { KernelChoice::Dirac };
+        SegmentConfig { kernel, radius: self.radius_rule() }
     }
     /// The configuration of `estimator` (these options apply to the cache-based and
     /// merging estimators only).
@@ -329,6 +344,7 @@ impl CacheArgs {
             (EstimatorKind::Lvcbpt, _) => EstimatorConfig::Lvcbpt(self.lvcbpt()),
             (EstimatorKind::Spcbpt, _) => EstimatorConfig::Spcbpt(self.spcbpt()),
             (_, EstimatorConfig::Merging(mode, _)) => EstimatorConfig::Merging(mode, self.merging()),
+            (_, EstimatorConfig::Segment(algorithm, _)) => EstimatorConfig::Segment(algorithm, self.segment()),
             (_, other) => other,
         }
     }

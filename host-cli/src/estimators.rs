@@ -158,6 +158,10 @@ impl CoreRenderer {
                     m.grid.radius()
                 )]
             }
+            Renderer::Segment(s) => match s.kernel {
+                ember_core::segment::Kernel::Disk { radius } => vec![format!("{:<10} kernel: disk of radius {radius:.4e}", self.renderer.kind().name())],
+                ember_core::segment::Kernel::Dirac => vec![format!("{:<10} kernel: dirac", self.renderer.kind().name())],
+            },
             Renderer::OnePhase(_) => Vec::new(),
         }
     }

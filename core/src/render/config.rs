@@ -30,11 +30,17 @@ pub enum EstimatorKind {
     /// Vertex connection and merging (UPS): BDPT's connections and every merge under
     /// one balance heuristic (Georgiev et al. 2012).
     Vcm,
+    /// Segment path tracing (Wang, West, Hachisuka 2025): the sequential segment sampler
+    /// from the camera with a kernel between segments, light-sampled last segment by MIS.
+    Spt,
+    /// Segment light tracing: the sequential segment sampler from the lights with a kernel
+    /// between segments, last segment to the pinhole.
+    Slt,
 }
 
 impl EstimatorKind {
     /// Every estimator, in listing order (its index is the browser's and the C ABI's id).
-    pub const ALL: [EstimatorKind; 8] = [Self::Pt, Self::Lt, Self::Bdpt, Self::Lvcbpt, Self::Spcbpt, Self::Ppm, Self::Bpm, Self::Vcm];
+    pub const ALL: [EstimatorKind; 10] = [Self::Pt, Self::Lt, Self::Bdpt, Self::Lvcbpt, Self::Spcbpt, Self::Ppm, Self::Bpm, Self::Vcm, Self::Spt, Self::Slt];
 
     /// The name as typed on a command line.
     pub fn name(self) -> &'static str {
@@ -47,6 +53,8 @@ impl EstimatorKind {
             Self::Ppm => "ppm",
             Self::Bpm => "bpm",
             Self::Vcm => "vcm",
+            Self::Spt => "spt",
+            Self::Slt => "slt",
         }
     }
 
@@ -61,6 +69,8 @@ impl EstimatorKind {
             Self::Ppm => "progressive photon mapping: photons merged at the first non-specular camera vertex, shrinking radius",
             Self::Bpm => "bidirectional photon mapping: merges at every camera vertex under the balance heuristic",
             Self::Vcm => "vertex connection and merging (UPS): BDPT's connections and photon merges under one balance heuristic",
+            Self::Spt => "segment path tracing: segments sampled in sequence from the camera, joined by a kernel (--kernel), light-sampled last segment by MIS; = pt with the Dirac kernel",
+            Self::Slt => "segment light tracing: segments sampled in sequence from the lights, joined by a kernel (--kernel), last segment to the camera; = lt with the Dirac kernel",
         }
     }
 
@@ -85,6 +95,8 @@ impl EstimatorKind {
             Self::Ppm => EstimatorConfig::Merging(MergeMode::Ppm, MergingConfig::DEFAULT),
             Self::Bpm => EstimatorConfig::Merging(MergeMode::Bpm, MergingConfig::DEFAULT),
             Self::Vcm => EstimatorConfig::Merging(MergeMode::Vcm, MergingConfig::DEFAULT),
+            Self::Spt => EstimatorConfig::Segment(SegmentAlgorithm::PathTracing, SegmentConfig::DEFAULT),
+            Self::Slt => EstimatorConfig::Segment(SegmentAlgorithm::LightTracing, SegmentConfig::DEFAULT),
         }
     }
 }
@@ -110,6 +122,8 @@ pub enum EstimatorConfig {
     Spcbpt(SpcbptConfig),
     /// PPM, BPM or VCM.
     Merging(MergeMode, MergingConfig),
+    /// Segment PT or segment LT.
+    Segment(SegmentAlgorithm, SegmentConfig),
 }
 
 impl EstimatorConfig {
@@ -124,6 +138,8 @@ impl EstimatorConfig {
             Self::Merging(MergeMode::Ppm, _) => EstimatorKind::Ppm,
             Self::Merging(MergeMode::Bpm, _) => EstimatorKind::Bpm,
             Self::Merging(MergeMode::Vcm, _) => EstimatorKind::Vcm,
+            Self::Segment(SegmentAlgorithm::PathTracing, _) => EstimatorKind::Spt,
+            Self::Segment(SegmentAlgorithm::LightTracing, _) => EstimatorKind::Slt,
         }
     }
 
@@ -134,6 +150,7 @@ impl EstimatorConfig {
             Self::Lvcbpt(c) => c.validate(),
             Self::Spcbpt(c) => c.validate(),
             Self::Merging(_, c) => c.validate(),
+            Self::Segment(_, c) => c.validate(),
         }
     }
 }
@@ -163,7 +180,7 @@ impl EstimatorConfig {
         let film = pixels as u64 * FILM_BYTES_PER_PIXEL;
         let vertex = core::mem::size_of::<crate::path::Vertex>() as u64;
         let (part, largest, lower) = match self {
-            Self::Pt | Self::Lt | Self::Bdpt => (0, "the film", "--width/--height"),
+            Self::Pt | Self::Lt | Self::Bdpt | Self::Segment(..) => (0, "the film", "--width/--height"),
             Self::Lvcbpt(c) => (c.light_paths_for(pixels) as u64 * VERTICES_PER_PATH * (vertex + 8), "the light paths of a pass", "--light-paths"),
             Self::Spcbpt(c) => {
                 let paths = c.light_paths_for(pixels) as u64 * VERTICES_PER_PATH * (vertex + 32);
@@ -291,13 +308,7 @@ impl MergingConfig {
         if let Some(m) = self.light_paths {
             check_u32("light-paths", m, 1..=MAX_LIGHT_PATHS, "1..=4000000")?;
         }
-        let r = self.radius.value();
-        let field = match self.radius {
-            RadiusRule::Footprints(_) => "radius-footprints",
-            RadiusRule::SceneFraction(_) => "radius-scene",
-            RadiusRule::Absolute(_) => "radius",
-        };
-        check_f32(field, r, r > 0.0 && r <= 1e30, "(0, 1e30]")?;
+        check_radius(self.radius)?;
         check_f32("alpha", self.alpha, self.alpha > 0.0 && self.alpha <= 1.0, "(0, 1]")
     }
 }
@@ -306,6 +317,62 @@ impl Default for MergingConfig {
     fn default() -> Self {
         Self::DEFAULT
     }
+}
+
+/// Which sequential segment estimator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SegmentAlgorithm {
+    /// Segments from the camera ([`crate::segment::spt`]).
+    PathTracing,
+    /// Segments from the lights ([`crate::segment::slt`]).
+    LightTracing,
+}
+
+/// The kernel joining consecutive segments, as chosen on the command line (its radius
+/// is resolved per scene from [`SegmentConfig::radius`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KernelChoice {
+    /// x_{i+1} = y_i: the vertex formulation (the default).
+    Dirac,
+    /// Uniform over the surface within a disk around y_i.
+    Disk,
+}
+
+/// The segment estimators' settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SegmentConfig {
+    /// The kernel (default: Dirac).
+    pub kernel: KernelChoice,
+    /// The disk kernel's radius (default: 4 pixel footprints, the rule vertex merging
+    /// uses for r₀; the radius stays fixed over passes).
+    pub radius: RadiusRule,
+}
+
+impl SegmentConfig {
+    /// The defaults.
+    pub const DEFAULT: Self = Self { kernel: KernelChoice::Dirac, radius: RadiusRule::DEFAULT };
+
+    /// Check every field against its range.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        check_radius(self.radius)
+    }
+}
+
+impl Default for SegmentConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// A radius rule's value must be positive and finite; the error names the option.
+fn check_radius(rule: RadiusRule) -> Result<(), ConfigError> {
+    let r = rule.value();
+    let field = match rule {
+        RadiusRule::Footprints(_) => "radius-footprints",
+        RadiusRule::SceneFraction(_) => "radius-scene",
+        RadiusRule::Absolute(_) => "radius",
+    };
+    check_f32(field, r, r > 0.0 && r <= 1e30, "(0, 1e30]")
 }
 
 /// SPCBPT's settings, with the paper's defaults. Scaling rule for small images: the

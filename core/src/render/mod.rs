@@ -41,6 +41,7 @@ mod renderer;
 pub use crate::scene::Context;
 pub use config::{
     ConfigError, EstimatorConfig, EstimatorKind, LvcbptConfig, MAX_DATASET, MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig, SpcbptConfig,
+    KernelChoice, SegmentAlgorithm, SegmentConfig,
 };
 pub use film::Film;
 pub use renderer::Renderer;

@@ -1,6 +1,6 @@
 //! The estimators behind one value: [`Renderer`] dispatches the protocol to PT, LT,
 //! BDPT (one phase per pass each, written here) and to LVCBPT, SPCBPT and the merging
-//! estimators (whose phases live in their modules).
+//! estimators and the segment estimators (whose phases live in their modules).
 
 use crate::geometry::RayQuery;
 use crate::integrator::lvcbpt::Lvcbpt;
@@ -8,6 +8,7 @@ use crate::integrator::spcbpt::Spcbpt;
 use crate::integrator::vcm::Vcm;
 use crate::integrator::{RenderParams, bdpt, lt, pt};
 use crate::scene::Scene;
+use crate::segment::Segments;
 
 use super::{ChunkOutput, ConfigError, Context, Cursor, EstimatorConfig, EstimatorKind, Film, Phase, Phased, Stage};
 
@@ -88,6 +89,8 @@ pub enum Renderer {
     Spcbpt(alloc::boxed::Box<Spcbpt>),
     /// PPM, BPM or VCM.
     Merging(alloc::boxed::Box<Vcm>),
+    /// Segment PT or segment LT.
+    Segment(Segments),
 }
 
 impl Renderer {
@@ -103,6 +106,7 @@ impl Renderer {
             EstimatorConfig::Lvcbpt(c) => Self::Lvcbpt(Lvcbpt::new(params, c, pixels)),
             EstimatorConfig::Spcbpt(c) => Self::Spcbpt(alloc::boxed::Box::new(Spcbpt::new(params, c, scene.camera.width(), scene.camera.height()))),
             EstimatorConfig::Merging(mode, c) => Self::Merging(alloc::boxed::Box::new(Vcm::new(params, mode, c, pixels))),
+            EstimatorConfig::Segment(a, c) => Self::Segment(Segments::new(params, a, c, pixels)),
         })
     }
 
@@ -117,6 +121,7 @@ impl Renderer {
             Self::Lvcbpt(_) => EstimatorKind::Lvcbpt,
             Self::Spcbpt(_) => EstimatorKind::Spcbpt,
             Self::Merging(m) => EstimatorConfig::Merging(m.mode, m.config).kind(),
+            Self::Segment(s) => EstimatorConfig::Segment(s.algorithm, s.config).kind(),
         }
     }
 
@@ -127,6 +132,7 @@ impl Renderer {
             Self::Lvcbpt(l) => &l.params,
             Self::Spcbpt(s) => &s.params,
             Self::Merging(m) => &m.params,
+            Self::Segment(s) => &s.params,
         }
     }
 }
@@ -138,6 +144,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Lvcbpt(l) => Phased::<Q>::next_phase(l),
             Self::Spcbpt(s) => Phased::<Q>::next_phase(&**s),
             Self::Merging(m) => Phased::<Q>::next_phase(&**m),
+            Self::Segment(s) => Phased::<Q>::next_phase(s),
         }
     }
     fn start_pass(&mut self, pass: u32) {
@@ -146,6 +153,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Lvcbpt(l) => Phased::<Q>::start_pass(l, pass),
             Self::Spcbpt(s) => Phased::<Q>::start_pass(&mut **s, pass),
             Self::Merging(m) => Phased::<Q>::start_pass(&mut **m, pass),
+            Self::Segment(s) => Phased::<Q>::start_pass(s, pass),
         }
     }
     fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput) {
@@ -154,6 +162,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Lvcbpt(l) => l.map(ctx, phase, out),
             Self::Spcbpt(s) => s.map(ctx, phase, out),
             Self::Merging(m) => m.map(ctx, phase, out),
+            Self::Segment(s) => s.map(ctx, phase, out),
         }
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
@@ -162,6 +171,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Lvcbpt(l) => l.reduce(ctx, phase, outputs, film),
             Self::Spcbpt(s) => s.reduce(ctx, phase, outputs, film),
             Self::Merging(m) => m.reduce(ctx, phase, outputs, film),
+            Self::Segment(s) => s.reduce(ctx, phase, outputs, film),
         }
     }
 }

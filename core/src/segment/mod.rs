@@ -61,6 +61,7 @@
 //! docs/segments.md has the derivations and what each test proves.
 
 mod kernel;
+mod phases;
 mod surfaces;
 
 pub mod contribution;
@@ -70,6 +71,7 @@ pub mod spt;
 
 pub use contribution::{contribution, geometry_term};
 pub use kernel::{Junctions, Kernel, KernelSample};
+pub use phases::Segments;
 pub use surfaces::SurfaceSampler;
 
 use crate::bsdf::{TransportMode, shading_normal_correction};

@@ -115,12 +115,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
         let (scene, tracer, params) = (ctx.scene, ctx.tracer, &self.params);
         let items = out.items.clone();
         match (phase.id, phase.pass) {
-            (0, _) => {
-                let f = Footprint::measure(scene, tracer, items);
-                let sums = out.sums(2);
-                sums[0] = f.distance;
-                sums[1] = f.hits as f64;
-            }
+            (0, _) => Footprint::map_chunk(scene, tracer, out),
             (1, Some(pass)) => {
                 let tech = self.techniques(pass);
                 let mut splats = core::mem::take(&mut out.splats);
@@ -144,15 +139,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         match (phase.id, phase.pass) {
-            (0, _) => {
-                let mut f = Footprint::default();
-                for out in outputs.iter() {
-                    if let PhaseData::Sums(s) = &out.data {
-                        f.add(Footprint { distance: s[0], hits: s[1] as u64 });
-                    }
-                }
-                self.r0 = self.config.radius.initial_radius(ctx.scene, &f);
-            }
+            (0, _) => self.r0 = self.config.radius.initial_radius(ctx.scene, &Footprint::reduce_chunks(outputs)),
             (1, pass) => {
                 self.paths.clear();
                 self.prefix.clear();
