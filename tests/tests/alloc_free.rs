@@ -110,7 +110,9 @@ fn per_sample_functions_do_not_allocate() {
 /// allocations.
 #[test]
 fn protocol_passes_do_not_allocate_in_steady_state() {
-    use ember_core::render::{Context, EstimatorConfig, EstimatorKind, Film, LvcbptConfig, PhaseBuffers, Renderer, render_pass};
+    use ember_core::render::{
+        Context, EstimatorConfig, EstimatorKind, Film, KernelChoice, LvcbptConfig, PhaseBuffers, Renderer, SegmentAlgorithm, SegmentConfig, render_pass,
+    };
     let (scene, geometry, _) = cornell_with_spheres(16, 16).build().unwrap();
     let tracer = BruteForce::new(geometry);
     let params = RenderParams { max_depth: MaxDepth::UNBOUNDED, seed: 3, ..RenderParams::default() };
@@ -124,6 +126,9 @@ fn protocol_passes_do_not_allocate_in_steady_state() {
         EstimatorKind::Ppm.default_config(),
         EstimatorKind::Bpm.default_config(),
         EstimatorKind::Vcm.default_config(),
+        // Segment PT and LT with the disk kernel: the kernel's stream lives on the stack.
+        EstimatorConfig::Segment(SegmentAlgorithm::PathTracing, SegmentConfig { kernel: KernelChoice::Disk, ..SegmentConfig::DEFAULT }),
+        EstimatorConfig::Segment(SegmentAlgorithm::LightTracing, SegmentConfig { kernel: KernelChoice::Disk, ..SegmentConfig::DEFAULT }),
     ];
     for config in configs {
         let mut renderer = Renderer::new(&scene, params, config).unwrap();

@@ -69,8 +69,12 @@ impl EstimatorKind {
             Self::Ppm => "progressive photon mapping: photons merged at the first non-specular camera vertex, shrinking radius",
             Self::Bpm => "bidirectional photon mapping: merges at every camera vertex under the balance heuristic",
             Self::Vcm => "vertex connection and merging (UPS): BDPT's connections and photon merges under one balance heuristic",
-            Self::Spt => "segment path tracing: segments sampled in sequence from the camera, joined by a kernel (--kernel), light-sampled last segment by MIS; = pt with the Dirac kernel",
-            Self::Slt => "segment light tracing: segments sampled in sequence from the lights, joined by a kernel (--kernel), last segment to the camera; = lt with the Dirac kernel",
+            Self::Spt => {
+                "segment path tracing: segments sampled in sequence from the camera, joined by a kernel (--kernel), light-sampled last segment by MIS; = pt with the Dirac kernel"
+            }
+            Self::Slt => {
+                "segment light tracing: segments sampled in sequence from the lights, joined by a kernel (--kernel), last segment to the camera; = lt with the Dirac kernel"
+            }
         }
     }
 

@@ -40,8 +40,8 @@ mod renderer;
 /// What every phase reads: the scene and the ray queries (defined with the scene).
 pub use crate::scene::Context;
 pub use config::{
-    ConfigError, EstimatorConfig, EstimatorKind, LvcbptConfig, MAX_DATASET, MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig, SpcbptConfig,
-    KernelChoice, SegmentAlgorithm, SegmentConfig,
+    ConfigError, EstimatorConfig, EstimatorKind, KernelChoice, LvcbptConfig, MAX_DATASET, MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig,
+    SegmentAlgorithm, SegmentConfig, SpcbptConfig,
 };
 pub use film::Film;
 pub use renderer::Renderer;

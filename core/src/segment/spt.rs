@@ -35,7 +35,15 @@ pub const KERNEL_KEY: u32 = 0x5e00;
 
 /// Render one segment-PT sample for each pixel in `pixels` of pass `pass` into
 /// `out[i − pixels.start]`.
-pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, kernel: Kernel, pass: u32, pixels: Range<u32>, out: &mut [Rgb]) -> Counters {
+pub fn render_pixels<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    kernel: Kernel,
+    pass: u32,
+    pixels: Range<u32>,
+    out: &mut [Rgb],
+) -> Counters {
     let mut counters = Counters::default();
     let width = scene.camera.width().max(1);
     for (slot, pixel) in out.iter_mut().zip(pixels) {

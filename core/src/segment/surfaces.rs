@@ -63,7 +63,13 @@ impl SurfaceSampler {
             let ns = match t.n {
                 Some(n) => {
                     let s = (n[0] * b0 + n[1] * b1 + n[2] * b2).normalize_or_zero();
-                    if s == Vec3::ZERO { ng } else if s.dot(ng) < 0.0 { -s } else { s }
+                    if s == Vec3::ZERO {
+                        ng
+                    } else if s.dot(ng) < 0.0 {
+                        -s
+                    } else {
+                        s
+                    }
                 }
                 None => ng,
             };
