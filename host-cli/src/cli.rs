@@ -254,8 +254,8 @@ pub struct CacheArgs {
     /// SPT/SLT: the kernel joining consecutive segments: dirac (x_{i+1} = y_i, the vertex
     /// formulation: spt = pt, slt = lt) or disk (uniform over the surface within a disk of
     /// the radius below around y_i; its radius stays fixed over passes).
-    #[arg(long, value_name = "KERNEL", value_parser = ["dirac", "disk"], default_value = "dirac")]
-    pub kernel: String,
+    #[arg(long, value_name = "KERNEL", value_enum, default_value_t = KernelArg::Dirac)]
+    pub kernel: KernelArg,
     /// PPM/BPM/VCM: initial merging radius r₀ in scene units; SPT/SLT: the disk kernel's
     /// radius [default: 4 pixel footprints].
     #[arg(long, value_name = "R", allow_negative_numbers = true, conflicts_with_all = ["radius_footprints", "radius_scene"])]
@@ -288,7 +288,7 @@ impl Default for CacheArgs {
             k_d: d.k_d,
             light_source_share: d.light_source_share,
             q_paths: d.q_paths,
-            kernel: "dirac".into(),
+            kernel: KernelArg::Dirac,
             radius: None,
             radius_footprints: None,
             radius_scene: None,
@@ -334,7 +334,10 @@ impl CacheArgs {
     }
     /// The segment estimators' configuration from these options.
     pub fn segment(&self) -> SegmentConfig {
-        let kernel = if self.kernel == "disk" { KernelChoice::Disk } else { KernelChoice::Dirac };
+        let kernel = match self.kernel {
+            KernelArg::Dirac => KernelChoice::Dirac,
+            KernelArg::Disk => KernelChoice::Disk,
+        };
         SegmentConfig { kernel, radius: self.radius_rule() }
     }
     /// The configuration of `estimator` (these options apply to the cache-based and
@@ -348,6 +351,15 @@ impl CacheArgs {
             (_, other) => other,
         }
     }
+}
+
+/// `--kernel`: the segment estimators' kernel ([`KernelChoice`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum KernelArg {
+    /// x_{i+1} = y_i: the vertex formulation.
+    Dirac,
+    /// Uniform over the surface within a disk around y_i.
+    Disk,
 }
 
 /// A share in [0, 1).

@@ -24,6 +24,7 @@ use crate::geometry::{RayQuery, spawn_ray_to};
 use crate::math::{Vec2, Vec3};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
+use crate::segment::{Junctions, Kernel, LIGHT_KERNEL_KEY};
 use crate::spectrum::Rgb;
 
 const DIMS_PER_BOUNCE: u32 = 4;
@@ -37,17 +38,32 @@ pub fn trace_paths<Q: RayQuery + ?Sized>(
     paths: Range<u32>,
     splat: &mut dyn FnMut(Splat),
 ) -> Counters {
+    trace_paths_with_kernel(scene, tracer, params, Kernel::Dirac, pass, paths, splat)
+}
+
+/// [`trace_paths`] with `kernel` joining consecutive segments: segment LT
+/// ([`crate::segment::slt`]); with the Dirac kernel it is LT.
+pub(crate) fn trace_paths_with_kernel<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    kernel: Kernel,
+    pass: u32,
+    paths: Range<u32>,
+    splat: &mut dyn FnMut(Splat),
+) -> Counters {
     let mut counters = Counters::default();
     for path in paths {
         let mut rng = SampleStream::for_sample(params.seed, Stream::Light, path, pass, 0);
         let mut sky = SampleStream::for_sample(params.seed, Stream::Aux, path, pass, SKY_KEY);
-        trace_one(scene, tracer, params, &mut rng, &mut sky, None, &mut counters, splat);
+        let mut junctions = Junctions::for_path(kernel, params.seed, path, pass, LIGHT_KERNEL_KEY);
+        trace_one(scene, tracer, params, &mut rng, &mut sky, junctions.as_mut(), &mut counters, splat);
     }
     counters
 }
 
 /// Last key of the visible-sky stream, keeping it apart from every other `Stream::Aux` stream.
-pub(crate) const SKY_KEY: u32 = 0x5c00;
+const SKY_KEY: u32 = 0x5c00;
 
 /// The directly visible lights at infinity, from one camera ray through a film position
 /// uniform over the whole film (see the module notes).
@@ -70,13 +86,13 @@ fn visible_sky<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, rng: &mut Sample
 /// kernel draws around it, and the shading point (BSDF, camera connection, continuation)
 /// moves there, which is where eq. (6) evaluates f_r in light order.
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn trace_one<Q: RayQuery + ?Sized>(
+fn trace_one<Q: RayQuery + ?Sized>(
     scene: &Scene,
     tracer: &Q,
     params: &RenderParams,
     rng: &mut SampleStream,
     sky_rng: &mut SampleStream,
-    mut junctions: Option<&mut crate::segment::Junctions>,
+    mut junctions: Option<&mut Junctions>,
     counters: &mut Counters,
     splat: &mut dyn FnMut(Splat),
 ) {

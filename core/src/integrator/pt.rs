@@ -17,7 +17,7 @@ use crate::geometry::{Ray, RayQuery, SurfaceHit, spawn_ray, spawn_ray_to};
 use crate::math::{Vec2, Vec3};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
-use crate::segment::{Junctions, KernelSample, throughput_cos};
+use crate::segment::{CAMERA_KERNEL_KEY, Junctions, Kernel, KernelSample, throughput_cos};
 use crate::spectrum::Rgb;
 
 /// Random dimensions used per bounce (light choice 1, light point 2, lobe 1, direction 2, roulette 1).
@@ -37,13 +37,28 @@ struct PrevBounce {
 /// Render one sample for each pixel in `pixels` (index y·width + x) of pass `pass`
 /// into `out[i − pixels.start]`.
 pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, pass: u32, pixels: Range<u32>, out: &mut [Rgb]) -> Counters {
+    render_pixels_with_kernel(scene, tracer, params, Kernel::Dirac, pass, pixels, out)
+}
+
+/// [`render_pixels`] with `kernel` joining consecutive segments: segment PT
+/// ([`crate::segment::spt`]); with the Dirac kernel it is PT.
+pub(crate) fn render_pixels_with_kernel<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    kernel: Kernel,
+    pass: u32,
+    pixels: Range<u32>,
+    out: &mut [Rgb],
+) -> Counters {
     let mut counters = Counters::default();
     let width = scene.camera.width().max(1);
     for (slot, pixel) in out.iter_mut().zip(pixels) {
         let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
         let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
         let ray = scene.camera.generate_ray(film);
-        let l = radiance(scene, tracer, params, ray, &mut rng, &mut counters);
+        let mut junctions = Junctions::for_path(kernel, params.seed, pixel, pass, CAMERA_KERNEL_KEY);
+        let l = walk(scene, tracer, params, ray, &mut rng, junctions.as_mut(), &mut counters);
         *slot = counters.sanitize(l);
     }
     counters
@@ -59,7 +74,7 @@ pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Render
 /// path tracing; otherwise each next segment starts at a point the kernel draws around
 /// the end of the previous one (eq. 15's p_K), from a random stream of its own, so the
 /// walk's own random numbers keep PT's layout.
-pub(crate) fn walk<Q: RayQuery + ?Sized>(
+fn walk<Q: RayQuery + ?Sized>(
     scene: &Scene,
     tracer: &Q,
     params: &RenderParams,

@@ -105,9 +105,19 @@ pub struct Junctions {
     rng: crate::rng::SampleStream,
 }
 
+/// Last key of the kernel's random stream on camera paths (`Stream::Aux`, index = pixel).
+pub const CAMERA_KERNEL_KEY: u32 = 0x5e00;
+/// Last key of the kernel's random stream on light paths (`Stream::Aux`, index = path).
+pub const LIGHT_KERNEL_KEY: u32 = 0x5e01;
+
 impl Junctions {
     pub fn new(kernel: Kernel, rng: crate::rng::SampleStream) -> Self {
         Self { kernel, rng }
+    }
+    /// The junctions of path `index` of pass `pass`, drawing from the `Stream::Aux`
+    /// stream with last key `key`; `None` for the Dirac kernel, which samples nothing.
+    pub fn for_path(kernel: Kernel, seed: u64, index: u32, pass: u32, key: u32) -> Option<Self> {
+        (!kernel.is_dirac()).then(|| Self::new(kernel, crate::rng::SampleStream::for_sample(seed, crate::rng::Stream::Aux, index, pass, key)))
     }
     /// The start of the next segment around `y`, the path having arrived from `toward`.
     pub fn sample<Q: RayQuery + ?Sized>(&mut self, tracer: &Q, y: &SurfaceHit, toward: Vec3) -> KernelSample {

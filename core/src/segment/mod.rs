@@ -70,7 +70,7 @@ pub mod slt;
 pub mod spt;
 
 pub use contribution::{contribution, geometry_term};
-pub use kernel::{Junctions, Kernel, KernelSample};
+pub use kernel::{CAMERA_KERNEL_KEY, Junctions, Kernel, KernelSample, LIGHT_KERNEL_KEY};
 pub use phases::Segments;
 pub use surfaces::SurfaceSampler;
 

@@ -50,6 +50,22 @@ impl<Q: RayQuery + ?Sized> Surfaces<'_, Q> {
     fn visible(&self, x: &SurfaceHit, y: &SurfaceHit) -> bool {
         !self.tracer.occluded(&spawn_ray_to(x.p, x.ng, y.p, y.ng))
     }
+
+    /// The density of a ray-cast segment: (1/|𝓜|) · p_ω(ŝ) |n_y·ŝ| V / d², where
+    /// `p_w` is the direction's density at x for the unit direction ŝ from x to y.
+    fn raycast_pdf(&self, seg: &Segment, x: &SurfaceHit, p_w: impl FnOnce(Vec3) -> SolidAnglePdf) -> SegmentPdf {
+        let d = seg.y.p - seg.x.p;
+        let dist2 = d.length_squared();
+        if !(dist2 > 0.0) {
+            return SegmentPdf::ZERO;
+        }
+        let w = d / crate::math::sqrt(dist2);
+        let p_w = p_w(w);
+        if !p_w.is_positive() || !self.visible(x, &seg.y) {
+            return SegmentPdf::ZERO;
+        }
+        SegmentPdf::joint(self.area.pdf(), p_w.to_area(seg.y.ng.dot(w), dist2))
+    }
 }
 
 /// Eq. (12): both endpoints uniform over the surfaces.
@@ -81,18 +97,7 @@ impl Raycast {
     }
     /// (1/|𝓜|) · cos_x cos_y V / (π d²) = G(s)/(π|𝓜|), zero behind x's normal.
     pub fn pdf<Q: RayQuery + ?Sized>(&self, s: &Surfaces<'_, Q>, seg: &Segment, x: &SurfaceHit) -> SegmentPdf {
-        let d = seg.y.p - seg.x.p;
-        let dist2 = d.length_squared();
-        if !(dist2 > 0.0) {
-            return SegmentPdf::ZERO;
-        }
-        let w = d / crate::math::sqrt(dist2);
-        let local = Frame::from_normal(x.ng).to_local(w);
-        let p_w: SolidAnglePdf = cosine_hemisphere_pdf(local);
-        if !p_w.is_positive() || !s.visible(x, &seg.y) {
-            return SegmentPdf::ZERO;
-        }
-        SegmentPdf::joint(s.area.pdf(), p_w.to_area(seg.y.ng.dot(w), dist2))
+        s.raycast_pdf(seg, x, |w| cosine_hemisphere_pdf(Frame::from_normal(x.ng).to_local(w)))
     }
 }
 
@@ -125,17 +130,7 @@ impl BsdfRaycast {
     /// (1/|𝓜|) · p_ω(ŝ | x, ŝ') |n_y·ŝ| V / d² (zero for directions only a Dirac lobe
     /// reaches).
     pub fn pdf<Q: RayQuery + ?Sized>(&self, s: &Surfaces<'_, Q>, seg: &Segment, x: &SurfaceHit) -> SegmentPdf {
-        let d = seg.y.p - seg.x.p;
-        let dist2 = d.length_squared();
-        if !(dist2 > 0.0) {
-            return SegmentPdf::ZERO;
-        }
-        let w = d / crate::math::sqrt(dist2);
         let sp = SurfacePoint::new(*x, self.aux);
-        let p_w = sp.material(s.scene).pdf(sp.frame.to_local(self.aux), sp.frame.to_local(w), TransportMode::Radiance);
-        if !p_w.is_positive() || !s.visible(x, &seg.y) {
-            return SegmentPdf::ZERO;
-        }
-        SegmentPdf::joint(s.area.pdf(), p_w.to_area(seg.y.ng.dot(w), dist2))
+        s.raycast_pdf(seg, x, |w| sp.material(s.scene).pdf(sp.frame.to_local(self.aux), sp.frame.to_local(w), TransportMode::Radiance))
     }
 }

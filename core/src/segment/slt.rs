@@ -21,10 +21,9 @@
 
 use core::ops::Range;
 
-use super::{Junctions, Kernel, spt::KERNEL_KEY};
+use super::Kernel;
 use crate::geometry::RayQuery;
 use crate::integrator::{Counters, RenderParams, Splat, lt};
-use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 
 /// Trace segment light paths `paths` of pass `pass`; every camera connection goes to
@@ -38,15 +37,5 @@ pub fn trace_paths<Q: RayQuery + ?Sized>(
     paths: Range<u32>,
     splat: &mut dyn FnMut(Splat),
 ) -> Counters {
-    if kernel.is_dirac() {
-        return lt::trace_paths(scene, tracer, params, pass, paths, splat);
-    }
-    let mut counters = Counters::default();
-    for path in paths {
-        let mut rng = SampleStream::for_sample(params.seed, Stream::Light, path, pass, 0);
-        let mut sky = SampleStream::for_sample(params.seed, Stream::Aux, path, pass, lt::SKY_KEY);
-        let mut junctions = Junctions::new(kernel, SampleStream::for_sample(params.seed, Stream::Aux, path, pass, KERNEL_KEY + 1));
-        lt::trace_one(scene, tracer, params, &mut rng, &mut sky, Some(&mut junctions), &mut counters, splat);
-    }
-    counters
+    lt::trace_paths_with_kernel(scene, tracer, params, kernel, pass, paths, splat)
 }

@@ -15,23 +15,18 @@
 //!
 //! Steps 2 and 3 are two techniques for the same last segment given x_{i+1}, both with
 //! densities per solid angle at x_{i+1}; they are weighted by the balance (or power)
-//! heuristic exactly as in [`crate::integrator::pt`]. The walk is PT's
-//! ([`crate::integrator::pt`]'s `walk`) with the kernel plugged in: with the Dirac kernel
-//! segment PT is PT, bit for bit, with PT's random numbers; the kernel's random numbers
-//! come from a stream of their own ([`KERNEL_KEY`]).
+//! heuristic exactly as in [`crate::integrator::pt`]. The walk is PT's with the kernel
+//! plugged in: with the Dirac kernel segment PT is PT, bit for bit, with PT's random
+//! numbers; the kernel's random numbers come from a stream of their own
+//! ([`super::CAMERA_KERNEL_KEY`]).
 
 use core::ops::Range;
 
-use super::{Junctions, Kernel};
+use super::Kernel;
 use crate::geometry::RayQuery;
 use crate::integrator::{Counters, RenderParams, pt};
-use crate::math::Vec2;
-use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
-
-/// Last key of the kernel's random stream (`Stream::Aux`, index = pixel or light path).
-pub const KERNEL_KEY: u32 = 0x5e00;
 
 /// Render one segment-PT sample for each pixel in `pixels` of pass `pass` into
 /// `out[i − pixels.start]`.
@@ -44,19 +39,5 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
     pixels: Range<u32>,
     out: &mut [Rgb],
 ) -> Counters {
-    let mut counters = Counters::default();
-    let width = scene.camera.width().max(1);
-    for (slot, pixel) in out.iter_mut().zip(pixels) {
-        let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
-        let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
-        let ray = scene.camera.generate_ray(film);
-        let l = if kernel.is_dirac() {
-            pt::walk(scene, tracer, params, ray, &mut rng, None, &mut counters)
-        } else {
-            let mut junctions = Junctions::new(kernel, SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, KERNEL_KEY));
-            pt::walk(scene, tracer, params, ray, &mut rng, Some(&mut junctions), &mut counters)
-        };
-        *slot = counters.sanitize(l);
-    }
-    counters
+    pt::render_pixels_with_kernel(scene, tracer, params, kernel, pass, pixels, out)
 }
