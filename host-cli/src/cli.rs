@@ -251,12 +251,12 @@ pub struct CacheArgs {
     /// SPCBPT: light paths estimating Q per light subspace, M' [default: min(2000000, 2·W·H)].
     #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..))]
     pub q_paths: Option<u32>,
-    /// SPT/SLT: the kernel joining consecutive segments: dirac (x_{i+1} = y_i, the vertex
-    /// formulation: spt = pt, slt = lt) or disk (uniform over the surface within a disk of
+    /// SPT/SLT/SBDPT: the kernel joining consecutive segments: dirac (x_{i+1} = y_i, the vertex
+    /// formulation: spt = pt, slt = lt, sbdpt = bdpt) or disk (uniform over the surface within a disk of
     /// the radius below around y_i; its radius stays fixed over passes).
     #[arg(long, value_name = "KERNEL", value_enum, default_value_t = KernelArg::Dirac)]
     pub kernel: KernelArg,
-    /// PPM/BPM/VCM: initial merging radius r₀ in scene units; SPT/SLT: the disk kernel's
+    /// PPM/BPM/VCM: initial merging radius r₀ in scene units; SPT/SLT/SBDPT: the disk kernel's
     /// radius [default: 4 pixel footprints].
     #[arg(long, value_name = "R", allow_negative_numbers = true, conflicts_with_all = ["radius_footprints", "radius_scene"])]
     pub radius: Option<f32>,

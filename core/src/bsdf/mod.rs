@@ -52,6 +52,17 @@ pub enum TransportMode {
     Importance,
 }
 
+impl TransportMode {
+    /// The walk in the opposite direction.
+    #[inline]
+    pub fn flip(self) -> Self {
+        match self {
+            Self::Radiance => Self::Importance,
+            Self::Importance => Self::Radiance,
+        }
+    }
+}
+
 /// Microfacet normal distribution (Mitsuba's `distribution` parameter).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MicrofacetKind {

@@ -112,7 +112,8 @@ pub fn connect<Q: RayQuery + ?Sized>(
         let chosen = table.sample(u_light);
         let id = chosen.index as u32;
         let light_ref = &scene.lights[chosen.index];
-        let ls = light_ref.sample_li(pt.p, u_point)?;
+        // From the start of the segment toward the light (`pt.p` but for segment BDPT).
+        let ls = light_ref.sample_li(pt.exit.p, u_point)?;
         if !ls.pdf.is_positive() || ls.radiance.is_black() {
             return None;
         }
@@ -128,13 +129,14 @@ pub fn connect<Q: RayQuery + ?Sized>(
         lv.pdf_fwd = lv.pdf_light_origin(scene, pt);
         let mut v = pt.beta * pt.f(scene, &lv, TransportMode::Radiance) * lv.beta;
         if pt.is_on_surface() {
-            v *= ls.wi.dot(pt.frame.n).abs();
+            v *= ls.wi.dot(pt.exit.ns).abs();
         }
         if v.is_black() {
             return None;
         }
         counters.rays += 1;
-        let shadow = if ls.dist.is_finite() { spawn_ray_to(pt.p, pt.ng, ls.p, ls.n) } else { crate::geometry::spawn_ray(pt.p, pt.ng, ls.wi) };
+        let x = &pt.exit;
+        let shadow = if ls.dist.is_finite() { spawn_ray_to(x.p, x.ng, ls.p, ls.n) } else { crate::geometry::spawn_ray(x.p, x.ng, ls.wi) };
         if tracer.occluded(&shadow) {
             return None;
         }
@@ -192,20 +194,30 @@ pub fn connect_light_source<Q: RayQuery + ?Sized>(
         return None;
     }
     counters.rays += 1;
-    if tracer.occluded(&spawn_ray_to(pt.p, pt.ng, y0.p, y0.ng)) {
+    if tracer.occluded(&spawn_ray_to(pt.exit.p, pt.exit.ng, y0.p, y0.ng)) {
         return None;
     }
     Some(Connection { value, film: None, sampled: None })
 }
 
-/// G = |cos θ_q| |cos θ_p| / d² with shading cosines left to the BSDF factors (the
-/// geometric cosines belong to the measure).
+/// G = |cos θ_q| |cos θ_p| / d² of the segment from camera-side `p` (its exit) to
+/// light-side `q`, with shading cosines left to the BSDF factors (the geometric cosines
+/// belong to the measure).
 #[inline]
-fn geometry_term(a: &Vertex, b: &Vertex) -> f32 {
-    super::vertex::cosines_over_distance2(a, a.frame.n, b, b.frame.n)
+fn geometry_term(q: &Vertex, p: &Vertex) -> f32 {
+    let d = p.exit.p - q.p;
+    let d2 = d.length_squared();
+    if !(d2 > 0.0) {
+        return 0.0;
+    }
+    let w = d / crate::math::sqrt(d2);
+    let cq = if q.is_on_surface() { q.frame.n.dot(w).abs() } else { 1.0 };
+    let cp = if p.is_on_surface() { p.exit.ns.dot(w).abs() } else { 1.0 };
+    cq * cp / d2
 }
 
+/// The shadow ray of the segment from camera-side `p` (its exit) to light-side `q`.
 #[inline]
-fn connect_ray(a: &Vertex, b: &Vertex) -> Ray {
-    spawn_ray_to(a.p, a.ng, b.p, b.ng)
+fn connect_ray(q: &Vertex, p: &Vertex) -> Ray {
+    spawn_ray_to(q.p, q.ng, p.exit.p, p.exit.ng)
 }

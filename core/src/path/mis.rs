@@ -9,6 +9,7 @@
 //! reverse densities depend on the strategy, so they are recomputed here on copies.
 
 use super::vertex::{Vertex, VertexKind};
+use crate::bsdf::TransportMode;
 use crate::measure::VertexPdf;
 use crate::scene::Scene;
 
@@ -84,20 +85,20 @@ pub fn for_each_strategy_ratio<V: FnMut(usize, usize, f64)>(
     if let Some(pt) = pt {
         // pt's reverse density: from qs (connection), or as a light-path origin (s = 0).
         pt_rev = match (qs, pt_minus) {
-            (Some(q), _) => q.pdf(scene, qs_minus, pt),
+            (Some(q), _) => q.pdf(scene, qs_minus, pt, TransportMode::Importance),
             (None, Some(pm)) => pt.pdf_light_origin(scene, pm),
             (None, None) => VertexPdf::ZERO,
         };
         if let Some(pm) = pt_minus {
             pt_minus_rev = match qs {
-                Some(q) => pt.pdf(scene, Some(q), pm),
+                Some(q) => pt.pdf(scene, Some(q), pm, TransportMode::Importance),
                 None => pt.pdf_light(scene, pm),
             };
         }
         if let Some(q) = qs {
-            qs_rev = pt.pdf(scene, pt_minus, q);
+            qs_rev = pt.pdf(scene, pt_minus, q, TransportMode::Radiance);
             if let Some(qm) = qs_minus {
-                qs_minus_rev = q.pdf(scene, Some(pt), qm);
+                qs_minus_rev = q.pdf(scene, Some(pt), qm, TransportMode::Radiance);
             }
         }
     }
@@ -119,11 +120,16 @@ pub fn for_each_strategy_ratio<V: FnMut(usize, usize, f64)>(
     let cam_delta = |i: usize| i + 1 != t && camera_at(i).delta;
     let light_delta = |i: usize| i > 0 && i + 1 != s && light_at(i).delta;
 
+    // A vertex changing sides also changes which side drew its junction's kernel sample
+    // (segment BDPT; 1 for vertex paths). The path's light end has no junction.
+    let cam_kernel = |i: usize| if s == 0 && i + 1 == t { 1.0 } else { camera_at(i).kernel_ratio as f64 };
+    let light_kernel = |i: usize| light_at(i).kernel_ratio as f64;
+
     // Ratios are accumulated in f64: they span many magnitudes along long paths.
     // Strategies with more light vertices: move camera vertices to the light side.
     let mut ri = 1.0f64;
     for i in (1..t).rev() {
-        ri *= remap0(cam_rev(i)) / remap0(camera_at(i).pdf_fwd);
+        ri *= remap0(cam_rev(i)) / remap0(camera_at(i).pdf_fwd) * cam_kernel(i);
         if !cam_delta(i) && !cam_delta(i - 1) {
             visit(s + t - i, i, ri);
         }
@@ -131,7 +137,7 @@ pub fn for_each_strategy_ratio<V: FnMut(usize, usize, f64)>(
     // Strategies with fewer light vertices.
     ri = 1.0;
     for i in (0..s).rev() {
-        ri *= remap0(light_rev(i)) / remap0(light_at(i).pdf_fwd);
+        ri *= remap0(light_rev(i)) / remap0(light_at(i).pdf_fwd) * light_kernel(i);
         let delta_before = if i > 0 { light_delta(i - 1) } else { is_delta_light(scene, light_at(0)) };
         if !light_delta(i) && !delta_before {
             visit(i, s + t - i, ri);

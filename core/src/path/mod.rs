@@ -24,11 +24,12 @@ use crate::integrator::{Counters, RenderParams};
 use crate::math::Vec2;
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
+use crate::segment::{CAMERA_KERNEL_KEY, Junctions, Kernel};
 
 pub use connect::{Connection, LightPointSample, Weighted, connect, connect_light_source};
 pub use store::{CacheEntry, LightPaths, cacheable_entries, is_cacheable, trace_light_subpath};
 pub use vertex::{Vertex, VertexKind};
-pub use walk::{SubPath, camera_subpath, light_subpath};
+pub use walk::{SubPath, camera_subpath, camera_subpath_with_kernel, light_subpath, light_subpath_with_kernel};
 
 /// Capacity of a sub-path (vertices); unbounded depth truncates here (counted).
 pub const MAX_VERTICES: usize = 34;
@@ -53,8 +54,24 @@ pub fn pixel_camera_subpath<Q: RayQuery + ?Sized>(
     max_camera: usize,
     counters: &mut Counters,
 ) -> SubPath {
+    pixel_camera_subpath_with_kernel(scene, tracer, params, pixel, pass, max_camera, Kernel::Dirac, counters)
+}
+
+/// [`pixel_camera_subpath`] with `kernel` at its junctions (segment BDPT), drawn from the
+/// pixel's camera-kernel stream.
+pub fn pixel_camera_subpath_with_kernel<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    pixel: u32,
+    pass: u32,
+    max_camera: usize,
+    kernel: Kernel,
+    counters: &mut Counters,
+) -> SubPath {
     let width = scene.camera.width().max(1);
     let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
     let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
-    camera_subpath(scene, tracer, params, film, max_camera, &mut rng, counters)
+    let mut junctions = Junctions::for_path(kernel, params.seed, pixel, pass, CAMERA_KERNEL_KEY);
+    camera_subpath_with_kernel(scene, tracer, params, film, max_camera, &mut rng, junctions.as_mut(), counters)
 }

@@ -6,6 +6,18 @@
 //! both as [`VertexPdf`]: per unit area at a point, per unit solid angle at a vertex at
 //! infinity (the type's constructors name the measure). The conversion from a sampler's
 //! solid-angle density is [`Vertex::convert_density`].
+//!
+//! **Segments.** A vertex is also the junction of two segments (Wang et al. 2025, eq. 4):
+//! `p` is where the BSDF is evaluated (y_i, the end of the segment arriving from the
+//! camera side) and [`Vertex::exit`] is where the segment toward the light side starts
+//! (x_{i+1}). The segment between path-order neighbours a (camera side) and b (light
+//! side) runs from `a.exit` to `b.p`. With the Dirac kernel `exit` is `p` and every
+//! density below is the vertex one bit for bit; segment BDPT
+//! ([`crate::segment::sbdpt`]) moves `exit` on camera vertices and `p` on light vertices
+//! (each sub-path moves the point its kernel samples). Which end of an edge a density
+//! lives at depends on the direction it is sampled in, so densities take the
+//! [`TransportMode`] of the walk that samples: `Radiance` walks toward the light side,
+//! `Importance` toward the camera side.
 
 use crate::bsdf::{TransportMode, shading_normal_correction};
 use crate::geometry::LightId;
@@ -49,6 +61,31 @@ pub struct Vertex {
     pub delta: bool,
     pub pdf_fwd: VertexPdf,
     pub pdf_rev: VertexPdf,
+    /// Where the segment toward the light side starts (`p` but for segment BDPT).
+    pub exit: Exit,
+    /// K_other / K_own of the kernel sample joining `p` and `exit`: the kernel density
+    /// with which the opposite sub-path would have drawn this junction over the one its
+    /// own sub-path drew it with (1 for the Dirac kernel, for a kernel's miss mass, and at
+    /// path ends).
+    pub kernel_ratio: f32,
+}
+
+/// The start of a vertex's segment toward the light side.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Exit {
+    pub p: Vec3,
+    /// Geometric normal (`Vec3::ZERO` off surfaces).
+    pub ng: Vec3,
+    /// Shading normal, for the cosine of the segment leaving here (eq. 6).
+    pub ns: Vec3,
+}
+
+impl Exit {
+    /// The exit at the vertex itself.
+    #[inline]
+    pub fn at(p: Vec3, ng: Vec3, ns: Vec3) -> Self {
+        Self { p, ng, ns }
+    }
 }
 
 impl Vertex {
@@ -65,6 +102,8 @@ impl Vertex {
             delta: false,
             pdf_fwd: VertexPdf::ZERO,
             pdf_rev: VertexPdf::ZERO,
+            exit: Exit::at(p, Vec3::ZERO, Vec3::Z),
+            kernel_ratio: 1.0,
         }
     }
 
@@ -81,6 +120,8 @@ impl Vertex {
             delta,
             pdf_fwd,
             pdf_rev: VertexPdf::ZERO,
+            exit: Exit::at(p, n, if n == Vec3::ZERO { Vec3::Z } else { n }),
+            kernel_ratio: 1.0,
         }
     }
 
@@ -97,7 +138,28 @@ impl Vertex {
             delta: false,
             pdf_fwd,
             pdf_rev: VertexPdf::ZERO,
+            exit: Exit::at(p, Vec3::ZERO, Vec3::Z),
+            kernel_ratio: 1.0,
         }
+    }
+
+    /// The segment between this vertex and `next`, sampled from here by a walk in
+    /// `mode`: (start, end, the end's geometric normal). Radiance walks go toward the
+    /// light side (from `self.exit` to `next.p`), importance walks toward the camera
+    /// side (from `self.p` to `next.exit`).
+    #[inline]
+    pub fn edge(&self, next: &Vertex, mode: TransportMode) -> (Vec3, Vec3, Vec3) {
+        match mode {
+            TransportMode::Radiance => (self.exit.p, next.p, next.ng),
+            TransportMode::Importance => (self.p, next.exit.p, next.exit.ng),
+        }
+    }
+
+    /// Unit direction from this vertex toward `next` along their segment (see [`Self::edge`]).
+    #[inline]
+    pub fn dir_to(&self, next: &Vertex, mode: TransportMode) -> Vec3 {
+        let (a, b, _) = self.edge(next, mode);
+        (b - a).normalize_or_zero()
     }
 
     #[inline]
@@ -131,40 +193,43 @@ impl Vertex {
         }
     }
 
-    /// BSDF value toward `next` (no cosine), with the adjoint shading-normal correction.
+    /// BSDF value toward `next` (no cosine), with the adjoint shading-normal correction;
+    /// `mode` is the walk's: `next` lies toward the light side for `Radiance`.
     pub fn f(&self, scene: &Scene, next: &Vertex, mode: TransportMode) -> Rgb {
         if self.kind != VertexKind::Surface {
             return Rgb::ZERO;
         }
-        let wi = (next.p - self.p).normalize_or_zero();
+        let wi = self.dir_to(next, mode);
         let m = &scene.materials[self.material as usize];
         m.eval(self.frame.to_local(self.wo), self.frame.to_local(wi), mode) * shading_normal_correction(mode, self.wo, wi, self.ng, self.frame.n)
     }
 
-    /// Convert a solid-angle density of sampling `next` from here into `next`'s vertex
-    /// density: per area at a point, unchanged for a vertex at infinity.
-    pub fn convert_density(&self, pdf: SolidAnglePdf, next: &Vertex) -> VertexPdf {
+    /// Convert a solid-angle density of sampling `next` from here (by a walk in `mode`)
+    /// into `next`'s vertex density: per area at the segment's end, unchanged for a
+    /// vertex at infinity.
+    pub fn convert_density(&self, pdf: SolidAnglePdf, next: &Vertex, mode: TransportMode) -> VertexPdf {
         if next.kind == VertexKind::InfiniteLight {
             return VertexPdf::of_direction(pdf);
         }
+        let (a, b, nb) = self.edge(next, mode);
         // In f64 (`to_area_f64`): near-grazing cosines lose most of their digits in f32.
-        let w = next.p.as_dvec3() - self.p.as_dvec3();
+        let w = b.as_dvec3() - a.as_dvec3();
         let d2 = w.length_squared();
         if !(d2 > 0.0) {
             return VertexPdf::ZERO;
         }
-        let cos = if next.is_on_surface() { next.ng.as_dvec3().dot(w).abs() / crate::math::sqrt_f64(d2) } else { 1.0 };
+        let cos = if next.is_on_surface() { nb.as_dvec3().dot(w).abs() / crate::math::sqrt_f64(d2) } else { 1.0 };
         VertexPdf::at_point(pdf.to_area_f64(cos, d2))
     }
 
-    /// Area density of sampling `next` from this vertex, given it was reached from
-    /// `prev` (pbrt-v3's `Vertex::Pdf`).
-    pub fn pdf(&self, scene: &Scene, prev: Option<&Vertex>, next: &Vertex) -> VertexPdf {
+    /// Area density of sampling `next` from this vertex by a walk in `mode`, given it
+    /// was reached from `prev` on the other side (pbrt-v3's `Vertex::Pdf`).
+    pub fn pdf(&self, scene: &Scene, prev: Option<&Vertex>, next: &Vertex, mode: TransportMode) -> VertexPdf {
         match self.kind {
             VertexKind::Light(_) | VertexKind::InfiniteLight => return self.pdf_light(scene, next),
             _ => {}
         }
-        let wn = (next.p - self.p).normalize_or_zero();
+        let wn = self.dir_to(next, mode);
         let pdf = match self.kind {
             VertexKind::Camera => scene.camera.pdf_dir(wn),
             _ => {
@@ -178,18 +243,20 @@ impl Vertex {
                     // drops that factor from the ratios: BDPT and VCM then weighted a
                     // caustic seen on the floor 0.01 below a glass sphere 0.68 toward
                     // hitting the light through the glass instead of ≈ 0.
-                    return self.convert_density(SolidAnglePdf(1.0), next);
+                    return self.convert_density(SolidAnglePdf(1.0), next, mode);
                 }
-                let wp = (prev.p - self.p).normalize_or_zero();
+                let wp = self.dir_to(prev, mode.flip());
                 m.pdf(self.frame.to_local(wp), self.frame.to_local(wn), TransportMode::Radiance)
             }
         };
-        self.convert_density(pdf, next)
+        self.convert_density(pdf, next, mode)
     }
 
-    /// Area density at `next` of a light path leaving this light vertex toward it.
+    /// Area density at `next` (toward the camera side) of a light path leaving this
+    /// light vertex toward it.
     pub fn pdf_light(&self, scene: &Scene, next: &Vertex) -> VertexPdf {
-        let wd = next.p.as_dvec3() - self.p.as_dvec3();
+        let (a, b, nb) = self.edge(next, TransportMode::Importance);
+        let wd = b.as_dvec3() - a.as_dvec3();
         let d2 = wd.length_squared();
         if !(d2 > 0.0) {
             return VertexPdf::ZERO;
@@ -210,7 +277,7 @@ impl Vertex {
             VertexKind::Camera => 0.0,
         };
         if next.is_on_surface() {
-            pdf *= next.ng.as_dvec3().dot(wd).abs();
+            pdf *= nb.as_dvec3().dot(wd).abs();
         }
         VertexPdf::at_point(AreaPdf(pdf as f32))
     }
@@ -218,7 +285,7 @@ impl Vertex {
     /// Density of this light vertex as the origin of a light path (light selection ×
     /// position density; for infinite lights, the selection-weighted direction density).
     pub fn pdf_light_origin(&self, scene: &Scene, next: &Vertex) -> VertexPdf {
-        let w = (next.p - self.p).normalize_or_zero();
+        let w = self.dir_to(next, TransportMode::Importance);
         match self.kind {
             VertexKind::InfiniteLight => VertexPdf::of_direction(infinite_light_density(scene, -w)),
             VertexKind::Light(id) => light_origin(scene, id, self.p, self.ng, w),
@@ -227,9 +294,10 @@ impl Vertex {
         }
     }
 
-    /// Radiance emitted from this vertex toward `toward` (emitters and infinite lights).
+    /// Radiance emitted from this vertex toward `toward` (on the camera side; emitters
+    /// and infinite lights).
     pub fn le(&self, scene: &Scene, toward: &Vertex) -> Rgb {
-        let w = (toward.p - self.p).normalize_or_zero();
+        let w = self.dir_to(toward, TransportMode::Importance);
         match self.kind {
             VertexKind::InfiniteLight => scene.infinite_lights().fold(Rgb::ZERO, |acc, (_, l)| acc + l.environment_radiance(-w)),
             _ => self.emitter.map_or(Rgb::ZERO, |id| scene.lights[id as usize].radiance(self.p, self.ng, w)),

@@ -3,7 +3,7 @@
 use heapless::Vec as FixedVec;
 
 use super::MAX_VERTICES;
-use super::vertex::{Vertex, VertexKind, infinite_light_density};
+use super::vertex::{Exit, Vertex, VertexKind, infinite_light_density};
 use crate::bsdf::{TransportMode, shading_normal_correction};
 use crate::geometry::{Ray, RayQuery, spawn_ray};
 use crate::integrator::{Counters, RenderParams, light_roulette_reference, survives_roulette};
@@ -11,6 +11,7 @@ use crate::math::{Frame, Vec2, Vec3};
 use crate::measure::{AreaPdf, VertexPdf};
 use crate::rng::SampleStream;
 use crate::scene::Scene;
+use crate::segment::{Junctions, KernelSample};
 use crate::spectrum::Rgb;
 
 /// A sub-path: vertices in the order they were generated.
@@ -30,13 +31,28 @@ pub fn camera_subpath<Q: RayQuery + ?Sized>(
     rng: &mut SampleStream,
     counters: &mut Counters,
 ) -> SubPath {
+    camera_subpath_with_kernel(scene, tracer, params, film, max_vertices, rng, None, counters)
+}
+
+/// [`camera_subpath`] with the kernel of `junctions` moving each vertex's exit (segment
+/// BDPT, [`crate::segment::sbdpt`]); `None` is the Dirac kernel.
+pub fn camera_subpath_with_kernel<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    film: Vec2,
+    max_vertices: usize,
+    rng: &mut SampleStream,
+    junctions: Option<&mut Junctions>,
+    counters: &mut Counters,
+) -> SubPath {
     let mut path = SubPath::new();
     if max_vertices == 0 {
         return path;
     }
     let ray = scene.camera.generate_ray(film);
     let _ = path.push(Vertex::camera(ray.origin, Rgb::ONE));
-    random_walk(scene, tracer, params, ray, Rgb::ONE, max_vertices, TransportMode::Radiance, rng, counters, &mut path);
+    random_walk(scene, tracer, params, ray, Rgb::ONE, max_vertices, TransportMode::Radiance, rng, junctions, counters, &mut path);
     path
 }
 
@@ -47,6 +63,20 @@ pub fn light_subpath<Q: RayQuery + ?Sized>(
     params: &RenderParams,
     max_vertices: usize,
     rng: &mut SampleStream,
+    counters: &mut Counters,
+) -> SubPath {
+    light_subpath_with_kernel(scene, tracer, params, max_vertices, rng, None, counters)
+}
+
+/// [`light_subpath`] with the kernel of `junctions` moving each vertex's shading point
+/// away from the hit (segment BDPT); `None` is the Dirac kernel.
+pub fn light_subpath_with_kernel<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    max_vertices: usize,
+    rng: &mut SampleStream,
+    mut junctions: Option<&mut Junctions>,
     counters: &mut Counters,
 ) -> SubPath {
     let mut path = SubPath::new();
@@ -70,7 +100,7 @@ pub fn light_subpath<Q: RayQuery + ?Sized>(
         let mut v0 = Vertex::infinite(es.p - es.dir, es.radiance, VertexPdf::of_direction(infinite_light_density(scene, -es.dir)));
         v0.delta = light.is_delta();
         let _ = path.push(v0);
-        random_walk(scene, tracer, params, ray, beta, max_vertices, TransportMode::Importance, rng, counters, &mut path);
+        random_walk(scene, tracer, params, ray, beta, max_vertices, TransportMode::Importance, rng, junctions.as_deref_mut(), counters, &mut path);
         // The second vertex's forward density is the disk's position density, per area.
         if let Some(v1) = path.get_mut(1) {
             v1.pdf_fwd = VertexPdf::at_point(AreaPdf(pdf_pos * if v1.is_on_surface() { v1.ng.dot(es.dir).abs() } else { 1.0 }));
@@ -80,7 +110,7 @@ pub fn light_subpath<Q: RayQuery + ?Sized>(
         // selection probability alone.
         let origin = if es.delta_pos { VertexPdf::discrete(chosen.pmf) } else { VertexPdf::at_point(es.pdf_pos * chosen.pmf) };
         let _ = path.push(Vertex::light(id, es.p, es.n, es.radiance, origin, light.is_delta()));
-        random_walk(scene, tracer, params, ray, beta, max_vertices, TransportMode::Importance, rng, counters, &mut path);
+        random_walk(scene, tracer, params, ray, beta, max_vertices, TransportMode::Importance, rng, junctions, counters, &mut path);
     }
     path
 }
@@ -93,6 +123,13 @@ pub fn light_subpath<Q: RayQuery + ?Sized>(
 /// sampled direction and the direction between stored vertices differ by up to a few
 /// percent in density. Evaluating every strategy's densities from the same positions
 /// makes the balance weights of one path sum to one exactly (pbrt-v3 mixes the two).
+///
+/// With `junctions` every surface vertex is a junction of two segments: a camera walk
+/// (radiance) keeps the BSDF at the hit and starts the next segment at the kernel's
+/// sample (`exit`); a light walk (importance) keeps the hit as `exit` and moves the
+/// shading point, BSDF and frame to the kernel's sample (`p`), as segment PT and LT do.
+/// The kernel is drawn at every vertex, the last one included, since connections start
+/// from it; its random numbers come from the junctions' own stream.
 fn random_walk<Q: RayQuery + ?Sized>(
     scene: &Scene,
     tracer: &Q,
@@ -102,6 +139,7 @@ fn random_walk<Q: RayQuery + ?Sized>(
     max_vertices: usize,
     mode: TransportMode,
     rng: &mut SampleStream,
+    mut junctions: Option<&mut Junctions>,
     counters: &mut Counters,
     path: &mut SubPath,
 ) {
@@ -120,33 +158,49 @@ fn random_walk<Q: RayQuery + ?Sized>(
         let Some(hit) = tracer.intersect(&ray) else {
             // Camera paths that escape end on the infinite lights.
             if mode == TransportMode::Radiance && scene.infinite_lights().next().is_some() {
-                let mut v = Vertex::infinite(prev.p + ray.dir, beta, VertexPdf::ZERO);
-                v.pdf_fwd = prev.pdf(scene, n.checked_sub(2).map(|i| &path[i]), &v);
+                let mut v = Vertex::infinite(prev.exit.p + ray.dir, beta, VertexPdf::ZERO);
+                v.pdf_fwd = prev.pdf(scene, n.checked_sub(2).map(|i| &path[i]), &v, mode);
                 if n >= 2 {
-                    path[n - 2].pdf_rev = prev.pdf(scene, Some(&v), &path[n - 2]);
+                    path[n - 2].pdf_rev = prev.pdf(scene, Some(&v), &path[n - 2], mode.flip());
                 }
                 let _ = path.push(v);
             }
             return;
         };
-        let frame = Frame::from_normal(hit.ns);
+        // The junction: which point keeps the BSDF and which starts the next segment.
+        let moved = match junctions.as_deref_mut() {
+            Some(j) => {
+                counters.rays += 1;
+                j.sample(tracer, &hit, -ray.dir)
+            }
+            None => KernelSample::AtEnd,
+        };
+        let kernel_moved = moved.moved().is_some();
+        let (shading, exit, kernel_ratio) = match (moved, mode) {
+            (KernelSample::AtEnd, _) => (hit, hit, 1.0),
+            (KernelSample::Moved(x), TransportMode::Radiance) => (hit, x, kernel_ratio(junctions.as_deref(), &hit, &x)),
+            (KernelSample::Moved(x), TransportMode::Importance) => (x, hit, kernel_ratio(junctions.as_deref(), &hit, &x)),
+        };
+        let frame = Frame::from_normal(shading.ns);
         let mut v = Vertex {
             kind: VertexKind::Surface,
-            p: hit.p,
-            ng: hit.ng,
+            p: shading.p,
+            ng: shading.ng,
             frame,
             wo: -ray.dir,
-            material: hit.material,
-            emitter: hit.emitter,
+            material: shading.material,
+            emitter: shading.emitter,
             beta,
             delta: false,
             pdf_fwd: VertexPdf::ZERO,
             pdf_rev: VertexPdf::ZERO,
+            exit: Exit::at(exit.p, exit.ng, exit.ns),
+            kernel_ratio,
         };
-        v.pdf_fwd = prev.pdf(scene, n.checked_sub(2).map(|i| &path[i]), &v);
+        v.pdf_fwd = prev.pdf(scene, n.checked_sub(2).map(|i| &path[i]), &v, mode);
         if n >= 2 {
             // Now that the successor is known: density of reaching path[n−2] from prev.
-            path[n - 2].pdf_rev = prev.pdf(scene, Some(&v), &path[n - 2]);
+            path[n - 2].pdf_rev = prev.pdf(scene, Some(&v), &path[n - 2], mode.flip());
         }
         if path.push(v).is_err() || path.len() >= max_vertices {
             return;
@@ -154,14 +208,21 @@ fn random_walk<Q: RayQuery + ?Sized>(
         rng.set_dimension(first_dim + (n + 1) as u32 * DIMS_PER_BOUNCE);
 
         // Sample the BSDF for the next direction.
-        let material = &scene.materials[hit.material as usize];
+        let material = &scene.materials[shading.material as usize];
         let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
         let Some(bs) = material.sample(frame.to_local(v.wo), u_lobe, u_dir, mode) else { return };
         if !bs.pdf.is_positive() {
             return;
         }
         let wi = frame.to_world(bs.wi);
-        beta *= bs.f * (bs.wi.z.abs() * shading_normal_correction(mode, v.wo, wi, hit.ng, hit.ns) / bs.pdf.0);
+        // The next segment leaves from: the exit toward the light side (radiance), the
+        // shading point toward the camera side (importance). Its cosine is taken there (eq. 6).
+        let moved_start = (mode == TransportMode::Radiance && kernel_moved).then_some(exit);
+        let (from, cos) = match moved_start {
+            None => (shading, bs.wi.z.abs()),
+            Some(x) => (x, x.ns.dot(wi).abs()),
+        };
+        beta *= bs.f * (cos * shading_normal_correction(mode, v.wo, wi, shading.ng, shading.ns) / bs.pdf.0);
         if beta.is_black() || !beta.is_finite() {
             return;
         }
@@ -171,6 +232,16 @@ fn random_walk<Q: RayQuery + ?Sized>(
         if !survives_roulette(params, (n + 1) as u32, &mut beta, reference, rng) {
             return;
         }
-        ray = spawn_ray(hit.p, hit.ng, wi);
+        ray = spawn_ray(from.p, from.ng, wi);
     }
+}
+
+/// K_other / K_own of a kernel sample `x` drawn around `hit` (the density with which the
+/// opposite sub-path would draw `hit` around `x`, over the one `x` was drawn with); 1 where
+/// the own density vanishes (outside the formula's support on folded surfaces).
+fn kernel_ratio(junctions: Option<&Junctions>, hit: &crate::geometry::SurfaceHit, x: &crate::geometry::SurfaceHit) -> f32 {
+    let Some(j) = junctions else { return 1.0 };
+    let own = j.kernel.density(hit, hit.ng, x.p, x.ng).0;
+    let other = j.kernel.density(x, x.ng, hit.p, hit.ng).0;
+    if own > 0.0 { other / own } else { 1.0 }
 }

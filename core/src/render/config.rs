@@ -36,11 +36,15 @@ pub enum EstimatorKind {
     /// Segment light tracing: the sequential segment sampler from the lights with a kernel
     /// between segments, last segment to the pinhole.
     Slt,
+    /// Segment BDPT: camera and light segment sequences joined by bridge segments, MIS
+    /// over every technique.
+    Sbdpt,
 }
 
 impl EstimatorKind {
     /// Every estimator, in listing order (its index is the browser's and the C ABI's id).
-    pub const ALL: [EstimatorKind; 10] = [Self::Pt, Self::Lt, Self::Bdpt, Self::Lvcbpt, Self::Spcbpt, Self::Ppm, Self::Bpm, Self::Vcm, Self::Spt, Self::Slt];
+    pub const ALL: [EstimatorKind; 11] =
+        [Self::Pt, Self::Lt, Self::Bdpt, Self::Lvcbpt, Self::Spcbpt, Self::Ppm, Self::Bpm, Self::Vcm, Self::Spt, Self::Slt, Self::Sbdpt];
 
     /// The name as typed on a command line.
     pub fn name(self) -> &'static str {
@@ -55,6 +59,7 @@ impl EstimatorKind {
             Self::Vcm => "vcm",
             Self::Spt => "spt",
             Self::Slt => "slt",
+            Self::Sbdpt => "sbdpt",
         }
     }
 
@@ -74,6 +79,9 @@ impl EstimatorKind {
             }
             Self::Slt => {
                 "segment light tracing: segments sampled in sequence from the lights, joined by a kernel (--kernel), last segment to the camera; = lt with the Dirac kernel"
+            }
+            Self::Sbdpt => {
+                "segment BDPT: camera and light segment sequences joined by a kernel (--kernel), every pair of prefixes by a bridge segment, balance-heuristic MIS; = bdpt with the Dirac kernel"
             }
         }
     }
@@ -101,6 +109,7 @@ impl EstimatorKind {
             Self::Vcm => EstimatorConfig::Merging(MergeMode::Vcm, MergingConfig::DEFAULT),
             Self::Spt => EstimatorConfig::Segment(SegmentAlgorithm::PathTracing, SegmentConfig::DEFAULT),
             Self::Slt => EstimatorConfig::Segment(SegmentAlgorithm::LightTracing, SegmentConfig::DEFAULT),
+            Self::Sbdpt => EstimatorConfig::Segment(SegmentAlgorithm::Bidirectional, SegmentConfig::DEFAULT),
         }
     }
 }
@@ -144,6 +153,7 @@ impl EstimatorConfig {
             Self::Merging(MergeMode::Vcm, _) => EstimatorKind::Vcm,
             Self::Segment(SegmentAlgorithm::PathTracing, _) => EstimatorKind::Spt,
             Self::Segment(SegmentAlgorithm::LightTracing, _) => EstimatorKind::Slt,
+            Self::Segment(SegmentAlgorithm::Bidirectional, _) => EstimatorKind::Sbdpt,
         }
     }
 
@@ -330,6 +340,8 @@ pub enum SegmentAlgorithm {
     PathTracing,
     /// Segments from the lights ([`crate::segment::slt`]).
     LightTracing,
+    /// Segments from both, joined by bridges ([`crate::segment::sbdpt`]).
+    Bidirectional,
 }
 
 /// The kernel joining consecutive segments, as chosen on the command line (its radius

@@ -190,6 +190,13 @@ impl ChunkOutput {
         &mut self.pixels
     }
 
+    /// The pixel buffer (as [`Self::pixel_buffer`]) and the splats, for estimators that
+    /// write both (BDPT's t = 1 strategies).
+    pub fn pixels_and_splats(&mut self) -> (&mut [Rgb], &mut Vec<Splat>) {
+        self.pixel_buffer();
+        (&mut self.pixels, &mut self.splats)
+    }
+
     /// The light-path store of this chunk (switching the data to it if needed).
     pub fn light_paths(&mut self) -> (&mut LightPaths, &mut Vec<PrefixMemo>) {
         if !matches!(self.data, PhaseData::LightPaths { .. }) {

@@ -55,8 +55,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for OnePhase {
         out.counters = match self.which {
             Simple::Pt => pt::render_pixels(scene, tracer, params, pass, items, out.pixel_buffer()),
             Simple::Bdpt => {
-                out.pixel_buffer();
-                let (pixels, splats) = (&mut out.pixels, &mut out.splats);
+                let (pixels, splats) = out.pixels_and_splats();
                 bdpt::render_pixels(scene, tracer, params, pass, items, pixels, &mut |s| splats.push(s))
             }
             Simple::Lt => {

@@ -66,6 +66,7 @@ mod surfaces;
 
 pub mod contribution;
 pub mod sampler;
+pub mod sbdpt;
 pub mod slt;
 pub mod spt;
 

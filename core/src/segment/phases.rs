@@ -3,9 +3,9 @@
 //! | stage | phase | items | reduction |
 //! |---|---|---|---|
 //! | setup 0 | `footprint` | W·H pixels (none unless the disk kernel's radius is in pixel footprints) | mean footprint → r |
-//! | pass 0 | `camera` (segment PT) or `light paths` (segment LT, W·H paths) | W·H | camera samples staged or splats pushed; pass committed with splat factor 1/(W·H) |
+//! | pass 0 | `camera` (segment PT, segment BDPT) or `light paths` (segment LT, W·H paths) | W·H | camera samples staged, splats pushed (LT, BDPT's t = 1); pass committed with splat factor 1/(W·H) |
 
-use super::{Kernel, slt, spt};
+use super::{Kernel, sbdpt, slt, spt};
 use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;
 use crate::merge::Footprint;
@@ -14,7 +14,7 @@ use crate::render::{ChunkOutput, Context, Cursor, Film, KernelChoice, Phase, Pha
 /// Items per chunk.
 const CHUNK: u32 = 1024;
 
-/// Segment PT or segment LT configured for one film.
+/// Segment PT, LT or BDPT configured for one film.
 #[derive(Clone, Debug)]
 pub struct Segments {
     /// Settings shared by the estimators.
@@ -69,6 +69,10 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Segments {
                     let splats = &mut out.splats;
                     out.counters = slt::trace_paths(scene, tracer, params, self.kernel, pass, items, &mut |s| splats.push(s));
                 }
+                SegmentAlgorithm::Bidirectional => {
+                    let (pixels, splats) = out.pixels_and_splats();
+                    out.counters = sbdpt::render_pixels(scene, tracer, params, self.kernel, pass, items, pixels, &mut |s| splats.push(s));
+                }
             },
             _ => {}
         }
@@ -80,7 +84,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Segments {
             }
         } else {
             for out in outputs.iter() {
-                if self.algorithm == SegmentAlgorithm::PathTracing {
+                if self.algorithm != SegmentAlgorithm::LightTracing {
                     film.set_camera_samples(out.items.clone(), &out.pixels);
                 }
                 film.push_splats(&out.splats);

@@ -21,10 +21,11 @@ use core::ops::Range;
 
 use super::{Counters, RenderParams, Splat};
 use crate::geometry::RayQuery;
-use crate::path::{LightPointSample, connect, light_subpath, mis::mis_weight, pixel_camera_subpath, vertex_budgets};
+use crate::path::{LightPointSample, connect, light_subpath_with_kernel, mis::mis_weight, pixel_camera_subpath_with_kernel, vertex_budgets};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Context;
 use crate::scene::Scene;
+use crate::segment::{Junctions, Kernel, LIGHT_KERNEL_KEY};
 use crate::spectrum::Rgb;
 
 /// Render one BDPT sample for each pixel in `pixels` of pass `pass`; camera-side
@@ -38,13 +39,30 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
     out: &mut [Rgb],
     splat: &mut dyn FnMut(Splat),
 ) -> Counters {
+    render_pixels_with_kernel(scene, tracer, params, Kernel::Dirac, pass, pixels, out, splat)
+}
+
+/// [`render_pixels`] with `kernel` joining consecutive segments on both sub-paths, and
+/// every connection a bridge segment: segment BDPT ([`crate::segment::sbdpt`]). With the
+/// Dirac kernel it is BDPT; the kernels draw from streams of their own.
+pub(crate) fn render_pixels_with_kernel<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    kernel: Kernel,
+    pass: u32,
+    pixels: Range<u32>,
+    out: &mut [Rgb],
+    splat: &mut dyn FnMut(Splat),
+) -> Counters {
     let mut counters = Counters::default();
     let ctx = Context { scene, tracer };
     let (max_camera, max_light) = vertex_budgets(params);
     for (slot, pixel) in out.iter_mut().zip(pixels) {
-        let camera = pixel_camera_subpath(scene, tracer, params, pixel, pass, max_camera, &mut counters);
+        let camera = pixel_camera_subpath_with_kernel(scene, tracer, params, pixel, pass, max_camera, kernel, &mut counters);
         let mut light_rng = SampleStream::for_sample(params.seed, Stream::Light, pixel, pass, 0);
-        let light = light_subpath(scene, tracer, params, max_light, &mut light_rng, &mut counters);
+        let mut light_junctions = Junctions::for_path(kernel, params.seed, pixel, pass, LIGHT_KERNEL_KEY);
+        let light = light_subpath_with_kernel(scene, tracer, params, max_light, &mut light_rng, light_junctions.as_mut(), &mut counters);
         let mut connect_rng = SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, 0);
         let mut l = Rgb::ZERO;
         for t in 1..=camera.len() {

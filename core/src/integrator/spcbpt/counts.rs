@@ -65,7 +65,7 @@ fn light_prefix_weights_from(scene: &Scene, x: &[Vertex], known: &[PrefixMemo], 
         if !scene.materials[v.material as usize].is_delta() {
             let mut turned = *v;
             turned.wo = (prev.p - v.p).normalize_or_zero();
-            let pdf = turned.pdf(scene, Some(prev), next).value();
+            let pdf = turned.pdf(scene, Some(prev), next, TransportMode::Importance).value();
             w = if pdf > 0.0 { w * turned.f(scene, next, TransportMode::Importance) * (geometry(v, next) / pdf) } else { Rgb::ZERO };
         }
         out[k + 2] = finite(scalar(w));

@@ -30,6 +30,7 @@
 //! weights are BDPT's (to rounding), with all connection counts 0 they are bidirectional
 //! photon mapping's.
 
+use crate::bsdf::TransportMode;
 use crate::measure::{SolidAnglePdf, VertexPdf};
 use crate::path::Vertex;
 use crate::path::mis::{is_delta_light, remap0, strategy_vertex};
@@ -182,8 +183,8 @@ pub fn connection_weight(
         let qs = light_at(s - 1);
         let qs_minus = (s > 1).then(|| light_at(s - 2));
         // Densities around the connection, for this technique.
-        let pt_rev = qs.pdf(scene, qs_minus, pt);
-        let qs_rev = pt.pdf(scene, pt_minus, qs);
+        let pt_rev = qs.pdf(scene, qs_minus, pt, TransportMode::Importance);
+        let qs_rev = pt.pdf(scene, pt_minus, qs, TransportMode::Radiance);
         let light_cut = if s == 1 {
             if is_delta_light(scene, qs) { 0.0 } else { tech.count(0, t + 1) }
         } else if s > 2 && qs_minus.is_some_and(|q| q.delta) {
@@ -196,7 +197,7 @@ pub fn connection_weight(
             rev: qs_rev,
             merge: s > 1 && mergeable(scene, qs),
             cut: light_cut,
-            prev: qs_minus.map(|qm| (qm, qs.pdf(scene, Some(pt), qm), light_b[s - 2], s > 2)),
+            prev: qs_minus.map(|qm| (qm, qs.pdf(scene, Some(pt), qm, TransportMode::Radiance), light_b[s - 2], s > 2)),
         };
         let camera_cut = if t > 1 && !pt_minus.is_some_and(|p| p.delta) { tech.count(s + 1, t - 1) } else { 0.0 };
         let camera_side = Junction {
@@ -204,7 +205,7 @@ pub fn connection_weight(
             rev: pt_rev,
             merge: t > 1 && mergeable(scene, pt),
             cut: camera_cut,
-            prev: pt_minus.map(|pm| (pm, pt.pdf(scene, Some(qs), pm), camera_b[t - 2], t > 2)),
+            prev: pt_minus.map(|pm| (pm, pt.pdf(scene, Some(qs), pm, TransportMode::Importance), camera_b[t - 2], t > 2)),
         };
         side_sum(scene, tech, &light_side) + side_sum(scene, tech, &camera_side)
     };
@@ -247,7 +248,7 @@ impl PhotonSums {
         Self {
             fwd: remap0(x.pdf_fwd) as f32,
             cut: if j > 1 && x_prev.delta { 0.0 } else { tech.count(j, 2) as f32 },
-            g_prev: x.convert_density(SolidAnglePdf(1.0), x_prev).value(),
+            g_prev: x.convert_density(SolidAnglePdf(1.0), x_prev, TransportMode::Radiance).value(),
             a: mu + light_b[j - 1] / remap0(x_prev.pdf_fwd),
         }
     }
@@ -282,7 +283,7 @@ impl CameraSums {
             let cut = if z.delta || y_prev.delta { 0.0 } else { tech.count(4, t - 2) };
             let merge_z = if mergeable(scene, z) { tech.merge * remap0(z.pdf_rev) } else { 0.0 };
             sums.has_side = true;
-            sums.g_prev = y.convert_density(SolidAnglePdf(1.0), y_prev).value();
+            sums.g_prev = y.convert_density(SolidAnglePdf(1.0), y_prev, TransportMode::Importance).value();
             sums.fwd_prev = remap0(y_prev.pdf_fwd);
             sums.merge_prev = if mergeable(scene, y_prev) { tech.merge } else { 0.0 };
             sums.inner = cut + merge_z + remap0(z.pdf_rev) / remap0(z.pdf_fwd) * camera_b[t - 3];
