@@ -17,12 +17,19 @@ use ember_core::scene::Scene;
 use glam::Vec3;
 
 /// Density (f64, per unit area at `to`) of sampling `to` from `from`, which was reached
-/// from `prev` (None for endpoints). Independent of the BDPT vertex code.
-pub fn area_density(scene: &Scene, prev: Option<&Vertex>, from: &Vertex, to: &Vertex) -> f64 {
-    let d = to.p - from.p;
+/// from `prev` (None for endpoints), by a walk in `mode`: `Radiance` from the camera
+/// side (`to` lies toward the light), `Importance` from the light side. Independent of the
+/// BDPT vertex code. On segment paths (segment BDPT) the segment between camera-side `a`
+/// and light-side `b` runs from `a.exit` to `b.p`; on vertex paths `exit` is `p`.
+pub fn area_density(scene: &Scene, prev: Option<&Vertex>, from: &Vertex, to: &Vertex, mode: TransportMode) -> f64 {
+    let (start, end, n_end) = match mode {
+        TransportMode::Radiance => (from.exit.p, to.p, to.ng),
+        TransportMode::Importance => (from.p, to.exit.p, to.exit.ng),
+    };
+    let d = end - start;
     let d2 = d.length_squared() as f64;
     let w = d.normalize();
-    let cos_to = if to.ng == Vec3::ZERO { 1.0 } else { to.ng.dot(w).abs() as f64 };
+    let cos_to = if to.ng == Vec3::ZERO { 1.0 } else { n_end.dot(w).abs() as f64 };
     let solid_angle = match from.kind {
         VertexKind::Camera => scene.camera.pdf_dir(w).0 as f64,
         VertexKind::Light(id) => scene.lights[id as usize].pdf_le(from.p, from.ng, w).1.0 as f64,
@@ -39,12 +46,46 @@ pub fn area_density(scene: &Scene, prev: Option<&Vertex>, from: &Vertex, to: &Ve
                 return cos_to / d2;
             }
             let frame = Frame::from_normal(from.frame.n);
-            let wp = (prev.unwrap().p - from.p).normalize();
+            let prev = prev.unwrap();
+            let wp = match mode {
+                TransportMode::Radiance => (prev.exit.p - from.p).normalize(),
+                TransportMode::Importance => (prev.p - from.exit.p).normalize(),
+            };
             m.pdf(frame.to_local(wp), frame.to_local(w), TransportMode::Radiance).0 as f64
         }
         VertexKind::InfiniteLight => unreachable!("no infinite lights in this scene"),
     };
     solid_angle * cos_to / d2
+}
+
+/// The disk kernel's density (f64, per unit area at `sample`) of drawing `sample` around
+/// `center` (normals `n_sample`, `n_center`), radius `r`: |n_s·n_c| / (π r²) within the
+/// tangent disk and r of the tangent plane. Written here from the definition, apart from
+/// `ember_core::segment::Kernel`.
+pub fn disk_kernel_density(r: f64, center: Vec3, n_center: Vec3, sample: Vec3, n_sample: Vec3) -> f64 {
+    let (c, n, x) = (center.as_dvec3(), n_center.as_dvec3().normalize(), sample.as_dvec3());
+    let d = x - c;
+    let h = d.dot(n);
+    if (d - n * h).length_squared() >= r * r || h.abs() > r {
+        return 0.0;
+    }
+    n_sample.as_dvec3().normalize().dot(n).abs() / (std::f64::consts::PI * r * r)
+}
+
+/// The kernel density with which junction `v` was drawn from the camera side (the exit
+/// around the hit, `toward_light`) or the light side (the shading point around the exit);
+/// 1 where the junction did not move (the Dirac kernel, the kernel's miss mass).
+fn junction_density(radius: Option<f64>, v: &Vertex, camera_side: bool) -> f64 {
+    match radius {
+        Some(r) if v.exit.p != v.p => {
+            if camera_side {
+                disk_kernel_density(r, v.p, v.ng, v.exit.p, v.exit.ng)
+            } else {
+                disk_kernel_density(r, v.exit.p, v.exit.ng, v.p, v.ng)
+            }
+        }
+        _ => 1.0,
+    }
 }
 
 pub fn origin_density(scene: &Scene, x0: &Vertex) -> f64 {
@@ -65,6 +106,13 @@ pub fn is_delta_surface(scene: &Scene, v: &Vertex) -> bool {
 /// with the sample count `count(s, t)` of each strategy; `None` where a strategy cannot
 /// produce the path.
 pub fn brute_force_weights(scene: &Scene, x: &[Vertex], count: impl Fn(usize, usize) -> f64) -> Vec<Option<f64>> {
+    brute_force_segment_weights(scene, x, None, count)
+}
+
+/// [`brute_force_weights`] of a segment path whose junctions a disk kernel of radius
+/// `radius` moved (segment BDPT): each sub-path vertex also carries the kernel density of
+/// the point its side drew around the one it reached (the light end has no junction).
+pub fn brute_force_segment_weights(scene: &Scene, x: &[Vertex], radius: Option<f64>, count: impl Fn(usize, usize) -> f64) -> Vec<Option<f64>> {
     let n = x.len();
     let mut p = vec![None; n + 1];
     if n == 2 {
@@ -80,17 +128,23 @@ pub fn brute_force_weights(scene: &Scene, x: &[Vertex], count: impl Fn(usize, us
         for i in 0..s {
             prod *= match i {
                 0 => origin_density(scene, &x[0]),
-                1 => area_density(scene, None, &x[0], &x[1]),
-                _ => area_density(scene, Some(&x[i - 2]), &x[i - 1], &x[i]),
+                1 => area_density(scene, None, &x[0], &x[1], TransportMode::Importance),
+                _ => area_density(scene, Some(&x[i - 2]), &x[i - 1], &x[i], TransportMode::Importance),
             };
+            if i > 0 {
+                prod *= junction_density(radius, &x[i], false);
+            }
         }
         for j in 0..t {
             let k = n - 1 - j;
             prod *= match j {
                 0 => 1.0,
-                1 => area_density(scene, None, &x[n - 1], &x[k]),
-                _ => area_density(scene, Some(&x[k + 2]), &x[k + 1], &x[k]),
+                1 => area_density(scene, None, &x[n - 1], &x[k], TransportMode::Radiance),
+                _ => area_density(scene, Some(&x[k + 2]), &x[k + 1], &x[k], TransportMode::Radiance),
             };
+            if j > 0 && k > 0 {
+                prod *= junction_density(radius, &x[k], true);
+            }
         }
         p[s] = Some(prod * count(s, t));
     }
@@ -119,17 +173,17 @@ pub fn strategy_can_produce(scene: &Scene, x: &[Vertex], s: usize) -> bool {
 pub fn split(scene: &Scene, x: &[Vertex], s: usize) -> (Vec<Vertex>, Vec<Vertex>) {
     let mut light: Vec<Vertex> = x[..s].to_vec();
     let mut cam: Vec<Vertex> = x[s..].iter().rev().copied().collect();
-    for path in [&mut light, &mut cam] {
+    for (path, mode) in [(&mut light, TransportMode::Importance), (&mut cam, TransportMode::Radiance)] {
         for i in 0..path.len() {
             path[i].pdf_rev = VertexPdf::ZERO;
             path[i].pdf_fwd = match i {
                 0 if path[0].kind == VertexKind::Camera => VertexPdf::ZERO,
                 0 => path.get(1).or(x.get(1)).map_or(VertexPdf::ZERO, |next| path[0].pdf_light_origin(scene, next)),
-                1 => path[0].pdf(scene, None, &path[1]),
-                _ => path[i - 1].pdf(scene, Some(&path[i - 2]), &path[i]),
+                1 => path[0].pdf(scene, None, &path[1], mode),
+                _ => path[i - 1].pdf(scene, Some(&path[i - 2]), &path[i], mode),
             };
             if i + 2 < path.len() {
-                path[i].pdf_rev = path[i + 1].pdf(scene, Some(&path[i + 2]), &path[i]);
+                path[i].pdf_rev = path[i + 1].pdf(scene, Some(&path[i + 2]), &path[i], mode.flip());
             }
         }
     }
@@ -154,15 +208,19 @@ pub fn for_each_strategy_split(scene: &Scene, x: &[Vertex], mut f: impl FnMut(us
 /// Density (f64) with which the camera side generates x_i of full path `x` (i < n − 1).
 fn camera_side_density(scene: &Scene, x: &[Vertex], i: usize) -> f64 {
     let n = x.len();
-    if i + 1 == n - 1 { area_density(scene, None, &x[n - 1], &x[i]) } else { area_density(scene, Some(&x[i + 2]), &x[i + 1], &x[i]) }
+    if i + 1 == n - 1 {
+        area_density(scene, None, &x[n - 1], &x[i], TransportMode::Radiance)
+    } else {
+        area_density(scene, Some(&x[i + 2]), &x[i + 1], &x[i], TransportMode::Radiance)
+    }
 }
 
 /// Density (f64) with which the light side generates x_i.
 fn light_side_density(scene: &Scene, x: &[Vertex], i: usize) -> f64 {
     match i {
         0 => origin_density(scene, &x[0]),
-        1 => area_density(scene, None, &x[0], &x[1]),
-        _ => area_density(scene, Some(&x[i - 2]), &x[i - 1], &x[i]),
+        1 => area_density(scene, None, &x[0], &x[1], TransportMode::Importance),
+        _ => area_density(scene, Some(&x[i - 2]), &x[i - 1], &x[i], TransportMode::Importance),
     }
 }
 

@@ -126,9 +126,10 @@ fn protocol_passes_do_not_allocate_in_steady_state() {
         EstimatorKind::Ppm.default_config(),
         EstimatorKind::Bpm.default_config(),
         EstimatorKind::Vcm.default_config(),
-        // Segment PT and LT with the disk kernel: the kernel's stream lives on the stack.
+        // Segment PT, LT and BDPT with the disk kernel: the kernels' streams live on the stack.
         EstimatorConfig::Segment(SegmentAlgorithm::PathTracing, SegmentConfig { kernel: KernelChoice::Disk, ..SegmentConfig::DEFAULT }),
         EstimatorConfig::Segment(SegmentAlgorithm::LightTracing, SegmentConfig { kernel: KernelChoice::Disk, ..SegmentConfig::DEFAULT }),
+        EstimatorConfig::Segment(SegmentAlgorithm::Bidirectional, SegmentConfig { kernel: KernelChoice::Disk, ..SegmentConfig::DEFAULT }),
     ];
     for config in configs {
         let mut renderer = Renderer::new(&scene, params, config).unwrap();

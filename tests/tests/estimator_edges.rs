@@ -39,6 +39,7 @@ fn every_estimator_renders_black_at_max_depth_0() {
         EstimatorKind::Vcm.default_config(),
         EstimatorKind::Spt.default_config(),
         EstimatorKind::Slt.default_config(),
+        EstimatorKind::Sbdpt.default_config(),
     ];
     assert_eq!(configs.len(), EstimatorKind::ALL.len(), "every estimator is checked");
     for config in configs {

@@ -38,11 +38,11 @@ fn uniforms(rng: &mut SampleStream) -> SegmentUniforms {
 }
 
 #[test]
-fn segment_pt_and_lt_with_the_dirac_kernel_are_pt_and_lt_bit_for_bit() {
+fn segment_pt_lt_and_bdpt_with_the_dirac_kernel_are_pt_lt_and_bdpt_bit_for_bit() {
     let (scene, geometry, _) = cornell_with_spheres(24, 24).build().unwrap();
     let tracer = BruteForce::new(geometry);
     let params = RenderParams { seed: 9, ..RenderParams::default() };
-    for (vertex, segment) in [(EstimatorKind::Pt, EstimatorKind::Spt), (EstimatorKind::Lt, EstimatorKind::Slt)] {
+    for (vertex, segment) in [(EstimatorKind::Pt, EstimatorKind::Spt), (EstimatorKind::Lt, EstimatorKind::Slt), (EstimatorKind::Bdpt, EstimatorKind::Sbdpt)] {
         let mut a = Passes::new(&scene, &tracer, &params, vertex.default_config());
         let mut b = Passes::new(&scene, &tracer, &params, segment.default_config());
         for pass in 0..2 {
@@ -76,8 +76,8 @@ fn image_mean(img: &[[f64; 3]]) -> f64 {
 
 /// Segment PT with the disk kernel converges to PT's image as r shrinks, with bias ∝ r²
 /// (fitted slope of log|bias| against log r within [1.6, 2.4]) of the sign and size the
-/// Laplacian predicts; segment LT agrees with segment PT at every r (both estimate the
-/// same blurred image), so it converges the same way. Seen failing with the kernel's disk sampled
+/// Laplacian predicts; segment LT and segment BDPT agree with segment PT at every r (all
+/// estimate the same blurred image), so they converge the same way. Seen failing with the kernel's disk sampled
 /// with radius 2r (bias 4× the prediction).
 #[test]
 fn disk_kernel_bias_shrinks_as_r_squared_on_a_plane_under_a_point_light() {
@@ -93,7 +93,7 @@ fn disk_kernel_bias_shrinks_as_r_squared_on_a_plane_under_a_point_light() {
         (stats.mean(), stats.std_error())
     };
     let exact = render(EstimatorKind::Pt.default_config(), 64).0;
-    let alpha = sidak(0.01, 3);
+    let alpha = sidak(0.01, 6);
     let mut points = Vec::new();
     for r in [0.4f64, 0.2, 0.1] {
         let config = SegmentConfig { kernel: KernelChoice::Disk, radius: RadiusRule::Absolute(r as f32) };
@@ -107,6 +107,12 @@ fn disk_kernel_bias_shrinks_as_r_squared_on_a_plane_under_a_point_light() {
         let sigma = (spt_se * spt_se + slt_se * slt_se).sqrt();
         let p = normal_two_sided_p((slt - spt).abs() / sigma);
         assert!(p > alpha, "r = {r}: slt {slt:.5} vs spt {spt:.5} (σ {sigma:.2e}, p = {p:.2e}); pt {exact:.5}");
+        // So does segment BDPT (here: next-event bridges from the kernel's sample and
+        // camera bridges to it, weighted against each other).
+        let (sbdpt, sbdpt_se) = render(EstimatorConfig::Segment(SegmentAlgorithm::Bidirectional, config), 128);
+        let sigma = (spt_se * spt_se + sbdpt_se * sbdpt_se).sqrt();
+        let p = normal_two_sided_p((sbdpt - spt).abs() / sigma);
+        assert!(p > alpha, "r = {r}: sbdpt {sbdpt:.5} vs spt {spt:.5} (σ {sigma:.2e}, p = {p:.2e}); pt {exact:.5}");
     }
     let n = points.len() as f64;
     let (mx, my) = (points.iter().map(|p| p.0).sum::<f64>() / n, points.iter().map(|p| p.1).sum::<f64>() / n);

@@ -24,7 +24,7 @@ use crate::geometry::{RayQuery, spawn_ray_to};
 use crate::math::{Vec2, Vec3};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
-use crate::segment::{Junctions, Kernel, LIGHT_KERNEL_KEY};
+use crate::segment::{Junctions, Kernel, KernelSample, LIGHT_KERNEL_KEY};
 use crate::spectrum::Rgb;
 
 const DIMS_PER_BOUNCE: u32 = 4;
@@ -138,7 +138,14 @@ fn trace_one<Q: RayQuery + ?Sized>(
         let hit = match junctions.as_deref_mut() {
             Some(j) => {
                 counters.rays += 1;
-                *j.sample(tracer, &arrived, -ray.dir).moved().unwrap_or(&arrived)
+                match j.sample(tracer, &arrived, -ray.dir) {
+                    KernelSample::AtEnd => arrived,
+                    KernelSample::Moved(x) => {
+                        // The integrand's kernel is the camera-direction one.
+                        beta *= j.kernel.reversed_ratio(&arrived, &x);
+                        x
+                    }
+                }
             }
             None => arrived,
         };

@@ -178,8 +178,14 @@ fn random_walk<Q: RayQuery + ?Sized>(
         let kernel_moved = moved.moved().is_some();
         let (shading, exit, kernel_ratio) = match (moved, mode) {
             (KernelSample::AtEnd, _) => (hit, hit, 1.0),
-            (KernelSample::Moved(x), TransportMode::Radiance) => (hit, x, kernel_ratio(junctions.as_deref(), &hit, &x)),
-            (KernelSample::Moved(x), TransportMode::Importance) => (x, hit, kernel_ratio(junctions.as_deref(), &hit, &x)),
+            (KernelSample::Moved(x), TransportMode::Radiance) => (hit, x, kernel_reversed_ratio(junctions.as_deref(), &hit, &x)),
+            (KernelSample::Moved(x), TransportMode::Importance) => {
+                // The light walk drew y_i around x_{i+1}; the integrand's kernel is the
+                // camera-direction one (`Kernel::reversed_ratio`).
+                let ratio = kernel_reversed_ratio(junctions.as_deref(), &hit, &x);
+                beta *= ratio;
+                (x, hit, ratio)
+            }
         };
         let frame = Frame::from_normal(shading.ns);
         let mut v = Vertex {
@@ -236,12 +242,7 @@ fn random_walk<Q: RayQuery + ?Sized>(
     }
 }
 
-/// K_other / K_own of a kernel sample `x` drawn around `hit` (the density with which the
-/// opposite sub-path would draw `hit` around `x`, over the one `x` was drawn with); 1 where
-/// the own density vanishes (outside the formula's support on folded surfaces).
-fn kernel_ratio(junctions: Option<&Junctions>, hit: &crate::geometry::SurfaceHit, x: &crate::geometry::SurfaceHit) -> f32 {
-    let Some(j) = junctions else { return 1.0 };
-    let own = j.kernel.density(hit, hit.ng, x.p, x.ng).0;
-    let other = j.kernel.density(x, x.ng, hit.p, hit.ng).0;
-    if own > 0.0 { other / own } else { 1.0 }
+/// [`crate::segment::Kernel::reversed_ratio`] of the junctions' kernel (1 without one).
+fn kernel_reversed_ratio(junctions: Option<&Junctions>, hit: &crate::geometry::SurfaceHit, x: &crate::geometry::SurfaceHit) -> f32 {
+    junctions.map_or(1.0, |j| j.kernel.reversed_ratio(hit, x))
 }

@@ -94,6 +94,20 @@ impl Kernel {
         }
         AreaPdf(nx.dot(n).abs() / (core::f32::consts::PI * radius * radius))
     }
+
+    /// K(x → y) / K(y → x) for a sample `x` drawn around `y`: the continuous density of
+    /// drawing `y` around `x` over that of drawing `x` around `y` (1 where the latter
+    /// vanishes, and for the Dirac kernel). The segment path integral's K joins y_i to
+    /// x_{i+1} in the camera's direction (segment PT draws it as it is); a light walk
+    /// reaches x_{i+1} and draws y_i around it, so it weighs each junction by this ratio
+    /// to estimate the same integral. On planar neighbourhoods the disk kernel is
+    /// symmetric and the ratio is 1; across folds it is not.
+    pub fn reversed_ratio(&self, y: &SurfaceHit, x: &SurfaceHit) -> f32 {
+        // The density does not depend on the side, only on the tangent plane.
+        let own = self.density(y, y.ng, x.p, x.ng).0;
+        let other = self.density(x, x.ng, y.p, y.ng).0;
+        if own > 0.0 { other / own } else { 1.0 }
+    }
 }
 
 /// The kernel with the random stream its samples come from: one per camera or light
