@@ -101,9 +101,10 @@ pub fn light_subpath_with_kernel<Q: RayQuery + ?Sized>(
         v0.delta = light.is_delta();
         let _ = path.push(v0);
         random_walk(scene, tracer, params, ray, beta, max_vertices, TransportMode::Importance, rng, junctions.as_deref_mut(), counters, &mut path);
-        // The second vertex's forward density is the disk's position density, per area.
+        // The second vertex's forward density is the disk's position density, per area
+        // at the point the ray reached (its exit, which a light walk's kernel leaves).
         if let Some(v1) = path.get_mut(1) {
-            v1.pdf_fwd = VertexPdf::at_point(AreaPdf(pdf_pos * if v1.is_on_surface() { v1.ng.dot(es.dir).abs() } else { 1.0 }));
+            v1.pdf_fwd = VertexPdf::at_point(AreaPdf(pdf_pos * if v1.is_on_surface() { v1.exit.ng.dot(es.dir).abs() } else { 1.0 }));
         }
     } else {
         // A point or spot light's position is a Dirac: its origin density is the
