@@ -125,7 +125,7 @@ fn parse_region(text: &str) -> Result<[u32; 4], String> {
 use ember_core::merge::RadiusRule;
 /// The light-transport algorithm: the core's one list of estimators.
 pub use ember_core::render::EstimatorKind;
-use ember_core::render::{EstimatorConfig, KernelChoice, LvcbptConfig, MergingConfig, SegmentConfig, SpcbptConfig};
+use ember_core::render::{EstimatorConfig, FilterConfig, KernelChoice, LvcbptConfig, MergingConfig, SegmentConfig, SpcbptConfig};
 
 /// Parses an estimator name; `--help` lists each with its summary.
 fn estimator_parser() -> impl clap::builder::TypedValueParser<Value = EstimatorKind> {
@@ -256,20 +256,24 @@ pub struct CacheArgs {
     /// the radius below around y_i; its radius stays fixed over passes).
     #[arg(long, value_name = "KERNEL", value_enum, default_value_t = KernelArg::Dirac)]
     pub kernel: KernelArg,
-    /// PPM/BPM/VCM: initial merging radius r₀ in scene units; SPT/SLT/SBDPT: the disk kernel's
+    /// PPM/BPM/VCM/MVF: initial merging radius r₀ in scene units; SPT/SLT/SBDPT: the disk kernel's
     /// radius [default: 4 pixel footprints].
     #[arg(long, value_name = "R", allow_negative_numbers = true, conflicts_with_all = ["radius_footprints", "radius_scene"])]
     pub radius: Option<f32>,
-    /// PPM/BPM/VCM: r₀ as a multiple of the mean pixel footprint (hit distance × pixel
+    /// PPM/BPM/VCM/MVF: r₀ as a multiple of the mean pixel footprint (hit distance × pixel
     /// angle, averaged over the image; the segment paper's 4) [default: 4].
     #[arg(long, value_name = "K", allow_negative_numbers = true, conflicts_with = "radius_scene")]
     pub radius_footprints: Option<f32>,
-    /// PPM/BPM/VCM: r₀ as a fraction of the scene's bounding-sphere radius (SmallVCM's 0.003).
+    /// PPM/BPM/VCM/MVF: r₀ as a fraction of the scene's bounding-sphere radius (SmallVCM's 0.003).
     #[arg(long, value_name = "F", allow_negative_numbers = true)]
     pub radius_scene: Option<f32>,
-    /// PPM/BPM/VCM: radius reduction α in (0, 1]: r_i = r₀ (i + 1)^((α − 1)/2); 1 keeps r fixed.
+    /// PPM/BPM/VCM/MVF: radius reduction α in (0, 1]: r_i = r₀ (i + 1)^((α − 1)/2); 1 keeps r fixed.
     #[arg(long, value_name = "ALPHA", allow_negative_numbers = true, default_value_t = MergingConfig::DEFAULT.alpha)]
     pub alpha: f32,
+    /// MVF: segments per path at most, each one propagation sweep per pass, 1 to 64
+    /// [default: the scene's max_depth; 16 where it is unbounded].
+    #[arg(long, value_name = "N")]
+    pub max_segments: Option<u32>,
 }
 
 impl Default for CacheArgs {
@@ -293,6 +297,7 @@ impl Default for CacheArgs {
             radius_footprints: None,
             radius_scene: None,
             alpha: MergingConfig::DEFAULT.alpha,
+            max_segments: None,
         }
     }
 }
@@ -340,6 +345,10 @@ impl CacheArgs {
         };
         SegmentConfig { kernel, radius: self.radius_rule() }
     }
+    /// Path filtering's configuration from these options.
+    pub fn filter(&self) -> FilterConfig {
+        FilterConfig { radius: self.radius_rule(), alpha: self.alpha, max_segments: self.max_segments }
+    }
     /// The configuration of `estimator` (these options apply to the cache-based and
     /// merging estimators only).
     pub fn config_for(&self, estimator: EstimatorKind) -> EstimatorConfig {
@@ -348,6 +357,7 @@ impl CacheArgs {
             (EstimatorKind::Spcbpt, _) => EstimatorConfig::Spcbpt(self.spcbpt()),
             (_, EstimatorConfig::Merging(mode, _)) => EstimatorConfig::Merging(mode, self.merging()),
             (_, EstimatorConfig::Segment(algorithm, _)) => EstimatorConfig::Segment(algorithm, self.segment()),
+            (_, EstimatorConfig::Filter(_)) => EstimatorConfig::Filter(self.filter()),
             (_, other) => other,
         }
     }

@@ -162,6 +162,16 @@ impl CoreRenderer {
                 ember_core::segment::Kernel::Disk { radius } => vec![format!("{:<10} kernel: disk of radius {radius:.4e}", self.renderer.kind().name())],
                 ember_core::segment::Kernel::Dirac => vec![format!("{:<10} kernel: dirac", self.renderer.kind().name())],
             },
+            Renderer::Filter(f) => vec![format!(
+                "{:<10} memory per pass: {:.1} MiB ({} nodes, {} reused segments, {:.0} B per pixel); {} segments per path; radius r0 = {:.4e}",
+                self.renderer.kind().name(),
+                mib(f.size_bytes()),
+                f.nodes.len(),
+                f.pairs(),
+                f.size_bytes() as f64 / (self.prepared.scene.camera.width() as f64 * self.prepared.scene.camera.height() as f64).max(1.0),
+                f.segments,
+                f.r0
+            )],
             Renderer::OnePhase(_) => Vec::new(),
         }
     }

@@ -39,12 +39,15 @@ pub enum EstimatorKind {
     /// Segment BDPT: camera and light segment sequences joined by bridge segments, MIS
     /// over every technique.
     Sbdpt,
+    /// Multi-vertex path filtering: recursive MMIS (eq. 18) over camera segment
+    /// sequences, computed by propagation, progressive kernel.
+    Mvf,
 }
 
 impl EstimatorKind {
     /// Every estimator, in listing order (its index is the browser's and the C ABI's id).
-    pub const ALL: [EstimatorKind; 11] =
-        [Self::Pt, Self::Lt, Self::Bdpt, Self::Lvcbpt, Self::Spcbpt, Self::Ppm, Self::Bpm, Self::Vcm, Self::Spt, Self::Slt, Self::Sbdpt];
+    pub const ALL: [EstimatorKind; 12] =
+        [Self::Pt, Self::Lt, Self::Bdpt, Self::Lvcbpt, Self::Spcbpt, Self::Ppm, Self::Bpm, Self::Vcm, Self::Spt, Self::Slt, Self::Sbdpt, Self::Mvf];
 
     /// The name as typed on a command line.
     pub fn name(self) -> &'static str {
@@ -60,6 +63,7 @@ impl EstimatorKind {
             Self::Spt => "spt",
             Self::Slt => "slt",
             Self::Sbdpt => "sbdpt",
+            Self::Mvf => "mvf",
         }
     }
 
@@ -82,6 +86,9 @@ impl EstimatorKind {
             }
             Self::Sbdpt => {
                 "segment BDPT: camera and light segment sequences joined by a kernel (--kernel), every pair of prefixes by a bridge segment, balance-heuristic MIS; = bdpt with the Dirac kernel"
+            }
+            Self::Mvf => {
+                "multi-vertex path filtering: camera segments reused by every kernel they fall in, recursive marginal MIS computed by propagation, shrinking kernel (--alpha)"
             }
         }
     }
@@ -110,6 +117,7 @@ impl EstimatorKind {
             Self::Spt => EstimatorConfig::Segment(SegmentAlgorithm::PathTracing, SegmentConfig::DEFAULT),
             Self::Slt => EstimatorConfig::Segment(SegmentAlgorithm::LightTracing, SegmentConfig::DEFAULT),
             Self::Sbdpt => EstimatorConfig::Segment(SegmentAlgorithm::Bidirectional, SegmentConfig::DEFAULT),
+            Self::Mvf => EstimatorConfig::Filter(FilterConfig::DEFAULT),
         }
     }
 }
@@ -135,8 +143,10 @@ pub enum EstimatorConfig {
     Spcbpt(SpcbptConfig),
     /// PPM, BPM or VCM.
     Merging(MergeMode, MergingConfig),
-    /// Segment PT or segment LT.
+    /// Segment PT, LT or BDPT.
     Segment(SegmentAlgorithm, SegmentConfig),
+    /// Multi-vertex path filtering.
+    Filter(FilterConfig),
 }
 
 impl EstimatorConfig {
@@ -154,6 +164,7 @@ impl EstimatorConfig {
             Self::Segment(SegmentAlgorithm::PathTracing, _) => EstimatorKind::Spt,
             Self::Segment(SegmentAlgorithm::LightTracing, _) => EstimatorKind::Slt,
             Self::Segment(SegmentAlgorithm::Bidirectional, _) => EstimatorKind::Sbdpt,
+            Self::Filter(_) => EstimatorKind::Mvf,
         }
     }
 
@@ -165,6 +176,7 @@ impl EstimatorConfig {
             Self::Spcbpt(c) => c.validate(),
             Self::Merging(_, c) => c.validate(),
             Self::Segment(_, c) => c.validate(),
+            Self::Filter(c) => c.validate(),
         }
     }
 }
@@ -187,6 +199,8 @@ pub struct MemoryEstimate {
 const FILM_BYTES_PER_PIXEL: u64 = 24 + 12;
 /// Assumed vertices per light path for the estimate.
 const VERTICES_PER_PATH: u64 = 8;
+/// Assumed kernel neighbours per node of path filtering for the estimate.
+const FILTER_NEIGHBOURS: u64 = 32;
 
 impl EstimatorConfig {
     /// The [`MemoryEstimate`] for a film of `pixels` pixels.
@@ -206,6 +220,12 @@ impl EstimatorConfig {
                 } else {
                     (paths + dataset + gamma, "the light paths of a pass", "--light-paths")
                 }
+            }
+            Self::Filter(_) => {
+                // Per node: itself, its denominators, two radiance vectors and its row,
+                // assuming 32 kernel neighbours (a pair is a u32 and three f32).
+                let node = core::mem::size_of::<crate::segment::filter::Node>() as u64 + 16 + 24 + FILTER_NEIGHBOURS * 16;
+                (pixels as u64 * VERTICES_PER_PATH * node, "the filtering rows of a pass", "--radius-footprints or --max-segments")
             }
             Self::Merging(_, c) => {
                 let photon = core::mem::size_of::<crate::integrator::vcm::Photon>() as u64 + 4 * 3 + 12 + 8;
@@ -559,5 +579,50 @@ mod tests {
         assert_eq!(c.subspaces_for(921_600), 960);
         assert_eq!(c.subspaces_for(100), 16);
         assert_eq!(c.q_paths_for(1280 * 720), 1_843_200);
+    }
+}
+
+/// Path filtering's settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilterConfig {
+    /// How the initial kernel radius r₀ is chosen (default: 4 pixel footprints, the
+    /// segment paper's heuristic).
+    pub radius: RadiusRule,
+    /// Kernel reduction α ∈ (0, 1]: r_i = r₀ (i + 1)^((α − 1)/2) (default 0.67).
+    pub alpha: f32,
+    /// Segments per path at most [default: the scene's max_depth; 16 where it is
+    /// unbounded]. Each costs one propagation sweep.
+    pub max_segments: Option<u32>,
+}
+
+/// Segments per path where neither max_depth nor `--max-segments` bounds them.
+pub const DEFAULT_FILTER_SEGMENTS: u32 = 16;
+/// Largest `--max-segments` (one propagation phase each).
+pub const MAX_FILTER_SEGMENTS: u32 = 64;
+
+impl FilterConfig {
+    /// The defaults.
+    pub const DEFAULT: Self = Self { radius: RadiusRule::DEFAULT, alpha: 0.67, max_segments: None };
+
+    /// Segments per path under `max_depth`.
+    pub fn segments(&self, max_depth: crate::integrator::MaxDepth) -> u32 {
+        let cap = self.max_segments.unwrap_or(if max_depth.0 < 0 { DEFAULT_FILTER_SEGMENTS } else { MAX_FILTER_SEGMENTS });
+        max_depth.capped(cap.min(MAX_FILTER_SEGMENTS))
+    }
+
+    /// Check every field against its range.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        check_radius(self.radius)?;
+        check_f32("alpha", self.alpha, self.alpha > 0.0 && self.alpha <= 1.0, "(0, 1]")?;
+        match self.max_segments {
+            Some(n) if !(1..=MAX_FILTER_SEGMENTS).contains(&n) => Err(ConfigError { field: "max-segments", value: n as f64, allowed: "1 to 64" }),
+            _ => Ok(()),
+        }
+    }
+}
+
+impl Default for FilterConfig {
+    fn default() -> Self {
+        Self::DEFAULT
     }
 }

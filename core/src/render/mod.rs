@@ -40,8 +40,8 @@ mod renderer;
 /// What every phase reads: the scene and the ray queries (defined with the scene).
 pub use crate::scene::Context;
 pub use config::{
-    ConfigError, EstimatorConfig, EstimatorKind, KernelChoice, LvcbptConfig, MAX_DATASET, MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig,
-    SegmentAlgorithm, SegmentConfig, SpcbptConfig,
+    ConfigError, DEFAULT_FILTER_SEGMENTS, EstimatorConfig, EstimatorKind, FilterConfig, KernelChoice, LvcbptConfig, MAX_DATASET, MAX_FILTER_SEGMENTS,
+    MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig, SegmentAlgorithm, SegmentConfig, SpcbptConfig,
 };
 pub use film::Film;
 pub use renderer::Renderer;
@@ -126,6 +126,8 @@ pub enum PhaseData {
     Sums(Vec<f64>),
     /// Training records (SPCBPT's dataset).
     Training(TrainingSet),
+    /// Multi-vertex filtering's per-chunk buffers (nodes, denominators, rows, radiance).
+    Filter(alloc::boxed::Box<crate::segment::filter::FilterChunk>),
     /// Stage-1 tables and norms for a range of eye subspaces (SPCBPT).
     GammaTables {
         /// Γ(· | e) restricted to the pass's non-empty subspaces, per eye subspace.
@@ -180,6 +182,18 @@ impl ChunkOutput {
                 tables.clear();
                 norms.clear();
             }
+            PhaseData::Filter(chunk) => chunk.clear(),
+        }
+    }
+
+    /// The filtering buffers of this chunk (switching the data to them if needed).
+    pub fn filter_chunk(&mut self) -> &mut crate::segment::filter::FilterChunk {
+        if !matches!(self.data, PhaseData::Filter(_)) {
+            self.data = PhaseData::Filter(alloc::boxed::Box::default());
+        }
+        match &mut self.data {
+            PhaseData::Filter(chunk) => chunk,
+            _ => unreachable!("just set"),
         }
     }
 

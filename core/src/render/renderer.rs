@@ -9,6 +9,7 @@ use crate::integrator::vcm::Vcm;
 use crate::integrator::{RenderParams, bdpt, lt, pt};
 use crate::scene::Scene;
 use crate::segment::Segments;
+use crate::segment::filter::Mvf;
 
 use super::{ChunkOutput, ConfigError, Context, Cursor, EstimatorConfig, EstimatorKind, Film, Phase, Phased, Stage};
 
@@ -88,8 +89,10 @@ pub enum Renderer {
     Spcbpt(alloc::boxed::Box<Spcbpt>),
     /// PPM, BPM or VCM.
     Merging(alloc::boxed::Box<Vcm>),
-    /// Segment PT or segment LT.
+    /// Segment PT, LT or BDPT.
     Segment(Segments),
+    /// Multi-vertex path filtering.
+    Filter(alloc::boxed::Box<Mvf>),
 }
 
 impl Renderer {
@@ -106,6 +109,7 @@ impl Renderer {
             EstimatorConfig::Spcbpt(c) => Self::Spcbpt(alloc::boxed::Box::new(Spcbpt::new(params, c, scene.camera.width(), scene.camera.height()))),
             EstimatorConfig::Merging(mode, c) => Self::Merging(alloc::boxed::Box::new(Vcm::new(params, mode, c, pixels))),
             EstimatorConfig::Segment(a, c) => Self::Segment(Segments::new(params, a, c, pixels)),
+            EstimatorConfig::Filter(c) => Self::Filter(alloc::boxed::Box::new(Mvf::new(params, c, pixels))),
         })
     }
 
@@ -121,6 +125,7 @@ impl Renderer {
             Self::Spcbpt(_) => EstimatorKind::Spcbpt,
             Self::Merging(m) => EstimatorConfig::Merging(m.mode, m.config).kind(),
             Self::Segment(s) => EstimatorConfig::Segment(s.algorithm, s.config).kind(),
+            Self::Filter(_) => EstimatorKind::Mvf,
         }
     }
 
@@ -132,6 +137,7 @@ impl Renderer {
             Self::Spcbpt(s) => &s.params,
             Self::Merging(m) => &m.params,
             Self::Segment(s) => &s.params,
+            Self::Filter(f) => &f.params,
         }
     }
 }
@@ -144,6 +150,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Spcbpt(s) => Phased::<Q>::next_phase(&**s),
             Self::Merging(m) => Phased::<Q>::next_phase(&**m),
             Self::Segment(s) => Phased::<Q>::next_phase(s),
+            Self::Filter(f) => Phased::<Q>::next_phase(&**f),
         }
     }
     fn start_pass(&mut self, pass: u32) {
@@ -153,6 +160,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Spcbpt(s) => Phased::<Q>::start_pass(&mut **s, pass),
             Self::Merging(m) => Phased::<Q>::start_pass(&mut **m, pass),
             Self::Segment(s) => Phased::<Q>::start_pass(s, pass),
+            Self::Filter(f) => Phased::<Q>::start_pass(&mut **f, pass),
         }
     }
     fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput) {
@@ -162,6 +170,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Spcbpt(s) => s.map(ctx, phase, out),
             Self::Merging(m) => m.map(ctx, phase, out),
             Self::Segment(s) => s.map(ctx, phase, out),
+            Self::Filter(f) => f.map(ctx, phase, out),
         }
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
@@ -171,6 +180,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Spcbpt(s) => s.reduce(ctx, phase, outputs, film),
             Self::Merging(m) => m.reduce(ctx, phase, outputs, film),
             Self::Segment(s) => s.reduce(ctx, phase, outputs, film),
+            Self::Filter(f) => f.reduce(ctx, phase, outputs, film),
         }
     }
 }

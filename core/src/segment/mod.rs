@@ -65,6 +65,7 @@ mod phases;
 mod surfaces;
 
 pub mod contribution;
+pub mod filter;
 pub mod sampler;
 pub mod sbdpt;
 pub mod slt;

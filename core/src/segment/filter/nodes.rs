@@ -1,0 +1,242 @@
+//! The segments one pass of multi-vertex path filtering samples: camera paths traced by
+//! the sequential segment sampler (eq. 15) with virtual perturbation (each segment starts
+//! where the previous one ended; the kernel is accounted for in the weights), one node per
+//! segment end, with what the weights of eq. (18) need of it.
+
+use alloc::vec::Vec;
+
+use crate::bsdf::TransportMode;
+use crate::geometry::{Ray, RayQuery, SurfaceHit, spawn_ray};
+use crate::integrator::{Counters, RenderParams, SurfacePoint};
+use crate::math::{Vec2, Vec3};
+use crate::rng::{SampleStream, Stream};
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+
+/// "No node".
+pub const NONE: u32 = u32::MAX;
+
+/// Random dimensions per bounce (roulette 1, light choice 1, light point 2, lobe 1,
+/// direction 2, spare 1).
+const DIMS_PER_BOUNCE: u32 = 8;
+
+/// The BSDF-sampled continuation segment leaving a node.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Continuation {
+    /// Probability that it was attempted (roulette and the depth cap), q.
+    pub q: f32,
+    /// Unit direction; zero if none was drawn.
+    pub dir: Vec3,
+    /// Drawn from a Dirac lobe: only its own node may use it.
+    pub delta: bool,
+    /// f |cos| / p of the draw (what a Dirac continuation carries).
+    pub throughput: Rgb,
+    /// The node it reached, or [`NONE`].
+    pub node: u32,
+    /// Radiance from the environment if it escaped.
+    pub escaped: Rgb,
+    /// P(light) · p_light(dir) per solid angle at the start, if a light sample could have
+    /// drawn the same segment (it ended on an area light or escaped to the sky).
+    pub light_pdf: f32,
+}
+
+/// The light-sampled segment leaving a node (next-event estimation).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LightSegment {
+    /// Was a light sample attempted (non-Dirac material, depth allows)?
+    pub attempted: bool,
+    /// Unit direction toward the light; zero if none was drawn.
+    pub dir: Vec3,
+    /// Radiance arriving along it (zero if occluded).
+    pub radiance: Rgb,
+    /// P(light) · p_light per solid angle at the start (for a point or spot light, P(light)).
+    pub pdf: f32,
+    /// A Dirac light (point, spot, directional): no BSDF draw reaches it.
+    pub delta: bool,
+}
+
+/// One segment end of a camera path.
+#[derive(Clone, Copy, Debug)]
+pub struct Node {
+    pub hit: SurfaceHit,
+    /// Unit direction back along the segment that reached it.
+    pub wo: Vec3,
+    /// L_e of the end back along the segment.
+    pub emitted: Rgb,
+    /// All-Dirac material: it reuses nothing and is reused by nobody.
+    pub delta: bool,
+    pub next: Continuation,
+    pub light: LightSegment,
+}
+
+/// Trace the camera paths of pixels `pixels` in pass `pass`, at most `max_segments`
+/// segments each: their nodes go to `nodes` (indices local to it, `next.node` included),
+/// and for each pixel `first` gets the index of the node its camera ray reached (or
+/// [`NONE`]) and `sky` the environment radiance if it escaped.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_camera_nodes<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    max_segments: u32,
+    pass: u32,
+    pixels: core::ops::Range<u32>,
+    nodes: &mut Vec<Node>,
+    first: &mut Vec<u32>,
+    sky: &mut Vec<Rgb>,
+) -> Counters {
+    let mut counters = Counters::default();
+    let width = scene.camera.width().max(1);
+    for pixel in pixels {
+        let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
+        let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
+        let ray = scene.camera.generate_ray(film);
+        let (node, escaped) =
+            if max_segments >= 1 { walk(scene, tracer, params, max_segments, ray, &mut rng, nodes, &mut counters) } else { (NONE, Rgb::ZERO) };
+        first.push(node);
+        sky.push(escaped);
+    }
+    counters
+}
+
+/// Radiance of the environment along `dir`.
+fn environment(scene: &Scene, dir: Vec3) -> Rgb {
+    scene.infinite_lights().fold(Rgb::ZERO, |acc, (_, l)| acc + l.environment_radiance(dir))
+}
+
+/// P(light) · p_light per solid angle of light sampling from `origin` drawing `dir`, for
+/// a segment ending at `hit` (on an area light) or escaping (`hit` = None).
+pub fn light_density(scene: &Scene, origin: Vec3, dir: Vec3, hit: Option<&SurfaceHit>) -> f32 {
+    match hit {
+        Some(h) => h.emitter.map_or(0.0, |id| scene.light_pmf(id) * scene.lights[id as usize].pdf_li(origin, dir, h.p, h.ng).0),
+        None => scene.infinite_lights().map(|(id, l)| scene.light_pmf(id) * l.pdf_li(origin, dir, Vec3::ZERO, Vec3::ZERO).0).sum(),
+    }
+}
+
+/// One camera path; returns the index of its first node (or [`NONE`]) and the
+/// environment radiance if the camera ray escaped.
+#[allow(clippy::too_many_arguments)]
+fn walk<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    max_segments: u32,
+    mut ray: Ray,
+    rng: &mut SampleStream,
+    nodes: &mut Vec<Node>,
+    counters: &mut Counters,
+) -> (u32, Rgb) {
+    let first_dim = rng.dimension();
+    let mut beta = Rgb::ONE;
+    let mut parent = NONE;
+    let mut first = NONE;
+    // `segments` counts the segment the current ray traces.
+    let mut segments = 1u32;
+    loop {
+        counters.rays += 1;
+        let hit = tracer.intersect(&ray);
+        let Some(hit) = hit else {
+            let env = environment(scene, ray.dir);
+            if parent == NONE {
+                return (NONE, env);
+            }
+            nodes[parent as usize].next.escaped = env;
+            break;
+        };
+        let index = nodes.len() as u32;
+        if parent == NONE {
+            first = index;
+        } else {
+            nodes[parent as usize].next.node = index;
+        }
+        let sp = SurfacePoint::new(hit, -ray.dir);
+        let material = sp.material(scene);
+        let emitted = hit.emitter.map_or(Rgb::ZERO, |id| scene.lights[id as usize].radiance(hit.p, hit.ng, sp.wo));
+        let mut node = Node {
+            hit,
+            wo: sp.wo,
+            emitted,
+            delta: material.is_delta(),
+            next: Continuation { node: NONE, ..Continuation::default() },
+            light: LightSegment::default(),
+        };
+        let more = segments < max_segments && params.max_depth.allows(segments + 1);
+        rng.set_dimension(first_dim + segments * DIMS_PER_BOUNCE);
+        let u_rr = rng.next_f32();
+        let (u_light, u_point) = (rng.next_f32(), rng.next_2d());
+        let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
+
+        // The light-sampled segment (next-event estimation), shadow ray included.
+        if more && !node.delta {
+            if let Some(table) = scene.light_selection.as_ref() {
+                node.light.attempted = true;
+                let chosen = table.sample(u_light);
+                let light = &scene.lights[chosen.index];
+                if let Some(ls) = light.sample_li(sp.reflection_origin(), u_point) {
+                    if ls.pdf.is_positive() && !ls.radiance.is_black() {
+                        node.light.dir = ls.wi;
+                        node.light.pdf = chosen.pmf * ls.pdf.0;
+                        node.light.delta = ls.is_delta;
+                        counters.rays += 1;
+                        let shadow = if ls.dist.is_finite() { sp.spawn_to(ls.p, ls.n) } else { sp.spawn(ls.wi) };
+                        if !tracer.occluded(&shadow) {
+                            node.light.radiance = ls.radiance;
+                        }
+                    }
+                }
+            }
+        }
+
+        // The continuation: roulette first, on the throughput so far, so that its
+        // probability q does not depend on the direction drawn.
+        let q = if !more {
+            0.0
+        } else if segments < params.rr_depth {
+            1.0
+        } else {
+            (beta.max_component()).min(0.95)
+        };
+        let mut next_ray = None;
+        if q > 0.0 && u_rr < q {
+            node.next.q = q;
+            if let Some(bs) = material.sample(sp.frame.to_local(sp.wo), u_lobe, u_dir, TransportMode::Radiance) {
+                if bs.pdf.is_positive() {
+                    let wi = sp.frame.to_world(bs.wi);
+                    let throughput = bs.f * (bs.wi.z.abs() / bs.pdf.0);
+                    if !throughput.is_black() && throughput.is_finite() {
+                        node.next.dir = wi;
+                        node.next.delta = bs.is_delta;
+                        node.next.throughput = throughput / q;
+                        beta *= throughput / q;
+                        next_ray = Some(spawn_ray(hit.p, hit.ng, wi));
+                    }
+                }
+            }
+        } else {
+            node.next.q = q;
+        }
+        nodes.push(node);
+        let Some(r) = next_ray else { break };
+        parent = index;
+        segments += 1;
+        ray = r;
+    }
+    // Light densities of continuations that ended on a light or escaped.
+    fill_light_densities(scene, nodes, first);
+    (first, Rgb::ZERO)
+}
+
+/// For each continuation along the path starting at node `first`: the density with which
+/// light sampling from its start draws it.
+fn fill_light_densities(scene: &Scene, nodes: &mut [Node], first: u32) {
+    let mut i = first;
+    while i != NONE {
+        let n = nodes[i as usize];
+        if n.next.dir != Vec3::ZERO && !n.next.delta {
+            let origin = SurfacePoint::new(n.hit, n.wo).reflection_origin();
+            let end = (n.next.node != NONE).then(|| nodes[n.next.node as usize].hit);
+            nodes[i as usize].next.light_pdf = light_density(scene, origin, n.next.dir, end.as_ref());
+        }
+        i = n.next.node;
+    }
+}

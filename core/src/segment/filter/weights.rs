@@ -1,0 +1,166 @@
+//! Eq. (18)'s weights over one pass's nodes: the MMIS denominators of every sampled
+//! segment and the rows of the propagation ([`super::graph`]).
+//!
+//! For a continuation s' = (x', y') leaving node u (x' = u's end, virtual perturbation),
+//! the techniques able to draw it are the continuations and light samples conditioned on
+//! every node t whose kernel covers x':
+//!
+//!   Σ_t p(s' | t) = Σ_t K(t → x') [q_t p_σ(ŝ' | t) + c_t P_L p_L(ŝ' | x')] |n_y'·ŝ'| / d²,
+//!
+//! with p_σ(ŝ' | t) the density of t's BSDF (for t's own incoming direction: the shift
+//! invariance of eq. 6) and c_t = 1 where t drew a light sample. The factor |n_y'·ŝ'|/d²
+//! cancels against G(s') in eq. (18), leaving per solid angle at x'
+//!
+//!   D(s') = Σ_t K(t → x') [q_t p_σ(ŝ' | t) + c_t P_L p_L(ŝ' | x')],
+//!
+//! and the term node v's segment gains from s' is K(v → x') f_r(v; ŝ') |n_x'·ŝ'| L(s') / D(s').
+//! Visibility is shared inside a kernel: s' is reused with its own end and radiance, no
+//! ray is traced. Nodes and continuations drawn from a Dirac lobe are neither reused nor
+//! reuse: a Dirac node keeps its own continuation with f |cos| / (q p) (its density in
+//! every other technique is zero).
+
+use alloc::vec::Vec;
+
+use super::graph::{Real, Rgb3};
+use super::nodes::{NONE, Node};
+use crate::bsdf::TransportMode;
+use crate::merge::HashGrid;
+use crate::scene::Scene;
+use crate::segment::Kernel;
+use crate::spectrum::Rgb;
+
+/// What the weights read: the pass's nodes, the grid over their positions and the kernel.
+#[derive(Clone, Copy, Debug)]
+pub struct Neighbourhood<'a> {
+    pub scene: &'a Scene,
+    pub nodes: &'a [Node],
+    pub grid: &'a HashGrid,
+    pub kernel: Kernel,
+}
+
+/// The MMIS denominators of one node's two segments (per solid angle at its end).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Denominators {
+    /// D of its continuation.
+    pub next: f64,
+    /// D of its light-sampled segment.
+    pub light: f64,
+}
+
+impl Neighbourhood<'_> {
+    /// K(t → x) for the node t's kernel at x = node x's end.
+    #[inline]
+    fn kernel(&self, t: &Node, x: &Node) -> f64 {
+        self.kernel.density(&t.hit, t.wo, x.hit.p, x.hit.ng).0 as f64
+    }
+
+    /// The BSDF density of node t for leaving along `dir` (its own incoming direction).
+    #[inline]
+    fn bsdf_pdf(&self, t: &Node, dir: crate::math::Vec3) -> f64 {
+        let frame = crate::math::Frame::from_normal(t.hit.ns);
+        let m = &self.scene.materials[t.hit.material as usize];
+        m.pdf(frame.to_local(t.wo), frame.to_local(dir), TransportMode::Radiance).0 as f64
+    }
+
+    /// Call `visit(index, node)` for every non-Dirac node whose end lies in the support of
+    /// the kernel around `center` (as_center: K(center → node)) or whose kernel covers
+    /// `center`'s end (otherwise: K(node → center)), with that density.
+    fn each_neighbour(&self, center: &Node, as_center: bool, mut visit: impl FnMut(u32, &Node, f64)) {
+        self.grid.query(center.hit.p, |i| {
+            let n = &self.nodes[i as usize];
+            if n.delta {
+                return;
+            }
+            let k = if as_center { self.kernel(center, n) } else { self.kernel(n, center) };
+            if k > 0.0 {
+                visit(i, n, k);
+            }
+        });
+    }
+
+    /// D of node u's continuation and light-sampled segment.
+    pub fn denominators(&self, u: &Node) -> Denominators {
+        let mut d = Denominators::default();
+        if u.delta {
+            return d;
+        }
+        let (next, light) = (&u.next, &u.light);
+        let next_ok = next.dir != crate::math::Vec3::ZERO && !next.delta;
+        let light_ok = light.dir != crate::math::Vec3::ZERO;
+        self.each_neighbour(u, false, |_, t, k| {
+            if next_ok {
+                let mut p = t.next.q as f64 * self.bsdf_pdf(t, next.dir);
+                if t.light.attempted {
+                    p += next.light_pdf as f64;
+                }
+                d.next += k * p;
+            }
+            if light_ok {
+                let mut p = if t.light.attempted { light.pdf as f64 } else { 0.0 };
+                if !light.delta {
+                    p += t.next.q as f64 * self.bsdf_pdf(t, light.dir);
+                }
+                d.light += k * p;
+            }
+        });
+        d
+    }
+
+    /// Node v's row of the propagation in `T`: L_e, the constant one-segment-later terms
+    /// and the (target, coefficient) pairs. `dens` holds every node's denominators.
+    pub fn row<T: Real>(&self, v: &Node, dens: &[Denominators], pairs: &mut Vec<(u32, Rgb3<T>)>) -> (Rgb3<T>, Rgb3<T>) {
+        pairs.clear();
+        let emission = rgb::<T>(v.emitted);
+        let mut direct = [T::zero(); 3];
+        if v.delta {
+            // Only its own continuation, with the Dirac draw's f |cos| / (q p).
+            let c = rgb::<T>(v.next.throughput);
+            if v.next.node != NONE {
+                pairs.push((v.next.node, c));
+            } else if !v.next.escaped.is_black() {
+                direct = super::graph::add3(direct, super::graph::mul3(c, rgb::<T>(v.next.escaped)));
+            }
+            return (emission, direct);
+        }
+        let frame = crate::math::Frame::from_normal(v.hit.ns);
+        let material = &self.scene.materials[v.hit.material as usize];
+        let wo = frame.to_local(v.wo);
+        let f = |dir: crate::math::Vec3| material.eval(wo, frame.to_local(dir), TransportMode::Radiance);
+        self.each_neighbour(v, true, |i, u, k| {
+            let d = &dens[i as usize];
+            let n = u.hit.ns;
+            // The continuation.
+            if u.next.dir != crate::math::Vec3::ZERO && !u.next.delta && d.next > 0.0 {
+                let fr = f(u.next.dir);
+                if !fr.is_black() {
+                    let scale = T::from_f32(n.dot(u.next.dir).abs()) * T::from_f64(k) / T::from_f64(d.next);
+                    let c = scale3(rgb::<T>(fr), scale);
+                    if u.next.node != NONE {
+                        pairs.push((u.next.node, c));
+                    } else if !u.next.escaped.is_black() {
+                        direct = super::graph::add3(direct, super::graph::mul3(c, rgb::<T>(u.next.escaped)));
+                    }
+                }
+            }
+            // The light-sampled segment.
+            if !u.light.radiance.is_black() && d.light > 0.0 {
+                let fr = f(u.light.dir);
+                if !fr.is_black() {
+                    let scale = T::from_f32(n.dot(u.light.dir).abs()) * T::from_f64(k) / T::from_f64(d.light);
+                    direct = super::graph::add3(direct, scale3(super::graph::mul3(rgb::<T>(fr), rgb::<T>(u.light.radiance)), scale));
+                }
+            }
+        });
+        (emission, direct)
+    }
+}
+
+#[inline]
+fn rgb<T: Real>(c: Rgb) -> Rgb3<T> {
+    [T::from_f32(c.r), T::from_f32(c.g), T::from_f32(c.b)]
+}
+
+#[inline]
+fn scale3<T: Real>(a: Rgb3<T>, s: T) -> Rgb3<T> {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
