@@ -73,6 +73,8 @@ pub struct Mvf {
     pub config: FilterConfig,
     /// r₀ (set by the setup phase).
     pub r0: f32,
+    /// The current pass's kernel radius.
+    pub r: f32,
     /// Segments per path.
     pub segments: u32,
     pixels: u32,
@@ -97,6 +99,7 @@ impl Mvf {
             params,
             config,
             r0: 0.0,
+            r: 0.0,
             segments,
             pixels,
             nodes: Vec::new(),
@@ -133,7 +136,7 @@ impl Mvf {
     }
 
     fn neighbourhood<'a>(&'a self, scene: &'a crate::scene::Scene) -> Neighbourhood<'a> {
-        Neighbourhood { scene, nodes: &self.nodes, grid: &self.grid, kernel: Kernel::Disk { radius: self.grid.radius() } }
+        Neighbourhood { scene, nodes: &self.nodes, grid: &self.grid, kernel: Kernel::Disk { radius: self.r } }
     }
 
     /// Each pixel's estimate from the current L: L of the node its camera ray reached.
@@ -217,8 +220,10 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Mvf {
                     self.sky.extend_from_slice(&chunk.sky);
                 }
                 debug_assert!(self.nodes.iter().all(|n| n.next.node == NONE || (n.next.node as usize) < self.nodes.len()), "node index out of range");
-                let r = self.radius(phase.pass.unwrap_or(0));
-                self.grid.build(self.nodes.iter().map(|n| n.hit.p), r);
+                self.r = self.radius(phase.pass.unwrap_or(0));
+                // The disk kernel's support (within r of the tangent plane, inside the disk)
+                // reaches √2 r from its centre.
+                self.grid.build(self.nodes.iter().map(|n| n.hit.p), self.r * core::f32::consts::SQRT_2);
             }
             2 => {
                 self.dens.clear();

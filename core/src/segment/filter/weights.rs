@@ -29,7 +29,9 @@ use crate::scene::Scene;
 use crate::segment::Kernel;
 use crate::spectrum::Rgb;
 
-/// What the weights read: the pass's nodes, the grid over their positions and the kernel.
+/// What the weights read: the pass's nodes, the grid over their positions (built for
+/// queries of radius √2 r at least: the disk kernel's support reaches that far) and the
+/// kernel.
 #[derive(Clone, Copy, Debug)]
 pub struct Neighbourhood<'a> {
     pub scene: &'a Scene,
