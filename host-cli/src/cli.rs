@@ -357,7 +357,7 @@ impl CacheArgs {
             (EstimatorKind::Spcbpt, _) => EstimatorConfig::Spcbpt(self.spcbpt()),
             (_, EstimatorConfig::Merging(mode, _)) => EstimatorConfig::Merging(mode, self.merging()),
             (_, EstimatorConfig::Segment(algorithm, _)) => EstimatorConfig::Segment(algorithm, self.segment()),
-            (_, EstimatorConfig::Filter(_)) => EstimatorConfig::Filter(self.filter()),
+            (_, EstimatorConfig::Filter(side, _)) => EstimatorConfig::Filter(side, self.filter()),
             (_, other) => other,
         }
     }

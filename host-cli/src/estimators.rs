@@ -162,18 +162,26 @@ impl CoreRenderer {
                 ember_core::segment::Kernel::Disk { radius } => vec![format!("{:<10} kernel: disk of radius {radius:.4e}", self.renderer.kind().name())],
                 ember_core::segment::Kernel::Dirac => vec![format!("{:<10} kernel: dirac", self.renderer.kind().name())],
             },
-            Renderer::Filter(f) => vec![format!(
-                "{:<10} memory per pass: {:.1} MiB ({} nodes, {} reused segments, {:.0} B per pixel); {} segments per path; radius r0 = {:.4e}",
-                self.renderer.kind().name(),
-                mib(f.size_bytes()),
-                f.nodes.len(),
-                f.pairs(),
-                f.size_bytes() as f64 / (self.prepared.scene.camera.width() as f64 * self.prepared.scene.camera.height() as f64).max(1.0),
-                f.segments,
-                f.r0
-            )],
+            Renderer::Filter(f) => self.filter_report(&f.pass, f.segments, f.r0),
+            Renderer::PhotonFilter(f) => self.filter_report(&f.pass, f.segments, f.r0),
             Renderer::OnePhase(_) => Vec::new(),
         }
+    }
+
+    /// The filtering estimators' report line: memory per pass and per pixel, reuse, depth
+    /// and kernel.
+    fn filter_report(&self, pass: &ember_core::segment::filter::FilterPass, segments: u32, r0: f32) -> Vec<String> {
+        let camera = &self.prepared.scene.camera;
+        let pixels = (camera.width() as f64 * camera.height() as f64).max(1.0);
+        vec![format!(
+            "{:<10} memory per pass: {:.1} MiB ({} nodes, {} reused segments, {:.0} B per pixel); {segments} segments per path; radius r0 = {r0:.4e}, last pass {:.4e}",
+            self.renderer.kind().name(),
+            pass.size_bytes() as f64 / 1_048_576.0,
+            pass.nodes.len(),
+            pass.graph.targets.len(),
+            pass.size_bytes() as f64 / pixels,
+            pass.r
+        )]
     }
 
     /// Render passes into `film` (see [`driver::render`]).

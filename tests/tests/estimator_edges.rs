@@ -40,6 +40,8 @@ fn every_estimator_renders_black_at_max_depth_0() {
         EstimatorKind::Spt.default_config(),
         EstimatorKind::Slt.default_config(),
         EstimatorKind::Sbdpt.default_config(),
+        EstimatorKind::Mvf.default_config(),
+        EstimatorKind::Phf.default_config(),
     ];
     assert_eq!(configs.len(), EstimatorKind::ALL.len(), "every estimator is checked");
     for config in configs {

@@ -42,12 +42,15 @@ pub enum EstimatorKind {
     /// Multi-vertex path filtering: recursive MMIS (eq. 18) over camera segment
     /// sequences, computed by propagation, progressive kernel.
     Mvf,
+    /// Photon filtering: recursive MMIS over light segment sequences, then photon density
+    /// estimation at the first non-Dirac camera vertex.
+    Phf,
 }
 
 impl EstimatorKind {
     /// Every estimator, in listing order (its index is the browser's and the C ABI's id).
-    pub const ALL: [EstimatorKind; 12] =
-        [Self::Pt, Self::Lt, Self::Bdpt, Self::Lvcbpt, Self::Spcbpt, Self::Ppm, Self::Bpm, Self::Vcm, Self::Spt, Self::Slt, Self::Sbdpt, Self::Mvf];
+    pub const ALL: [EstimatorKind; 13] =
+        [Self::Pt, Self::Lt, Self::Bdpt, Self::Lvcbpt, Self::Spcbpt, Self::Ppm, Self::Bpm, Self::Vcm, Self::Spt, Self::Slt, Self::Sbdpt, Self::Mvf, Self::Phf];
 
     /// The name as typed on a command line.
     pub fn name(self) -> &'static str {
@@ -64,6 +67,7 @@ impl EstimatorKind {
             Self::Slt => "slt",
             Self::Sbdpt => "sbdpt",
             Self::Mvf => "mvf",
+            Self::Phf => "phf",
         }
     }
 
@@ -89,6 +93,9 @@ impl EstimatorKind {
             }
             Self::Mvf => {
                 "multi-vertex path filtering: camera segments reused by every kernel they fall in, recursive marginal MIS computed by propagation, shrinking kernel (--alpha)"
+            }
+            Self::Phf => {
+                "photon filtering: light segments reused by every kernel they fall in (recursive marginal MIS by propagation), then photon density estimation; shrinking kernel"
             }
         }
     }
@@ -117,7 +124,8 @@ impl EstimatorKind {
             Self::Spt => EstimatorConfig::Segment(SegmentAlgorithm::PathTracing, SegmentConfig::DEFAULT),
             Self::Slt => EstimatorConfig::Segment(SegmentAlgorithm::LightTracing, SegmentConfig::DEFAULT),
             Self::Sbdpt => EstimatorConfig::Segment(SegmentAlgorithm::Bidirectional, SegmentConfig::DEFAULT),
-            Self::Mvf => EstimatorConfig::Filter(FilterConfig::DEFAULT),
+            Self::Mvf => EstimatorConfig::Filter(FilterSide::Camera, FilterConfig::DEFAULT),
+            Self::Phf => EstimatorConfig::Filter(FilterSide::Light, FilterConfig::DEFAULT),
         }
     }
 }
@@ -145,8 +153,8 @@ pub enum EstimatorConfig {
     Merging(MergeMode, MergingConfig),
     /// Segment PT, LT or BDPT.
     Segment(SegmentAlgorithm, SegmentConfig),
-    /// Multi-vertex path filtering.
-    Filter(FilterConfig),
+    /// Multi-vertex path filtering (camera side) or photon filtering (light side).
+    Filter(FilterSide, FilterConfig),
 }
 
 impl EstimatorConfig {
@@ -164,7 +172,8 @@ impl EstimatorConfig {
             Self::Segment(SegmentAlgorithm::PathTracing, _) => EstimatorKind::Spt,
             Self::Segment(SegmentAlgorithm::LightTracing, _) => EstimatorKind::Slt,
             Self::Segment(SegmentAlgorithm::Bidirectional, _) => EstimatorKind::Sbdpt,
-            Self::Filter(_) => EstimatorKind::Mvf,
+            Self::Filter(FilterSide::Camera, _) => EstimatorKind::Mvf,
+            Self::Filter(FilterSide::Light, _) => EstimatorKind::Phf,
         }
     }
 
@@ -176,7 +185,7 @@ impl EstimatorConfig {
             Self::Spcbpt(c) => c.validate(),
             Self::Merging(_, c) => c.validate(),
             Self::Segment(_, c) => c.validate(),
-            Self::Filter(c) => c.validate(),
+            Self::Filter(_, c) => c.validate(),
         }
     }
 }
@@ -221,7 +230,7 @@ impl EstimatorConfig {
                     (paths + dataset + gamma, "the light paths of a pass", "--light-paths")
                 }
             }
-            Self::Filter(_) => {
+            Self::Filter(..) => {
                 // Per node: itself, its denominators, two radiance vectors and its row,
                 // assuming 32 kernel neighbours (a pair is a u32 and three f32).
                 let node = core::mem::size_of::<crate::segment::filter::Node>() as u64 + 16 + 24 + FILTER_NEIGHBOURS * 16;
@@ -580,6 +589,15 @@ mod tests {
         assert_eq!(c.subspaces_for(100), 16);
         assert_eq!(c.q_paths_for(1280 * 720), 1_843_200);
     }
+}
+
+/// Which sub-paths path filtering filters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FilterSide {
+    /// Camera paths: multi-vertex path filtering ([`crate::segment::filter::Mvf`]).
+    Camera,
+    /// Light paths: photon filtering ([`crate::segment::filter::Phf`]).
+    Light,
 }
 
 /// Path filtering's settings.

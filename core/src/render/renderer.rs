@@ -9,9 +9,9 @@ use crate::integrator::vcm::Vcm;
 use crate::integrator::{RenderParams, bdpt, lt, pt};
 use crate::scene::Scene;
 use crate::segment::Segments;
-use crate::segment::filter::Mvf;
+use crate::segment::filter::{Mvf, Phf};
 
-use super::{ChunkOutput, ConfigError, Context, Cursor, EstimatorConfig, EstimatorKind, Film, Phase, Phased, Stage};
+use super::{ChunkOutput, ConfigError, Context, Cursor, EstimatorConfig, EstimatorKind, Film, FilterSide, Phase, Phased, Stage};
 
 /// Pixels per chunk of a camera phase, light paths per chunk of a light phase.
 pub const CHUNK: u32 = 1024;
@@ -93,6 +93,8 @@ pub enum Renderer {
     Segment(Segments),
     /// Multi-vertex path filtering.
     Filter(alloc::boxed::Box<Mvf>),
+    /// Photon filtering.
+    PhotonFilter(alloc::boxed::Box<Phf>),
 }
 
 impl Renderer {
@@ -109,7 +111,8 @@ impl Renderer {
             EstimatorConfig::Spcbpt(c) => Self::Spcbpt(alloc::boxed::Box::new(Spcbpt::new(params, c, scene.camera.width(), scene.camera.height()))),
             EstimatorConfig::Merging(mode, c) => Self::Merging(alloc::boxed::Box::new(Vcm::new(params, mode, c, pixels))),
             EstimatorConfig::Segment(a, c) => Self::Segment(Segments::new(params, a, c, pixels)),
-            EstimatorConfig::Filter(c) => Self::Filter(alloc::boxed::Box::new(Mvf::new(params, c, pixels))),
+            EstimatorConfig::Filter(FilterSide::Camera, c) => Self::Filter(alloc::boxed::Box::new(Mvf::new(params, c, pixels))),
+            EstimatorConfig::Filter(FilterSide::Light, c) => Self::PhotonFilter(alloc::boxed::Box::new(Phf::new(params, c, pixels))),
         })
     }
 
@@ -126,6 +129,7 @@ impl Renderer {
             Self::Merging(m) => EstimatorConfig::Merging(m.mode, m.config).kind(),
             Self::Segment(s) => EstimatorConfig::Segment(s.algorithm, s.config).kind(),
             Self::Filter(_) => EstimatorKind::Mvf,
+            Self::PhotonFilter(_) => EstimatorKind::Phf,
         }
     }
 
@@ -138,6 +142,7 @@ impl Renderer {
             Self::Merging(m) => &m.params,
             Self::Segment(s) => &s.params,
             Self::Filter(f) => &f.params,
+            Self::PhotonFilter(f) => &f.params,
         }
     }
 }
@@ -151,6 +156,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Merging(m) => Phased::<Q>::next_phase(&**m),
             Self::Segment(s) => Phased::<Q>::next_phase(s),
             Self::Filter(f) => Phased::<Q>::next_phase(&**f),
+            Self::PhotonFilter(f) => Phased::<Q>::next_phase(&**f),
         }
     }
     fn start_pass(&mut self, pass: u32) {
@@ -161,6 +167,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Merging(m) => Phased::<Q>::start_pass(&mut **m, pass),
             Self::Segment(s) => Phased::<Q>::start_pass(s, pass),
             Self::Filter(f) => Phased::<Q>::start_pass(&mut **f, pass),
+            Self::PhotonFilter(f) => Phased::<Q>::start_pass(&mut **f, pass),
         }
     }
     fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput) {
@@ -171,6 +178,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Merging(m) => m.map(ctx, phase, out),
             Self::Segment(s) => s.map(ctx, phase, out),
             Self::Filter(f) => f.map(ctx, phase, out),
+            Self::PhotonFilter(f) => f.map(ctx, phase, out),
         }
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
@@ -181,6 +189,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Merging(m) => m.reduce(ctx, phase, outputs, film),
             Self::Segment(s) => s.reduce(ctx, phase, outputs, film),
             Self::Filter(f) => f.reduce(ctx, phase, outputs, film),
+            Self::PhotonFilter(f) => f.reduce(ctx, phase, outputs, film),
         }
     }
 }

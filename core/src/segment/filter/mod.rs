@@ -39,9 +39,13 @@
 pub mod graph;
 pub mod mvf;
 pub mod nodes;
+pub mod pass;
+pub mod phf;
 pub mod weights;
 
 pub use graph::{FilterGraph, Real};
-pub use mvf::{FilterChunk, Mvf};
-pub use nodes::{Node, trace_camera_nodes};
+pub use mvf::Mvf;
+pub use nodes::{Node, trace_camera_nodes, trace_light_nodes};
+pub use pass::{FilterChunk, FilterPass};
+pub use phf::Phf;
 pub use weights::{Denominators, Neighbourhood};

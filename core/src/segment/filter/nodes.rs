@@ -240,3 +240,124 @@ fn fill_light_densities(scene: &Scene, nodes: &mut [Node], first: u32) {
         i = n.next.node;
     }
 }
+
+/// Trace light paths `paths` of pass `pass` (photon filtering), at most `max_segments`
+/// segments each. Each hit is a node (`wo` points back toward the light; no light
+/// sample, no emission): it goes to `nodes`, its predecessor on its own path (the node
+/// whose continuation reached it, or [`NONE`] for the emission's first hit) to `pred`,
+/// and its base flux to `base`: β₀ / `paths_per_pass` for a first hit, β₀ = L_e |cos| /
+/// (P(light) p_pos p_dir) (the emission technique, `paths_per_pass` samples of it), zero
+/// otherwise. Indices are local to `nodes`.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_light_nodes<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    max_segments: u32,
+    paths_per_pass: u32,
+    pass: u32,
+    paths: core::ops::Range<u32>,
+    nodes: &mut Vec<Node>,
+    pred: &mut Vec<u32>,
+    base: &mut Vec<Rgb>,
+) -> Counters {
+    let mut counters = Counters::default();
+    let Some(table) = scene.light_selection.as_ref() else { return counters };
+    for path in paths {
+        let mut rng = SampleStream::for_sample(params.seed, Stream::Light, path, pass, 0);
+        let chosen = table.sample(rng.next_f32());
+        let light = &scene.lights[chosen.index];
+        let (u_pos, u_dir) = (rng.next_2d(), rng.next_2d());
+        if max_segments == 0 {
+            continue;
+        }
+        let Some(es) = light.sample_le(u_pos, u_dir) else { continue };
+        let pdf_pos = chosen.pmf * if es.delta_pos { 1.0 } else { es.pdf_pos.0 };
+        if !(pdf_pos > 0.0) || !es.pdf_dir.is_positive() || es.radiance.is_black() {
+            continue;
+        }
+        let cos0 = if es.n == Vec3::ZERO { 1.0 } else { es.n.dot(es.dir).abs() };
+        let beta0 = es.radiance * (cos0 / (pdf_pos * es.pdf_dir.0));
+        let ray = if es.n == Vec3::ZERO { Ray::new(es.p, es.dir, f32::INFINITY) } else { spawn_ray(es.p, es.n, es.dir) };
+        light_walk(scene, tracer, params, max_segments, ray, beta0, paths_per_pass, &mut rng, nodes, pred, base, &mut counters);
+    }
+    counters
+}
+
+/// One light path's nodes (see [`trace_light_nodes`]).
+#[allow(clippy::too_many_arguments)]
+fn light_walk<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    max_segments: u32,
+    mut ray: Ray,
+    beta0: Rgb,
+    paths_per_pass: u32,
+    rng: &mut SampleStream,
+    nodes: &mut Vec<Node>,
+    pred: &mut Vec<u32>,
+    base: &mut Vec<Rgb>,
+    counters: &mut Counters,
+) {
+    let first_dim = rng.dimension();
+    let reference = crate::integrator::light_roulette_reference(beta0);
+    let mut beta = beta0;
+    let mut parent = NONE;
+    let mut segments = 1u32;
+    loop {
+        counters.rays += 1;
+        let Some(hit) = tracer.intersect(&ray) else { break };
+        let index = nodes.len() as u32;
+        if parent != NONE {
+            nodes[parent as usize].next.node = index;
+        }
+        let sp = SurfacePoint::new(hit, -ray.dir);
+        let material = sp.material(scene);
+        let mut node = Node {
+            hit,
+            wo: sp.wo,
+            emitted: Rgb::ZERO,
+            delta: material.is_delta(),
+            next: Continuation { node: NONE, ..Continuation::default() },
+            light: LightSegment::default(),
+        };
+        // A light segment and the camera's make two segments: one more must fit.
+        let more = segments + 2 <= max_segments && params.max_depth.allows(segments + 2);
+        rng.set_dimension(first_dim + segments * DIMS_PER_BOUNCE);
+        let u_rr = rng.next_f32();
+        let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
+        let q = if !more {
+            0.0
+        } else if segments < params.rr_depth {
+            1.0
+        } else {
+            (beta.max_component() / reference).min(0.95)
+        };
+        node.next.q = q;
+        let mut next_ray = None;
+        if q > 0.0 && u_rr < q {
+            if let Some(bs) = material.sample(sp.frame.to_local(sp.wo), u_lobe, u_dir, TransportMode::Importance) {
+                if bs.pdf.is_positive() {
+                    let wi = sp.frame.to_world(bs.wi);
+                    let correction = crate::bsdf::shading_normal_correction(TransportMode::Importance, sp.wo, wi, hit.ng, hit.ns);
+                    let throughput = bs.f * (bs.wi.z.abs() * correction / bs.pdf.0);
+                    if !throughput.is_black() && throughput.is_finite() {
+                        node.next.dir = wi;
+                        node.next.delta = bs.is_delta;
+                        node.next.throughput = throughput / q;
+                        beta *= throughput / q;
+                        next_ray = Some(spawn_ray(hit.p, hit.ng, wi));
+                    }
+                }
+            }
+        }
+        nodes.push(node);
+        pred.push(parent);
+        base.push(if parent == NONE { beta0 / paths_per_pass.max(1) as f32 } else { Rgb::ZERO });
+        let Some(r) = next_ray else { break };
+        parent = index;
+        segments += 1;
+        ray = r;
+    }
+}

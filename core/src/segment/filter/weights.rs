@@ -166,3 +166,47 @@ fn rgb<T: Real>(c: Rgb) -> Rgb3<T> {
 fn scale3<T: Real>(a: Rgb3<T>, s: T) -> Rgb3<T> {
     [a[0] * s, a[1] * s, a[2] * s]
 }
+
+impl Neighbourhood<'_> {
+    /// Photon filtering's row of light node u, reached from its predecessor w = `pred`
+    /// (light order): the flux arriving at u is its base (the emission's, for a first
+    /// hit) plus, for w's continuation s = (w, u), the terms of every segment arriving at
+    /// a node u' in w's kernel:
+    ///
+    ///   A(u) = |n_w·ŝ| / D(s) · Σ_{u'} K(w → u') f_r(w; ŝ, −ŝ_{u'}) A(u'),
+    ///
+    /// the adjoint of [`Self::row`]: the reused segments are the arriving ones, and D(s)
+    /// sums the continuations conditioned on every node whose kernel covers w. A Dirac w
+    /// passes on its own flux times f |cos| / (q p).
+    pub fn light_row<T: Real>(&self, pred: u32, base: Rgb, dens: &[Denominators], pairs: &mut Vec<(u32, Rgb3<T>)>) -> (Rgb3<T>, Rgb3<T>) {
+        pairs.clear();
+        let zero = [T::zero(); 3];
+        if pred == NONE {
+            return (rgb::<T>(base), zero);
+        }
+        let w = &self.nodes[pred as usize];
+        if w.delta {
+            pairs.push((pred, rgb::<T>(w.next.throughput)));
+            return (rgb::<T>(base), zero);
+        }
+        let d = dens[pred as usize].next;
+        if !(d > 0.0) {
+            return (rgb::<T>(base), zero);
+        }
+        let frame = crate::math::Frame::from_normal(w.hit.ns);
+        let material = &self.scene.materials[w.hit.material as usize];
+        let out = frame.to_local(w.next.dir);
+        let cos = T::from_f32(w.hit.ns.dot(w.next.dir).abs()) / T::from_f64(d);
+        self.grid.query(w.hit.p, |i| {
+            let u = &self.nodes[i as usize];
+            let k = self.kernel(w, u);
+            if k > 0.0 {
+                let fr = material.eval(out, frame.to_local(u.wo), TransportMode::Radiance);
+                if !fr.is_black() {
+                    pairs.push((i, scale3(rgb::<T>(fr), cos * T::from_f64(k))));
+                }
+            }
+        });
+        (rgb::<T>(base), zero)
+    }
+}

@@ -1,0 +1,152 @@
+//! What one pass of either filtering estimator holds, and the phase steps they share:
+//! nodes gathered from chunks, the grid over them, the denominators, the rows and the
+//! sweeps of the propagation.
+
+use alloc::vec::Vec;
+
+use super::graph::{FilterGraph, Rgb3};
+use super::nodes::{NONE, Node};
+use super::weights::{Denominators, Neighbourhood};
+use crate::merge::HashGrid;
+use crate::render::ChunkOutput;
+use crate::scene::Scene;
+use crate::segment::Kernel;
+use crate::spectrum::Rgb;
+
+/// What one chunk of a filtering phase produces (reused across passes).
+#[derive(Clone, Debug, Default)]
+pub struct FilterChunk {
+    /// Path tracing phase: the chunk's nodes, indices local to it.
+    pub nodes: Vec<Node>,
+    /// MVF: per pixel, its first node (local) or [`NONE`]; PhF: per node, its predecessor.
+    pub links: Vec<u32>,
+    /// MVF: per pixel, the environment radiance if its camera ray escaped; PhF: per node,
+    /// its base flux.
+    pub values: Vec<Rgb>,
+    /// `denominators`: per node.
+    pub dens: Vec<Denominators>,
+    /// `filter`: the rows of the chunk's nodes (targets global).
+    pub rows: FilterGraph<f32>,
+    /// `propagate`: L_i (or A_i) of the chunk's nodes.
+    pub radiance: Vec<Rgb3<f32>>,
+    /// `filter`: scratch for one row's pairs.
+    pub pairs: Vec<(u32, Rgb3<f32>)>,
+}
+
+impl FilterChunk {
+    /// Forget everything, keeping the storage.
+    pub fn clear(&mut self) {
+        self.nodes.clear();
+        self.links.clear();
+        self.values.clear();
+        self.dens.clear();
+        self.rows.clear();
+        self.radiance.clear();
+    }
+}
+
+/// One pass's nodes and everything computed over them.
+#[derive(Clone, Debug, Default)]
+pub struct FilterPass {
+    /// The nodes, indices global.
+    pub nodes: Vec<Node>,
+    /// Per-item links gathered with them (global node indices; [`NONE`] kept).
+    pub links: Vec<u32>,
+    /// Per-item values gathered with them.
+    pub values: Vec<Rgb>,
+    /// The grid over the nodes' ends, for queries of radius √2 r.
+    pub grid: HashGrid,
+    /// The kernel radius.
+    pub r: f32,
+    pub dens: Vec<Denominators>,
+    pub graph: FilterGraph<f32>,
+    /// The current L_i (A_i) per node.
+    pub radiance: Vec<Rgb3<f32>>,
+}
+
+impl FilterPass {
+    /// Bytes held (capacity).
+    pub fn size_bytes(&self) -> usize {
+        self.nodes.capacity() * core::mem::size_of::<Node>()
+            + self.links.capacity() * 4
+            + self.values.capacity() * core::mem::size_of::<Rgb>()
+            + self.grid.size_bytes()
+            + self.dens.capacity() * core::mem::size_of::<Denominators>()
+            + self.graph.size_bytes()
+            + self.radiance.capacity() * core::mem::size_of::<Rgb3<f32>>()
+    }
+
+    /// What the weights read.
+    pub fn neighbourhood<'a>(&'a self, scene: &'a Scene) -> Neighbourhood<'a> {
+        Neighbourhood { scene, nodes: &self.nodes, grid: &self.grid, kernel: Kernel::Disk { radius: self.r } }
+    }
+
+    /// Gather the chunks' nodes, links and values (node indices shifted to global), and
+    /// build the grid for kernel radius `r`.
+    pub fn gather_nodes(&mut self, outputs: &mut [ChunkOutput], r: f32) {
+        self.nodes.clear();
+        self.links.clear();
+        self.values.clear();
+        for out in outputs.iter_mut() {
+            let chunk = out.filter_chunk();
+            let offset = self.nodes.len() as u32;
+            let shift = |i: u32| if i == NONE { NONE } else { i + offset };
+            self.nodes.extend(chunk.nodes.iter().map(|n| {
+                let mut n = *n;
+                n.next.node = shift(n.next.node);
+                n
+            }));
+            self.links.extend(chunk.links.iter().map(|&i| shift(i)));
+            self.values.extend_from_slice(&chunk.values);
+        }
+        self.r = r;
+        // The disk kernel's support (within r of the tangent plane, inside the disk)
+        // reaches √2 r from its centre.
+        self.grid.build(self.nodes.iter().map(|n| n.hit.p), r * core::f32::consts::SQRT_2);
+    }
+
+    /// Gather the chunks' denominators.
+    pub fn gather_denominators(&mut self, outputs: &mut [ChunkOutput]) {
+        self.dens.clear();
+        for out in outputs.iter_mut() {
+            self.dens.extend_from_slice(&out.filter_chunk().dens);
+        }
+    }
+
+    /// Gather the chunks' rows; L₀ = the rows' emission.
+    pub fn gather_rows(&mut self, outputs: &mut [ChunkOutput]) {
+        self.graph.clear();
+        for out in outputs.iter_mut() {
+            self.graph.append(&out.filter_chunk().rows, 0);
+        }
+        self.radiance.clear();
+        self.radiance.extend_from_slice(&self.graph.emission);
+    }
+
+    /// Gather one sweep's L_i.
+    pub fn gather_sweep(&mut self, outputs: &mut [ChunkOutput]) {
+        self.radiance.clear();
+        for out in outputs.iter_mut() {
+            self.radiance.extend_from_slice(&out.filter_chunk().radiance);
+        }
+    }
+
+    /// Map step of `denominators` over nodes `range`.
+    pub fn map_denominators(&self, scene: &Scene, range: core::ops::Range<usize>, chunk: &mut FilterChunk) {
+        let hood = self.neighbourhood(scene);
+        chunk.dens.extend(self.nodes[range].iter().map(|u| hood.denominators(u)));
+    }
+
+    /// Map step of a sweep over nodes `range`.
+    pub fn map_sweep(&self, range: core::ops::Range<usize>, chunk: &mut FilterChunk) {
+        self.graph.sweep(Some(&self.radiance), range, &mut chunk.radiance);
+    }
+
+    /// L (A) of node `i`, or zero for [`NONE`].
+    pub fn value(&self, i: u32) -> Rgb {
+        if i == NONE {
+            return Rgb::ZERO;
+        }
+        self.radiance.get(i as usize).map_or(Rgb::ZERO, |l| Rgb::new(l[0], l[1], l[2]))
+    }
+}
