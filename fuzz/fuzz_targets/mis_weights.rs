@@ -8,6 +8,10 @@
 //!   sub-paths every other strategy would have produced are rebuilt (as
 //!   `tests/tests/bdpt_mis.rs` does) and the recursive weights of all strategies able to
 //!   produce the path sum to 1 within 1e-3.
+//!   Then path and photon filtering's denominators on the same scene (issue 16): camera
+//!   and light nodes of 16 paths each, a kernel radius from the input (1e-4 … 1): every
+//!   denominator of a segment that exists is finite and positive (its own node's
+//!   technique is among those summed), and the propagated radiance and flux are finite.
 //! - **MMIS** (first byte odd): 1–4 techniques, 1–4 pairs each, with conditional
 //!   densities from the input's raw f64 bits (NaN, ∞, negative, 1e±300 included) at 1–4
 //!   evaluation points: `Mmis::balance_weight` over all techniques sums to 1 where the
@@ -24,7 +28,10 @@ use ember_core::scene::Context;
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::mmis::{Mmis, Pair, Technique, product_of_sums, tuple_weight};
 use ember_core::rng::{SampleStream, Stream};
+use ember_core::merge::HashGrid;
 use ember_core::scene::Scene;
+use ember_core::segment::Kernel;
+use ember_core::segment::filter::{FilterGraph, Neighbourhood, trace_camera_nodes, trace_light_nodes};
 use ember_core::spectrum::Rgb;
 use ember_fuzz::Bytes;
 use ember_tests::bdpt_oracle::for_each_strategy_split;
@@ -76,6 +83,7 @@ fn bdpt(b: &mut Bytes, hash: u64) {
     for pair in 0..4u32 {
         paths_of_one_sample(b, &scene, &tracer, &params, (seed >> 32) as u32 ^ pair, depth);
     }
+    filtering(b, &scene, &tracer, &params, depth as u32);
     // The target must actually exercise full paths, not only reject them (about 6 % of
     // path pairs yield one, measured; the floor is 1/32 of inputs).
     let inputs = BDPT_INPUTS.fetch_add(1, Ordering::Relaxed) + 1;
@@ -117,6 +125,42 @@ fn paths_of_one_sample(b: &mut Bytes, scene: &Scene, tracer: &BruteForce, params
             });
             assert!((sum - 1.0).abs() <= 1e-3, "BDPT weights of a {n}-vertex path (joined at ({s}, {t})) sum to {sum}");
             FULL_PATHS.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+}
+
+// ---------------------------------------------------------------- filtering
+
+fn filtering(b: &mut Bytes, scene: &Scene, tracer: &BruteForce, params: &RenderParams, segments: u32) {
+    let radius = b.log_uniform(1e-4, 1.0);
+    let (mut cam, mut first, mut sky) = (Vec::new(), Vec::new(), Vec::new());
+    trace_camera_nodes(scene, tracer, params, segments, 0, 0..16, &mut cam, &mut first, &mut sky);
+    let (mut light, mut pred, mut base) = (Vec::new(), Vec::new(), Vec::new());
+    trace_light_nodes(scene, tracer, params, segments, 16, 0, 0..16, &mut light, &mut pred, &mut base);
+    for (nodes, is_light) in [(&cam, false), (&light, true)] {
+        let mut grid = HashGrid::new();
+        grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
+        let hood = Neighbourhood { scene, nodes, grid: &grid, kernel: Kernel::Disk { radius } };
+        let dens: Vec<_> = nodes.iter().map(|u| hood.denominators(u)).collect();
+        for (u, d) in nodes.iter().zip(&dens) {
+            if u.delta {
+                continue;
+            }
+            if u.next.dir != Vec3::ZERO && !u.next.delta {
+                assert!(d.next.is_finite() && d.next > 0.0, "continuation denominator {} (r = {radius})", d.next);
+            }
+            if u.light.dir != Vec3::ZERO {
+                assert!(d.light.is_finite() && d.light > 0.0, "light-segment denominator {} (r = {radius})", d.light);
+            }
+        }
+        let mut graph = FilterGraph::<f32>::new();
+        let mut pairs = Vec::new();
+        for (i, v) in nodes.iter().enumerate() {
+            let (e, d) = if is_light { hood.light_row::<f32>(pred[i], base[i], &dens, &mut pairs) } else { hood.row::<f32>(v, &dens, &mut pairs) };
+            graph.push_row(e, d, pairs.iter().copied());
+        }
+        for l in graph.propagate(segments) {
+            assert!(l.iter().all(|c| c.is_finite() && *c >= 0.0), "propagated value {l:?} (r = {radius})");
         }
     }
 }
