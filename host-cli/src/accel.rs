@@ -351,8 +351,21 @@ impl Query {
     #[inline]
     fn new(ray: &Ray) -> Option<Self> {
         let ok = finite(ray.origin) && finite(ray.dir) && ray.dir != Vec3::ZERO && ray.t_max > 0.0;
-        ok.then(|| Self { bvh_ray: BvhRay::new(ray.origin.into(), ray.dir.into(), 0.0, ray.t_max) })
+        ok.then(|| Self { bvh_ray: BvhRay::new(ray.origin.into(), safe_direction(ray.dir).into(), 0.0, ray.t_max) })
     }
+}
+
+/// The direction with every exactly-zero component replaced by ±1e-30 (its sign kept),
+/// as Embree's `rcp_safe` does. obvhs's traversal divides by the direction: with a zero
+/// component the node tests of the compressed-wide BVH missed triangles the ray crosses.
+/// Seen on the segment kernel's projection rays, which run along surface normals: on the
+/// built-in Cornell box's short block, whose front face's normal has y = 0 exactly, every
+/// one missed (photon filtering's gather read 0 there). The change of direction, 1e-30
+/// against a unit vector, is far below f32 resolution.
+#[inline]
+fn safe_direction(d: Vec3) -> Vec3 {
+    let fix = |c: f32| if c == 0.0 { 1e-30f32.copysign(c) } else { c };
+    Vec3::new(fix(d.x), fix(d.y), fix(d.z))
 }
 
 impl<B: TriangleBvh> RayQuery for AccelWith<B> {

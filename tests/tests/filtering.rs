@@ -309,16 +309,13 @@ fn denominators_are_finite_and_positive() {
 
 /// MVF and PhF with the shrinking kernel converge to Mitsuba's reference of the Cornell
 /// box at 32×32 (the 256×256 reference averaged over 8×8 pixel blocks: the box filter's
-/// pixel measurement at 32×32), over three steps of 4× passes (4 → 16 → 64 → 256).
-/// With α = 0.67, bias² and variance both fall as passes^(−2/3), so 4× passes should
-/// give 4^(2/3) ≈ 2.5× in the limit.
-/// - MVF: relMSE falls at least 1.5× per step.
-/// - PhF: its last kernel, the photon gather, is normalised by the full disk, so within r
-///   of every edge it underestimates (half the disk hangs off the surface), a band whose
-///   share shrinks only as r ∝ passes^(−1/6). PPM has the same bias (measured here: 1.83×,
-///   1.47×, 1.39× per step), so PhF is held to falling at least 1.3× per step and to no
-///   more than 1.05× PPM's relMSE at each step (the same light paths: same seed and
-///   streams).
+/// pixel measurement at 32×32): relMSE falls at least 1.5× per 4× passes over three steps
+/// (4 → 16 → 64 → 256). With α = 0.67, bias² and variance both fall as passes^(−2/3), so
+/// 4× passes should give 4^(2/3) ≈ 2.5× in the limit. PhF also stays below PPM (the same
+/// light paths: same seed and streams), whose gather is normalised by the full disk and
+/// falls short within r of every edge (PPM: 1.83×, 1.47×, 1.39× per step; PhF 3.0×,
+/// 1.67×, 2.34×). Seen failing with PhF's gather normalised by the full disk too: 1.44×
+/// at the second step.
 #[test]
 fn mvf_and_phf_converge_to_the_reference_on_the_cornell_box() {
     use ember_core::merge::RadiusRule;
@@ -332,10 +329,10 @@ fn mvf_and_phf_converge_to_the_reference_on_the_cornell_box() {
         assert!(w[0] / w[1] >= 1.5, "MVF: relMSE fell only {:.2}× per 4× passes: {mvf:?}", w[0] / w[1]);
     }
     for w in phf.windows(2) {
-        assert!(w[0] / w[1] >= 1.3, "PhF: relMSE fell only {:.2}× per 4× passes: {phf:?}", w[0] / w[1]);
+        assert!(w[0] / w[1] >= 1.5, "PhF: relMSE fell only {:.2}× per 4× passes: {phf:?}", w[0] / w[1]);
     }
     for (a, b) in phf.iter().zip(&ppm) {
-        assert!(*a <= 1.05 * b, "PhF above PPM: {phf:?} against {ppm:?}");
+        assert!(a < b, "PhF above PPM: {phf:?} against {ppm:?}");
     }
 }
 

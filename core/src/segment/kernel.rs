@@ -95,6 +95,26 @@ impl Kernel {
         AreaPdf(nx.dot(n).abs() / (core::f32::consts::PI * radius * radius))
     }
 
+    /// ∫ K dx over the surfaces, the continuous part's mass: the share of the disk whose
+    /// projection ray finds a surface (1 on a plane, about ½ at an edge), estimated by
+    /// `n`×`n` stratified rays jittered by `rng`. A kernel normalised by it,
+    /// K / ∫ K, is the segment paper's uniform kernel over the part of 𝒦(y) that lies on
+    /// surfaces, (∫_𝒦 dx)⁻¹ (§3.1): a density estimate with it does not fall short near
+    /// edges. 1 for the Dirac kernel.
+    pub fn surface_share<Q: RayQuery + ?Sized>(&self, tracer: &Q, y: &SurfaceHit, toward: Vec3, n: u32, rng: &mut crate::rng::SampleStream) -> f32 {
+        let Self::Disk { .. } = *self else { return 1.0 };
+        let n = n.max(1);
+        let mut hits = 0u32;
+        for i in 0..n * n {
+            let j = rng.next_2d();
+            let u = Vec2::new(((i % n) as f32 + j.x) / n as f32, ((i / n) as f32 + j.y) / n as f32);
+            if matches!(self.sample(tracer, y, toward, u), KernelSample::Moved(_)) {
+                hits += 1;
+            }
+        }
+        hits as f32 / (n * n) as f32
+    }
+
     /// K(x → y) / K(y → x) for a sample `x` drawn around `y`: the continuous density of
     /// drawing `y` around `x` over that of drawing `x` around `y` (1 where the latter
     /// vanishes, and for the Dirac kernel). The segment path integral's K joins y_i to

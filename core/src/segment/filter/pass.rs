@@ -13,6 +13,9 @@ use crate::scene::Scene;
 use crate::segment::Kernel;
 use crate::spectrum::Rgb;
 
+/// Largest mean number of nodes per kernel a pass keeps (see [`FilterPass::gather_nodes`]).
+pub const NEIGHBOUR_BUDGET: u32 = 64;
+
 /// What one chunk of a filtering phase produces (reused across passes).
 #[derive(Clone, Debug, Default)]
 pub struct FilterChunk {
@@ -103,6 +106,37 @@ impl FilterPass {
         // The disk kernel's support (within r of the tangent plane, inside the disk)
         // reaches √2 r from its centre.
         self.grid.build(self.nodes.iter().map(|n| n.hit.p), r * core::f32::consts::SQRT_2);
+        // The neighbour budget: rows cost O(Σ n²), so where nodes crowd (a caustic, a
+        // spot light's pool) the pass's radius is lowered until the mean kernel holds at
+        // most NEIGHBOUR_BUDGET nodes (surface density: n ∝ r²). The radius still goes
+        // to zero over passes, so the estimator stays consistent.
+        let mean = self.mean_neighbours();
+        if mean > NEIGHBOUR_BUDGET as f64 {
+            self.r = r * libm::sqrtf((NEIGHBOUR_BUDGET as f64 / mean) as f32).max(1.0 / 64.0);
+            self.grid.build(self.nodes.iter().map(|n| n.hit.p), self.r * core::f32::consts::SQRT_2);
+        }
+    }
+
+    /// Rebuild the grid for kernel radius `r` (PhF's gather, which keeps the progressive
+    /// radius whatever the neighbour budget did to the pass's reuse kernel).
+    pub fn rebuild_grid(&mut self, r: f32) {
+        self.r = r;
+        self.grid.build(self.nodes.iter().map(|n| n.hit.p), r * core::f32::consts::SQRT_2);
+    }
+
+    /// Mean number of nodes in a node's grid ball, from up to 512 nodes spread evenly.
+    fn mean_neighbours(&self) -> f64 {
+        let n = self.nodes.len();
+        if n == 0 {
+            return 0.0;
+        }
+        let stride = n.div_ceil(512);
+        let (mut count, mut probes) = (0u64, 0u64);
+        for node in self.nodes.iter().step_by(stride) {
+            self.grid.query(node.hit.p, |_| count += 1);
+            probes += 1;
+        }
+        count as f64 / probes as f64
     }
 
     /// Gather the chunks' denominators.

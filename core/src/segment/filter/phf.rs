@@ -11,8 +11,11 @@
 //! every segment arriving in w's kernel continued by s, D(s) summing the continuations
 //! conditioned on every node whose kernel covers w (the same denominators as MVF's,
 //! without light samples). A camera vertex c then gathers
-//! Σ_u K(c → u) f_r(c; ω_o, −ŝ_u) A(u), the last kernel of the segment path. Both
-//! kernels are the same disk, shrinking over passes.
+//! Σ_u K(c → u) f_r(c; ω_o, −ŝ_u) A(u) / ∫K, the last kernel of the segment path,
+//! normalised over the part of the disk that lies on surfaces (16 stratified rays):
+//! without it the estimate falls short within r of every edge, PPM's boundary bias.
+//! Both kernels are the same disk, shrinking over passes (the reuse kernels appear in
+//! ratios, numerator and denominators alike, and need no normalisation).
 //!
 //! | stage | phase | items | reduction |
 //! |---|---|---|---|
@@ -43,6 +46,10 @@ use crate::spectrum::Rgb;
 
 /// Dirac bounces the camera side follows at most.
 const MAX_CAMERA_BOUNCES: u32 = 16;
+/// Rays per side of the stratified estimate of the gather kernel's surface share.
+const SHARE_STRATA: u32 = 4;
+/// Last key of that estimate's random stream (`Stream::Aux`, index = pixel).
+const GATHER_SHARE_KEY: u32 = 0x5f00;
 
 /// Photon filtering configured for one film, with the current pass's light nodes.
 #[derive(Clone, Debug)]
@@ -157,6 +164,11 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
             }
             _ => self.pass.gather_sweep(outputs),
         }
+        // Before the gather: its kernel keeps the progressive radius (the neighbour
+        // budget bounds the cost of the rows only; the gather is linear in photons).
+        if phase.id == 3 + self.sweeps {
+            self.pass.rebuild_grid(self.radius(phase.pass.unwrap_or(0)));
+        }
         if self.cursor.advance() {
             film.end_pass(1.0);
         }
@@ -197,16 +209,10 @@ fn gather_pixels<Q: RayQuery + ?Sized>(
             }
             let material = sp.material(scene);
             if !material.is_delta() {
-                let wo = sp.frame.to_local(sp.wo);
-                let mut gathered = Rgb::ZERO;
-                pass_data.grid.query(hit.p, |i| {
-                    let u = &pass_data.nodes[i as usize];
-                    let k = kernel.density(&hit, sp.wo, u.hit.p, u.hit.ng).0;
-                    if k > 0.0 {
-                        gathered += material.eval(wo, sp.frame.to_local(u.wo), TransportMode::Radiance) * pass_data.value(i) * k;
-                    }
-                });
-                l += beta * gathered;
+                // The gather adds the light path's segments (at least one).
+                if params.max_depth.allows(segments + 1) {
+                    l += beta * gather(tracer, pass_data, &kernel, &sp, material, params.seed, pixel, pass, &mut counters);
+                }
                 break;
             }
             let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
@@ -224,4 +230,38 @@ fn gather_pixels<Q: RayQuery + ?Sized>(
         *slot = counters.sanitize(l);
     }
     counters
+}
+
+/// Σ_u K(c → u) f_r(c) A(u) / ∫K at camera vertex `sp`: the light nodes in its kernel,
+/// the kernel normalised over the part of the disk on surfaces (without it the estimate
+/// falls short within r of every edge).
+#[allow(clippy::too_many_arguments)]
+fn gather<Q: RayQuery + ?Sized>(
+    tracer: &Q,
+    pass_data: &FilterPass,
+    kernel: &Kernel,
+    sp: &SurfacePoint,
+    material: &crate::bsdf::Material,
+    seed: u64,
+    pixel: u32,
+    pass: u32,
+    counters: &mut Counters,
+) -> Rgb {
+    let hit = &sp.hit;
+    let mut share_rng = SampleStream::for_sample(seed, Stream::Aux, pixel, pass, GATHER_SHARE_KEY);
+    let share = kernel.surface_share(tracer, hit, sp.wo, SHARE_STRATA, &mut share_rng);
+    counters.rays += (SHARE_STRATA * SHARE_STRATA) as u64;
+    if !(share > 0.0) {
+        return Rgb::ZERO;
+    }
+    let wo = sp.frame.to_local(sp.wo);
+    let mut gathered = Rgb::ZERO;
+    pass_data.grid.query(hit.p, |i| {
+        let u = &pass_data.nodes[i as usize];
+        let k = kernel.density(hit, sp.wo, u.hit.p, u.hit.ng).0;
+        if k > 0.0 {
+            gathered += material.eval(wo, sp.frame.to_local(u.wo), TransportMode::Radiance) * pass_data.value(i) * k;
+        }
+    });
+    gathered / share
 }
