@@ -12,6 +12,9 @@
 //!   and light nodes of 16 paths each, a kernel radius from the input (1e-4 … 1): every
 //!   denominator of a segment that exists is finite and positive (its own node's
 //!   technique is among those summed), and the propagated radiance and flux are finite.
+//!   Seen failing (seed `filter-denominator-roughness`): a rough dielectric at roughness
+//!   1e-5 whose pdf re-evaluated to 0 for the direction its sampler drew, before the own
+//!   technique used the sampler's density.
 //! - **MMIS** (first byte odd): 1–4 techniques, 1–4 pairs each, with conditional
 //!   densities from the input's raw f64 bits (NaN, ∞, negative, 1e±300 included) at 1–4
 //!   evaluation points: `Mmis::balance_weight` over all techniques sums to 1 where the
@@ -141,7 +144,7 @@ fn filtering(b: &mut Bytes, scene: &Scene, tracer: &BruteForce, params: &RenderP
         let mut grid = HashGrid::new();
         grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
         let hood = Neighbourhood { scene, nodes, grid: &grid, kernel: Kernel::Disk { radius } };
-        let dens: Vec<_> = nodes.iter().map(|u| hood.denominators(u)).collect();
+        let dens: Vec<_> = (0..nodes.len() as u32).map(|i| hood.denominators(i)).collect();
         for (u, d) in nodes.iter().zip(&dens) {
             if u.delta {
                 continue;

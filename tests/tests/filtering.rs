@@ -44,7 +44,7 @@ fn pass_nodes(scene: &Scene, tracer: &BruteForce, params: &RenderParams, segment
 
 /// Rows and denominators through the estimator's own code, in `f64`.
 fn graph_f64(hood: &Neighbourhood<'_>) -> (Vec<Denominators>, FilterGraph<f64>) {
-    let dens: Vec<Denominators> = hood.nodes.iter().map(|u| hood.denominators(u)).collect();
+    let dens: Vec<Denominators> = (0..hood.nodes.len() as u32).map(|i| hood.denominators(i)).collect();
     let mut graph = FilterGraph::<f64>::new();
     let mut pairs = Vec::new();
     for v in hood.nodes {
@@ -105,7 +105,9 @@ impl Naive<'_> {
                 }
                 let mut p = if t.light.attempted { light_pdf } else { 0.0 };
                 if bsdf {
-                    p += t.next.q as f64 * self.pdf_sigma(t, dir);
+                    // The segment's own technique: the density its sampler reported.
+                    let own = std::ptr::eq(t, u) && dir == u.next.dir;
+                    p += t.next.q as f64 * if own { u.next.pdf as f64 } else { self.pdf_sigma(t, dir) };
                 }
                 k * p
             })
@@ -254,7 +256,7 @@ fn photon_filtering_propagation_equals_its_recursion_in_f64() {
     grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
     let kernel = Kernel::Disk { radius };
     let hood = Neighbourhood { scene: &scene, nodes: &nodes, grid: &grid, kernel };
-    let dens: Vec<Denominators> = nodes.iter().map(|u| hood.denominators(u)).collect();
+    let dens: Vec<Denominators> = (0..nodes.len() as u32).map(|i| hood.denominators(i)).collect();
     let mut graph = FilterGraph::<f64>::new();
     let mut pairs = Vec::new();
     for u in 0..nodes.len() {
@@ -292,8 +294,8 @@ fn denominators_are_finite_and_positive() {
         let mut grid = HashGrid::new();
         grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
         let hood = Neighbourhood { scene: &scene, nodes: &nodes, grid: &grid, kernel: Kernel::Disk { radius } };
-        for u in nodes.iter().filter(|u| !u.delta) {
-            let d = hood.denominators(u);
+        for (i, u) in nodes.iter().enumerate().filter(|(_, u)| !u.delta) {
+            let d = hood.denominators(i as u32);
             if u.next.dir != Vec3::ZERO && !u.next.delta {
                 assert!(d.next.is_finite() && d.next > 0.0, "continuation denominator {} at r = {radius}", d.next);
                 checked += 1;

@@ -209,7 +209,7 @@ const FILM_BYTES_PER_PIXEL: u64 = 24 + 12;
 /// Assumed vertices per light path for the estimate.
 const VERTICES_PER_PATH: u64 = 8;
 /// Assumed kernel neighbours per node of path filtering for the estimate.
-const FILTER_NEIGHBOURS: u64 = 32;
+const FILTER_NEIGHBOURS: u64 = 64;
 
 impl EstimatorConfig {
     /// The [`MemoryEstimate`] for a film of `pixels` pixels.
@@ -232,7 +232,7 @@ impl EstimatorConfig {
             }
             Self::Filter(..) => {
                 // Per node: itself, its denominators, two radiance vectors and its row,
-                // assuming 32 kernel neighbours (a pair is a u32 and three f32).
+                // assuming 64 kernel neighbours, the neighbour budget (a pair is a u32 and three f32).
                 let node = core::mem::size_of::<crate::segment::filter::Node>() as u64 + 16 + 24 + FILTER_NEIGHBOURS * 16;
                 (pixels as u64 * VERTICES_PER_PATH * node, "the filtering rows of a pass", "--radius-footprints or --max-segments")
             }

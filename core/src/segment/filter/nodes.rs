@@ -31,6 +31,10 @@ pub struct Continuation {
     pub delta: bool,
     /// f |cos| / p of the draw (what a Dirac continuation carries).
     pub throughput: Rgb,
+    /// p_σ of the draw per solid angle, as the sampler reported it: the natural
+    /// technique's density in the denominators (re-evaluating the BSDF's pdf can give 0
+    /// for a direction its sampler drew, at roughness 1e-5).
+    pub pdf: f32,
     /// The node it reached, or [`NONE`].
     pub node: u32,
     /// Radiance from the environment if it escaped.
@@ -207,6 +211,7 @@ fn walk<Q: RayQuery + ?Sized>(
                         node.next.dir = wi;
                         node.next.delta = bs.is_delta;
                         node.next.throughput = throughput / q;
+                        node.next.pdf = bs.pdf.0;
                         beta *= throughput / q;
                         next_ray = Some(spawn_ray(hit.p, hit.ng, wi));
                     }
@@ -346,6 +351,7 @@ fn light_walk<Q: RayQuery + ?Sized>(
                         node.next.dir = wi;
                         node.next.delta = bs.is_delta;
                         node.next.throughput = throughput / q;
+                        node.next.pdf = bs.pdf.0;
                         beta *= throughput / q;
                         next_ray = Some(spawn_ray(hit.p, hit.ng, wi));
                     }

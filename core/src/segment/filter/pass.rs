@@ -168,7 +168,7 @@ impl FilterPass {
     /// Map step of `denominators` over nodes `range`.
     pub fn map_denominators(&self, scene: &Scene, range: core::ops::Range<usize>, chunk: &mut FilterChunk) {
         let hood = self.neighbourhood(scene);
-        chunk.dens.extend(self.nodes[range].iter().map(|u| hood.denominators(u)));
+        chunk.dens.extend(range.map(|i| hood.denominators(i as u32)));
     }
 
     /// Map step of a sweep over nodes `range`.

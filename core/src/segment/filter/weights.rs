@@ -80,18 +80,22 @@ impl Neighbourhood<'_> {
         });
     }
 
-    /// D of node u's continuation and light-sampled segment.
-    pub fn denominators(&self, u: &Node) -> Denominators {
+    /// D of node `index`'s continuation and light-sampled segment. Its own technique
+    /// enters with the density its sampler reported (`Continuation::pdf`), so D is never
+    /// below K(u → u) q_u p_σ > 0 for a segment that was drawn.
+    pub fn denominators(&self, index: u32) -> Denominators {
         let mut d = Denominators::default();
+        let u = &self.nodes[index as usize];
         if u.delta {
             return d;
         }
         let (next, light) = (&u.next, &u.light);
         let next_ok = next.dir != crate::math::Vec3::ZERO && !next.delta;
         let light_ok = light.dir != crate::math::Vec3::ZERO;
-        self.each_neighbour(u, false, |_, t, k| {
+        self.each_neighbour(u, false, |i, t, k| {
             if next_ok {
-                let mut p = t.next.q as f64 * self.bsdf_pdf(t, next.dir);
+                let p_sigma = if i == index { next.pdf as f64 } else { self.bsdf_pdf(t, next.dir) };
+                let mut p = t.next.q as f64 * p_sigma;
                 if t.light.attempted {
                     p += next.light_pdf as f64;
                 }
