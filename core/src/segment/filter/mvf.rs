@@ -88,27 +88,14 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Mvf {
                 out.counters = c;
             }
             2 => self.pass.map_denominators(scene, range, chunk),
-            3 => {
-                let hood = self.pass.neighbourhood(scene);
-                let pairs = &mut chunk.pairs;
-                for v in &self.pass.nodes[range] {
-                    let (emission, direct) = hood.row::<f32>(v, &self.pass.dens, pairs);
-                    chunk.rows.push_row(emission, direct, pairs.iter().copied());
-                }
-            }
+            3 => self.pass.map_rows(scene, range, chunk, |hood, i, pairs| hood.row::<f32>(&self.pass.nodes[i], &self.pass.dens, pairs)),
             _ => self.pass.map_sweep(range, chunk),
         }
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         match phase.id {
             0 => self.r0 = self.config.radius.initial_radius(ctx.scene, &Footprint::reduce_chunks(outputs)),
-            1 => {
-                let r = self.radius(phase.pass.unwrap_or(0));
-                self.pass.gather_nodes(outputs, r);
-            }
-            2 => self.pass.gather_denominators(outputs),
-            3 => self.pass.gather_rows(outputs),
-            _ => self.pass.gather_sweep(outputs),
+            id => self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0))),
         }
         // The pass ends after `filter` (no sweep) or after the last sweep: L is final.
         if self.cursor.advance() {

@@ -191,35 +191,8 @@ fn walk<Q: RayQuery + ?Sized>(
             }
         }
 
-        // The continuation: roulette first, on the throughput so far, so that its
-        // probability q does not depend on the direction drawn.
-        let q = if !more {
-            0.0
-        } else if segments < params.rr_depth {
-            1.0
-        } else {
-            (beta.max_component()).min(0.95)
-        };
-        let mut next_ray = None;
-        if q > 0.0 && u_rr < q {
-            node.next.q = q;
-            if let Some(bs) = material.sample(sp.frame.to_local(sp.wo), u_lobe, u_dir, TransportMode::Radiance) {
-                if bs.pdf.is_positive() {
-                    let wi = sp.frame.to_world(bs.wi);
-                    let throughput = bs.f * (bs.wi.z.abs() / bs.pdf.0);
-                    if !throughput.is_black() && throughput.is_finite() {
-                        node.next.dir = wi;
-                        node.next.delta = bs.is_delta;
-                        node.next.throughput = throughput / q;
-                        node.next.pdf = bs.pdf.0;
-                        beta *= throughput / q;
-                        next_ray = Some(spawn_ray(hit.p, hit.ng, wi));
-                    }
-                }
-            }
-        } else {
-            node.next.q = q;
-        }
+        let draws = ContinuationDraws { more, segments, u_rr, u_lobe, u_dir };
+        let next_ray = continue_path(params, &sp, material, TransportMode::Radiance, 1.0, draws, &mut node, &mut beta);
         nodes.push(node);
         let Some(r) = next_ray else { break };
         parent = index;
@@ -332,32 +305,8 @@ fn light_walk<Q: RayQuery + ?Sized>(
         rng.set_dimension(first_dim + segments * DIMS_PER_BOUNCE);
         let u_rr = rng.next_f32();
         let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
-        let q = if !more {
-            0.0
-        } else if segments < params.rr_depth {
-            1.0
-        } else {
-            (beta.max_component() / reference).min(0.95)
-        };
-        node.next.q = q;
-        let mut next_ray = None;
-        if q > 0.0 && u_rr < q {
-            if let Some(bs) = material.sample(sp.frame.to_local(sp.wo), u_lobe, u_dir, TransportMode::Importance) {
-                if bs.pdf.is_positive() {
-                    let wi = sp.frame.to_world(bs.wi);
-                    let correction = crate::bsdf::shading_normal_correction(TransportMode::Importance, sp.wo, wi, hit.ng, hit.ns);
-                    let throughput = bs.f * (bs.wi.z.abs() * correction / bs.pdf.0);
-                    if !throughput.is_black() && throughput.is_finite() {
-                        node.next.dir = wi;
-                        node.next.delta = bs.is_delta;
-                        node.next.throughput = throughput / q;
-                        node.next.pdf = bs.pdf.0;
-                        beta *= throughput / q;
-                        next_ray = Some(spawn_ray(hit.p, hit.ng, wi));
-                    }
-                }
-            }
-        }
+        let draws = ContinuationDraws { more, segments, u_rr, u_lobe, u_dir };
+        let next_ray = continue_path(params, &sp, material, TransportMode::Importance, reference, draws, &mut node, &mut beta);
         nodes.push(node);
         pred.push(parent);
         base.push(if parent == NONE { beta0 / paths_per_pass.max(1) as f32 } else { Rgb::ZERO });
@@ -366,4 +315,61 @@ fn light_walk<Q: RayQuery + ?Sized>(
         segments += 1;
         ray = r;
     }
+}
+
+/// The random numbers and depth state of one continuation.
+#[derive(Clone, Copy, Debug)]
+struct ContinuationDraws {
+    /// Does the depth cap allow another segment?
+    more: bool,
+    /// Segments so far (roulette starts at `rr_depth`).
+    segments: u32,
+    u_rr: f32,
+    u_lobe: f32,
+    u_dir: Vec2,
+}
+
+/// The continuation of `node` at `sp` on both walks: roulette first, on the throughput so
+/// far over `reference`, so that its probability q (recorded in `node.next.q`) does not
+/// depend on the direction drawn; then the BSDF draw in `mode` (the adjoint, with its
+/// shading-normal correction, for importance). Fills `node.next`, updates `beta` and
+/// returns the ray to trace, if any.
+#[allow(clippy::too_many_arguments)]
+fn continue_path(
+    params: &RenderParams,
+    sp: &SurfacePoint,
+    material: &crate::bsdf::Material,
+    mode: TransportMode,
+    reference: f32,
+    draws: ContinuationDraws,
+    node: &mut Node,
+    beta: &mut Rgb,
+) -> Option<Ray> {
+    let q = if !draws.more {
+        0.0
+    } else if draws.segments < params.rr_depth {
+        1.0
+    } else {
+        (beta.max_component() / reference).min(0.95)
+    };
+    node.next.q = q;
+    if !(q > 0.0 && draws.u_rr < q) {
+        return None;
+    }
+    let bs = material.sample(sp.frame.to_local(sp.wo), draws.u_lobe, draws.u_dir, mode)?;
+    if !bs.pdf.is_positive() {
+        return None;
+    }
+    let wi = sp.frame.to_world(bs.wi);
+    let correction = crate::bsdf::shading_normal_correction(mode, sp.wo, wi, sp.hit.ng, sp.hit.ns);
+    let throughput = bs.f * (bs.wi.z.abs() * correction / bs.pdf.0);
+    if throughput.is_black() || !throughput.is_finite() {
+        return None;
+    }
+    node.next.dir = wi;
+    node.next.delta = bs.is_delta;
+    node.next.throughput = throughput / q;
+    node.next.pdf = bs.pdf.0;
+    *beta *= throughput / q;
+    Some(spawn_ray(sp.hit.p, sp.hit.ng, wi))
 }

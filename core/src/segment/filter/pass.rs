@@ -165,6 +165,32 @@ impl FilterPass {
         }
     }
 
+    /// Reduction of the phases both estimators share, by phase id: 1 the nodes (for
+    /// kernel radius `r`), 2 the denominators, 3 the rows, later ones a sweep.
+    pub fn reduce_phase(&mut self, id: u8, outputs: &mut [ChunkOutput], r: f32) {
+        match id {
+            1 => self.gather_nodes(outputs, r),
+            2 => self.gather_denominators(outputs),
+            3 => self.gather_rows(outputs),
+            _ => self.gather_sweep(outputs),
+        }
+    }
+
+    /// Map step of `filter` over nodes `range`: node i's row from `row(hood, i, pairs)`.
+    pub fn map_rows(
+        &self,
+        scene: &Scene,
+        range: core::ops::Range<usize>,
+        chunk: &mut FilterChunk,
+        row: impl Fn(&Neighbourhood<'_>, usize, &mut Vec<(u32, Rgb3<f32>)>) -> (Rgb3<f32>, Rgb3<f32>),
+    ) {
+        let hood = self.neighbourhood(scene);
+        for i in range {
+            let (emission, direct) = row(&hood, i, &mut chunk.pairs);
+            chunk.rows.push_row(emission, direct, chunk.pairs.iter().copied());
+        }
+    }
+
     /// Map step of `denominators` over nodes `range`.
     pub fn map_denominators(&self, scene: &Scene, range: core::ops::Range<usize>, chunk: &mut FilterChunk) {
         let hood = self.neighbourhood(scene);

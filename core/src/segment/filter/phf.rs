@@ -138,12 +138,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
             }
             2 => self.pass.map_denominators(scene, range, chunk),
             3 => {
-                let hood = self.pass.neighbourhood(scene);
-                let pairs = &mut chunk.pairs;
-                for u in range {
-                    let (emission, direct) = hood.light_row::<f32>(self.pass.links[u], self.pass.values[u], &self.pass.dens, pairs);
-                    chunk.rows.push_row(emission, direct, pairs.iter().copied());
-                }
+                self.pass.map_rows(scene, range, chunk, |hood, u, pairs| hood.light_row::<f32>(self.pass.links[u], self.pass.values[u], &self.pass.dens, pairs))
             }
             _ => self.pass.map_sweep(range, chunk),
         }
@@ -151,18 +146,12 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         match phase.id {
             0 => self.r0 = self.config.radius.initial_radius(ctx.scene, &Footprint::reduce_chunks(outputs)),
-            1 => {
-                let r = self.radius(phase.pass.unwrap_or(0));
-                self.pass.gather_nodes(outputs, r);
-            }
-            2 => self.pass.gather_denominators(outputs),
-            3 => self.pass.gather_rows(outputs),
             id if id == 4 + self.sweeps => {
                 for out in outputs.iter() {
                     film.set_camera_samples(out.items.clone(), &out.pixels);
                 }
             }
-            _ => self.pass.gather_sweep(outputs),
+            id => self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0))),
         }
         // Before the gather: its kernel keeps the progressive radius (the neighbour
         // budget bounds the cost of the rows only; the gather is linear in photons).
