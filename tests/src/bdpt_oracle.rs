@@ -152,6 +152,24 @@ pub fn brute_force_segment_weights(scene: &Scene, x: &[Vertex], radius: Option<f
     p.iter().map(|v| v.map(|v| v / total)).collect()
 }
 
+/// The full path, light end first, of strategy (s, t) joining `light[..s]` and `cam[..t]`,
+/// with the endpoint `sampled` at connection time (the light point of s = 1, the camera
+/// of t = 1) in place of the sub-path's own; `None` where the camera path escaped to an
+/// infinite light (the brute force has none).
+pub fn full_path(light: &[Vertex], cam: &[Vertex], s: usize, t: usize, sampled: Option<Vertex>) -> Option<Vec<Vertex>> {
+    let mut x: Vec<Vertex> = light[..s].to_vec();
+    let mut cpart: Vec<Vertex> = cam[..t].to_vec();
+    if let Some(v) = sampled {
+        if s == 1 { x[0] = v } else { cpart[0] = v }
+    }
+    if cpart.last()?.kind == VertexKind::InfiniteLight {
+        return None;
+    }
+    cpart.reverse();
+    x.extend(cpart);
+    Some(x)
+}
+
 /// Can strategy s (light prefix x₀…x_{s−1}, camera suffix x_s…) produce full path `x`?
 /// s = 0 needs x₀ to emit and not be a Dirac light; otherwise x_{s−1} and x_s are joined by a connection, which
 /// neither may be Dirac for.

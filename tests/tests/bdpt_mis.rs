@@ -20,11 +20,11 @@
 
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::path::mis::mis_weight;
-use ember_core::path::{LightPointSample, Vertex, VertexKind, camera_subpath, connect, light_subpath};
+use ember_core::path::{LightPointSample, Vertex, camera_subpath, connect, light_subpath};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::Context;
 use ember_core::scene::Scene;
-use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split};
+use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split, full_path};
 use ember_tests::scenes::{cornell_with_delta_lights, cornell_with_spheres};
 use ember_tests::tracer::BruteForce;
 use glam::Vec2;
@@ -72,16 +72,7 @@ fn weights_equal_brute_force(scene: &Scene, tracer: &BruteForce) {
                 let Some(c) = connect(&ctx, &light, &cam, s, t, u, &mut counters) else { continue };
                 let c = c.weighted(mis_weight(&scene, &light, &cam, c.sampled.as_ref(), s, t));
                 // Assemble the full path, light end first.
-                let mut x: Vec<Vertex> = light[..s].to_vec();
-                let mut cpart: Vec<Vertex> = cam[..t].to_vec();
-                if let Some(v) = c.sampled {
-                    if s == 1 { x[0] = v } else { cpart[0] = v }
-                }
-                if cpart.last().unwrap().kind == VertexKind::InfiniteLight {
-                    continue;
-                }
-                cpart.reverse();
-                x.extend(cpart);
+                let Some(x) = full_path(&light, &cam, s, t, c.sampled) else { continue };
                 let bf = brute_force_weights(&scene, &x, |_, _| 1.0);
                 let expected = bf[s].expect("a strategy that produced a path must be possible");
                 let diff = (expected - c.weight as f64).abs();

@@ -16,10 +16,10 @@
 use ember_core::integrator::lvcbpt::StrategyCounts;
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::path::mis::mis_weight_counted;
-use ember_core::path::{LightPointSample, Vertex, VertexKind, camera_subpath, connect, light_subpath};
+use ember_core::path::{LightPointSample, Vertex, camera_subpath, connect, light_subpath};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::Context;
-use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split};
+use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split, full_path};
 use ember_tests::scenes::cornell_with_spheres;
 use ember_tests::tracer::BruteForce;
 use glam::Vec2;
@@ -49,16 +49,7 @@ fn counted_weights_equal_brute_force_and_sum_to_one() {
                 let u = LightPointSample { u_light: lrng.next_f32(), u_point: lrng.next_2d() };
                 let Some(c) = connect(&ctx, &light[..s], &cam[..t.max(1)], s, t, u, &mut counters) else { continue };
                 let c = c.weighted(mis_weight_counted(&scene, &light[..s], &cam[..t.max(1)], c.sampled.as_ref(), s, t, &count));
-                let mut x: Vec<Vertex> = light[..s].to_vec();
-                let mut cpart: Vec<Vertex> = cam[..t].to_vec();
-                if let Some(v) = c.sampled {
-                    if s == 1 { x[0] = v } else { cpart[0] = v }
-                }
-                if cpart.last().unwrap().kind == VertexKind::InfiniteLight {
-                    continue;
-                }
-                cpart.reverse();
-                x.extend(cpart);
+                let Some(x) = full_path(&light, &cam, s, t, c.sampled) else { continue };
                 let bf = brute_force_weights(&scene, &x, |s, t| COUNTS.count(s, t));
                 let expected = bf[s].expect("a strategy that produced a path must be possible");
                 let diff = (expected - c.weight as f64).abs();

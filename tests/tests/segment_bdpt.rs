@@ -19,14 +19,14 @@ use ember_core::bsdf::{Material, MicrofacetKind};
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::merge::RadiusRule;
 use ember_core::path::mis::mis_weight;
-use ember_core::path::{LightPointSample, Vertex, VertexKind, camera_subpath_with_kernel, connect, light_subpath_with_kernel};
+use ember_core::path::{LightPointSample, camera_subpath_with_kernel, connect, light_subpath_with_kernel};
 use ember_core::render::{EstimatorConfig, KernelChoice, SegmentAlgorithm, SegmentConfig};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::Context;
 use ember_core::scene::Scene;
 use ember_core::segment::{Junctions, Kernel};
 use ember_core::spectrum::Rgb;
-use ember_tests::bdpt_oracle::brute_force_segment_weights;
+use ember_tests::bdpt_oracle::{brute_force_segment_weights, full_path};
 use ember_tests::chi2::sidak;
 use ember_tests::render::{Passes, assert_blocks_agree, push_block_means};
 use ember_tests::scenes::{cornell, cornell_with_spheres};
@@ -72,16 +72,7 @@ fn segment_bdpt_weights_equal_brute_force_with_the_disk_kernel() {
                 let u = LightPointSample { u_light: lrng.next_f32(), u_point: lrng.next_2d() };
                 let Some(c) = connect(&ctx, &light, &cam, s, t, u, &mut counters) else { continue };
                 let weight = mis_weight(&scene, &light, &cam, c.sampled.as_ref(), s, t);
-                let mut x: Vec<Vertex> = light[..s].to_vec();
-                let mut cpart: Vec<Vertex> = cam[..t].to_vec();
-                if let Some(v) = c.sampled {
-                    if s == 1 { x[0] = v } else { cpart[0] = v }
-                }
-                if cpart.last().unwrap().kind == VertexKind::InfiniteLight {
-                    continue;
-                }
-                cpart.reverse();
-                x.extend(cpart);
+                let Some(x) = full_path(&light, &cam, s, t, c.sampled) else { continue };
                 let bf = brute_force_segment_weights(&scene, &x, Some(radius as f64), |_, _| 1.0);
                 let expected = bf[s].expect("a technique that produced a path must be possible");
                 let diff = (expected - weight as f64).abs();
