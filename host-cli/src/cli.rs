@@ -256,24 +256,28 @@ pub struct CacheArgs {
     /// the radius below around y_i; its radius stays fixed over passes).
     #[arg(long, value_name = "KERNEL", value_enum, default_value_t = KernelArg::Dirac)]
     pub kernel: KernelArg,
-    /// PPM/BPM/VCM/MVF/PhF: initial merging radius r₀ in scene units; SPT/SLT/SBDPT: the disk kernel's
+    /// PPM/BPM/VCM/MVF/PhF/BPF: initial merging radius r₀ in scene units; SPT/SLT/SBDPT: the disk kernel's
     /// radius [default: 4 pixel footprints].
     #[arg(long, value_name = "R", allow_negative_numbers = true, conflicts_with_all = ["radius_footprints", "radius_scene"])]
     pub radius: Option<f32>,
-    /// PPM/BPM/VCM/MVF/PhF: r₀ as a multiple of the mean pixel footprint (hit distance × pixel
+    /// PPM/BPM/VCM/MVF/PhF/BPF: r₀ as a multiple of the mean pixel footprint (hit distance × pixel
     /// angle, averaged over the image; the segment paper's 4) [default: 4].
     #[arg(long, value_name = "K", allow_negative_numbers = true, conflicts_with = "radius_scene")]
     pub radius_footprints: Option<f32>,
-    /// PPM/BPM/VCM/MVF/PhF: r₀ as a fraction of the scene's bounding-sphere radius (SmallVCM's 0.003).
+    /// PPM/BPM/VCM/MVF/PhF/BPF: r₀ as a fraction of the scene's bounding-sphere radius (SmallVCM's 0.003).
     #[arg(long, value_name = "F", allow_negative_numbers = true)]
     pub radius_scene: Option<f32>,
-    /// PPM/BPM/VCM/MVF/PhF: radius reduction α in (0, 1]: r_i = r₀ (i + 1)^((α − 1)/2); 1 keeps r fixed.
+    /// PPM/BPM/VCM/MVF/PhF/BPF: radius reduction α in (0, 1]: r_i = r₀ (i + 1)^((α − 1)/2); 1 keeps r fixed.
     #[arg(long, value_name = "ALPHA", allow_negative_numbers = true, default_value_t = MergingConfig::DEFAULT.alpha)]
     pub alpha: f32,
-    /// MVF/PhF: segments per path at most, each one propagation sweep per pass, 1 to 64
+    /// MVF/PhF/BPF: segments per path at most, each one propagation sweep per pass, 1 to 64
     /// [default: the scene's max_depth; 16 where it is unbounded].
     #[arg(long, value_name = "N")]
     pub max_segments: Option<u32>,
+    /// BPF: light paths per camera path, β in [0, 16] (N_L = β · width · height per pass;
+    /// the segment paper's 0.25, and 1 on caustics).
+    #[arg(long, value_name = "BETA", allow_negative_numbers = true, default_value_t = FilterConfig::DEFAULT.beta)]
+    pub beta: f32,
 }
 
 impl Default for CacheArgs {
@@ -298,6 +302,7 @@ impl Default for CacheArgs {
             radius_scene: None,
             alpha: MergingConfig::DEFAULT.alpha,
             max_segments: None,
+            beta: FilterConfig::DEFAULT.beta,
         }
     }
 }
@@ -347,7 +352,7 @@ impl CacheArgs {
     }
     /// Path filtering's configuration from these options.
     pub fn filter(&self) -> FilterConfig {
-        FilterConfig { radius: self.radius_rule(), alpha: self.alpha, max_segments: self.max_segments }
+        FilterConfig { radius: self.radius_rule(), alpha: self.alpha, max_segments: self.max_segments, beta: self.beta }
     }
     /// The configuration of `estimator` (these options apply to the cache-based and
     /// merging estimators only).

@@ -164,6 +164,7 @@ impl CoreRenderer {
             },
             Renderer::Filter(f) => self.filter_report(&f.pass, f.segments, f.r0),
             Renderer::PhotonFilter(f) => self.filter_report(&f.pass, f.segments, f.r0),
+            Renderer::BidirectionalFilter(f) => self.filter_report(&f.pass, f.segments, f.r0),
             Renderer::OnePhase(_) => Vec::new(),
         }
     }

@@ -9,7 +9,7 @@ use crate::integrator::vcm::Vcm;
 use crate::integrator::{RenderParams, bdpt, lt, pt};
 use crate::scene::Scene;
 use crate::segment::Segments;
-use crate::segment::filter::{Mvf, Phf};
+use crate::segment::filter::{Bpf, Mvf, Phf};
 
 use super::{ChunkOutput, ConfigError, Context, Cursor, EstimatorConfig, EstimatorKind, Film, FilterSide, Phase, Phased, Stage};
 
@@ -95,6 +95,8 @@ pub enum Renderer {
     Filter(alloc::boxed::Box<Mvf>),
     /// Photon filtering.
     PhotonFilter(alloc::boxed::Box<Phf>),
+    /// Bidirectional path filtering.
+    BidirectionalFilter(alloc::boxed::Box<Bpf>),
 }
 
 impl Renderer {
@@ -113,6 +115,7 @@ impl Renderer {
             EstimatorConfig::Segment(a, c) => Self::Segment(Segments::new(params, a, c, pixels)),
             EstimatorConfig::Filter(FilterSide::Camera, c) => Self::Filter(alloc::boxed::Box::new(Mvf::new(params, c, pixels))),
             EstimatorConfig::Filter(FilterSide::Light, c) => Self::PhotonFilter(alloc::boxed::Box::new(Phf::new(params, c, pixels))),
+            EstimatorConfig::Filter(FilterSide::Both, c) => Self::BidirectionalFilter(alloc::boxed::Box::new(Bpf::new(params, c, pixels))),
         })
     }
 
@@ -130,6 +133,7 @@ impl Renderer {
             Self::Segment(s) => EstimatorConfig::Segment(s.algorithm, s.config).kind(),
             Self::Filter(_) => EstimatorKind::Mvf,
             Self::PhotonFilter(_) => EstimatorKind::Phf,
+            Self::BidirectionalFilter(_) => EstimatorKind::Bpf,
         }
     }
 
@@ -143,6 +147,7 @@ impl Renderer {
             Self::Segment(s) => &s.params,
             Self::Filter(f) => &f.params,
             Self::PhotonFilter(f) => &f.params,
+            Self::BidirectionalFilter(f) => &f.params,
         }
     }
 }
@@ -157,6 +162,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Segment(s) => Phased::<Q>::next_phase(s),
             Self::Filter(f) => Phased::<Q>::next_phase(&**f),
             Self::PhotonFilter(f) => Phased::<Q>::next_phase(&**f),
+            Self::BidirectionalFilter(f) => Phased::<Q>::next_phase(&**f),
         }
     }
     fn start_pass(&mut self, pass: u32) {
@@ -168,6 +174,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Segment(s) => Phased::<Q>::start_pass(s, pass),
             Self::Filter(f) => Phased::<Q>::start_pass(&mut **f, pass),
             Self::PhotonFilter(f) => Phased::<Q>::start_pass(&mut **f, pass),
+            Self::BidirectionalFilter(f) => Phased::<Q>::start_pass(&mut **f, pass),
         }
     }
     fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput) {
@@ -179,6 +186,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Segment(s) => s.map(ctx, phase, out),
             Self::Filter(f) => f.map(ctx, phase, out),
             Self::PhotonFilter(f) => f.map(ctx, phase, out),
+            Self::BidirectionalFilter(f) => f.map(ctx, phase, out),
         }
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
@@ -190,6 +198,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::Segment(s) => s.reduce(ctx, phase, outputs, film),
             Self::Filter(f) => f.reduce(ctx, phase, outputs, film),
             Self::PhotonFilter(f) => f.reduce(ctx, phase, outputs, film),
+            Self::BidirectionalFilter(f) => f.reduce(ctx, phase, outputs, film),
         }
     }
 }

@@ -36,6 +36,8 @@
 //! shared with vertex merging (4 pixel footprints by default), shrinking over passes as
 //! r_i = r₀ (i + 1)^((α − 1)/2) with α = 0.67 (Knaus and Zwicker 2011): consistent.
 
+pub mod bidir;
+pub mod bpf;
 pub mod graph;
 pub mod mvf;
 pub mod nodes;
@@ -43,6 +45,8 @@ pub mod pass;
 pub mod phf;
 pub mod weights;
 
+pub use bidir::Bidirectional;
+pub use bpf::Bpf;
 pub use graph::{FilterGraph, Real};
 pub use mvf::Mvf;
 pub use nodes::{Node, trace_camera_nodes, trace_light_nodes};

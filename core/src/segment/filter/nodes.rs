@@ -57,20 +57,87 @@ pub struct LightSegment {
     pub pdf: f32,
     /// A Dirac light (point, spot, directional): no BSDF draw reaches it.
     pub delta: bool,
+    /// The sampled point on the light.
+    pub end: LightEnd,
 }
 
-/// One segment end of a camera path.
+/// A segment's end on a light (what the emission and light-sampling techniques' densities
+/// read): the light, the point and its normal (zero for point, spot and infinite lights).
+#[derive(Clone, Copy, Debug)]
+pub struct LightEnd {
+    /// The light's index, or [`NONE`]: the end is on no light.
+    pub light: u32,
+    pub p: Vec3,
+    pub n: Vec3,
+}
+
+impl Default for LightEnd {
+    fn default() -> Self {
+        Self { light: NONE, p: Vec3::ZERO, n: Vec3::ZERO }
+    }
+}
+
+impl LightEnd {
+    /// The end at surface point `hit`, if it lies on an emitter.
+    pub fn at_surface(hit: &SurfaceHit) -> Self {
+        hit.emitter.map_or(Self::default(), |id| Self { light: id, p: hit.p, n: hit.ng })
+    }
+
+    pub fn is_light(&self) -> bool {
+        self.light != NONE
+    }
+}
+
+/// Which walk a node belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NodeKind {
+    /// A camera path's segment end (`wo` toward the camera).
+    Camera,
+    /// A light path's segment end (`wo` toward the light).
+    Light,
+    /// The point a light path left an area light from (bidirectional filtering): the
+    /// centre of its first segment's row, neither reused nor a technique's condition.
+    Emission,
+}
+
+/// One segment end of a camera or light path.
 #[derive(Clone, Copy, Debug)]
 pub struct Node {
     pub hit: SurfaceHit,
     /// Unit direction back along the segment that reached it.
     pub wo: Vec3,
-    /// L_e of the end back along the segment.
+    /// Camera node: L_e of the end back along the segment. Light node: L_e of the
+    /// segment's light-side end toward it (the light's, for a first hit; for point and
+    /// spot lights intensity / d²), zero unless that end is on a light.
     pub emitted: Rgb,
     /// All-Dirac material: it reuses nothing and is reused by nobody.
     pub delta: bool,
+    pub kind: NodeKind,
+    /// The node whose continuation reached it, or [`NONE`] (a camera ray's hit; a light
+    /// path's first hit from a light without an emission node).
+    pub pred: u32,
+    /// Light node: the arriving segment's light-side end, if on a light.
+    pub source: LightEnd,
     pub next: Continuation,
+    /// Camera node: its light-sampled segment.
     pub light: LightSegment,
+}
+
+impl Node {
+    /// A node at `hit` reached along `-wo`, before its continuation is drawn.
+    fn new(scene: &Scene, hit: SurfaceHit, wo: Vec3, kind: NodeKind, pred: u32) -> Self {
+        Self {
+            hit,
+            wo,
+            emitted: Rgb::ZERO,
+            delta: scene.materials[hit.material as usize].is_delta(),
+            kind,
+            pred,
+            source: LightEnd::default(),
+            next: Continuation { node: NONE, ..Continuation::default() },
+            light: LightSegment::default(),
+        }
+    }
 }
 
 /// Trace the camera paths of pixels `pixels` in pass `pass`, at most `max_segments`
@@ -155,15 +222,8 @@ fn walk<Q: RayQuery + ?Sized>(
         }
         let sp = SurfacePoint::new(hit, -ray.dir);
         let material = sp.material(scene);
-        let emitted = hit.emitter.map_or(Rgb::ZERO, |id| scene.lights[id as usize].radiance(hit.p, hit.ng, sp.wo));
-        let mut node = Node {
-            hit,
-            wo: sp.wo,
-            emitted,
-            delta: material.is_delta(),
-            next: Continuation { node: NONE, ..Continuation::default() },
-            light: LightSegment::default(),
-        };
+        let mut node = Node::new(scene, hit, sp.wo, NodeKind::Camera, parent);
+        node.emitted = hit.emitter.map_or(Rgb::ZERO, |id| scene.lights[id as usize].radiance(hit.p, hit.ng, sp.wo));
         let more = segments < max_segments && params.max_depth.allows(segments + 1);
         rng.set_dimension(first_dim + segments * DIMS_PER_BOUNCE);
         let u_rr = rng.next_f32();
@@ -181,6 +241,7 @@ fn walk<Q: RayQuery + ?Sized>(
                         node.light.dir = ls.wi;
                         node.light.pdf = chosen.pmf * ls.pdf.0;
                         node.light.delta = ls.is_delta;
+                        node.light.end = LightEnd { light: chosen.index as u32, p: ls.p, n: ls.n };
                         counters.rays += 1;
                         let shadow = if ls.dist.is_finite() { sp.spawn_to(ls.p, ls.n) } else { sp.spawn(ls.wi) };
                         if !tracer.occluded(&shadow) {
@@ -219,13 +280,19 @@ fn fill_light_densities(scene: &Scene, nodes: &mut [Node], first: u32) {
     }
 }
 
-/// Trace light paths `paths` of pass `pass` (photon filtering), at most `max_segments`
-/// segments each. Each hit is a node (`wo` points back toward the light; no light
-/// sample, no emission): it goes to `nodes`, its predecessor on its own path (the node
-/// whose continuation reached it, or [`NONE`] for the emission's first hit) to `pred`,
-/// and its base flux to `base`: β₀ / `paths_per_pass` for a first hit, β₀ = L_e |cos| /
+/// Trace light paths `paths` of pass `pass`, at most `max_segments` segments each. Each
+/// hit is a light node (`wo` points back toward the light; no light sample): it goes to
+/// `nodes`, its predecessor on its own path to `pred` (also in [`Node::pred`]), and its
+/// base flux to `base`: β₀ / `paths_per_pass` for a first hit, β₀ = L_e |cos| /
 /// (P(light) p_pos p_dir) (the emission technique, `paths_per_pass` samples of it), zero
-/// otherwise. Indices are local to `nodes`.
+/// otherwise (photon filtering's A₀). Each node also records the arriving segment's L_e
+/// and light-side end ([`Node::emitted`], [`Node::source`]).
+///
+/// With `emission_nodes` (bidirectional filtering), a path leaving an area light starts
+/// with an [`NodeKind::Emission`] node at its origin (found by a ray back from the first
+/// hit along the unoccluded emission segment), the first hit's predecessor; the centre
+/// of the row of radiance reflected by the light's own surface. Indices are local to
+/// `nodes`.
 #[allow(clippy::too_many_arguments)]
 pub fn trace_light_nodes<Q: RayQuery + ?Sized>(
     scene: &Scene,
@@ -235,6 +302,7 @@ pub fn trace_light_nodes<Q: RayQuery + ?Sized>(
     paths_per_pass: u32,
     pass: u32,
     paths: core::ops::Range<u32>,
+    emission_nodes: bool,
     nodes: &mut Vec<Node>,
     pred: &mut Vec<u32>,
     base: &mut Vec<Rgb>,
@@ -257,9 +325,51 @@ pub fn trace_light_nodes<Q: RayQuery + ?Sized>(
         let cos0 = if es.n == Vec3::ZERO { 1.0 } else { es.n.dot(es.dir).abs() };
         let beta0 = es.radiance * (cos0 / (pdf_pos * es.pdf_dir.0));
         let ray = if es.n == Vec3::ZERO { Ray::new(es.p, es.dir, f32::INFINITY) } else { spawn_ray(es.p, es.n, es.dir) };
-        light_walk(scene, tracer, params, max_segments, ray, beta0, paths_per_pass, &mut rng, nodes, pred, base, &mut counters);
+        let start = Emission { light: chosen.index as u32, sample: es, beta0, paths_per_pass, with_node: emission_nodes && light.has_area() };
+        let out = LightNodes { nodes: &mut *nodes, pred: &mut *pred, base: &mut *base };
+        light_walk(scene, tracer, params, max_segments, ray, start, &mut rng, out, &mut counters);
     }
     counters
+}
+
+/// How a light path started.
+struct Emission {
+    light: u32,
+    sample: crate::light::EmissionSample,
+    beta0: Rgb,
+    paths_per_pass: u32,
+    /// Add an emission node at the origin.
+    with_node: bool,
+}
+
+/// Where a light walk writes.
+struct LightNodes<'a> {
+    nodes: &'a mut Vec<Node>,
+    pred: &'a mut Vec<u32>,
+    base: &'a mut Vec<Rgb>,
+}
+
+/// The emission node at the origin of a light path whose first segment ends at `hit`:
+/// the light's surface, found by a ray back along that (unoccluded) segment.
+fn emission_node<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    hit: &SurfaceHit,
+    es: &crate::light::EmissionSample,
+    counters: &mut Counters,
+) -> Option<Node> {
+    let back = -es.dir;
+    let dist = (hit.p - es.p).length();
+    let mut ray = spawn_ray(hit.p, hit.ng, back);
+    ray.t_max = dist * 1.01 + 1e-4;
+    counters.rays += 1;
+    let found = tracer.intersect(&ray)?;
+    if found.emitter.is_none() || (found.p - es.p).length() > 1e-3 * (1.0 + dist) {
+        return None;
+    }
+    let mut node = Node::new(scene, found, es.dir, NodeKind::Emission, NONE);
+    node.next = Continuation { q: 1.0, dir: es.dir, node: NONE, ..Continuation::default() };
+    Some(node)
 }
 
 /// One light path's nodes (see [`trace_light_nodes`]).
@@ -270,36 +380,48 @@ fn light_walk<Q: RayQuery + ?Sized>(
     params: &RenderParams,
     max_segments: u32,
     mut ray: Ray,
-    beta0: Rgb,
-    paths_per_pass: u32,
+    start: Emission,
     rng: &mut SampleStream,
-    nodes: &mut Vec<Node>,
-    pred: &mut Vec<u32>,
-    base: &mut Vec<Rgb>,
+    out: LightNodes<'_>,
     counters: &mut Counters,
 ) {
     let first_dim = rng.dimension();
-    let reference = crate::integrator::light_roulette_reference(beta0);
-    let mut beta = beta0;
+    let reference = crate::integrator::light_roulette_reference(start.beta0);
+    let mut beta = start.beta0;
     let mut parent = NONE;
     let mut segments = 1u32;
     loop {
         counters.rays += 1;
         let Some(hit) = tracer.intersect(&ray) else { break };
-        let index = nodes.len() as u32;
+        if segments == 1 && start.with_node {
+            if let Some(e) = emission_node(scene, tracer, &hit, &start.sample, counters) {
+                parent = out.nodes.len() as u32;
+                out.nodes.push(e);
+                out.pred.push(NONE);
+                out.base.push(Rgb::ZERO);
+            }
+        }
+        let index = out.nodes.len() as u32;
         if parent != NONE {
-            nodes[parent as usize].next.node = index;
+            out.nodes[parent as usize].next.node = index;
         }
         let sp = SurfacePoint::new(hit, -ray.dir);
         let material = sp.material(scene);
-        let mut node = Node {
-            hit,
-            wo: sp.wo,
-            emitted: Rgb::ZERO,
-            delta: material.is_delta(),
-            next: Continuation { node: NONE, ..Continuation::default() },
-            light: LightSegment::default(),
-        };
+        let mut node = Node::new(scene, hit, sp.wo, NodeKind::Light, parent);
+        if segments == 1 {
+            let es = &start.sample;
+            node.source = LightEnd { light: start.light, p: es.p, n: es.n };
+            // Point and spot lights give intensity: radiance-like per unit solid angle
+            // seen from the hit, as their light samples report it.
+            let d2 = if es.delta_pos { (hit.p - es.p).length_squared().max(1e-12) } else { 1.0 };
+            node.emitted = es.radiance / d2;
+        } else {
+            let w = &out.nodes[parent as usize].hit;
+            node.source = LightEnd::at_surface(w);
+            if let Some(id) = w.emitter {
+                node.emitted = scene.lights[id as usize].radiance(w.p, w.ng, ray.dir);
+            }
+        }
         // A light segment and the camera's make two segments: one more must fit.
         let more = segments + 2 <= max_segments && params.max_depth.allows(segments + 2);
         rng.set_dimension(first_dim + segments * DIMS_PER_BOUNCE);
@@ -307,9 +429,9 @@ fn light_walk<Q: RayQuery + ?Sized>(
         let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
         let draws = ContinuationDraws { more, segments, u_rr, u_lobe, u_dir };
         let next_ray = continue_path(params, &sp, material, TransportMode::Importance, reference, draws, &mut node, &mut beta);
-        nodes.push(node);
-        pred.push(parent);
-        base.push(if parent == NONE { beta0 / paths_per_pass.max(1) as f32 } else { Rgb::ZERO });
+        out.nodes.push(node);
+        out.pred.push(parent);
+        out.base.push(if segments == 1 { start.beta0 / start.paths_per_pass.max(1) as f32 } else { Rgb::ZERO });
         let Some(r) = next_ray else { break };
         parent = index;
         segments += 1;

@@ -97,6 +97,7 @@ impl FilterPass {
             self.nodes.extend(chunk.nodes.iter().map(|n| {
                 let mut n = *n;
                 n.next.node = shift(n.next.node);
+                n.pred = shift(n.pred);
                 n
             }));
             self.links.extend(chunk.links.iter().map(|&i| shift(i)));

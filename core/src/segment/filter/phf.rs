@@ -130,6 +130,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
                     self.light_paths(),
                     pass,
                     items,
+                    false,
                     &mut chunk.nodes,
                     &mut chunk.links,
                     &mut chunk.values,

@@ -47,21 +47,34 @@ pub struct Denominators {
     pub next: f64,
     /// D of its light-sampled segment.
     pub light: f64,
+    /// Bidirectional filtering: the light samples' part of `next`.
+    pub next_light: f64,
+    /// Bidirectional filtering, light node: D of its arriving segment.
+    pub arrive: f64,
+    /// The light samples' part of `arrive`.
+    pub arrive_light: f64,
 }
 
 impl Neighbourhood<'_> {
     /// K(t → x) for the node t's kernel at x = node x's end.
     #[inline]
     fn kernel(&self, t: &Node, x: &Node) -> f64 {
-        self.kernel.density(&t.hit, t.wo, x.hit.p, x.hit.ng).0 as f64
+        self.kernel_at(t, x.hit.p, x.hit.ng)
     }
 
-    /// The BSDF density of node t for leaving along `dir` (its own incoming direction).
+    /// K(t → x) for the point `x` with geometric normal `nx`.
     #[inline]
-    fn bsdf_pdf(&self, t: &Node, dir: crate::math::Vec3) -> f64 {
+    pub(super) fn kernel_at(&self, t: &Node, x: crate::math::Vec3, nx: crate::math::Vec3) -> f64 {
+        self.kernel.density(&t.hit, t.wo, x, nx).0 as f64
+    }
+
+    /// The BSDF density of node t for leaving along `dir` (its own incoming direction),
+    /// in transport mode `mode`.
+    #[inline]
+    pub(super) fn bsdf_pdf(&self, t: &Node, dir: crate::math::Vec3, mode: TransportMode) -> f64 {
         let frame = crate::math::Frame::from_normal(t.hit.ns);
         let m = &self.scene.materials[t.hit.material as usize];
-        m.pdf(frame.to_local(t.wo), frame.to_local(dir), TransportMode::Radiance).0 as f64
+        m.pdf(frame.to_local(t.wo), frame.to_local(dir), mode).0 as f64
     }
 
     /// Call `visit(index, node)` for every non-Dirac node whose end lies in the support of
@@ -94,7 +107,7 @@ impl Neighbourhood<'_> {
         let light_ok = light.dir != crate::math::Vec3::ZERO;
         self.each_neighbour(u, false, |i, t, k| {
             if next_ok {
-                let p_sigma = if i == index { next.pdf as f64 } else { self.bsdf_pdf(t, next.dir) };
+                let p_sigma = if i == index { next.pdf as f64 } else { self.bsdf_pdf(t, next.dir, TransportMode::Radiance) };
                 let mut p = t.next.q as f64 * p_sigma;
                 if t.light.attempted {
                     p += next.light_pdf as f64;
@@ -104,7 +117,7 @@ impl Neighbourhood<'_> {
             if light_ok {
                 let mut p = if t.light.attempted { light.pdf as f64 } else { 0.0 };
                 if !light.delta {
-                    p += t.next.q as f64 * self.bsdf_pdf(t, light.dir);
+                    p += t.next.q as f64 * self.bsdf_pdf(t, light.dir, TransportMode::Radiance);
                 }
                 d.light += k * p;
             }

@@ -1,0 +1,333 @@
+//! Eq. (18)'s weights over the union of camera and light segments (bidirectional path
+//! filtering, Wang et al. 2025 §5 and Fig. 3).
+//!
+//! Every node stands for the segment that reached it. A camera node's segment runs from
+//! its predecessor (or the camera) to it; a light node u's segment s = (x, y) runs from u
+//! (x, the camera side) to its predecessor w (y, the light side: a light node, an
+//! emission node, or the light itself). Radiance flows from y to x in both. The pool of
+//! segments a junction reuses is every continuation and light-sampled segment leaving a
+//! camera node, and every segment arriving at a light node, whose start x lies in the
+//! junction's kernel.
+//!
+//! **Techniques.** A segment s = (x, y) with direction ŝ from x to y can be drawn
+//! - by the continuation of every camera node t whose kernel covers x: K(t → x) q_t
+//!   p_σ(ŝ | t) per area at x and solid angle at x;
+//! - by the light sample of every such t, if y is on a light: K(t → x) c_t P_L p_L(ŝ | x);
+//! - by the continuation of every light node t whose kernel covers y, the adjoint draw
+//!   K(t → y) q_t p*_σ(−ŝ | t) per area at y and solid angle at y;
+//! - by the emission, N_L samples, if y is on a light: N_L P_L p_pos(y) p_dir(−ŝ | y).
+//!
+//! In one measure, per area at x and solid angle at x (area at y = solid angle · d² /
+//! |n_y·ŝ|; y's Dirac for point and spot lights, ŝ's for directional ones, as their
+//! light samples report them):
+//!
+//!   D(s) = Σ_cam K [q p_σ + c P_L p_L] + Σ_light K q p*_σ |n_x·ŝ| / |n_y·ŝ| + N_L P_L p_pos p_dir |n_x·ŝ| J,
+//!
+//! J = 1 / |n_y·ŝ| on an area light, 1 / d² for a point light, 1 for lights at infinity
+//! (p_pos their disk's). The term a junction at y_v (f_r there) gains from s is
+//! K(y_v → x) f_r(ŝ) |n_x·ŝ| L(s) / D(s), as in multi-vertex path filtering, whose
+//! weights these are when no light paths are traced.
+//!
+//! **Light samples end at the light.** A light-sampled segment carries L_e only; its
+//! density belongs to the emitted part of the segment's radiance and not to what the
+//! light's surface reflects. So a reused segment that ends on a light enters as
+//! L / D_r + L_e (1/D − 1/D_r), D_r = D without the light samples' terms: the emitted
+//! part under every technique, the reflected part under those that can continue.
+//!
+//! **Dirac light nodes** pass on their own arriving segment with the throughput of their
+//! adjoint draw (the product of a light path's throughputs is the path's; refraction's
+//! η² factors cancel between entering and leaving a medium, and reused segments start
+//! in the light's medium).
+
+use alloc::vec::Vec;
+
+use super::graph::{Real, Rgb3, add3, mul3};
+use super::nodes::{LightEnd, NONE, Node, NodeKind};
+use super::weights::{Denominators, Neighbourhood};
+use crate::bsdf::TransportMode;
+use crate::math::{Frame, Vec3};
+use crate::spectrum::Rgb;
+
+/// The weights of bidirectional filtering: the neighbourhood and the emission's sample
+/// count N_L.
+#[derive(Clone, Copy, Debug)]
+pub struct Bidirectional<'a> {
+    pub hood: Neighbourhood<'a>,
+    /// Light paths traced in the pass (the emission technique's samples).
+    pub light_paths: f64,
+}
+
+/// Where a reusable segment ends on its light side.
+#[derive(Clone, Copy, Debug)]
+enum Far {
+    /// A surface point (position, geometric normal), on a light or not.
+    Surface(Vec3, Vec3, LightEnd),
+    /// A light without a surface there (point, spot, at infinity; or an area light whose
+    /// emission node was not found).
+    Light(LightEnd),
+    /// Escaped: every light at infinity.
+    Sky,
+}
+
+impl Far {
+    fn light(&self) -> Option<LightEnd> {
+        match *self {
+            Far::Surface(_, _, e) | Far::Light(e) if e.is_light() => Some(e),
+            _ => None,
+        }
+    }
+}
+
+impl Bidirectional<'_> {
+    fn nodes(&self) -> &[Node] {
+        self.hood.nodes
+    }
+
+    /// P_L p_L of light sampling from `x` drawing `dir` toward light end `end` (P_L for a
+    /// Dirac light, as its samples report it).
+    fn light_sample_density(&self, x: Vec3, dir: Vec3, end: LightEnd) -> f64 {
+        let scene = self.hood.scene;
+        let light = &scene.lights[end.light as usize];
+        let pmf = scene.light_pmf(end.light) as f64;
+        if light.is_delta() { pmf } else { pmf * light.pdf_li(x, dir, end.p, end.n).0 as f64 }
+    }
+
+    /// N_L P_L p_pos p_dir |n_x·ŝ| J: the emission technique's density of a segment from
+    /// `x` along `dir` ending at `far`, in D's measure.
+    fn emission_density(&self, x: &Node, dir: Vec3, far: Far) -> f64 {
+        let scene = self.hood.scene;
+        let cos_x = x.hit.ng.dot(dir).abs() as f64;
+        let one = |end: LightEnd| -> f64 {
+            let light = &scene.lights[end.light as usize];
+            let (pos, pdir) = light.pdf_le(end.p, end.n, -dir);
+            let j = if light.is_infinite() {
+                1.0
+            } else if light.is_delta_position() {
+                1.0 / (end.p - x.hit.p).length_squared().max(1e-12) as f64
+            } else {
+                let c = end.n.dot(dir).abs() as f64;
+                if c > 1e-7 { 1.0 / c } else { 0.0 }
+            };
+            scene.light_pmf(end.light) as f64 * pos.0 as f64 * pdir.0 as f64 * j
+        };
+        let sum = match far {
+            Far::Sky => scene.infinite_lights().map(|(id, _)| one(LightEnd { light: id, p: Vec3::ZERO, n: Vec3::ZERO })).sum(),
+            f => f.light().map_or(0.0, one),
+        };
+        self.light_paths * sum * cos_x
+    }
+
+    /// Σ over camera nodes t whose kernel covers `x`: K(t → x) [q_t p_σ(dir | t) (if
+    /// `bsdf`) + c_t `nee`], with node `own`'s continuation density replaced by the one
+    /// its sampler reported. Returns (all, light samples' part).
+    fn camera_techniques(&self, x: &Node, dir: Vec3, nee: f64, bsdf: bool, own: Option<(u32, f64)>) -> (f64, f64) {
+        let (mut all, mut nee_part) = (0.0, 0.0);
+        self.hood.grid.query(x.hit.p, |i| {
+            let t = &self.nodes()[i as usize];
+            if t.delta || t.kind != NodeKind::Camera {
+                return;
+            }
+            let k = self.hood.kernel_at(t, x.hit.p, x.hit.ng);
+            if !(k > 0.0) {
+                return;
+            }
+            if bsdf {
+                let p = match own {
+                    Some((o, pdf)) if o == i => pdf,
+                    _ => self.hood.bsdf_pdf(t, dir, TransportMode::Radiance),
+                };
+                all += k * t.next.q as f64 * p;
+            }
+            if t.light.attempted && nee > 0.0 {
+                all += k * nee;
+                nee_part += k * nee;
+            }
+        });
+        (all, nee_part)
+    }
+
+    /// Σ over light nodes t whose kernel covers y = (`py`, `ny`): K(t → y) q_t p*_σ(−dir |
+    /// t) · |n_x·ŝ| / |n_y·ŝ|, node `own`'s density replaced by its sampler's.
+    fn light_techniques(&self, x: &Node, py: Vec3, ny: Vec3, dir: Vec3, own: u32) -> f64 {
+        let cos_y = ny.dot(dir).abs() as f64;
+        if !(cos_y > 1e-7) {
+            return 0.0;
+        }
+        let mut sum = 0.0;
+        self.hood.grid.query(py, |i| {
+            let t = &self.nodes()[i as usize];
+            if t.delta || t.kind != NodeKind::Light || !(t.next.q > 0.0) {
+                return;
+            }
+            let k = self.hood.kernel_at(t, py, ny);
+            if k > 0.0 {
+                let p = if i == own { t.next.pdf as f64 } else { self.hood.bsdf_pdf(t, -dir, TransportMode::Importance) };
+                sum += k * t.next.q as f64 * p;
+            }
+        });
+        sum * x.hit.ng.dot(dir).abs() as f64 / cos_y
+    }
+
+    /// D of a segment leaving node `x` along `dir` to `far`, and its light samples' part.
+    fn sum(&self, x: &Node, dir: Vec3, far: Far, nee: f64, own_camera: Option<(u32, f64)>, own_light: u32) -> (f64, f64) {
+        let delta_end = far.light().is_some_and(|e| self.hood.scene.lights[e.light as usize].is_delta());
+        let (mut d, nee_part) = self.camera_techniques(x, dir, nee, !delta_end, own_camera);
+        if let Far::Surface(py, ny, _) = far {
+            d += self.light_techniques(x, py, ny, dir, own_light);
+        }
+        if far.light().is_some() || matches!(far, Far::Sky) {
+            d += self.emission_density(x, dir, far);
+        }
+        (d, nee_part)
+    }
+
+    /// The denominators of node `index`'s reusable segments: a camera node's
+    /// continuation and light sample, a light node's arriving segment.
+    pub fn denominators(&self, index: u32) -> Denominators {
+        let mut d = Denominators::default();
+        let nodes = self.nodes();
+        let u = &nodes[index as usize];
+        if u.delta {
+            return d;
+        }
+        match u.kind {
+            NodeKind::Camera => {
+                let next = &u.next;
+                if next.dir != Vec3::ZERO && !next.delta {
+                    let far = if next.node != NONE {
+                        let y = &nodes[next.node as usize].hit;
+                        Far::Surface(y.p, y.ng, LightEnd::at_surface(y))
+                    } else {
+                        Far::Sky
+                    };
+                    (d.next, d.next_light) = self.sum(u, next.dir, far, next.light_pdf as f64, Some((index, next.pdf as f64)), NONE);
+                }
+                let light = &u.light;
+                if light.dir != Vec3::ZERO {
+                    let end = light.end;
+                    let far = if self.hood.scene.lights[end.light as usize].has_area() { Far::Surface(end.p, end.n, end) } else { Far::Light(end) };
+                    d.light = self.sum(u, light.dir, far, light.pdf as f64, None, NONE).0;
+                }
+            }
+            NodeKind::Light => {
+                let dir = u.wo;
+                let far = if u.pred != NONE {
+                    let w = &nodes[u.pred as usize].hit;
+                    Far::Surface(w.p, w.ng, u.source)
+                } else if u.source.is_light() && self.hood.scene.lights[u.source.light as usize].has_area() {
+                    Far::Surface(u.source.p, u.source.n, u.source)
+                } else {
+                    Far::Light(u.source)
+                };
+                let nee = if u.source.is_light() { self.light_sample_density(u.hit.p, dir, u.source) } else { 0.0 };
+                let own = if u.pred != NONE && nodes[u.pred as usize].kind == NodeKind::Light { u.pred } else { NONE };
+                (d.arrive, d.arrive_light) = self.sum(u, dir, far, nee, None, own);
+            }
+            NodeKind::Emission => {}
+        }
+        d
+    }
+
+    /// Node `index`'s row: L_e of its segment, the constant terms and the pairs.
+    pub fn row<T: Real>(&self, index: u32, dens: &[Denominators], pairs: &mut Vec<(u32, Rgb3<T>)>) -> (Rgb3<T>, Rgb3<T>) {
+        pairs.clear();
+        let nodes = self.nodes();
+        let v = &nodes[index as usize];
+        let emission = rgb::<T>(v.emitted);
+        let zero = [T::zero(); 3];
+        let (centre, wo) = match v.kind {
+            NodeKind::Emission => return (zero, zero),
+            NodeKind::Camera => (v, v.wo),
+            NodeKind::Light if v.pred == NONE => return (emission, zero),
+            NodeKind::Light => {
+                let w = &nodes[v.pred as usize];
+                (w, w.next.dir)
+            }
+        };
+        let mut direct = zero;
+        if centre.delta {
+            // Only the centre's own segment, with its Dirac draw's f |cos| / (q p).
+            let c = rgb::<T>(centre.next.throughput);
+            match centre.kind {
+                NodeKind::Camera if centre.next.node != NONE => pairs.push((centre.next.node, c)),
+                NodeKind::Camera => direct = mul3(c, rgb::<T>(centre.next.escaped)),
+                NodeKind::Light => pairs.push((v.pred, c)),
+                NodeKind::Emission => {}
+            }
+            return (emission, direct);
+        }
+        let frame = Frame::from_normal(centre.hit.ns);
+        let material = &self.hood.scene.materials[centre.hit.material as usize];
+        let wo = frame.to_local(wo);
+        let f = |dir: Vec3| material.eval(wo, frame.to_local(dir), TransportMode::Radiance);
+        self.hood.grid.query(centre.hit.p, |i| {
+            let u = &nodes[i as usize];
+            if u.delta || u.kind == NodeKind::Emission {
+                return;
+            }
+            let k = self.hood.kernel_at(centre, u.hit.p, u.hit.ng);
+            if !(k > 0.0) {
+                return;
+            }
+            let d = &dens[i as usize];
+            let n = u.hit.ns;
+            // A reused segment along `dir` with denominators (all, light samples' part),
+            // reaching node `target` (its L) or carrying `constant`.
+            let mut reuse = |dir: Vec3, all: f64, nee: f64, target: u32, constant: Rgb| {
+                let reflected = all - nee;
+                if !(all > 0.0) {
+                    return;
+                }
+                let fr = f(dir);
+                if fr.is_black() {
+                    return;
+                }
+                let g = n.dot(dir).abs() as f64 * k;
+                let c = rgb::<T>(fr);
+                if target == NONE {
+                    direct = add3(direct, scale3(mul3(c, rgb::<T>(constant)), T::from_f64(g / all)));
+                    return;
+                }
+                if !(reflected > 0.0) {
+                    // Only light samples draw it: its emitted part alone.
+                    direct = add3(direct, scale3(mul3(c, rgb::<T>(nodes[target as usize].emitted)), T::from_f64(g / all)));
+                    return;
+                }
+                pairs.push((target, scale3(c, T::from_f64(g / reflected))));
+                if nee > 0.0 {
+                    let e = nodes[target as usize].emitted;
+                    if !e.is_black() {
+                        direct = add3(direct, scale3(mul3(c, rgb::<T>(e)), T::from_f64(g * (1.0 / all - 1.0 / reflected))));
+                    }
+                }
+            };
+            match u.kind {
+                NodeKind::Camera => {
+                    if u.next.dir != Vec3::ZERO && !u.next.delta {
+                        if u.next.node != NONE {
+                            reuse(u.next.dir, d.next, d.next_light, u.next.node, Rgb::ZERO);
+                        } else if !u.next.escaped.is_black() {
+                            reuse(u.next.dir, d.next, 0.0, NONE, u.next.escaped);
+                        }
+                    }
+                    if !u.light.radiance.is_black() {
+                        reuse(u.light.dir, d.light, 0.0, NONE, u.light.radiance);
+                    }
+                }
+                NodeKind::Light => reuse(u.wo, d.arrive, d.arrive_light, i, Rgb::ZERO),
+                NodeKind::Emission => {}
+            }
+        });
+        (emission, direct)
+    }
+}
+
+#[inline]
+fn rgb<T: Real>(c: Rgb) -> Rgb3<T> {
+    [T::from_f32(c.r), T::from_f32(c.g), T::from_f32(c.b)]
+}
+
+#[inline]
+fn scale3<T: Real>(a: Rgb3<T>, s: T) -> Rgb3<T> {
+    [a[0] * s, a[1] * s, a[2] * s]
+}

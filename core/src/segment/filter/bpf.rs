@@ -1,0 +1,171 @@
+//! Bidirectional path filtering (Wang, West and Hachisuka 2025, §5, Fig. 3): recursive
+//! MMIS (eq. 18–19) over the segments of camera paths and light paths together.
+//!
+//! Each pass traces one camera path per pixel, as multi-vertex path filtering does, and
+//! N_L = β · W·H light paths, as photon filtering does. Both walks are the sequential
+//! segment sampler (eq. 15) with virtual perturbation. Every junction of a camera path,
+//! and of a light path, then reuses every segment whose start lies in its kernel: the
+//! continuations and light samples of camera nodes, and the segments of light paths
+//! arriving near it. Each reused segment is divided by the sum of the densities of every
+//! technique able to draw it ([`super::bidir`]): the camera continuations and light
+//! samples conditioned on the camera nodes around its start, the light continuations
+//! conditioned on the light nodes around its end, and the emission. The pixel is the
+//! radiance along its camera segment (eq. 19). A camera path meeting a light path inside
+//! one kernel is bidirectional photon mapping's merge; a camera path continuing through
+//! another camera path's segment is multi-vertex path filtering; a light path through
+//! another's, photon filtering; the set of segment paths contains BPM's.
+//!
+//! The radiance along every segment follows by propagation, as for MVF ([`super::graph`]):
+//! a light node's row sits at its predecessor (the light side of its segment), so that
+//! radiance flows from the lights through light paths, camera paths, and back, in d
+//! sweeps for segment paths of d + 1 segments.
+//!
+//! | stage | phase | items | reduction |
+//! |---|---|---|---|
+//! | setup 0 | `footprint` | W·H pixels (none unless r₀ is in pixel footprints) | mean footprint → r₀ |
+//! | pass 0 | `paths` | W·H camera paths, then N_L light paths | nodes appended, grid built for r_pass |
+//! | pass 1 | `denominators` | nodes | D of every reusable segment |
+//! | pass 2 | `filter` | nodes | rows appended; L₀ = L_e |
+//! | pass 3 … 2 + d | `propagate` | nodes | L_i from L_{i−1}; after the last, each pixel's L |
+//!
+//! d = (segments per path) − 1 sweeps; committed with splat factor 1 (no splats).
+
+use alloc::vec::Vec;
+
+use super::bidir::Bidirectional;
+use super::mvf::CHUNK;
+use super::nodes::{NONE, trace_camera_nodes, trace_light_nodes};
+use super::pass::FilterPass;
+use crate::geometry::RayQuery;
+use crate::integrator::RenderParams;
+use crate::merge::{Footprint, progressive_radius};
+use crate::render::{ChunkOutput, Context, Cursor, Film, FilterConfig, Phase, Phased, Stage};
+use crate::spectrum::Rgb;
+
+/// Bidirectional path filtering configured for one film, with the current pass's nodes.
+#[derive(Clone, Debug)]
+pub struct Bpf {
+    /// Settings shared by the estimators.
+    pub params: RenderParams,
+    /// The configuration it was built with.
+    pub config: FilterConfig,
+    /// r₀ (set by the setup phase).
+    pub r0: f32,
+    /// Segments per path.
+    pub segments: u32,
+    pixels: u32,
+    /// The pass's camera and light nodes (`links`: each pixel's first node; `values`: its
+    /// sky radiance).
+    pub pass: FilterPass,
+    pixel_values: Vec<Rgb>,
+    cursor: Cursor,
+}
+
+impl Bpf {
+    /// The estimator for a film of `pixels` pixels (r₀ is set by the setup phase).
+    pub fn new(params: RenderParams, config: FilterConfig, pixels: u32) -> Self {
+        let segments = config.segments(params.max_depth);
+        let sweeps = segments.saturating_sub(1) as u8;
+        Self { params, config, r0: 0.0, segments, pixels, pass: FilterPass::default(), pixel_values: Vec::new(), cursor: Cursor::new(1, 3 + sweeps) }
+    }
+
+    /// The kernel radius of global pass `pass`.
+    pub fn radius(&self, pass: u32) -> f32 {
+        progressive_radius(self.r0, self.config.alpha, pass)
+    }
+
+    /// Light paths per pass, N_L = β · pixels (rounded; at least one where β > 0).
+    pub fn light_paths(&self) -> u32 {
+        self.config.light_paths(self.pixels)
+    }
+
+    /// The weights over the current pass.
+    pub fn weights<'a>(&'a self, scene: &'a crate::scene::Scene) -> Bidirectional<'a> {
+        Bidirectional { hood: self.pass.neighbourhood(scene), light_paths: self.light_paths() as f64 }
+    }
+}
+
+impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
+    fn next_phase(&self) -> Option<Phase> {
+        let nodes = self.pass.nodes.len() as u32;
+        Some(match self.cursor.stage()? {
+            Stage::Setup(_) => {
+                let items = if self.config.radius.needs_footprint() { self.pixels } else { 0 };
+                Phase { name: "footprint", id: 0, pass: None, items, chunk: CHUNK, samples: false }
+            }
+            Stage::Pass(pass, 0) => {
+                Phase { name: "paths", id: 1, pass: Some(pass), items: self.pixels.saturating_add(self.light_paths()), chunk: CHUNK, samples: true }
+            }
+            Stage::Pass(pass, 1) => Phase { name: "denominators", id: 2, pass: Some(pass), items: nodes, chunk: CHUNK, samples: false },
+            Stage::Pass(pass, 2) => Phase { name: "filter", id: 3, pass: Some(pass), items: nodes, chunk: CHUNK, samples: false },
+            Stage::Pass(pass, i) => Phase { name: "propagate", id: i.saturating_add(1), pass: Some(pass), items: nodes, chunk: CHUNK, samples: false },
+        })
+    }
+    fn start_pass(&mut self, pass: u32) {
+        self.cursor.start_pass(pass);
+    }
+    fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput) {
+        let (scene, tracer) = (ctx.scene, ctx.tracer);
+        let items = out.items.clone();
+        if phase.id == 0 {
+            Footprint::map_chunk(scene, tracer, out);
+            return;
+        }
+        let Some(pass) = phase.pass else { return };
+        let range = items.start as usize..items.end as usize;
+        let chunk = out.filter_chunk();
+        match phase.id {
+            1 => {
+                // Items below W·H are pixels, the rest light paths.
+                let p = self.pixels;
+                let camera = items.start.min(p)..items.end.min(p);
+                let light = items.start.max(p) - p..items.end.max(p) - p;
+                let mut c = trace_camera_nodes(scene, tracer, &self.params, self.segments, pass, camera, &mut chunk.nodes, &mut chunk.links, &mut chunk.values);
+                let (mut pred, mut base) = (Vec::new(), Vec::new());
+                if !light.is_empty() {
+                    let l = trace_light_nodes(
+                        scene,
+                        tracer,
+                        &self.params,
+                        self.segments,
+                        self.light_paths(),
+                        pass,
+                        light,
+                        true,
+                        &mut chunk.nodes,
+                        &mut pred,
+                        &mut base,
+                    );
+                    c += l;
+                }
+                out.counters = c;
+            }
+            2 => {
+                let w = self.weights(scene);
+                chunk.dens.extend(range.map(|i| w.denominators(i as u32)));
+            }
+            3 => {
+                let w = self.weights(scene);
+                for i in range {
+                    let (emission, direct) = w.row::<f32>(i as u32, &self.pass.dens, &mut chunk.pairs);
+                    chunk.rows.push_row(emission, direct, chunk.pairs.iter().copied());
+                }
+            }
+            _ => self.pass.map_sweep(range, chunk),
+        }
+    }
+    fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
+        match phase.id {
+            0 => self.r0 = self.config.radius.initial_radius(ctx.scene, &Footprint::reduce_chunks(outputs)),
+            id => self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0))),
+        }
+        if self.cursor.advance() {
+            self.pixel_values.clear();
+            for (&first, &sky) in self.pass.links.iter().zip(&self.pass.values) {
+                self.pixel_values.push(if first == NONE { sky } else { self.pass.value(first) });
+            }
+            film.set_camera_samples(0..self.pixels, &self.pixel_values);
+            film.end_pass(1.0);
+        }
+    }
+}
