@@ -34,10 +34,26 @@
 //! L / D_r + L_e (1/D − 1/D_r), D_r = D without the light samples' terms: the emitted
 //! part under every technique, the reflected part under those that can continue.
 //!
-//! **Dirac light nodes** pass on their own arriving segment with the throughput of their
-//! adjoint draw (the product of a light path's throughputs is the path's; refraction's
-//! η² factors cancel between entering and leaving a medium, and reused segments start
-//! in the light's medium).
+//! **Dirac vertices.** A segment into a Dirac vertex y (mirror, glass) continues there
+//! with a Dirac draw, so the balance heuristic between the camera side (drawing the
+//! segment into y) and the light side (drawing the segment beyond y, then the Dirac
+//! bounce) would have to compare densities across the bounce. Instead, with light paths
+//! traced, every segment path through a Dirac vertex reached from a non-Dirac camera
+//! vertex is left to the light side: a camera continuation that ends at a Dirac vertex
+//! is not reused (the camera ray's own chain through glass, from the pixel, still is),
+//! and a light segment leaving a Dirac light node w is reused with the light side's
+//! density carried through the bounce,
+//!
+//!   D(s) = D(s_w) |n_u·ŝ| / |n_w·ŝ_w|,
+//!
+//! D(s_w) of the segment that reached w (light techniques and emission only: nothing on
+//! the camera side draws it), so that |n_u·ŝ| L(s) / D(s) is the light path's flux at u,
+//! photon mapping's estimate. Such paths stay covered: light paths reach every Dirac
+//! chain, and the segment beyond it reuses camera and light segments alike. A Dirac
+//! light node passes on its arriving segment's radiance with the throughput of its
+//! adjoint draw (refraction's η² factors cancel between entering and leaving a medium;
+//! reused segments start in the light's medium). Without light paths (β = 0) the
+//! camera side keeps these paths as multi-vertex path filtering does.
 
 use alloc::vec::Vec;
 
@@ -90,6 +106,51 @@ impl Bidirectional<'_> {
         let light = &scene.lights[end.light as usize];
         let pmf = scene.light_pmf(end.light) as f64;
         if light.is_delta() { pmf } else { pmf * light.pdf_li(x, dir, end.p, end.n).0 as f64 }
+    }
+
+    /// Are camera continuations into Dirac vertices left to the light side?
+    fn light_side_owns_dirac(&self) -> bool {
+        self.light_paths > 0.0
+    }
+
+    /// D of light node `index`'s arriving segment under the light side's techniques
+    /// only (light continuations and emission), carried through Dirac light nodes.
+    fn light_side(&self, index: u32) -> f64 {
+        let nodes = self.nodes();
+        let u = &nodes[index as usize];
+        let dir = u.wo;
+        if u.pred != NONE {
+            let w = &nodes[u.pred as usize];
+            if w.delta && w.kind == NodeKind::Light {
+                let cos_w = w.hit.ng.dot(w.wo).abs() as f64;
+                return if cos_w > 1e-7 { self.light_side(u.pred) * u.hit.ng.dot(dir).abs() as f64 / cos_w } else { 0.0 };
+            }
+        }
+        let far = self.arriving_far(u);
+        let own = if u.pred != NONE && nodes[u.pred as usize].kind == NodeKind::Light { u.pred } else { NONE };
+        let mut d = 0.0;
+        if let Far::Surface(py, ny, _) = far {
+            d += self.light_techniques(u, py, ny, dir, own);
+        }
+        if far.light().is_some() {
+            d += self.emission_density(u, dir, far);
+        }
+        d
+    }
+
+    /// The light-side end of light node `u`'s arriving segment.
+    fn arriving_far(&self, u: &Node) -> Far {
+        if u.pred != NONE {
+            // On a light, the end is the node's point (the emission node's, not the
+            // emission sample's: one point for every density).
+            let w = &self.nodes()[u.pred as usize].hit;
+            let end = if u.source.is_light() { LightEnd { light: u.source.light, p: w.p, n: w.ng } } else { u.source };
+            Far::Surface(w.p, w.ng, end)
+        } else if u.source.is_light() && self.hood.scene.lights[u.source.light as usize].has_area() {
+            Far::Surface(u.source.p, u.source.n, u.source)
+        } else {
+            Far::Light(u.source)
+        }
     }
 
     /// N_L P_L p_pos p_dir |n_x·ŝ| J: the emission technique's density of a segment from
@@ -187,6 +248,11 @@ impl Bidirectional<'_> {
         let mut d = Denominators::default();
         let nodes = self.nodes();
         let u = &nodes[index as usize];
+        if u.kind == NodeKind::Light && (u.delta || (u.pred != NONE && nodes[u.pred as usize].delta && nodes[u.pred as usize].kind == NodeKind::Light)) {
+            // Through a Dirac light node, or into one: the light side's density alone.
+            d.arrive = self.light_side(index);
+            return d;
+        }
         if u.delta {
             return d;
         }
@@ -211,15 +277,9 @@ impl Bidirectional<'_> {
             }
             NodeKind::Light => {
                 let dir = u.wo;
-                let far = if u.pred != NONE {
-                    let w = &nodes[u.pred as usize].hit;
-                    Far::Surface(w.p, w.ng, u.source)
-                } else if u.source.is_light() && self.hood.scene.lights[u.source.light as usize].has_area() {
-                    Far::Surface(u.source.p, u.source.n, u.source)
-                } else {
-                    Far::Light(u.source)
-                };
-                let nee = if u.source.is_light() { self.light_sample_density(u.hit.p, dir, u.source) } else { 0.0 };
+                let far = self.arriving_far(u);
+                let origin = crate::integrator::SurfacePoint::new(u.hit, u.wo).reflection_origin();
+                let nee = far.light().map_or(0.0, |end| self.light_sample_density(origin, dir, end));
                 let own = if u.pred != NONE && nodes[u.pred as usize].kind == NodeKind::Light { u.pred } else { NONE };
                 (d.arrive, d.arrive_light) = self.sum(u, dir, far, nee, None, own);
             }
@@ -304,7 +364,9 @@ impl Bidirectional<'_> {
             match u.kind {
                 NodeKind::Camera => {
                     if u.next.dir != Vec3::ZERO && !u.next.delta {
-                        if u.next.node != NONE {
+                        if u.next.node != NONE && nodes[u.next.node as usize].delta && self.light_side_owns_dirac() {
+                            // Into a Dirac vertex: the light side's (see the module notes).
+                        } else if u.next.node != NONE {
                             reuse(u.next.dir, d.next, d.next_light, u.next.node, Rgb::ZERO);
                         } else if !u.next.escaped.is_black() {
                             reuse(u.next.dir, d.next, 0.0, NONE, u.next.escaped);
