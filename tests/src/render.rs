@@ -126,3 +126,39 @@ pub fn assert_blocks_agree(name: &str, reference: &[[MeanVar; 3]], other: &[[Mea
     }
     min_p
 }
+
+/// relMSE of `config` against Mitsuba's reference of the Cornell box at 32×32 (the
+/// 256×256 reference averaged over 8×8 pixel blocks: the box filter's pixel measurement
+/// at 32×32) after each of `checkpoints` passes (increasing), one continuous render with
+/// seed 31 and max_depth 30.
+pub fn cornell_relmse(config: EstimatorConfig, checkpoints: &[u32]) -> Vec<f64> {
+    use crate::reference::{read_exr, scenes_dir};
+    const RES: usize = 32;
+    let reference = read_exr(&scenes_dir().join("cornell-box").join("reference.exr")).expect("the suite's reference (../shared/scenes)");
+    let scale = reference.width / RES;
+    let target: Vec<[f64; 3]> = (0..RES * RES).map(|i| reference.block_mean(i % RES, i / RES, scale, scale)).collect();
+    let (scene, geometry, _) = crate::scenes::cornell(RES as u32, RES as u32).build().expect("scene");
+    let tracer = crate::tracer::BruteForce::new(geometry);
+    let params = RenderParams { max_depth: ember_core::integrator::MaxDepth(30), seed: 31, ..RenderParams::default() };
+    let mut passes = Passes::new(&scene, &tracer, &params, config);
+    let mut sum = vec![[0.0f64; 3]; RES * RES];
+    let mut errors = Vec::new();
+    let mut done = 0u32;
+    for &checkpoint in checkpoints {
+        while done < checkpoint {
+            let (img, counters) = passes.pass_image(done);
+            assert_eq!(counters.discarded, 0, "non-finite samples");
+            for (s, p) in sum.iter_mut().zip(&img) {
+                for c in 0..3 {
+                    s[c] += p[c];
+                }
+            }
+            done += 1;
+        }
+        let rel: f64 =
+            sum.iter().zip(&target).map(|(s, t)| (0..3).map(|c| (s[c] / done as f64 - t[c]).powi(2) / (t[c] * t[c] + 1e-2)).sum::<f64>() / 3.0).sum::<f64>()
+                / (RES * RES) as f64;
+        errors.push(rel);
+    }
+    errors
+}

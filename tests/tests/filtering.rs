@@ -21,6 +21,7 @@ use ember_core::segment::Kernel;
 use ember_core::segment::filter::nodes::NONE;
 use ember_core::segment::filter::{Denominators, FilterGraph, Neighbourhood, Node, trace_camera_nodes, trace_light_nodes};
 use ember_core::spectrum::Rgb;
+use ember_tests::render::cornell_relmse;
 use ember_tests::scenes::{cornell, cornell_with_spheres};
 use ember_tests::tracer::BruteForce;
 use glam::Vec3;
@@ -325,7 +326,7 @@ fn mvf_and_phf_converge_to_the_reference_on_the_cornell_box() {
     let steps = [4, 16, 64, 256];
     let mvf = relmse_over_passes(FilterSide::Camera, &steps);
     let phf = relmse_over_passes(FilterSide::Light, &steps);
-    let ppm = relmse_config(EstimatorConfig::Merging(MergeMode::Ppm, MergingConfig { radius: RadiusRule::Footprints(4.0), ..MergingConfig::DEFAULT }), &steps);
+    let ppm = cornell_relmse(EstimatorConfig::Merging(MergeMode::Ppm, MergingConfig { radius: RadiusRule::Footprints(4.0), ..MergingConfig::DEFAULT }), &steps);
     println!("relMSE at 4, 16, 64, 256 passes: mvf {mvf:?}, phf {phf:?}, ppm {ppm:?}");
     for w in mvf.windows(2) {
         assert!(w[0] / w[1] >= 1.5, "MVF: relMSE fell only {:.2}× per 4× passes: {mvf:?}", w[0] / w[1]);
@@ -341,40 +342,6 @@ fn mvf_and_phf_converge_to_the_reference_on_the_cornell_box() {
 fn relmse_over_passes(side: FilterSide, checkpoints: &[u32]) -> Vec<f64> {
     use ember_core::merge::RadiusRule;
     use ember_core::render::{EstimatorConfig, FilterConfig};
-    let config = FilterConfig { radius: RadiusRule::Footprints(4.0), alpha: 0.67, max_segments: Some(12) };
-    relmse_config(EstimatorConfig::Filter(side, config), checkpoints)
-}
-
-fn relmse_config(config: ember_core::render::EstimatorConfig, checkpoints: &[u32]) -> Vec<f64> {
-    use ember_tests::reference::{read_exr, scenes_dir};
-    use ember_tests::render::Passes;
-    const RES: usize = 32;
-    let reference = read_exr(&scenes_dir().join("cornell-box").join("reference.exr")).expect("the suite's reference (../shared/scenes)");
-    let scale = reference.width / RES;
-    let target: Vec<[f64; 3]> = (0..RES * RES).map(|i| reference.block_mean(i % RES, i / RES, scale, scale)).collect();
-    let (scene, geometry, _) = cornell(RES as u32, RES as u32).build().unwrap();
-    let tracer = BruteForce::new(geometry);
-    // The scene file's max_depth is 30; 12 segments leave < 0.1 % of the energy out.
-    let params = RenderParams { max_depth: MaxDepth(30), seed: 31, ..RenderParams::default() };
-    let mut passes = Passes::new(&scene, &tracer, &params, config);
-    let mut sum = vec![[0.0f64; 3]; RES * RES];
-    let mut errors = Vec::new();
-    let mut done = 0u32;
-    for &checkpoint in checkpoints {
-        while done < checkpoint {
-            let (img, counters) = passes.pass_image(done);
-            assert_eq!(counters.discarded, 0, "non-finite samples");
-            for (s, p) in sum.iter_mut().zip(&img) {
-                for c in 0..3 {
-                    s[c] += p[c];
-                }
-            }
-            done += 1;
-        }
-        let rel: f64 =
-            sum.iter().zip(&target).map(|(s, t)| (0..3).map(|c| (s[c] / done as f64 - t[c]).powi(2) / (t[c] * t[c] + 1e-2)).sum::<f64>() / 3.0).sum::<f64>()
-                / (RES * RES) as f64;
-        errors.push(rel);
-    }
-    errors
+    let config = FilterConfig { radius: RadiusRule::Footprints(4.0), alpha: 0.67, max_segments: Some(12), ..FilterConfig::DEFAULT };
+    cornell_relmse(EstimatorConfig::Filter(side, config), checkpoints)
 }
