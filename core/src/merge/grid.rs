@@ -58,7 +58,8 @@ impl HashGrid {
     }
 
     /// Rebuild over `points` for queries of radius `radius` (> 0 and finite; otherwise
-    /// the grid is left empty). Point i is reported to queries as index i.
+    /// the grid is left empty). Point i is reported to queries as index i; a point that
+    /// is not finite is left out (a host's way to keep an item from every query).
     pub fn build(&mut self, points: impl ExactSizeIterator<Item = Vec3> + Clone, radius: f32) {
         self.starts.clear();
         self.indices.clear();
@@ -77,10 +78,16 @@ impl HashGrid {
         // Counting sort: counts, exclusive prefix sums, then each point at its bucket's
         // cursor; the cursors end at the bucket ends, shifted back into starts.
         self.starts.resize(buckets + 1, 0);
+        let mut kept = 0usize;
         for p in points.clone() {
+            if !p.is_finite() {
+                self.buckets_of.push(u32::MAX);
+                continue;
+            }
             let b = self.bucket(self.cell_of(p));
             self.buckets_of.push(b);
             self.starts[b as usize] += 1;
+            kept += 1;
         }
         let mut sum = 0u32;
         for b in 0..buckets {
@@ -89,9 +96,12 @@ impl HashGrid {
             sum += count;
         }
         self.starts[buckets] = sum;
-        self.indices.resize(n, 0);
-        self.points.resize(n, Vec3::ZERO);
+        self.indices.resize(kept, 0);
+        self.points.resize(kept, Vec3::ZERO);
         for (i, p) in points.enumerate() {
+            if self.buckets_of[i] == u32::MAX {
+                continue;
+            }
             let b = self.buckets_of[i] as usize;
             let k = self.starts[b] as usize;
             self.indices[k] = i as u32;
@@ -212,5 +222,17 @@ mod tests {
         assert_eq!(hits, 50);
         g.query(Vec3::splat(f32::NAN), |_| hits += 1);
         assert_eq!(hits, 50);
+    }
+
+    /// Non-finite points are left out and the others keep their indices.
+    #[test]
+    fn non_finite_points_are_left_out() {
+        let mut g = HashGrid::new();
+        g.build([Vec3::ZERO, Vec3::NAN, Vec3::new(0.01, 0.0, 0.0), Vec3::splat(f32::INFINITY)].into_iter(), 0.5);
+        assert_eq!(g.len(), 2);
+        let mut found = Vec::new();
+        g.query(Vec3::ZERO, |i| found.push(i));
+        found.sort();
+        assert_eq!(found, [0, 2]);
     }
 }

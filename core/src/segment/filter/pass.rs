@@ -16,6 +16,13 @@ use crate::spectrum::Rgb;
 /// Largest mean number of nodes per kernel a pass keeps (see [`FilterPass::gather_nodes`]).
 pub const NEIGHBOUR_BUDGET: u32 = 64;
 
+/// A node's position in the grid: emission nodes (all on the lights, and never anyone's
+/// neighbour) are left out, so that queries near a small light do not visit every light
+/// path's origin.
+fn grid_point(n: &Node) -> crate::math::Vec3 {
+    if n.kind == super::nodes::NodeKind::Emission { crate::math::Vec3::NAN } else { n.hit.p }
+}
+
 /// What one chunk of a filtering phase produces (reused across passes).
 #[derive(Clone, Debug, Default)]
 pub struct FilterChunk {
@@ -106,7 +113,7 @@ impl FilterPass {
         self.r = r;
         // The disk kernel's support (within r of the tangent plane, inside the disk)
         // reaches √2 r from its centre.
-        self.grid.build(self.nodes.iter().map(|n| n.hit.p), r * core::f32::consts::SQRT_2);
+        self.grid.build(self.nodes.iter().map(grid_point), r * core::f32::consts::SQRT_2);
         // The neighbour budget: rows cost O(Σ n²), so where nodes crowd (a caustic, a
         // spot light's pool) the pass's radius is lowered until the mean kernel holds at
         // most NEIGHBOUR_BUDGET nodes (surface density: n ∝ r²). The radius still goes
@@ -114,7 +121,7 @@ impl FilterPass {
         let mean = self.mean_neighbours();
         if mean > NEIGHBOUR_BUDGET as f64 {
             self.r = r * libm::sqrtf((NEIGHBOUR_BUDGET as f64 / mean) as f32).max(1.0 / 64.0);
-            self.grid.build(self.nodes.iter().map(|n| n.hit.p), self.r * core::f32::consts::SQRT_2);
+            self.grid.build(self.nodes.iter().map(grid_point), self.r * core::f32::consts::SQRT_2);
         }
     }
 
@@ -122,7 +129,7 @@ impl FilterPass {
     /// radius whatever the neighbour budget did to the pass's reuse kernel).
     pub fn rebuild_grid(&mut self, r: f32) {
         self.r = r;
-        self.grid.build(self.nodes.iter().map(|n| n.hit.p), r * core::f32::consts::SQRT_2);
+        self.grid.build(self.nodes.iter().map(grid_point), r * core::f32::consts::SQRT_2);
     }
 
     /// Mean number of nodes in a node's grid ball, from up to 512 nodes spread evenly.
