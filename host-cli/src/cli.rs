@@ -278,6 +278,11 @@ pub struct CacheArgs {
     /// the segment paper's 0.25, and 1 on caustics).
     #[arg(long, value_name = "BETA", allow_negative_numbers = true, default_value_t = FilterConfig::DEFAULT.beta)]
     pub beta: f32,
+    /// BPF: which segment paths its junctions form: `every` segment in a kernel (the
+    /// paper's estimator) or only bidirectional photon mapping's `merges` (its reduction
+    /// to BPM)
+    #[arg(long, value_name = "REUSE", default_value = "every", value_parser = ["every", "merges"])]
+    pub filter_reuse: String,
 }
 
 impl Default for CacheArgs {
@@ -303,6 +308,7 @@ impl Default for CacheArgs {
             alpha: MergingConfig::DEFAULT.alpha,
             max_segments: None,
             beta: FilterConfig::DEFAULT.beta,
+            filter_reuse: "every".into(),
         }
     }
 }
@@ -352,7 +358,13 @@ impl CacheArgs {
     }
     /// Path filtering's configuration from these options.
     pub fn filter(&self) -> FilterConfig {
-        FilterConfig { radius: self.radius_rule(), alpha: self.alpha, max_segments: self.max_segments, beta: self.beta }
+        FilterConfig {
+            radius: self.radius_rule(),
+            alpha: self.alpha,
+            max_segments: self.max_segments,
+            beta: self.beta,
+            reuse: if self.filter_reuse == "merges" { ember_core::render::FilterReuse::Merges } else { ember_core::render::FilterReuse::Every },
+        }
     }
     /// The configuration of `estimator` (these options apply to the cache-based and
     /// merging estimators only).

@@ -69,7 +69,7 @@ fn relmse_series(config: EstimatorConfig, steps: &[u32]) -> Vec<f64> {
 #[test]
 fn bpf_and_phf_converge_on_the_caustic_scene() {
     let steps = [4, 16, 64, 256];
-    let config = FilterConfig { radius: RadiusRule::Footprints(1.0), alpha: 0.67, max_segments: Some(12), beta: 1.0 };
+    let config = FilterConfig { radius: RadiusRule::Footprints(1.0), alpha: 0.67, max_segments: Some(12), beta: 1.0, ..FilterConfig::DEFAULT };
     let all: Vec<_> =
         [FilterSide::Both, FilterSide::Light].into_iter().map(|side| (side, relmse_series(EstimatorConfig::Filter(side, config), &steps))).collect();
     for (side, series) in &all {

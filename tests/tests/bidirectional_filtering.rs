@@ -232,7 +232,8 @@ fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
     let mut grid = HashGrid::new();
     grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
     let kernel = Kernel::Disk { radius };
-    let weights = Bidirectional { hood: Neighbourhood { scene: &scene, nodes: &nodes, grid: &grid, kernel }, light_paths: light_paths as f64 };
+    let weights =
+        Bidirectional { hood: Neighbourhood { scene: &scene, nodes: &nodes, grid: &grid, kernel }, light_paths: light_paths as f64, merges_only: false };
     let dens: Vec<Denominators> = (0..nodes.len() as u32).map(|i| weights.denominators(i)).collect();
     let mut graph = FilterGraph::<f64>::new();
     let mut pairs = Vec::new();
@@ -282,7 +283,7 @@ fn bpf_denominators_are_finite_and_positive() {
         let mut grid = HashGrid::new();
         grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
         let hood = Neighbourhood { scene: &scene, nodes: &nodes, grid: &grid, kernel: Kernel::Disk { radius } };
-        let w = Bidirectional { hood, light_paths: 40.0 };
+        let w = Bidirectional { hood, light_paths: 40.0, merges_only: false };
         for (i, u) in nodes.iter().enumerate().filter(|(_, u)| !u.delta) {
             let d = w.denominators(i as u32);
             let ok = |x: f64| x.is_finite() && x > 0.0;
@@ -349,7 +350,7 @@ fn bpf_converges_to_the_reference_on_the_cornell_box() {
     use ember_core::merge::RadiusRule;
     use ember_core::render::{EstimatorConfig, FilterConfig, FilterSide};
     let steps = [4, 16, 64, 256];
-    let config = FilterConfig { radius: RadiusRule::Footprints(4.0), alpha: 0.67, max_segments: Some(12), beta: 0.25 };
+    let config = FilterConfig { radius: RadiusRule::Footprints(4.0), alpha: 0.67, max_segments: Some(12), beta: 0.25, ..FilterConfig::DEFAULT };
     let bpf = ember_tests::render::cornell_relmse(EstimatorConfig::Filter(FilterSide::Both, config), &steps);
     let mvf = ember_tests::render::cornell_relmse(EstimatorConfig::Filter(FilterSide::Camera, config), &steps[3..]);
     println!("BPF relMSE at {steps:?} passes: {bpf:?}; MVF at 256: {mvf:?}");

@@ -640,6 +640,20 @@ pub struct FilterConfig {
     /// the segment paper's; it used 1 on its caustic scene). 0 traces none: MVF's
     /// segments with BPF's weights.
     pub beta: f32,
+    /// Bidirectional filtering: which segment paths a junction forms (default: every).
+    pub reuse: FilterReuse,
+}
+
+/// Which segments bidirectional filtering's junctions reuse.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FilterReuse {
+    /// Every segment whose start lies in the junction's kernel: the paper's estimator.
+    Every,
+    /// Bidirectional photon mapping's segment paths only: a camera junction reuses its
+    /// own continuation and light sample and the light segments in its kernel (a merge),
+    /// a light junction its own path. The reduction to BPM (recursive MMIS over BPM's
+    /// techniques), for testing and for measuring what the filtering adds.
+    Merges,
 }
 
 /// Largest β.
@@ -652,7 +666,7 @@ pub const MAX_FILTER_SEGMENTS: u32 = 64;
 
 impl FilterConfig {
     /// The defaults.
-    pub const DEFAULT: Self = Self { radius: RadiusRule::DEFAULT, alpha: 0.67, max_segments: None, beta: 0.25 };
+    pub const DEFAULT: Self = Self { radius: RadiusRule::DEFAULT, alpha: 0.67, max_segments: None, beta: 0.25, reuse: FilterReuse::Every };
 
     /// Light paths per pass for a film of `pixels` pixels: round(β · pixels), at least one
     /// where β > 0.

@@ -40,7 +40,7 @@ mod renderer;
 /// What every phase reads: the scene and the ray queries (defined with the scene).
 pub use crate::scene::Context;
 pub use config::{
-    ConfigError, DEFAULT_FILTER_SEGMENTS, EstimatorConfig, EstimatorKind, FilterConfig, FilterSide, KernelChoice, LvcbptConfig, MAX_DATASET,
+    ConfigError, DEFAULT_FILTER_SEGMENTS, EstimatorConfig, EstimatorKind, FilterConfig, FilterReuse, FilterSide, KernelChoice, LvcbptConfig, MAX_DATASET,
     MAX_FILTER_SEGMENTS, MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig, SegmentAlgorithm, SegmentConfig, SpcbptConfig,
 };
 pub use film::Film;

@@ -31,8 +31,9 @@
 //! **Light samples end at the light.** A light-sampled segment carries L_e only; its
 //! density belongs to the emitted part of the segment's radiance and not to what the
 //! light's surface reflects. So a reused segment that ends on a light enters as
-//! L / D_r + L_e (1/D − 1/D_r), D_r = D without the light samples' terms: the emitted
-//! part under every technique, the reflected part under those that can continue.
+//! (L − L_e) / D_r + L_e / D, D_r = D without the light samples' terms: the emitted
+//! part under every technique, the reflected part under those that can continue (a
+//! pair flagged [`REFLECTED`]: no cancellation between two large terms).
 //!
 //! **Dirac vertices.** A segment into a Dirac vertex y (mirror, glass) continues there
 //! with a Dirac draw, so the balance heuristic between the camera side (drawing the
@@ -57,7 +58,7 @@
 
 use alloc::vec::Vec;
 
-use super::graph::{Real, Rgb3, add3, mul3};
+use super::graph::{REFLECTED, Real, Rgb3, add3, mul3};
 use super::nodes::{LightEnd, NONE, Node, NodeKind};
 use super::weights::{Denominators, Neighbourhood};
 use crate::bsdf::TransportMode;
@@ -71,6 +72,9 @@ pub struct Bidirectional<'a> {
     pub hood: Neighbourhood<'a>,
     /// Light paths traced in the pass (the emission technique's samples).
     pub light_paths: f64,
+    /// Reuse only bidirectional photon mapping's segment paths
+    /// ([`crate::render::FilterReuse::Merges`]).
+    pub merges_only: bool,
 }
 
 /// Where a reusable segment ends on its light side.
@@ -115,7 +119,7 @@ impl Bidirectional<'_> {
 
     /// D of light node `index`'s arriving segment under the light side's techniques
     /// only (light continuations and emission), carried through Dirac light nodes.
-    fn light_side(&self, index: u32) -> f64 {
+    fn light_side(&self, index: u32, own_only: bool) -> f64 {
         let nodes = self.nodes();
         let u = &nodes[index as usize];
         let dir = u.wo;
@@ -123,14 +127,14 @@ impl Bidirectional<'_> {
             let w = &nodes[u.pred as usize];
             if w.delta && w.kind == NodeKind::Light {
                 let cos_w = w.hit.ng.dot(w.wo).abs() as f64;
-                return if cos_w > 1e-7 { self.light_side(u.pred) * u.hit.ng.dot(dir).abs() as f64 / cos_w } else { 0.0 };
+                return if cos_w > 1e-7 { self.light_side(u.pred, own_only) * u.hit.ng.dot(dir).abs() as f64 / cos_w } else { 0.0 };
             }
         }
         let far = self.arriving_far(u);
         let own = if u.pred != NONE && nodes[u.pred as usize].kind == NodeKind::Light { u.pred } else { NONE };
         let mut d = 0.0;
         if let Far::Surface(py, ny, _) = far {
-            d += self.light_techniques(u, py, ny, dir, own);
+            d += self.light_techniques(u, py, ny, dir, own, own_only);
         }
         if far.light().is_some() {
             d += self.emission_density(u, dir, far);
@@ -208,8 +212,9 @@ impl Bidirectional<'_> {
     }
 
     /// Σ over light nodes t whose kernel covers y = (`py`, `ny`): K(t → y) q_t p*_σ(−dir |
-    /// t) · |n_x·ŝ| / |n_y·ŝ|, node `own`'s density replaced by its sampler's.
-    fn light_techniques(&self, x: &Node, py: Vec3, ny: Vec3, dir: Vec3, own: u32) -> f64 {
+    /// t) · |n_x·ŝ| / |n_y·ŝ|, node `own`'s density replaced by its sampler's (`own_only`:
+    /// node `own` alone).
+    fn light_techniques(&self, x: &Node, py: Vec3, ny: Vec3, dir: Vec3, own: u32, own_only: bool) -> f64 {
         let cos_y = ny.dot(dir).abs() as f64;
         if !(cos_y > 1e-7) {
             return 0.0;
@@ -217,7 +222,7 @@ impl Bidirectional<'_> {
         let mut sum = 0.0;
         self.hood.grid.query(py, |i| {
             let t = &self.nodes()[i as usize];
-            if t.delta || t.kind != NodeKind::Light || !(t.next.q > 0.0) {
+            if t.delta || t.kind != NodeKind::Light || !(t.next.q > 0.0) || (own_only && i != own) {
                 return;
             }
             let k = self.hood.kernel_at(t, py, ny);
@@ -229,17 +234,41 @@ impl Bidirectional<'_> {
         sum * x.hit.ng.dot(dir).abs() as f64 / cos_y
     }
 
-    /// D of a segment leaving node `x` along `dir` to `far`, and its light samples' part.
+    /// D of a segment leaving node `x` along `dir` to `far`, and the part of it whose
+    /// samples carry L_e alone (light samples; with merges only, the emission too). With
+    /// merges only, the camera techniques are the junction's and left to the row.
     fn sum(&self, x: &Node, dir: Vec3, far: Far, nee: f64, own_camera: Option<(u32, f64)>, own_light: u32) -> (f64, f64) {
-        let delta_end = far.light().is_some_and(|e| self.hood.scene.lights[e.light as usize].is_delta());
-        let (mut d, nee_part) = self.camera_techniques(x, dir, nee, !delta_end, own_camera);
+        let delta_end = self.delta_end(far);
+        let (mut d, mut emitted_only) = if self.merges_only { (0.0, 0.0) } else { self.camera_techniques(x, dir, nee, !delta_end, own_camera) };
         if let Far::Surface(py, ny, _) = far {
-            d += self.light_techniques(x, py, ny, dir, own_light);
+            d += self.light_techniques(x, py, ny, dir, own_light, false);
         }
         if far.light().is_some() || matches!(far, Far::Sky) {
-            d += self.emission_density(x, dir, far);
+            let e = self.emission_density(x, dir, far);
+            d += e;
+            if self.merges_only {
+                emitted_only += e;
+            }
         }
-        (d, nee_part)
+        (d, emitted_only)
+    }
+
+    /// Does a segment to `far` end at a Dirac light (no BSDF draw reaches it)?
+    fn delta_end(&self, far: Far) -> bool {
+        far.light().is_some_and(|e| self.hood.scene.lights[e.light as usize].is_delta())
+    }
+
+    /// With merges only: the junction c's own techniques for a segment leaving node `x`
+    /// along `dir` (its continuation, q p_σ, unless the segment ends at a Dirac light, and
+    /// its light sample, c P_L p_L = `nee`), times k = K(c → x); `own_pdf` replaces p_σ
+    /// for c's own continuation. Returns (all, light samples' part).
+    fn junction(&self, c: &Node, k: f64, dir: Vec3, nee: f64, bsdf: bool, own_pdf: Option<f64>) -> (f64, f64) {
+        let mut all = 0.0;
+        if bsdf {
+            all += k * c.next.q as f64 * own_pdf.unwrap_or_else(|| self.hood.bsdf_pdf(c, dir, TransportMode::Radiance));
+        }
+        let n = if c.light.attempted { k * nee } else { 0.0 };
+        (all + n, n)
     }
 
     /// The denominators of node `index`'s reusable segments: a camera node's
@@ -250,7 +279,8 @@ impl Bidirectional<'_> {
         let u = &nodes[index as usize];
         if u.kind == NodeKind::Light && (u.delta || (u.pred != NONE && nodes[u.pred as usize].delta && nodes[u.pred as usize].kind == NodeKind::Light)) {
             // Through a Dirac light node, or into one: the light side's density alone.
-            d.arrive = self.light_side(index);
+            d.arrive = self.light_side(index, self.merges_only);
+            d.arrive_own = d.arrive;
             return d;
         }
         if u.delta {
@@ -282,6 +312,14 @@ impl Bidirectional<'_> {
                 let nee = far.light().map_or(0.0, |end| self.light_sample_density(origin, dir, end));
                 let own = if u.pred != NONE && nodes[u.pred as usize].kind == NodeKind::Light { u.pred } else { NONE };
                 (d.arrive, d.arrive_light) = self.sum(u, dir, far, nee, None, own);
+                if self.merges_only {
+                    // A light junction reuses its own path alone: its own technique and
+                    // the emission.
+                    d.arrive_own = d.arrive_light;
+                    if let Far::Surface(py, ny, _) = far {
+                        d.arrive_own += self.light_techniques(u, py, ny, dir, own, true);
+                    }
+                }
             }
             NodeKind::Emission => {}
         }
@@ -316,6 +354,7 @@ impl Bidirectional<'_> {
             }
             return (emission, direct);
         }
+        let centre_index = if v.kind == NodeKind::Camera { index } else { v.pred };
         let frame = Frame::from_normal(centre.hit.ns);
         let material = &self.hood.scene.materials[centre.hit.material as usize];
         let wo = frame.to_local(wo);
@@ -323,6 +362,11 @@ impl Bidirectional<'_> {
         self.hood.grid.query(centre.hit.p, |i| {
             let u = &nodes[i as usize];
             if u.delta || u.kind == NodeKind::Emission {
+                return;
+            }
+            // Merges only: a camera junction reuses its own segments and light segments,
+            // a light junction its own chain.
+            if self.merges_only && i != centre_index && (u.kind == NodeKind::Camera || centre.kind == NodeKind::Light) {
                 return;
             }
             let k = self.hood.kernel_at(centre, u.hit.p, u.hit.ng);
@@ -353,30 +397,46 @@ impl Bidirectional<'_> {
                     direct = add3(direct, scale3(mul3(c, rgb::<T>(nodes[target as usize].emitted)), T::from_f64(g / all)));
                     return;
                 }
-                pairs.push((target, scale3(c, T::from_f64(g / reflected))));
-                if nee > 0.0 {
-                    let e = nodes[target as usize].emitted;
-                    if !e.is_black() {
-                        direct = add3(direct, scale3(mul3(c, rgb::<T>(e)), T::from_f64(g * (1.0 / all - 1.0 / reflected))));
-                    }
+                let e = nodes[target as usize].emitted;
+                if nee > 0.0 && !e.is_black() {
+                    // The reflected part over D_r, the emitted part over D.
+                    pairs.push((target | REFLECTED, scale3(c, T::from_f64(g / reflected))));
+                    direct = add3(direct, scale3(mul3(c, rgb::<T>(e)), T::from_f64(g / all)));
+                } else {
+                    pairs.push((target, scale3(c, T::from_f64(g / reflected))));
                 }
             };
+            // The junction's own techniques, with merges only (camera junctions).
+            let at_junction = self.merges_only && centre.kind == NodeKind::Camera;
             match u.kind {
                 NodeKind::Camera => {
                     if u.next.dir != Vec3::ZERO && !u.next.delta {
+                        let (ja, jn) =
+                            if at_junction { self.junction(centre, k, u.next.dir, u.next.light_pdf as f64, true, Some(u.next.pdf as f64)) } else { (0.0, 0.0) };
                         if u.next.node != NONE && nodes[u.next.node as usize].delta && self.light_side_owns_dirac() {
                             // Into a Dirac vertex: the light side's (see the module notes).
                         } else if u.next.node != NONE {
-                            reuse(u.next.dir, d.next, d.next_light, u.next.node, Rgb::ZERO);
+                            reuse(u.next.dir, d.next + ja, d.next_light + jn, u.next.node, Rgb::ZERO);
                         } else if !u.next.escaped.is_black() {
-                            reuse(u.next.dir, d.next, 0.0, NONE, u.next.escaped);
+                            reuse(u.next.dir, d.next + ja, 0.0, NONE, u.next.escaped);
                         }
                     }
                     if !u.light.radiance.is_black() {
-                        reuse(u.light.dir, d.light, 0.0, NONE, u.light.radiance);
+                        let ja = if at_junction { self.junction(centre, k, u.light.dir, u.light.pdf as f64, !u.light.delta, None).0 } else { 0.0 };
+                        reuse(u.light.dir, d.light + ja, 0.0, NONE, u.light.radiance);
                     }
                 }
-                NodeKind::Light => reuse(u.wo, d.arrive, d.arrive_light, i, Rgb::ZERO),
+                NodeKind::Light => {
+                    let (mut ja, mut jn) = (0.0, 0.0);
+                    if at_junction {
+                        let far = self.arriving_far(u);
+                        let origin = crate::integrator::SurfacePoint::new(u.hit, u.wo).reflection_origin();
+                        let nee = far.light().map_or(0.0, |end| self.light_sample_density(origin, u.wo, end));
+                        (ja, jn) = self.junction(centre, k, u.wo, nee, !self.delta_end(far), None);
+                    }
+                    let all = if self.merges_only && centre.kind == NodeKind::Light { d.arrive_own } else { d.arrive + ja };
+                    reuse(u.wo, all, d.arrive_light + jn, i, Rgb::ZERO)
+                }
                 NodeKind::Emission => {}
             }
         });

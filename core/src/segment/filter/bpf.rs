@@ -81,7 +81,11 @@ impl Bpf {
 
     /// The weights over the current pass.
     pub fn weights<'a>(&'a self, scene: &'a crate::scene::Scene) -> Bidirectional<'a> {
-        Bidirectional { hood: self.pass.neighbourhood(scene), light_paths: self.light_paths() as f64 }
+        Bidirectional {
+            hood: self.pass.neighbourhood(scene),
+            light_paths: self.light_paths() as f64,
+            merges_only: self.config.reuse == crate::render::FilterReuse::Merges,
+        }
     }
 }
 

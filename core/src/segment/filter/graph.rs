@@ -8,7 +8,8 @@
 //!   segments and continuations that escaped to the environment, reused from every
 //!   kernel neighbour);
 //! - `(target, coefficient)` pairs: K f_r G / Σ p for each reused continuation segment
-//!   s_u' (u a kernel neighbour of v's end), with `target` the node of s_u'.
+//!   s_u' (u a kernel neighbour of v's end), with `target` the node of s_u' (flagged
+//!   [`REFLECTED`] where only the target's reflected radiance, L − L_e, is meant).
 //!
 //! With L_0 = emission and L_d = emission + direct + Σ coefficient · L_{d−1}(target), L_d(v) is
 //! eq. (18) over every segment path of at most d further segments: the exponential sum
@@ -18,7 +19,7 @@ use alloc::vec::Vec;
 use core::ops::{Add, Div, Mul};
 
 /// The float types the propagation runs in.
-pub trait Real: Copy + Default + PartialOrd + Add<Output = Self> + Mul<Output = Self> + Div<Output = Self> {
+pub trait Real: Copy + Default + PartialOrd + Add<Output = Self> + core::ops::Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> {
     fn from_f32(x: f32) -> Self;
     fn from_f64(x: f64) -> Self;
     fn to_f64(self) -> f64;
@@ -69,6 +70,10 @@ pub fn add3<T: Real>(a: Rgb3<T>, b: Rgb3<T>) -> Rgb3<T> {
 pub fn mul3<T: Real>(a: Rgb3<T>, b: Rgb3<T>) -> Rgb3<T> {
     [a[0] * b[0], a[1] * b[1], a[2] * b[2]]
 }
+
+/// A target flagged with this bit takes the target's L minus its L_e (the reflected
+/// part alone, without cancellation against a separate negative term).
+pub const REFLECTED: u32 = 1 << 31;
 
 /// One pass's rows (compressed sparse rows over the nodes).
 #[derive(Clone, Debug)]
@@ -130,7 +135,7 @@ impl<T: Real> FilterGraph<T> {
         self.emission.extend_from_slice(&other.emission);
         self.direct.extend_from_slice(&other.direct);
         self.starts.extend(other.starts[1..].iter().map(|s| s + base));
-        self.targets.extend(other.targets.iter().map(|t| t + offset));
+        self.targets.extend(other.targets.iter().map(|t| ((t & !REFLECTED) + offset) | (t & REFLECTED)));
         self.coefficients.extend_from_slice(&other.coefficients);
     }
 
@@ -150,7 +155,14 @@ impl<T: Real> FilterGraph<T> {
                 l = add3(l, self.direct[v]);
                 let (a, b) = (self.starts[v] as usize, self.starts[v + 1] as usize);
                 for k in a..b {
-                    l = add3(l, mul3(self.coefficients[k], prev[self.targets[k] as usize]));
+                    let t = self.targets[k];
+                    let x = if t & REFLECTED == 0 {
+                        prev[t as usize]
+                    } else {
+                        let (p, e) = (prev[(t & !REFLECTED) as usize], self.emission[(t & !REFLECTED) as usize]);
+                        [p[0] - e[0], p[1] - e[1], p[2] - e[2]]
+                    };
+                    l = add3(l, mul3(self.coefficients[k], x));
                 }
             }
             out.push(l);

@@ -53,6 +53,9 @@ pub struct Denominators {
     pub arrive: f64,
     /// The light samples' part of `arrive`.
     pub arrive_light: f64,
+    /// Bidirectional filtering with merges only: D of the arriving segment at its own
+    /// path's junction (its own technique and the emission).
+    pub arrive_own: f64,
 }
 
 impl Neighbourhood<'_> {
