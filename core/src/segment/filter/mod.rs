@@ -36,6 +36,8 @@
 //! shared with vertex merging (4 pixel footprints by default), shrinking over passes as
 //! r_i = r₀ (i + 1)^((α − 1)/2) with α = 0.67 (Knaus and Zwicker 2011): consistent.
 
+// Bidirectional path filtering ([`bpf`], weights in [`bidir`]) is the same estimator over
+// camera and light segments together: docs/bidirectional-filtering.md.
 pub mod bidir;
 pub mod bpf;
 pub mod graph;
