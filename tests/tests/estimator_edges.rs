@@ -42,6 +42,7 @@ fn every_estimator_renders_black_at_max_depth_0() {
         EstimatorKind::Sbdpt.default_config(),
         EstimatorKind::Mvf.default_config(),
         EstimatorKind::Phf.default_config(),
+        EstimatorKind::Bpf.default_config(),
     ];
     assert_eq!(configs.len(), EstimatorKind::ALL.len(), "every estimator is checked");
     for config in configs {
