@@ -58,7 +58,7 @@
 
 use alloc::vec::Vec;
 
-use super::graph::{REFLECTED, Real, Rgb3, add3, mul3};
+use super::graph::{REFLECTED, Real, Rgb3, add3, mul3, rgb, scale3};
 use super::nodes::{LightEnd, NONE, Node, NodeKind};
 use super::weights::{Denominators, Neighbourhood};
 use crate::bsdf::TransportMode;
@@ -442,14 +442,4 @@ impl Bidirectional<'_> {
         });
         (emission, direct)
     }
-}
-
-#[inline]
-fn rgb<T: Real>(c: Rgb) -> Rgb3<T> {
-    [T::from_f32(c.r), T::from_f32(c.g), T::from_f32(c.b)]
-}
-
-#[inline]
-fn scale3<T: Real>(a: Rgb3<T>, s: T) -> Rgb3<T> {
-    [a[0] * s, a[1] * s, a[2] * s]
 }

@@ -71,6 +71,17 @@ pub fn mul3<T: Real>(a: Rgb3<T>, b: Rgb3<T>) -> Rgb3<T> {
     [a[0] * b[0], a[1] * b[1], a[2] * b[2]]
 }
 
+#[inline]
+pub fn scale3<T: Real>(a: Rgb3<T>, s: T) -> Rgb3<T> {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+
+/// A radiance in `T`.
+#[inline]
+pub fn rgb<T: Real>(c: crate::spectrum::Rgb) -> Rgb3<T> {
+    [T::from_f32(c.r), T::from_f32(c.g), T::from_f32(c.b)]
+}
+
 /// A target flagged with this bit takes the target's L minus its L_e (the reflected
 /// part alone, without cancellation against a separate negative term).
 pub const REFLECTED: u32 = 1 << 31;

@@ -21,7 +21,7 @@
 
 use alloc::vec::Vec;
 
-use super::graph::{Real, Rgb3};
+use super::graph::{Real, Rgb3, rgb, scale3};
 use super::nodes::{NONE, Node};
 use crate::bsdf::TransportMode;
 use crate::merge::HashGrid;
@@ -175,16 +175,6 @@ impl Neighbourhood<'_> {
         });
         (emission, direct)
     }
-}
-
-#[inline]
-fn rgb<T: Real>(c: Rgb) -> Rgb3<T> {
-    [T::from_f32(c.r), T::from_f32(c.g), T::from_f32(c.b)]
-}
-
-#[inline]
-fn scale3<T: Real>(a: Rgb3<T>, s: T) -> Rgb3<T> {
-    [a[0] * s, a[1] * s, a[2] * s]
 }
 
 impl Neighbourhood<'_> {
