@@ -9,12 +9,14 @@
 //! at 4, 16, 64 and 256 passes. relMSE against the reference must fall at least 1.5×
 //! per 4× passes (α = 0.67: bias² and variance both fall as passes^(−2/3), 2.5× per step
 //! in the limit), the criterion of `tests/tests/filtering.rs` on the Cornell box.
-//! Measured: BPF 0.058, 0.017, 0.0090, 0.0047 (3.4×, 1.9×, 1.9×); PhF 0.25, 0.064,
+//! Measured: BPF 0.057, 0.017, 0.0096, 0.0057 (3.3×, 1.8×, 1.7×); PhF 0.25, 0.064,
 //! 0.034, 0.016.
 //!
 //! Seen failing with BPF's light segments that leave Dirac nodes not reused (the
 //! caustic then comes only from camera paths through the glass to the light): 0.063,
-//! 0.045, 0.038, 0.032, 1.40× at the first step.
+//! 0.045, 0.038, 0.032, 1.40× at the first step. And with a Dirac light node's row not
+//! reusing its own arriving segment (paths from a diffuse vertex through glass to the
+//! light lost, the image 8 % dark off the caustic): 1.18× at the last step.
 
 use std::path::PathBuf;
 use std::time::Instant;

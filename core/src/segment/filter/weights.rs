@@ -56,6 +56,12 @@ pub struct Denominators {
     /// Bidirectional filtering with merges only: D of the arriving segment at its own
     /// path's junction (its own technique and the emission).
     pub arrive_own: f64,
+    /// Bidirectional filtering: the emission technique's part of `next`, `light` and
+    /// `arrive` (all N_L light paths'), which a light junction counts without its own
+    /// path's.
+    pub next_emit: f64,
+    pub light_emit: f64,
+    pub arrive_emit: f64,
 }
 
 impl Neighbourhood<'_> {
