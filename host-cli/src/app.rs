@@ -26,6 +26,8 @@ pub enum AppError {
     Estimator(String),
     Driver(DriverError),
     Image(ImageError),
+    /// Stopped by Ctrl-C (exit status [`crate::interrupt::EXIT_CODE`]); says what was kept.
+    Interrupted(String),
 }
 
 impl fmt::Display for AppError {
@@ -35,6 +37,7 @@ impl fmt::Display for AppError {
             Self::Estimator(m) => write!(f, "cannot set up the renderer: {m}"),
             Self::Driver(e) => e.fmt(f),
             Self::Image(e) => e.fmt(f),
+            Self::Interrupted(m) => f.write_str(m),
         }
     }
 }
@@ -45,8 +48,15 @@ impl std::error::Error for AppError {}
 pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
     match &cli.command {
         Command::Render(args) => {
+            if let Err(e) = crate::interrupt::install() {
+                eprintln!("warning: {e}");
+            }
             let report = render(args, start, true, crate::estimators::make_built)?;
             println!("{report}");
+            if report.summary.interrupted {
+                let s = if report.summary.passes == 1 { "" } else { "es" };
+                return Err(AppError::Interrupted(format!("interrupted: the image holds the {} completed pass{s}", report.summary.passes)));
+            }
             Ok(())
         }
         Command::Compare(args) => {
@@ -79,7 +89,14 @@ fn run_convergence(args: &ConvergenceArgs) -> Result<(), AppError> {
     let reference_path = args.reference.clone().unwrap_or_else(|| args.scene.with_file_name("reference.exr"));
     let reference = Reference::load(&reference_path).map_err(AppError::Output)?;
     let threads = crate::cli::thread_count(args.threads);
-    let setup = ConvergenceSetup { estimators: args.estimators.clone(), budget_seconds: args.budget, seeds: args.seeds, threads, max_depth: args.max_depth };
+    let setup = ConvergenceSetup {
+        estimators: args.estimators.clone(),
+        budget_seconds: args.budget,
+        seeds: args.seeds,
+        threads,
+        max_depth: args.max_depth,
+        memory_limit: None,
+    };
     let prepare = || estimators::prepare_file(&args.scene, None, None, Vec::new());
     let points = convergence::measure(&setup, &reference, &prepare, |c| {
         println!(
@@ -224,9 +241,21 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         (None, None, Some(n)) => n,
         _ => args.spp_limit(),
     };
-    let limits = Limits { spp, deadline };
+    let limits = Limits { spp, deadline, interrupt: Some(crate::interrupt::flag()) };
     let config = DriverConfig { progress, ..DriverConfig::with_threads(args.thread_count()) };
+    if progress && !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        // A log's first line: what is being rendered and until when.
+        let until = match (args.time, spp) {
+            (Some(t), u32::MAX) => format!("for {t} s"),
+            (Some(t), n) => format!("{n} passes or {t} s"),
+            (None, n) => format!("{n} passes"),
+        };
+        eprintln!("render: {} with {}, {width}x{height}, {until}, {} threads", built.scene, args.estimator.name(), config.threads);
+    }
     let summary = renderer.render(&mut film, limits, config, start).map_err(AppError::Driver)?;
+    if summary.interrupted && summary.passes == 0 {
+        return Err(AppError::Interrupted("interrupted before any pass completed: nothing written".into()));
+    }
     for line in renderer.memory_report() {
         eprintln!("{line}");
     }

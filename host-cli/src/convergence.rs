@@ -36,6 +36,42 @@ pub struct ConvergenceSetup {
     pub threads: usize,
     /// Overrides of the scene file's depth.
     pub max_depth: Option<i32>,
+    /// Memory the renderers may claim together (`--memory-limit`); `None`: what the
+    /// machine has available ([`crate::memory::available_bytes`]).
+    pub memory_limit: Option<u64>,
+}
+
+/// Refuse, before building them, estimators whose renderers (all held at once, one per
+/// estimator) would together need more memory than `limit` or the memory available.
+fn check_memory(prepared: &PreparedScene, estimators: &[EstimatorKind], limit: Option<u64>) -> Result<(), String> {
+    let camera = &prepared.scene.camera;
+    let pixels = camera.width() as u64 * camera.height() as u64;
+    let mut total = 0u64;
+    let mut largest = (0u64, EstimatorKind::Pt);
+    for &e in estimators {
+        let bytes = e.default_config().memory_estimate(pixels.min(u32::MAX as u64) as u32).bytes.max(pixels * 36);
+        total = total.saturating_add(bytes);
+        if bytes > largest.0 {
+            largest = (bytes, e);
+        }
+    }
+    let (available, source) = match limit {
+        Some(l) => (Some(l), "--memory-limit"),
+        None => (crate::memory::available_bytes(), "available memory"),
+    };
+    match available {
+        Some(a) if total > a => Err(format!(
+            "the {} estimators, run side by side at {}×{}, would need about {} ({} the most, {}), more than the {} of {source}; run fewer estimators, lower the resolution or raise --memory-limit",
+            estimators.len(),
+            camera.width(),
+            camera.height(),
+            crate::memory::human(total),
+            largest.1,
+            crate::memory::human(largest.0),
+            crate::memory::human(a)
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// One snapshot.
@@ -139,6 +175,9 @@ pub fn measure(
         for &estimator in &setup.estimators {
             let start = Instant::now();
             let prepared = prepare()?;
+            if runs.is_empty() {
+                check_memory(&prepared, &setup.estimators, setup.memory_limit)?;
+            }
             let depth = setup.max_depth.or(prepared.max_depth).unwrap_or(-1);
             let renderer = CoreRenderer::with_config(prepared, estimator.default_config(), depth, seed as u64, setup.threads)?;
             let (w, h) = (renderer.width(), renderer.height());
@@ -154,7 +193,7 @@ pub fn measure(
                     // The run's own clock: it started `spent` ago as far as it knows.
                     let now = Instant::now();
                     let start = now.checked_sub(run.spent).unwrap_or(now);
-                    let limits = Limits { spp: u32::MAX, deadline: Some(start + target_duration) };
+                    let limits = Limits { spp: u32::MAX, deadline: Some(start + target_duration), interrupt: None };
                     run.renderer.render(&mut run.film, limits, config, start).map_err(|e| e.to_string())?;
                     run.spent += now.elapsed();
                 }

@@ -14,9 +14,17 @@
 //! first. The deadline is checked between passes: a pass in progress when time runs
 //! out is finished (an interrupted pass would leave some pixels with one sample fewer
 //! than others, and light splats without their normalisation). The first pass always
-//! runs, even when preprocessing used up the whole budget, so an image exists.
+//! runs, even when preprocessing used up the whole budget, so an image exists. An
+//! interrupt (Ctrl-C, [`crate::interrupt`]) is checked before every pass, the first
+//! included: the pass in progress is finished and the summary says so.
+//!
+//! # Progress
+//! On a terminal, a progress bar. Otherwise (a log file, a batch job) plain lines on
+//! stderr: when setup ends, after the first pass, then at most every
+//! [`LOG_INTERVAL`] seconds, and at the end.
 
 use std::io::IsTerminal;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -118,7 +126,18 @@ pub struct Limits {
     pub spp: u32,
     /// Wall-clock deadline (checked between passes).
     pub deadline: Option<Instant>,
+    /// Set to stop after the pass in progress (checked before every pass).
+    pub interrupt: Option<&'static AtomicBool>,
 }
+
+impl Limits {
+    fn interrupted(&self) -> bool {
+        self.interrupt.is_some_and(|f| f.load(Ordering::SeqCst))
+    }
+}
+
+/// Seconds between progress lines when stderr is not a terminal.
+pub const LOG_INTERVAL: f64 = 10.0;
 
 /// How to run.
 #[derive(Clone, Copy, Debug)]
@@ -151,6 +170,8 @@ pub struct RenderSummary {
     pub threads: usize,
     /// Seconds per phase over the render loop (camera, light paths, …).
     pub phase_seconds: PhaseTimes,
+    /// Stopped by an interrupt before the limits were reached.
+    pub interrupted: bool,
 }
 
 /// Problems the driver reports.
@@ -198,10 +219,12 @@ where
     let pool = thread_pool(threads, "ember-render")?;
     let mut buffers = PhaseBuffers::new();
     let mut times = PhaseTimes::new();
-    // Setup not yet run (a renderer built without `run_setup`) counts as setup time.
-    pool.install(|| run_pending(est, ctx, &mut Film::new(0, 0), &mut buffers, &mut times));
-
     let progress = Progress::new(config.progress, limits, program_start);
+    // Setup not yet run (a renderer built without `run_setup`) counts as setup time.
+    let setup_start = Instant::now();
+    pool.install(|| run_pending(est, ctx, &mut Film::new(0, 0), &mut buffers, &mut times));
+    progress.setup_done(setup_start.elapsed().as_secs_f64());
+
     let loop_start = Instant::now();
     let discarded_before = film.discarded();
     let mut stats = PassStats::default();
@@ -210,7 +233,12 @@ where
     // Continue a film that already holds passes (checkpointed renders), so pass indices,
     // and with them the random streams, never repeat.
     let first_pass = film.passes();
+    let mut interrupted = false;
     for pass in first_pass..limits.spp {
+        if limits.interrupted() {
+            interrupted = true;
+            break;
+        }
         if pass > first_pass && limits.deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
@@ -219,7 +247,7 @@ where
         passes += 1;
         progress.pass_done(passes);
     }
-    progress.finish();
+    progress.finish(passes);
 
     let render_seconds = loop_start.elapsed().as_secs_f64();
     let per_second = |n: u64| if render_seconds > 0.0 { n as f64 / render_seconds } else { 0.0 };
@@ -233,19 +261,24 @@ where
         discarded: film.discarded() - discarded_before,
         threads,
         phase_seconds: times,
+        interrupted,
     })
 }
 
 /// The progress bar: over passes when only `spp` limits the render, over the time
-/// budget when a deadline does. Hidden unless stderr is a terminal.
+/// budget when a deadline does; on a terminal only. Elsewhere, log lines.
 struct Progress {
     bar: ProgressBar,
     deadline: Option<(Instant, Duration)>,
+    /// Log lines instead of a bar: when the last one was printed.
+    log: Option<std::cell::Cell<Option<Instant>>>,
+    start: Instant,
 }
 
 impl Progress {
     fn new(enabled: bool, limits: Limits, program_start: Instant) -> Self {
-        let target = if enabled && std::io::stderr().is_terminal() { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() };
+        let terminal = std::io::stderr().is_terminal();
+        let target = if enabled && terminal { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() };
         let by_time = limits.deadline.filter(|_| limits.spp == u32::MAX);
         let (len, template) = match by_time {
             Some(d) => (d.saturating_duration_since(program_start).as_millis() as u64, "{elapsed_precise} [{wide_bar}] {msg} (ETA {eta})"),
@@ -255,7 +288,14 @@ impl Progress {
         if let Ok(style) = ProgressStyle::with_template(template) {
             bar.set_style(style.progress_chars("=> "));
         }
-        Self { bar, deadline: by_time.map(|d| (program_start, d.saturating_duration_since(program_start))) }
+        let log = (enabled && !terminal).then(|| std::cell::Cell::new(None));
+        Self { bar, deadline: by_time.map(|d| (program_start, d.saturating_duration_since(program_start))), log, start: program_start }
+    }
+
+    fn setup_done(&self, seconds: f64) {
+        if self.log.is_some() && seconds >= 0.05 {
+            eprintln!("progress: setup done in {seconds:.1} s");
+        }
     }
 
     fn pass_done(&self, passes: u32) {
@@ -266,10 +306,22 @@ impl Progress {
             }
             None => self.bar.set_position(passes as u64),
         }
+        if let Some(last) = &self.log {
+            let now = Instant::now();
+            if last.get().is_none_or(|t| now.duration_since(t).as_secs_f64() >= LOG_INTERVAL) {
+                last.set(Some(now));
+                let s = if passes == 1 { "" } else { "es" };
+                eprintln!("progress: {passes} pass{s} at {:.1} s", now.duration_since(self.start).as_secs_f64());
+            }
+        }
     }
 
-    fn finish(&self) {
+    fn finish(&self, passes: u32) {
         self.bar.finish_and_clear();
+        if self.log.is_some() {
+            let s = if passes == 1 { "" } else { "es" };
+            eprintln!("progress: done, {passes} pass{s} at {:.1} s", self.start.elapsed().as_secs_f64());
+        }
     }
 }
 

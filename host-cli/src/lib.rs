@@ -11,6 +11,7 @@ pub mod convergence;
 pub mod driver;
 pub mod estimators;
 pub mod image_io;
+pub mod interrupt;
 pub mod memory;
 pub mod metrics;
 pub mod mitsuba;

@@ -1,5 +1,6 @@
 //! `ember`: parse the command line, run the command, report errors as text and exit
-//! with 0 (success, `--help`, `--version`) or 1 (any error).
+//! with 0 (success, `--help`, `--version`), 1 (any error) or 130 (interrupted by Ctrl-C:
+//! the image of the completed passes is written, if there is one).
 
 use std::process::ExitCode;
 use std::time::Instant;
@@ -21,6 +22,10 @@ fn main() -> ExitCode {
     };
     match app::run(&cli, start) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e @ app::AppError::Interrupted(_)) => {
+            eprintln!("{e}");
+            ExitCode::from(ember_cli::interrupt::EXIT_CODE)
+        }
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE

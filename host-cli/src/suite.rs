@@ -49,7 +49,14 @@ pub fn run(args: &SuiteArgs, threads: usize) -> Result<Vec<SceneResult>, String>
     for folder in scene_folders(&args.scenes, &args.only)? {
         let name = folder.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let reference = Reference::load(&folder.join("reference.exr"))?;
-        let setup = ConvergenceSetup { estimators: args.estimators.clone(), budget_seconds: args.budget, seeds: args.seeds, threads, max_depth: None };
+        let setup = ConvergenceSetup {
+            estimators: args.estimators.clone(),
+            budget_seconds: args.budget,
+            seeds: args.seeds,
+            threads,
+            max_depth: None,
+            memory_limit: None,
+        };
         let scene_file = folder.join("scene.xml");
         let prepare = || estimators::prepare_file(&scene_file, None, None, Vec::new());
         let points = convergence::measure(&setup, &reference, &prepare, |c| {

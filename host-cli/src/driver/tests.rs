@@ -119,7 +119,7 @@ fn run(threads: usize, spp: u32) -> (Film, RenderSummary) {
     let mut film = Film::new(61, 47);
     let config = DriverConfig { threads, progress: false };
     let ctx = Context { scene: &scene, tracer: &accel };
-    let summary = render(&mut fake, &ctx, &mut film, Limits { spp, deadline: None }, config, Instant::now()).unwrap();
+    let summary = render(&mut fake, &ctx, &mut film, Limits { spp, deadline: None, interrupt: None }, config, Instant::now()).unwrap();
     (film, summary)
 }
 
@@ -175,14 +175,14 @@ fn deadline_stops_between_passes() {
     let mut film = Film::new(8, 8);
     let config = DriverConfig { threads: 2, progress: false };
     let past = Instant::now();
-    let limits = Limits { spp: u32::MAX, deadline: Some(past) };
+    let limits = Limits { spp: u32::MAX, deadline: Some(past), interrupt: None };
     let s = render(&mut fake, &ctx, &mut film, limits, config, past).unwrap();
     assert_eq!(s.passes, 1);
     assert_eq!(film.passes(), 1);
 
     let mut film = Film::new(8, 8);
     let soon = Instant::now() + Duration::from_millis(50);
-    let s = render(&mut fake, &ctx, &mut film, Limits { spp: u32::MAX, deadline: Some(soon) }, config, past).unwrap();
+    let s = render(&mut fake, &ctx, &mut film, Limits { spp: u32::MAX, deadline: Some(soon), interrupt: None }, config, past).unwrap();
     assert!(Instant::now() >= soon);
     assert!(s.passes > 1 && s.passes == film.passes());
 }
@@ -194,6 +194,24 @@ fn resolution_mismatch_is_an_error() {
     let ctx = Context { scene: &scene, tracer: &accel };
     let mut film = Film::new(8, 9);
     let config = DriverConfig::with_threads(1);
-    let r = render(&mut fake, &ctx, &mut film, Limits { spp: 1, deadline: None }, config, Instant::now());
+    let r = render(&mut fake, &ctx, &mut film, Limits { spp: 1, deadline: None, interrupt: None }, config, Instant::now());
     assert!(matches!(r, Err(DriverError::Resolution { .. })));
+}
+
+/// An interrupt is checked before every pass, the first included: set before the loop,
+/// nothing is rendered and the summary says it was interrupted. Seen failing with the
+/// check left out of the loop (64 passes, not interrupted).
+#[test]
+fn an_interrupt_stops_before_the_next_pass() {
+    static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
+    let mut fake = fake(8, 8, 0);
+    let (scene, accel) = scene(8, 8);
+    let ctx = Context { scene: &scene, tracer: &accel };
+    let mut film = Film::new(8, 8);
+    let config = DriverConfig { threads: 2, progress: false };
+    let s = render(&mut fake, &ctx, &mut film, Limits { spp: 64, deadline: None, interrupt: Some(&STOP) }, config, Instant::now()).unwrap();
+    assert_eq!((s.passes, film.passes(), s.interrupted), (0, 0, true));
+    STOP.store(false, std::sync::atomic::Ordering::SeqCst);
+    let s = render(&mut fake, &ctx, &mut film, Limits { spp: 64, deadline: None, interrupt: Some(&STOP) }, config, Instant::now()).unwrap();
+    assert_eq!((s.passes, s.interrupted), (64, false));
 }
