@@ -15,6 +15,11 @@
 //!   Seen failing (seed `filter-denominator-roughness`): a rough dielectric at roughness
 //!   1e-5 whose pdf re-evaluated to 0 for the direction its sampler drew, before the own
 //!   technique used the sampler's density.
+//!   Then, on one input in four, bidirectional path filtering's (issue 17) over the camera nodes and the light
+//!   nodes with their emission nodes together, every reuse mode: every denominator of a
+//!   segment that exists is finite and positive, every row coefficient finite and
+//!   non-negative (the pair correction's D_a − D_a,u and D_b − D_b,emit / N_L stay
+//!   positive), and the propagated radiance finite.
 //! - **MMIS** (first byte odd): 1–4 techniques, 1–4 pairs each, with conditional
 //!   densities from the input's raw f64 bits (NaN, ∞, negative, 1e±300 included) at 1–4
 //!   evaluation points: `Mmis::balance_weight` over all techniques sums to 1 where the
@@ -34,7 +39,8 @@ use ember_core::rng::{SampleStream, Stream};
 use ember_core::merge::HashGrid;
 use ember_core::scene::Scene;
 use ember_core::segment::Kernel;
-use ember_core::segment::filter::{FilterGraph, Neighbourhood, trace_camera_nodes, trace_light_nodes};
+use ember_core::segment::filter::nodes::{NONE, NodeKind};
+use ember_core::segment::filter::{Bidirectional, FilterGraph, Neighbourhood, trace_camera_nodes, trace_light_nodes};
 use ember_core::spectrum::Rgb;
 use ember_fuzz::Bytes;
 use ember_tests::bdpt_oracle::for_each_strategy_split;
@@ -165,6 +171,59 @@ fn filtering(b: &mut Bytes, scene: &Scene, tracer: &BruteForce, params: &RenderP
         for l in graph.propagate(segments) {
             assert!(l.iter().all(|c| c.is_finite() && *c >= 0.0), "propagated value {l:?} (r = {radius})");
         }
+    }
+    // One input in four: its weights cost about six times the rest of the target.
+    if b.u8() % 4 == 0 {
+        bidirectional(b, scene, tracer, params, segments, radius);
+    }
+}
+
+/// Bidirectional filtering's weights over 16 camera and 16 light paths (with emission
+/// nodes) at kernel radius `radius`.
+fn bidirectional(b: &mut Bytes, scene: &Scene, tracer: &BruteForce, params: &RenderParams, segments: u32, radius: f32) {
+    let (mut nodes, mut first, mut sky) = (Vec::new(), Vec::new(), Vec::new());
+    trace_camera_nodes(scene, tracer, params, segments, 0, 0..16, &mut nodes, &mut first, &mut sky);
+    let (mut light, mut pred, mut base) = (Vec::new(), Vec::new(), Vec::new());
+    trace_light_nodes(scene, tracer, params, segments, 16, 0, 0..16, true, &mut light, &mut pred, &mut base);
+    let offset = nodes.len() as u32;
+    let shift = |i: u32| if i == NONE { NONE } else { i + offset };
+    nodes.extend(light.into_iter().map(|mut n| {
+        n.pred = shift(n.pred);
+        n.next.node = shift(n.next.node);
+        n
+    }));
+    let mut grid = HashGrid::new();
+    grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
+    let hood = Neighbourhood { scene, nodes: &nodes, grid: &grid, kernel: Kernel::Disk { radius } };
+    let w = Bidirectional { hood, light_paths: 16.0, merges_only: b.u8() % 2 == 1 };
+    let dens: Vec<_> = (0..nodes.len() as u32).map(|i| w.denominators(i)).collect();
+    let ok = |x: f64| x.is_finite() && x > 0.0;
+    for (u, d) in nodes.iter().zip(&dens) {
+        match u.kind {
+            NodeKind::Camera if !u.delta => {
+                if u.next.dir != Vec3::ZERO && !u.next.delta {
+                    assert!(ok(d.next) && d.next_light >= 0.0, "BPF continuation denominator {d:?} (r = {radius})");
+                }
+                if u.light.dir != Vec3::ZERO {
+                    assert!(ok(d.light), "BPF light-segment denominator {d:?} (r = {radius})");
+                }
+            }
+            NodeKind::Light => assert!(ok(d.arrive) && d.arrive_light >= 0.0, "BPF arriving-segment denominator {d:?} (r = {radius})"),
+            _ => {}
+        }
+    }
+    let mut graph = FilterGraph::<f32>::new();
+    let mut pairs = Vec::new();
+    for v in 0..nodes.len() as u32 {
+        let (e, d) = w.row::<f32>(v, &dens, &mut pairs);
+        assert!(e.iter().chain(&d).all(|c| c.is_finite() && *c >= 0.0), "BPF row constants {e:?} {d:?} (r = {radius})");
+        for (_, c) in &pairs {
+            assert!(c.iter().all(|x| x.is_finite() && *x >= 0.0), "BPF coefficient {c:?} (r = {radius})");
+        }
+        graph.push_row(e, d, pairs.iter().copied());
+    }
+    for l in graph.propagate(segments) {
+        assert!(l.iter().all(|c| c.is_finite()), "BPF propagated value {l:?} (r = {radius})");
     }
 }
 

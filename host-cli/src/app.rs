@@ -95,9 +95,9 @@ fn run_convergence(args: &ConvergenceArgs) -> Result<(), AppError> {
         seeds: args.seeds,
         threads,
         max_depth: args.max_depth,
-        memory_limit: None,
+        memory_limit: args.memory_limit,
     };
-    let prepare = || estimators::prepare_file(&args.scene, None, None, Vec::new());
+    let prepare = estimators::preparer(&args.scene, &args.defines.pairs);
     let points = convergence::measure(&setup, &reference, &prepare, |c| {
         println!(
             "{:5} seed {} at {:7.2} s: relMSE {:.4e}  MAPE {:7.3} %  ({} passes)",
@@ -132,6 +132,8 @@ pub fn compare_files(args: &CompareArgs) -> Result<ErrorMetrics, AppError> {
     }
     let test = image_io::read_exr(&args.test).map_err(AppError::Image)?;
     let reference = image_io::read_exr(&args.reference).map_err(AppError::Image)?;
+    // A NaN or infinite pixel makes every metric NaN: refuse, naming the file.
+    image_io::check_finite(&args.test, &test).and_then(|()| image_io::check_finite(&args.reference, &reference)).map_err(AppError::Image)?;
     if (test.width, test.height) != (reference.width, reference.height) {
         return Err(AppError::Output(format!(
             "'{}' is {}x{} but the reference '{}' is {}x{}",

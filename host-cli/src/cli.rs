@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, Parser, Subcommand};
 
-/// Passes rendered when neither `--spp` nor `--time` is given (pbrt's default).
+/// Passes rendered when neither `--spp` nor `--time` is given and the scene file gives
+/// no `sample_count` (pbrt's default; the built-in scenes always use it).
 pub const DEFAULT_SPP: u32 = 16;
 /// Resolution of the built-in scene when `--width`/`--height` are not given.
 pub const DEFAULT_RESOLUTION: (u32, u32) = (512, 512);
@@ -58,6 +59,13 @@ pub struct ConvergenceArgs {
     /// Override the scene file's max_depth (-1: unbounded).
     #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = clap::value_parser!(i32).range(-1..))]
     pub max_depth: Option<i32>,
+    /// Refuse a run whose estimators together (each holds its renderer until the end)
+    /// would need more than this many bytes (suffixes K, M, G, T: binary) [default: the
+    /// memory available].
+    #[arg(long, value_name = "BYTES", value_parser = crate::memory::parse_size)]
+    pub memory_limit: Option<u64>,
+    #[command(flatten)]
+    pub defines: Defines,
     /// Output folder for NAME.csv, NAME-relmse.svg and NAME-mape.svg.
     #[arg(short, long, default_value = "convergence", value_name = "DIR")]
     pub output: PathBuf,
@@ -84,6 +92,13 @@ pub struct SuiteArgs {
     /// Render threads (default: every core; at most 4 × the cores, and 1024).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub threads: Option<u32>,
+    /// Refuse a run whose estimators together (each holds its renderer until the end)
+    /// would need more than this many bytes (suffixes K, M, G, T: binary) [default: the
+    /// memory available].
+    #[arg(long, value_name = "BYTES", value_parser = crate::memory::parse_size)]
+    pub memory_limit: Option<u64>,
+    #[command(flatten)]
+    pub defines: Defines,
     /// The markdown report; plots and CSVs go to a folder of the same stem beside it.
     #[arg(short, long, default_value = "docs/results.md", value_name = "FILE")]
     pub output: PathBuf,
@@ -108,6 +123,31 @@ pub struct CompareArgs {
     /// the top-left pixel): e.g. a caustic seen through glass.
     #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_region)]
     pub region: Option<[u32; 4]>,
+}
+
+/// `-D KEY=VALUE`: scene parameters, for every command that loads a scene file.
+#[derive(Args, Debug, Clone, Default, PartialEq)]
+pub struct Defines {
+    /// Set the scene parameter KEY, replacing the file's `<default name="KEY" value="...">`
+    /// and filling its `$KEY` (as `mitsuba -D`); repeatable, the last of a KEY wins. A KEY
+    /// the scene never uses gives a warning.
+    #[arg(short = 'D', long = "define", value_name = "KEY=VALUE", value_parser = parse_define)]
+    pub pairs: Vec<(String, String)>,
+}
+
+/// `KEY=VALUE`, KEY being letters, digits and `_` (as a scene file's parameter names);
+/// VALUE may be empty or hold `=`.
+fn parse_define(text: &str) -> Result<(String, String), String> {
+    let Some((key, value)) = text.split_once('=') else {
+        return Err(format!("'{text}' has no '=': -D takes KEY=VALUE, e.g. -D spp=64"));
+    };
+    if key.is_empty() {
+        return Err(format!("'{text}' has an empty KEY: -D takes KEY=VALUE, e.g. -D spp=64"));
+    }
+    if !key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        return Err(format!("-D parameter name '{key}' must be letters, digits and '_'"));
+    }
+    Ok((key.to_string(), value.to_string()))
 }
 
 /// `x0,y0,x1,y1` with x0 < x1 and y0 < y1.
@@ -153,7 +193,9 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub cache: CacheArgs,
 
-    /// Samples per pixel (passes). Defaults to 16, or to unlimited when --time is given.
+    /// Samples per pixel (passes) [default: unlimited when --time is given; else the scene
+    /// file's `sample_count` (its sampler's) where it gives one; else 16, as for the
+    /// built-in scenes].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: Option<u32>,
 
@@ -172,11 +214,15 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
 
-    /// Image width in pixels [default: the scene's film; 512 for the built-in scene].
+    /// Image width in pixels; given without --height, the height follows the film's
+    /// aspect ratio, rounded to the nearest pixel [default: the scene's film; 512 for the
+    /// built-in scene].
     #[arg(long, value_name = "PIXELS", value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub width: Option<u32>,
 
-    /// Image height in pixels [default: the scene's film; 512 for the built-in scene].
+    /// Image height in pixels; given without --width, the width follows the film's aspect
+    /// ratio, rounded to the nearest pixel [default: the scene's film; 512 for the
+    /// built-in scene].
     #[arg(long, value_name = "PIXELS", value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub height: Option<u32>,
 
@@ -186,6 +232,10 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", allow_negative_numbers = true,
           value_parser = clap::value_parser!(i32).range(-1..))]
     pub max_depth: Option<i32>,
+
+    // Scene parameters (`-D KEY=VALUE`); refused without a SCENE file.
+    #[command(flatten)]
+    pub defines: Defines,
 
     /// Output EXR file (linear RGB, 32-bit float); an sRGB PNG with the same stem is
     /// written beside it.
@@ -426,7 +476,8 @@ pub fn thread_count(option: Option<u32>) -> usize {
 }
 
 impl RenderArgs {
-    /// Maximum passes: `--spp`, else unlimited under `--time`, else [`DEFAULT_SPP`].
+    /// Maximum passes: `--spp`, else unlimited under `--time`, else [`DEFAULT_SPP`] (the
+    /// render command puts the scene file's `sample_count` before the last).
     pub fn spp_limit(&self) -> u32 {
         match (self.spp, self.time) {
             (Some(n), _) => n,
@@ -440,9 +491,11 @@ impl RenderArgs {
         thread_count(self.threads)
     }
 
-    /// Resolution: the options where given, `default` (the scene's film) otherwise.
+    /// Resolution: the options where given, `default` (the scene's film) otherwise; one
+    /// side alone keeps `default`'s aspect ratio ([`crate::mitsuba::film_size`], the rule
+    /// scene files follow too).
     pub fn resolution_or(&self, default: (u32, u32)) -> (u32, u32) {
-        (self.width.unwrap_or(default.0), self.height.unwrap_or(default.1))
+        crate::mitsuba::film_size(default, self.width, self.height)
     }
 
     /// Mitsuba max_depth: the option where given, `default` (the scene's) otherwise.
@@ -540,7 +593,44 @@ mod tests {
         assert_eq!(a.output_paths().unwrap().1, PathBuf::from("img/x.png"));
         let b = parse(&["-e", "lt", "--max-depth", "3", "--time", "1"]).unwrap();
         assert_eq!((b.estimator, b.max_depth, b.spp_limit()), (EstimatorKind::Lt, Some(3), u32::MAX));
-        assert_eq!(parse(&["--width", "100"]).unwrap().resolution_or((7, 9)), (100, 9));
+    }
+
+    /// Regression: --width alone kept the film's height (a 320x240 film at --width 64 was
+    /// 64x240, stretched). Injected bug checked: `(width.unwrap_or(w), height.unwrap_or(h))`
+    /// in `film_size` fails here.
+    #[test]
+    fn one_side_keeps_the_aspect_ratio() {
+        let size = |args: &[&str], film| parse(args).unwrap().resolution_or(film);
+        assert_eq!(size(&["--width", "64"], (320, 240)), (64, 48));
+        assert_eq!(size(&["--height", "48"], (320, 240)), (64, 48));
+        assert_eq!(size(&["--width", "100"], (7, 9)), (100, 129), "128.57 rounds to 129");
+        assert_eq!(size(&["--width", "1"], (1000, 10)), (1, 1), "never below one pixel");
+        assert_eq!(size(&["--width", "30", "--height", "20"], (320, 240)), (30, 20), "both given: both used");
+        assert_eq!(size(&[], (320, 240)), (320, 240));
+        assert_eq!(parse(&["--width", "100"]).unwrap().resolution_or(DEFAULT_RESOLUTION), (100, 100));
+    }
+
+    /// `-D KEY=VALUE`: repeatable, VALUE may be empty or hold '='; a missing '=', an empty
+    /// KEY or a KEY the scene language cannot name is refused. Injected bug checked:
+    /// accepting a text without '=' as (text, "") fails here.
+    #[test]
+    fn defines_are_key_value_pairs() {
+        let a = parse(&["s.xml", "-D", "spp=64", "--define", "name=a=b", "-Dempty="]).unwrap();
+        let pairs: Vec<(&str, &str)> = a.defines.pairs.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
+        assert_eq!(pairs, [("spp", "64"), ("name", "a=b"), ("empty", "")]);
+        for (bad, says) in [("spp", "has no '='"), ("=64", "empty KEY"), ("a-b=1", "letters, digits")] {
+            let e = parse(&["s.xml", "-D", bad]).unwrap_err().to_string();
+            assert!(e.contains(says) && e.contains("-D"), "{bad}: {e}");
+        }
+        for sub in [&["convergence", "s.xml", "-D", "a=1"][..], &["suite", "-D", "a=1"]] {
+            let c = Cli::try_parse_from([&["ember"][..], sub].concat()).unwrap();
+            let pairs = match c.command {
+                Command::Convergence(c) => c.defines.pairs,
+                Command::Suite(s) => s.defines.pairs,
+                other => panic!("{other:?}"),
+            };
+            assert_eq!(pairs, [("a".to_string(), "1".to_string())]);
+        }
     }
 
     #[test]
@@ -578,7 +668,7 @@ mod tests {
     #[test]
     fn help_mentions_the_pbrt_and_mitsuba_terms() {
         let help = Cli::command().find_subcommand_mut("render").unwrap().render_long_help().to_string();
-        for word in ["--spp", "--time", "--max-depth", "unbounded", "pt", "lt", "bdpt", "out.exr", "all cores"] {
+        for word in ["--spp", "--time", "--max-depth", "unbounded", "pt", "lt", "bdpt", "out.exr", "all cores", "-D", "sample_count", "aspect ratio"] {
             assert!(help.contains(word), "help lacks {word}:\n{help}");
         }
     }

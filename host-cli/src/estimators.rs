@@ -48,8 +48,21 @@ pub fn prepare_file(path: &Path, width: Option<u32>, height: Option<u32>, defaul
 /// The scene a `render` command names (a file, or the built-in one).
 pub fn prepare(args: &RenderArgs) -> Result<PreparedScene, String> {
     match &args.scene {
-        Some(path) => prepare_file(path, args.width, args.height, Vec::new()),
+        Some(path) => prepare_file(path, args.width, args.height, args.defines.pairs.clone()),
+        None if !args.defines.pairs.is_empty() => Err("-D sets parameters of a scene file; the built-in scenes have none (give a SCENE)".into()),
         None => prepare_builtin(args),
+    }
+}
+
+/// [`prepare_file`] at the file's resolution, for commands that load the scene once per
+/// run (convergence, suite); the scene's warnings (an unused `-D` among them) are printed
+/// on the first load only.
+pub fn preparer<'a>(path: &'a Path, defaults: &'a [(String, String)]) -> impl Fn() -> Result<PreparedScene, String> + 'a {
+    let warned = std::sync::Once::new();
+    move || {
+        let prepared = prepare_file(path, None, None, defaults.to_vec())?;
+        warned.call_once(|| prepared.warnings.iter().for_each(|w| eprintln!("warning: {}: {w}", path.display())));
+        Ok(prepared)
     }
 }
 
@@ -65,8 +78,11 @@ fn finish(
     if warnings.degenerate_triangles > 0 {
         notes.push(format!("{} degenerate (zero-area) triangles dropped", warnings.degenerate_triangles));
     }
+    // Only what was really dropped (the core counts no light it keeps). A light of any
+    // power, even one too bright for f32, is selectable, so there is no selection only
+    // when no emitter is left.
     if warnings.dark_lights > 0 {
-        notes.push(format!("{} lights emit nothing and were dropped", warnings.dark_lights));
+        notes.push(format!("{} lights emit nothing and were dropped (an emitting mesh counts once per triangle)", warnings.dark_lights));
     }
     if scene.light_selection.is_none() {
         notes.push("the scene has no light: the image will be black".into());
@@ -264,4 +280,59 @@ pub fn make_core_renderer(args: &RenderArgs) -> Result<CoreRenderer, String> {
         );
     }
     Ok(r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The notes `prepare_file` prints for a scene holding `emitters` (and one rectangle).
+    fn notes(emitters: &str) -> Vec<String> {
+        let xml = format!(
+            r#"<scene version="3.0.0">
+                <sensor type="perspective"><float name="fov" value="40"/>
+                    <transform name="to_world"><lookat origin="0,0,5" target="0,0,0" up="0,1,0"/></transform>
+                    <film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/><rfilter type="box"/></film>
+                </sensor>
+                <shape type="rectangle"/>
+                {emitters}
+            </scene>"#
+        );
+        let loaded = mitsuba::load_scene_from_str(&xml, Path::new("notes.xml"), &mitsuba::LoadOptions::default()).unwrap();
+        let (scene, geometry, warnings) = loaded.builder.build().unwrap();
+        finish("notes.xml".into(), scene, &geometry, warnings, None, None, loaded.warnings).warnings
+    }
+
+    /// Regression: every `constant` and `directional` emitter was reported as "emits
+    /// nothing and was dropped" though it was kept and lit the scene. Injected bug checked:
+    /// counting `light.power() <= 0` in `SceneBuilder::add_light` again fails here.
+    #[test]
+    fn lights_at_infinity_give_no_note() {
+        for emitter in [r#"<emitter type="constant"/>"#, r#"<emitter type="directional"><vector name="direction" value="0,0,-1"/></emitter>"#] {
+            assert_eq!(notes(emitter), Vec::<String>::new(), "{emitter}");
+        }
+    }
+
+    /// Regression: a light whose power overflows f32 was left out of the light selection
+    /// and the scene reported as having no light. Injected bug checked: removing the
+    /// saturation in `Light::power` fails here.
+    #[test]
+    fn a_very_bright_light_is_a_light() {
+        assert_eq!(
+            notes(r#"<emitter type="point"><point name="position" value="0,0,1"/><rgb name="intensity" value="1e38"/></emitter>"#),
+            Vec::<String>::new()
+        );
+    }
+
+    /// Dark lights are counted as dropped, and a scene left with none is said to be unlit.
+    #[test]
+    fn dark_lights_are_reported_dropped_and_the_scene_unlit() {
+        let n = notes(r#"<emitter type="point"><point name="position" value="0,0,1"/><rgb name="intensity" value="0"/></emitter>"#);
+        assert!(n[0].starts_with("1 lights emit nothing and were dropped"), "{n:?}");
+        assert!(n[1].contains("has no light"), "{n:?}");
+        assert_eq!(n.len(), 2, "{n:?}");
+        let none = notes("");
+        assert_eq!(none.len(), 1, "{none:?}");
+        assert!(none[0].contains("has no light"), "{none:?}");
+    }
 }

@@ -34,6 +34,8 @@ pub enum ImageErrorKind {
     Io(std::io::Error),
     /// The pixel buffer does not match the stated size.
     Size { width: u32, height: u32, pixels: usize },
+    /// Pixels holding NaN or an infinity in some channel, where finite values are needed.
+    NonFinite { count: usize, width: u32, height: u32 },
 }
 
 impl ImageError {
@@ -52,6 +54,9 @@ impl fmt::Display for ImageError {
             ImageErrorKind::Size { width, height, pixels } => {
                 write!(f, "image for '{p}': {pixels} pixels given for {width}x{height}")
             }
+            ImageErrorKind::NonFinite { count, width, height } => {
+                write!(f, "image '{p}': {count} of its {width}x{height} pixels are not finite (NaN or infinite); the error metrics need finite values")
+            }
         }
     }
 }
@@ -62,7 +67,7 @@ impl std::error::Error for ImageError {
             ImageErrorKind::Exr(e) => Some(e),
             ImageErrorKind::Png(e) => Some(e),
             ImageErrorKind::Io(e) => Some(e),
-            ImageErrorKind::Size { .. } => None,
+            ImageErrorKind::Size { .. } | ImageErrorKind::NonFinite { .. } => None,
         }
     }
 }
@@ -70,6 +75,16 @@ impl std::error::Error for ImageError {
 fn check_size(path: &Path, width: u32, height: u32, pixels: &[[f32; 3]]) -> Result<(), ImageError> {
     if pixels.len() != width as usize * height as usize || width == 0 || height == 0 {
         return Err(ImageError::new(path, ImageErrorKind::Size { width, height, pixels: pixels.len() }));
+    }
+    Ok(())
+}
+
+/// Refuse an image (read from `path`) with a NaN or infinite channel anywhere, counting
+/// the pixels that hold one.
+pub fn check_finite(path: &Path, image: &RgbImage) -> Result<(), ImageError> {
+    let count = image.pixels.iter().filter(|p| !p.iter().all(|c| c.is_finite())).count();
+    if count > 0 {
+        return Err(ImageError::new(path, ImageErrorKind::NonFinite { count, width: image.width, height: image.height }));
     }
     Ok(())
 }

@@ -55,10 +55,10 @@ pub fn run(args: &SuiteArgs, threads: usize) -> Result<Vec<SceneResult>, String>
             seeds: args.seeds,
             threads,
             max_depth: None,
-            memory_limit: None,
+            memory_limit: args.memory_limit,
         };
         let scene_file = folder.join("scene.xml");
-        let prepare = || estimators::prepare_file(&scene_file, None, None, Vec::new());
+        let prepare = estimators::preparer(&scene_file, &args.defines.pairs);
         let points = convergence::measure(&setup, &reference, &prepare, |c| {
             eprintln!(
                 "{name:12} {:5} seed {} at {:6.1} s: relMSE {:.4e}, MAPE {:6.2} % ({} passes)",

@@ -21,8 +21,26 @@ fn help_and_version_exit_zero() {
     assert!(help.contains("--max-depth") && help.contains("bdpt"), "{help}");
 }
 
+/// A fresh folder under the system's temporary one, for files a test writes.
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("ember-cli-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
 #[test]
 fn bad_input_exits_one_with_a_message() {
+    // A 2x2 image with a NaN and an infinity, and a finite one (for compare).
+    let dir = temp_dir("bad-input");
+    let (nan, finite) = (dir.join("nan.exr"), dir.join("finite.exr"));
+    ember_cli::image_io::write_exr(&nan, 2, 2, &[[1.0; 3], [f32::NAN, 1.0, 1.0], [1.0, 1.0, f32::INFINITY], [1.0; 3]]).unwrap();
+    ember_cli::image_io::write_exr(&finite, 2, 2, &[[1.0; 3]; 4]).unwrap();
+    let (nan, finite) = (nan.to_str().unwrap(), finite.to_str().unwrap());
+    let scenes_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes");
+    let cornell_file = scenes_dir.join("cornell-box/scene.xml");
+    let (out_dir, report) = (dir.join("convergence"), dir.join("report.md"));
+    let (scenes, cornell, out_dir, report) =
+        (scenes_dir.to_str().unwrap(), cornell_file.to_str().unwrap(), out_dir.to_str().unwrap(), report.to_str().unwrap());
     for (args, needle) in [
         (&[][..], "Usage"),
         (&["render", "--spp", "0"], "--spp"),
@@ -63,6 +81,28 @@ fn bad_input_exits_one_with_a_message() {
         (&["render", "--memory-limit", "12Q"], "not a size"),
         // compare never overwrites an input.
         (&["compare", "a.exr", "b.exr", "--error-image", "a.exr"], "one of the images"),
+        // -D KEY=VALUE (issue 13): the form is checked, naming the option; a built-in
+        // scene has no parameters. Injected bug checked: accepting "-D spp" as spp="" makes
+        // the first row fail on the missing file instead.
+        (&["render", "no-such-scene.xml", "-D", "spp"], "'spp' has no '=': -D takes KEY=VALUE"),
+        (&["render", "no-such-scene.xml", "-D", "=64"], "empty KEY"),
+        (&["render", "no-such-scene.xml", "--define", "a b=1"], "-D parameter name 'a b'"),
+        (&["convergence", "scene.xml", "-D", "resx"], "has no '='"),
+        (&["suite", "-D", "=1"], "empty KEY"),
+        (&["render", "-D", "spp=4", "--spp", "1"], "the built-in scenes have none"),
+        // compare refuses non-finite pixels instead of printing NaN metrics with exit 0.
+        // Injected bug checked: without the check_finite call in compare_files, this row
+        // exits 0.
+        (&["compare", nan, finite], "2 of its 2x2 pixels are not finite"),
+        (&["compare", finite, nan], "nan.exr"),
+        // convergence and suite hold every estimator's renderer at once and check their
+        // sum before building any. Injected bug checked: without the check_memory call in
+        // convergence::measure, both render for their budget and exit 0.
+        (&["convergence", cornell, "-e", "pt,bdpt", "--budget", "1", "--seeds", "1", "--memory-limit", "1K", "-o", out_dir], "run fewer estimators"),
+        (
+            &["suite", "--scenes", scenes, "--only", "cornell-box", "-e", "pt,bdpt", "--budget", "1", "--seeds", "1", "--memory-limit", "1K", "-o", report],
+            "run fewer estimators",
+        ),
     ] {
         let o = ember(args);
         let err = stderr(&o);
@@ -70,6 +110,7 @@ fn bad_input_exits_one_with_a_message() {
         assert!(err.contains(needle), "{args:?}: stderr lacks {needle:?}:\n{err}");
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A thread count far beyond the machine is capped with a warning, and the render runs.
@@ -82,4 +123,36 @@ fn huge_thread_counts_are_capped() {
     assert!(err.contains("capped at"), "{err}");
     let _ = std::fs::remove_file(&out);
     let _ = std::fs::remove_file(out.with_extension("png"));
+}
+
+/// `-D res=4` replaces the scene's `<default name="res" value="8"/>` (the film width).
+/// Injected bug checked: passing no defaults to the loader in `estimators::prepare`
+/// renders 8 pixels wide and fails here.
+#[test]
+fn define_overrides_a_scene_default() {
+    let dir = temp_dir("define");
+    let scene = dir.join("scene.xml");
+    std::fs::write(
+        &scene,
+        r#"<scene version="3.0.0">
+    <default name="res" value="8"/>
+    <sensor type="perspective">
+        <float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0,0,5" target="0,0,0" up="0,1,0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="$res"/><integer name="height" value="6"/><rfilter type="box"/></film>
+    </sensor>
+    <shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+</scene>"#,
+    )
+    .unwrap();
+    let out = dir.join("out.exr");
+    for (define, width) in [(None, 8), (Some("res=4"), 4)] {
+        let mut args = vec!["render", scene.to_str().unwrap(), "--spp", "1", "-o", out.to_str().unwrap()];
+        args.extend(define.map(|d| ["-D", d]).into_iter().flatten());
+        let o = ember(&args);
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {}", stderr(&o));
+        let image = ember_cli::image_io::read_exr(&out).unwrap();
+        assert_eq!((image.width, image.height), (width, 6), "{args:?}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -252,15 +252,19 @@ impl Light {
 
     /// Total emitted power (average over the RGB channels), for light selection. Lights
     /// at infinity count the power crossing the scene's bounding disk (pbrt-v4 `Phi`).
+    /// Saturates at `f32::MAX`: a light too bright for f32 (a point light of intensity
+    /// 1e38 has 4π·1e38) stays selectable, where an infinite weight would be dropped by
+    /// the selection table and the scene reported as unlit.
     pub fn power(&self) -> f32 {
-        match &self.kind {
+        let power = match &self.kind {
             Kind::Triangle(l) => l.power(),
             Kind::Sphere(l) => l.power(),
             Kind::Point(l) => l.power(),
             Kind::Spot(l) => l.power(),
             Kind::Directional(l) => l.power(),
             Kind::Environment(l) => l.power(),
-        }
+        };
+        if power == f32::INFINITY { f32::MAX } else { power }
     }
 
     /// Point, spot and directional lights: no ray can hit them.

@@ -102,7 +102,9 @@ impl core::fmt::Display for SceneError {
 pub struct BuildWarnings {
     /// Triangles with zero area (they cannot be hit or sampled).
     pub degenerate_triangles: usize,
-    /// Lights that emit nothing (zero radiance, zero-size shape).
+    /// Lights dropped because they emit nothing (zero radiance, intensity or
+    /// irradiance); an emitting mesh counts once per triangle. Lights that are kept are
+    /// never counted here.
     pub dark_lights: usize,
 }
 
@@ -132,12 +134,20 @@ impl SceneBuilder {
     }
 
     /// A light that is not attached to a shape (point, spot, directional, environment).
-    pub fn add_light(&mut self, light: Light) -> LightId {
-        if light.power() <= 0.0 {
+    /// One that emits nothing is dropped (counted in the warnings' `dark_lights`) and
+    /// gets no id.
+    pub fn add_light(&mut self, light: Light) -> Option<LightId> {
+        // The power of a light at infinity scales with the scene's radius, unknown until
+        // `build` (before it, every environment's power is 0); whether it is positive does
+        // not depend on the radius, so ask at radius 1.
+        let mut probe = light;
+        probe.set_scene_bounds(Vec3::ZERO, 1.0);
+        if !(probe.power() > 0.0) {
             self.warnings.dark_lights += 1;
+            return None;
         }
         self.lights.push(light);
-        (self.lights.len() - 1) as LightId
+        Some((self.lights.len() - 1) as LightId)
     }
 
     fn check_material(&mut self, m: MaterialId) -> bool {
@@ -242,7 +252,15 @@ impl SceneBuilder {
             self.warnings.degenerate_triangles += 1;
             return;
         }
-        let emitter = emission.filter(|e| !e.radiance.is_black()).map(|e| {
+        // Emission of zero radiance is dropped, as for triangles (the sphere stays).
+        let emission = match emission {
+            Some(e) if e.radiance.is_black() => {
+                self.warnings.dark_lights += 1;
+                None
+            }
+            other => other,
+        };
+        let emitter = emission.map(|e| {
             self.lights.push(Light::sphere(center, radius, e.radiance));
             (self.lights.len() - 1) as LightId
         });
@@ -270,4 +288,68 @@ impl SceneBuilder {
 
 fn fetch3(v: &[Vec3], idx: &[u32; 3]) -> Option<[Vec3; 3]> {
     Some([*v.get(idx[0] as usize)?, *v.get(idx[1] as usize)?, *v.get(idx[2] as usize)?])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::FovAxis;
+    use crate::spectrum::Rgb;
+
+    /// A builder with a camera, one diffuse material and one unit triangle.
+    fn builder() -> (SceneBuilder, MaterialId) {
+        let mut b = SceneBuilder::new();
+        b.set_camera(PerspectiveCamera::new(Mat4::IDENTITY, 40.0, FovAxis::X, 4, 4));
+        let m = b.add_material(Material::diffuse(Rgb::splat(0.5)));
+        b.add_triangle([Vec3::ZERO, Vec3::X, Vec3::Y], None, m, None);
+        (b, m)
+    }
+
+    /// Regression: every `constant` and `directional` emitter was counted as dark (its
+    /// power is 0 until `build` knows the scene's radius) though it was kept. Injected
+    /// bug checked: testing `light.power()` instead of the probe at radius 1 fails here.
+    #[test]
+    fn lights_at_infinity_are_not_counted_as_dark() {
+        let (mut b, _) = builder();
+        assert!(b.add_light(Light::constant_environment(Rgb::splat(1.0))).is_some());
+        assert!(b.add_light(Light::directional(Vec3::NEG_Z, Rgb::splat(2.0))).is_some());
+        let (scene, _, warnings) = b.build().unwrap();
+        assert_eq!(warnings.dark_lights, 0);
+        assert_eq!(scene.lights.len(), 2);
+        assert!(scene.lights.iter().all(|l| l.power() > 0.0));
+    }
+
+    /// Lights that emit nothing are dropped and counted, each once: a point light, a
+    /// sphere's emission and each triangle of an emitting mesh. Injected bug checked:
+    /// keeping the dark point light (pushing it after counting) fails the light count.
+    #[test]
+    fn dark_lights_are_dropped_and_counted() {
+        let (mut b, m) = builder();
+        assert!(b.add_light(Light::point(Vec3::Z, Rgb::ZERO)).is_none());
+        assert!(b.add_light(Light::constant_environment(Rgb::ZERO)).is_none());
+        let dark = Some(AreaEmission { radiance: Rgb::ZERO, two_sided: false });
+        b.add_sphere(Vec3::Z, 0.5, false, m, dark);
+        b.add_triangle([Vec3::ZERO, Vec3::X, Vec3::Z], None, m, dark);
+        b.add_light(Light::point(Vec3::Z, Rgb::splat(1.0)));
+        let (scene, geometry, warnings) = b.build().unwrap();
+        assert_eq!(warnings.dark_lights, 4);
+        assert_eq!(scene.lights.len(), 1, "only the bright point light is kept");
+        assert!(geometry.spheres[0].emitter.is_none() && geometry.triangles[1].emitter.is_none());
+    }
+
+    /// Regression: a light whose power overflows f32 (here 4π·1e38) got an infinite
+    /// weight, which the selection table drops, so the scene had no light selection
+    /// ("the scene has no light", a black image under next-event estimation). Injected
+    /// bug checked: removing the saturation in `Light::power` fails here.
+    #[test]
+    fn a_light_too_bright_for_f32_is_still_selected() {
+        let (mut b, _) = builder();
+        b.add_light(Light::point(Vec3::Z, Rgb::splat(1e38)));
+        b.add_light(Light::point(Vec3::Y, Rgb::splat(1.0)));
+        let (scene, _, warnings) = b.build().unwrap();
+        assert_eq!(warnings.dark_lights, 0);
+        assert_eq!(scene.lights[0].power(), f32::MAX);
+        assert!(scene.light_selection.is_some());
+        assert!(scene.light_pmf(0) > 0.99 && scene.light_pmf(1) > 0.0, "{} {}", scene.light_pmf(0), scene.light_pmf(1));
+    }
 }

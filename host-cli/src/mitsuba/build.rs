@@ -113,20 +113,26 @@ pub(crate) fn instantiate(parsed: Parsed, base_dir: &Path, options: &LoadOptions
         }
     }
     let (spec, _) = sensor.ok_or_else(|| Fail::nowhere("the scene has no <sensor> (a perspective camera is required)"))?;
-    let width = override_side(options.width, spec.width, "width")?;
-    let height = override_side(options.height, spec.height, "height")?;
+    override_side(options.width, "width")?;
+    override_side(options.height, "height")?;
+    let (width, height) = super::film_size((spec.width, spec.height), options.width, options.height);
+    if width as i64 > MAX_FILM_SIDE || height as i64 > MAX_FILM_SIDE {
+        return Err(Fail::nowhere(format!(
+            "the film would be {width}x{height} (the file's {}x{} scaled to keep its aspect ratio), more than {MAX_FILM_SIDE} pixels a side; give both the width and the height",
+            spec.width, spec.height
+        )));
+    }
     let camera = PerspectiveCamera::new(spec.to_world.as_mat4(), spec.fov, spec.fov_axis, width, height);
     ctx.sb.set_camera(camera);
     let world_origin = -ctx.render_frame.w_axis.truncate();
     Ok(LoadedScene { builder: ctx.sb, max_depth: integrator.and_then(|(d, _)| d), spp: spec.spp, width, height, warnings: ctx.warnings, world_origin })
 }
 
-fn override_side(option: Option<u32>, file: u32, what: &str) -> Res<u32> {
+fn override_side(option: Option<u32>, what: &str) -> Res<()> {
     match option {
         Some(0) => Err(Fail::nowhere(format!("the {what} override must be positive"))),
         Some(v) if v as i64 > MAX_FILM_SIDE => Err(Fail::nowhere(format!("the {what} override {v} exceeds {MAX_FILM_SIDE}"))),
-        Some(v) => Ok(v),
-        None => Ok(file),
+        _ => Ok(()),
     }
 }
 

@@ -84,10 +84,25 @@ pub struct LoadOptions {
     /// Parameter values that replace the file's `<default>` ones (like `mitsuba -D
     /// name=value`); a parameter the file never uses gives a warning.
     pub defaults: Vec<(String, String)>,
-    /// Film width override, replacing the file's `width`.
+    /// Film width override, replacing the file's `width`; alone, the height follows
+    /// the file's aspect ratio ([`film_size`]).
     pub width: Option<u32>,
-    /// Film height override, replacing the file's `height`.
+    /// Film height override, replacing the file's `height`; alone, the width follows
+    /// the file's aspect ratio ([`film_size`]).
     pub height: Option<u32>,
+}
+
+/// The film size under `width`/`height` overrides of a `file` film: both replace both;
+/// one alone keeps the file's aspect ratio, the other side rounded to the nearest pixel
+/// (at least 1, saturating at `u32::MAX`); neither keeps the file's.
+pub fn film_size(file: (u32, u32), width: Option<u32>, height: Option<u32>) -> (u32, u32) {
+    let scaled = |side: u32, num: u32, den: u32| (side as f64 * num as f64 / den.max(1) as f64).round().max(1.0) as u32;
+    match (width, height) {
+        (Some(w), Some(h)) => (w, h),
+        (Some(w), None) => (w, scaled(w, file.1, file.0)),
+        (None, Some(h)) => (scaled(h, file.0, file.1), h),
+        (None, None) => file,
+    }
 }
 
 /// A problem in a scene file, with where it is.

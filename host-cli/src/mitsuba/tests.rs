@@ -427,3 +427,19 @@ fn far_translated_scene_loads_camera_centred_without_losing_precision() {
         }
     }
 }
+
+/// Regression: a width override alone kept the file's height (stretching the image); one
+/// side alone now keeps the film's aspect ratio, and a derived side past the limit is
+/// refused. Injected bug checked: `(width.unwrap_or(w), height.unwrap_or(h))` in
+/// `film_size` fails here.
+#[test]
+fn one_film_side_keeps_the_aspect_ratio() {
+    let dir = temp_dir("aspect");
+    let body = r#"<shape type="cube"/><emitter type="constant"/>"#;
+    for ((width, height), expected) in [((Some(16), None), (16, 12)), ((None, Some(3)), (4, 3)), ((Some(5), Some(5)), (5, 5)), ((None, None), (8, 6))] {
+        let loaded = load_body(&dir, body, &LoadOptions { width, height, ..Default::default() }).unwrap();
+        assert_eq!((loaded.width, loaded.height), expected, "{width:?} {height:?}");
+    }
+    let e = load_body(&dir, body, &LoadOptions { height: Some(65536), ..Default::default() }).unwrap_err();
+    assert!(e.to_string().contains("the film would be 87381x65536") && e.to_string().contains("give both"), "{e}");
+}

@@ -194,6 +194,20 @@ fn parameters_and_document_errors() {
     assert!(e.to_string().contains("malformed integer \"wide\""), "{e}");
 }
 
+/// Regression: a truncated file was reported at 1:1 (roxmltree's position for an early
+/// end); it is reported where the text ends. Injected bug checked: using `e.pos()` for
+/// every XML error again fails here.
+#[test]
+fn truncated_files_are_reported_where_they_end() {
+    let dir = temp_dir("truncated");
+    let path = dir.join("scene.xml");
+    // Ends inside a tag (end of stream), and after an open element (unclosed root).
+    for (text, line, col) in [("<scene version=\"3.0.0\">\n  <shape type=\"cu", 2, 18), ("<scene version=\"3.0.0\">\n<shape type=\"cube\">\n", 3, 1)] {
+        std::fs::write(&path, text).unwrap();
+        check(&load_scene(&path, &LoadOptions::default()).unwrap_err(), line, col, &["malformed XML", "truncated"]);
+    }
+}
+
 #[test]
 fn garbage_never_panics() {
     // A crude fuzz pass: every prefix of a real scene and byte-flipped variants load or

@@ -140,9 +140,15 @@ pub(crate) struct Parsed {
 /// Parse a document; `overrides` replace `<default>` values (`-D name=value`).
 pub(crate) fn parse(text: &str, overrides: &[(String, String)]) -> Res<Parsed> {
     let opts = ParsingOptions { allow_dtd: false, ..ParsingOptions::default() };
-    let doc = Document::parse_with_options(text, opts).map_err(|e| {
-        let p = e.pos();
-        Fail::at(Loc { line: p.row, col: p.col }, format!("malformed XML: {e}"))
+    let doc = Document::parse_with_options(text, opts).map_err(|e| match e {
+        // roxmltree places these at 1:1; the problem is where the text stops.
+        roxmltree::Error::UnexpectedEndOfStream | roxmltree::Error::UnclosedRootNode => {
+            Fail::at(end_of(text), format!("malformed XML: {e}: the text ends here with elements left open (is the file truncated?)"))
+        }
+        _ => {
+            let p = e.pos();
+            Fail::at(Loc { line: p.row, col: p.col }, format!("malformed XML: {e}"))
+        }
     })?;
     let mut p = Parser {
         doc: &doc,
@@ -158,6 +164,14 @@ pub(crate) fn parse(text: &str, overrides: &[(String, String)]) -> Res<Parsed> {
         p.out.warnings.push(format!("parameter `{k}` given on the command line is not used by the scene"));
     }
     Ok(p.out)
+}
+
+/// The position just past the last character of `text` (1-based; columns count
+/// characters, as roxmltree's do).
+fn end_of(text: &str) -> Loc {
+    let last = text.rsplit('\n').next().unwrap_or("");
+    let line = text.matches('\n').count() + 1;
+    Loc { line: line.min(u32::MAX as usize) as u32, col: (last.chars().count() + 1).min(u32::MAX as usize) as u32 }
 }
 
 struct Parser<'a, 'input> {
