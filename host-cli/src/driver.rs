@@ -31,7 +31,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 
 use ember_core::geometry::RayQuery;
-use ember_core::render::{ChunkOutput, Context, Film, PhaseBuffers, Phased};
+use ember_core::render::{ChunkOutput, Context, Film, Phase, PhaseBuffers, Phased};
 
 /// A contribution at a continuous film position: the core's type.
 pub use ember_core::integrator::Splat;
@@ -71,27 +71,38 @@ where
 {
     let mut stats = PassStats::default();
     while let Some(phase) = est.next_phase() {
-        let start = Instant::now();
-        let outputs = buffers.for_phase(&phase);
-        let shared: &E = est;
-        // `with_max_len(1)` makes every chunk its own stealable task: rayon's adaptive
-        // splitting otherwise hands a thread runs of 32-64 chunks that cannot be stolen
-        // once started (on 2 threads one worker idled 10 % of every BDPT pass).
-        let rays: u64 = outputs
-            .par_iter_mut()
-            .with_max_len(1)
-            .map(|out: &mut ChunkOutput| {
-                shared.map(ctx, &phase, out);
-                out.counters.rays
-            })
-            .sum();
-        stats.rays += rays;
-        if phase.samples {
-            stats.samples += phase.items as u64;
-        }
-        est.reduce(ctx, &phase, outputs, film);
-        add_time(times, phase.name, start.elapsed().as_secs_f64());
+        stats = stats + run_phase(est, ctx, &phase, film, buffers, times);
     }
+    stats
+}
+
+/// Map and reduce one phase.
+fn run_phase<E, Q>(est: &mut E, ctx: &Context<'_, Q>, phase: &Phase, film: &mut Film, buffers: &mut PhaseBuffers, times: &mut PhaseTimes) -> PassStats
+where
+    E: Phased<Q> + Sync + ?Sized,
+    Q: RayQuery + Sync + ?Sized,
+{
+    let mut stats = PassStats::default();
+    let start = Instant::now();
+    let outputs = buffers.for_phase(phase);
+    let shared: &E = est;
+    // `with_max_len(1)` makes every chunk its own stealable task: rayon's adaptive
+    // splitting otherwise hands a thread runs of 32-64 chunks that cannot be stolen
+    // once started (on 2 threads one worker idled 10 % of every BDPT pass).
+    let rays: u64 = outputs
+        .par_iter_mut()
+        .with_max_len(1)
+        .map(|out: &mut ChunkOutput| {
+            shared.map(ctx, phase, out);
+            out.counters.rays
+        })
+        .sum();
+    stats.rays += rays;
+    if phase.samples {
+        stats.samples += phase.items as u64;
+    }
+    est.reduce(ctx, phase, outputs, film);
+    add_time(times, phase.name, start.elapsed().as_secs_f64());
     stats
 }
 
@@ -106,7 +117,21 @@ where
     let mut times = PhaseTimes::new();
     let mut film = Film::new(0, 0);
     let mut buffers = PhaseBuffers::new();
-    pool.install(|| run_pending(est, ctx, &mut film, &mut buffers, &mut times));
+    // Preprocessing can take a while (SPCBPT's training): say which phase runs, as a
+    // spinner on a terminal, as lines in a log.
+    let terminal = std::io::stderr().is_terminal();
+    let spinner = ProgressBar::with_draw_target(None, if terminal { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() });
+    let start = Instant::now();
+    while let Some(phase) = est.next_phase() {
+        if terminal {
+            spinner.set_message(format!("setup: {}", phase.name));
+            spinner.tick();
+        } else {
+            eprintln!("setup: {} ({} items) at {:.1} s", phase.name, phase.items, start.elapsed().as_secs_f64());
+        }
+        pool.install(|| run_phase(est, ctx, &phase, &mut film, &mut buffers, &mut times));
+    }
+    spinner.finish_and_clear();
     Ok(times)
 }
 
