@@ -75,12 +75,13 @@
 //!   pair: the pair (a, b) enters over (D_a − D_a,u) D_b, a factor in b's row coefficient.
 //!
 //! With these the estimator agrees with the path tracer at fixed kernels of 0.02 to 0.5
-//! pixel footprints at depth 3; a shortfall of 2–6 % remains where light nodes are dense
-//! (depth 8 with β ≥ 1 or radii of a footprint; 5 % on the caustic scene). The likely cause, not yet confirmed: a
-//! light junction has no technique of its own among the camera segments it reuses, so
-//! it sees them only when a camera node lies in its kernel, and with the drawer's K(0)
-//! in each one's D its estimate of their part of L has mean 1 − e^(−m) of the true one
-//! for m camera nodes per kernel (a Poisson count).
+//! pixel footprints at depth 3; a shortfall of 2–8 % remains where light nodes are dense
+//! (depth 8 with β ≥ 1 or radii of a footprint; 5 % on the caustic scene, 7 % on ajar at
+//! r₀ = 1–2 footprints). The likely cause, not yet confirmed: a light junction has no
+//! technique of its own among the camera segments it reuses, so it sees them only when a
+//! camera node lies in its kernel, and with the drawer's K(0) in each one's D its
+//! estimate of their part of L has mean 1 − e^(−m) of the true one for m camera nodes
+//! per kernel (a Poisson count).
 
 use alloc::vec::Vec;
 
