@@ -460,6 +460,7 @@ impl Bidirectional<'_> {
                 return;
             }
             if light_junction && i == centre_index {
+                // Its own arriving segment: the sample that placed it.
                 return;
             }
             let k = self.hood.kernel_at(centre, u.hit.p, u.hit.ng);
@@ -471,7 +472,8 @@ impl Bidirectional<'_> {
             // A reused segment along `dir` with denominators (all, light samples' part),
             // reaching node `target` (its L) or carrying `constant`.
             // The pair correction D_a D_b / (D_a − dep) (D_b − own): `dep` the term in D_a
-            // of the light node b drew, `emit` D_b's emission part (module notes).
+            // of the light node b reached, `emit` D_b's emission part, `own` one light
+            // path's share of it at a light junction (module notes).
             let mut reuse = |dir: Vec3, all: f64, nee: f64, target: u32, constant: Rgb, dep: f64, emit: f64| {
                 let reflected = all - nee;
                 if !(all > 0.0) {
