@@ -45,22 +45,17 @@ pub struct ConvergenceSetup {
 /// estimator) would together need more memory than `limit` or the memory available.
 fn check_memory(prepared: &PreparedScene, estimators: &[EstimatorKind], limit: Option<u64>) -> Result<(), String> {
     let camera = &prepared.scene.camera;
-    let pixels = camera.width() as u64 * camera.height() as u64;
     let mut total = 0u64;
     let mut largest = (0u64, EstimatorKind::Pt);
     for &e in estimators {
-        let bytes = e.default_config().memory_estimate(pixels.min(u32::MAX as u64) as u32).bytes.max(pixels * 36);
+        let (bytes, _) = crate::estimators::memory_need(prepared, &e.default_config());
         total = total.saturating_add(bytes);
         if bytes > largest.0 {
             largest = (bytes, e);
         }
     }
-    let (available, source) = match limit {
-        Some(l) => (Some(l), "--memory-limit"),
-        None => (crate::memory::available_bytes(), "available memory"),
-    };
-    match available {
-        Some(a) if total > a => Err(format!(
+    match crate::estimators::memory_budget(limit) {
+        (Some(a), source) if total > a => Err(format!(
             "the {} estimators, run side by side at {}×{}, would need about {} ({} the most, {}), more than the {} of {source}; run fewer estimators, lower the resolution or raise --memory-limit",
             estimators.len(),
             camera.width(),

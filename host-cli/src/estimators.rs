@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use ember_core::integrator::{Heuristic, MaxDepth, RenderParams};
-use ember_core::render::{Context, EstimatorConfig, EstimatorKind, Film, Renderer};
+use ember_core::render::{Context, EstimatorConfig, EstimatorKind, Film, MemoryEstimate, Renderer};
 use ember_core::scene::{BuildWarnings, Scene, SceneGeometry, builtin};
 use std::path::Path;
 
@@ -214,19 +214,31 @@ pub fn make_built(args: &RenderArgs) -> Result<Built, String> {
     Ok(Built { scene: r.prepared.name.clone(), max_depth: r.renderer.params().max_depth.0, file_spp: r.prepared.spp, renderer: Box::new(r) })
 }
 
-/// Refuse, before anything large is allocated, a render whose estimated memory exceeds
-/// `limit` or, without one, the memory available ([`crate::memory`]).
-pub fn check_memory(prepared: &PreparedScene, config: &EstimatorConfig, limit: Option<u64>) -> Result<(), String> {
+/// What `config` would hold for `prepared`'s film: its estimate, with the bytes at least
+/// the film's own.
+pub fn memory_need(prepared: &PreparedScene, config: &EstimatorConfig) -> (u64, MemoryEstimate) {
     let camera = &prepared.scene.camera;
     let pixels = camera.width() as u64 * camera.height() as u64;
     let estimate = config.memory_estimate(pixels.min(u32::MAX as u64) as u32);
-    let bytes = estimate.bytes.max(pixels * 36);
-    let (available, source) = match limit {
+    (estimate.bytes.max(pixels * 36), estimate)
+}
+
+/// The memory a run may claim, `limit` or else what the machine has available
+/// ([`crate::memory`]), with how messages name it.
+pub fn memory_budget(limit: Option<u64>) -> (Option<u64>, &'static str) {
+    match limit {
         Some(l) => (Some(l), "--memory-limit"),
         None => (crate::memory::available_bytes(), "available memory"),
-    };
-    match available {
-        Some(a) if bytes > a => Err(format!(
+    }
+}
+
+/// Refuse, before anything large is allocated, a render whose estimated memory exceeds
+/// `limit` or, without one, the memory available.
+pub fn check_memory(prepared: &PreparedScene, config: &EstimatorConfig, limit: Option<u64>) -> Result<(), String> {
+    let camera = &prepared.scene.camera;
+    let (bytes, estimate) = memory_need(prepared, config);
+    match memory_budget(limit) {
+        (Some(a), source) if bytes > a => Err(format!(
             "{} would need about {} ({} at {}×{} is the largest part), more than the {} of {source}; lower {} or raise --memory-limit",
             config.kind(),
             crate::memory::human(bytes),
