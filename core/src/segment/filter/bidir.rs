@@ -257,17 +257,25 @@ impl Bidirectional<'_> {
         }
         let mut sum = 0.0;
         self.hood.grid.query(py, |i| {
-            let t = &self.nodes()[i as usize];
-            if t.delta || t.kind != NodeKind::Light || !(t.next.q > 0.0) || (own_only && i != own) {
-                return;
-            }
-            let k = self.hood.kernel_at(t, py, ny);
-            if k > 0.0 {
-                let p = if i == own { t.next.pdf as f64 } else { self.hood.bsdf_pdf(t, -dir, TransportMode::Importance) };
-                sum += k * t.next.q as f64 * p;
+            if !own_only || i == own {
+                sum += self.light_term(&self.nodes()[i as usize], py, ny, dir, i == own);
             }
         });
         sum * x.hit.ng.dot(dir).abs() as f64 / cos_y
+    }
+
+    /// One light node t's K(t → y) q_t p*_σ(−dir | t) for a segment along `dir` ending at
+    /// y = (`py`, `ny`) (its sampler's density if `own`); 0 for nodes that cannot draw it.
+    fn light_term(&self, t: &Node, py: Vec3, ny: Vec3, dir: Vec3, own: bool) -> f64 {
+        if t.delta || t.kind != NodeKind::Light || !(t.next.q > 0.0) {
+            return 0.0;
+        }
+        let k = self.hood.kernel_at(t, py, ny);
+        if !(k > 0.0) {
+            return 0.0;
+        }
+        let p = if own { t.next.pdf as f64 } else { self.hood.bsdf_pdf(t, -dir, TransportMode::Importance) };
+        k * t.next.q as f64 * p
     }
 
     /// D of a segment leaving node `x` along `dir` to `far`, and the part of it whose
@@ -394,19 +402,15 @@ impl Bidirectional<'_> {
         }
     }
 
-    /// Light node u's term in D_a (see [`Self::light_techniques`]): K(u → y_a) q_u
-    /// p*_σ(wo_a | u) |n_xa·ŝ_a| / |n_ya·ŝ_a|, for segment a from x_a (`start`) to y_a
-    /// (`centre`), `wo_a` pointing from y_a to x_a.
+    /// Light node u's term in D_a ([`Self::light_term`] converted as in
+    /// [`Self::light_techniques`]): K(u → y_a) q_u p*_σ(wo_a | u) |n_xa·ŝ_a| / |n_ya·ŝ_a|,
+    /// for segment a from x_a (`start`) to y_a (`centre`), `wo_a` pointing from y_a to x_a.
     fn light_instance(&self, u: &Node, centre: &Node, start: &Node, wo_a: Vec3) -> f64 {
         let cos_y = centre.hit.ng.dot(wo_a).abs() as f64;
-        if !(cos_y > 1e-7) || !(u.next.q > 0.0) || u.kind != NodeKind::Light || u.delta {
+        if !(cos_y > 1e-7) {
             return 0.0;
         }
-        let k = self.hood.kernel_at(u, centre.hit.p, centre.hit.ng);
-        if !(k > 0.0) {
-            return 0.0;
-        }
-        k * u.next.q as f64 * self.hood.bsdf_pdf(u, wo_a, TransportMode::Importance) * start.hit.ng.dot(wo_a).abs() as f64 / cos_y
+        self.light_term(u, centre.hit.p, centre.hit.ng, -wo_a, false) * start.hit.ng.dot(wo_a).abs() as f64 / cos_y
     }
 
     /// Node `index`'s row: L_e of its segment, the constant terms and the pairs.
