@@ -1,18 +1,28 @@
-//! The one accumulation film: per-pixel f64 sums of every pass's camera samples and
-//! splats, the pass count and the tallies of what was thrown away.
+//! The one accumulation film: per-pixel sums of every pass's camera samples and splats,
+//! the pass count and the tallies of what was thrown away.
 //!
 //! A pass is staged, then committed whole: an estimator's phases write the pass's camera
 //! samples ([`Film::set_camera_samples`]) and append its splats ([`Film::push_splats`]) in
 //! index order; its last phase calls [`Film::end_pass`] with the pass's splat factor
-//! (e.g. 1/M for M light paths), which adds the camera samples and then the splats, in
-//! the order they were staged, to the sums. A pass that never ends leaves the sums as
-//! they were, so a render interrupted mid-pass never holds a pixel with one sample fewer
-//! than its neighbours or splats without their normalisation.
+//! (e.g. 1/M for M light paths), which adds the camera samples and then the splats to the
+//! sums. A pass that never ends leaves the sums as they were, so a render interrupted
+//! mid-pass never holds a pixel with one sample fewer than its neighbours or splats
+//! without their normalisation.
 //!
-//! The image is the mean over passes, `sum / passes`. Sums are f64, so thousands of passes
-//! add without the drift f32 would show, and the staging order alone decides the bits:
-//! a host that maps chunks on any number of threads and reduces them in index order
-//! writes the same film as the serial runner.
+//! # Exact sums
+//! The image is the mean over passes, `sum / passes`. The sums are fixed-point integers,
+//! not floats: every camera sample and every scaled splat is rounded once, on its own, to
+//! a multiple of the quantum 2⁻⁶⁴ ([`QUANTUM_BITS`]), and added to a `u128` per channel.
+//! Integer addition is associative, so the sums do not depend on the order in which
+//! samples, splats, passes or whole films ([`Film::merge`]) are added: a render split
+//! into pass ranges on several machines and merged equals the single-process render bit
+//! for bit (docs/distributed.md). f64 sums could not promise that: (a + b) + c and
+//! a + (b + c) differ in the last bit.
+//!
+//! The range: a pixel's sum holds up to 2⁶⁴ ≈ 1.8·10¹⁹ (over all passes); a sample's
+//! part below 2⁻⁶⁵ ≈ 2.7·10⁻²⁰ is rounded away (round half up). A sum that would pass the
+//! top stays at the top and is tallied in [`Film::saturated`]. Radiance from 10⁻⁸ to 10⁸
+//! times the built-in box's renders linearly (`tests/tests/stability_extremes.rs`).
 //!
 //! A sample with a NaN, infinite or negative channel is never added: it counts as zero
 //! (the pass still counts) and is tallied in [`Film::discarded`], so an estimator bug shows
@@ -26,15 +36,20 @@ use crate::integrator::Splat;
 use crate::math;
 use crate::spectrum::Rgb;
 
+/// Bits of a sum below the binary point: a sum is an integer count of 2⁻⁶⁴.
+pub const QUANTUM_BITS: u32 = 64;
+const SCALE: f64 = (1u128 << QUANTUM_BITS) as f64;
+const INV_SCALE: f64 = 1.0 / SCALE;
+
 /// Accumulated radiance of a `width × height` image (pixel index `y·width + x`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
     width: u32,
     height: u32,
-    sum: Vec<[f64; 3]>,
+    /// Per pixel and channel, the sum in units of 2⁻⁶⁴ ([`QUANTUM_BITS`]).
+    sum: Vec<[u128; 3]>,
     passes: u32,
-    discarded: u64,
-    splats_outside: u64,
+    tallies: Tallies,
     /// The pass being staged: one camera sample per pixel (zero where no phase wrote one).
     camera: Vec<Rgb>,
     has_camera: bool,
@@ -42,21 +57,78 @@ pub struct Film {
     splats: Vec<Splat>,
 }
 
+/// What a film threw away or clamped, summed over its passes (and over merged films).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Tallies {
+    /// Samples and splats with a NaN, infinite or negative value.
+    pub discarded: u64,
+    /// Splats with finite positions outside the image.
+    pub splats_outside: u64,
+    /// Additions that would have passed a sum's top (the sum stayed at the top).
+    pub saturated: u64,
+}
+
+impl Tallies {
+    fn add(&mut self, o: &Tallies) {
+        self.discarded += o.discarded;
+        self.splats_outside += o.splats_outside;
+        self.saturated += o.saturated;
+    }
+}
+
+/// Why two films cannot be merged, or parts not assembled into a film.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FilmError {
+    /// The films' sizes differ.
+    Size {
+        /// This film's width and height.
+        this: (u32, u32),
+        /// The other film's.
+        other: (u32, u32),
+    },
+    /// The pass count would pass `u32::MAX`.
+    PassCount,
+    /// `sums` does not hold `width × height` pixels.
+    Pixels {
+        /// width × height.
+        expected: usize,
+        /// The sums given.
+        got: usize,
+    },
+}
+
+impl core::fmt::Display for FilmError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Size { this, other } => write!(f, "a {}x{} film cannot take a {}x{} one", this.0, this.1, other.0, other.1),
+            Self::PassCount => f.write_str("more than 2^32 - 1 passes"),
+            Self::Pixels { expected, got } => write!(f, "{got} pixel sums for {expected} pixels"),
+        }
+    }
+}
+
 impl Film {
     /// A black film with no passes. Allocates the sums and the staging buffer once.
     pub fn new(width: u32, height: u32) -> Self {
         let n = width as usize * height as usize;
-        Self {
-            width,
-            height,
-            sum: vec![[0.0; 3]; n],
-            passes: 0,
-            discarded: 0,
-            splats_outside: 0,
-            camera: vec![Rgb::ZERO; n],
-            has_camera: false,
-            splats: Vec::new(),
+        Self { width, height, sum: vec![[0; 3]; n], passes: 0, tallies: Tallies::default(), camera: vec![Rgb::ZERO; n], has_camera: false, splats: Vec::new() }
+    }
+
+    /// A film holding `passes` passes whose exact sums are `sums` (as [`Film::exact_sums`]
+    /// gave them): how a host reads back a stored partial film.
+    pub fn from_exact(width: u32, height: u32, sums: Vec<[u128; 3]>, passes: u32, tallies: Tallies) -> Result<Self, FilmError> {
+        let expected = width as usize * height as usize;
+        if sums.len() != expected {
+            return Err(FilmError::Pixels { expected, got: sums.len() });
         }
+        let mut film = Self::new(0, 0);
+        film.width = width;
+        film.height = height;
+        film.sum = sums;
+        film.camera = vec![Rgb::ZERO; expected];
+        film.passes = passes;
+        film.tallies = tallies;
+        Ok(film)
     }
 
     /// Image width in pixels.
@@ -81,18 +153,33 @@ impl Film {
 
     /// Samples and splats thrown away for a NaN, infinite or negative value.
     pub fn discarded(&self) -> u64 {
-        self.discarded
+        self.tallies.discarded
     }
 
     /// Splats with finite positions outside the image (dropped, not an error: a light
     /// path may connect to a lens point whose pixel lies off the film's edge).
     pub fn splats_outside(&self) -> u64 {
-        self.splats_outside
+        self.tallies.splats_outside
     }
 
-    /// The raw per-pixel sums.
-    pub fn sums(&self) -> &[[f64; 3]] {
+    /// Additions clamped at the top of a sum (2⁶⁴): 0 unless radiance is astronomical.
+    pub fn saturated(&self) -> u64 {
+        self.tallies.saturated
+    }
+
+    /// All tallies.
+    pub fn tallies(&self) -> Tallies {
+        self.tallies
+    }
+
+    /// The exact per-pixel sums, in units of 2⁻⁶⁴ ([`QUANTUM_BITS`]).
+    pub fn exact_sums(&self) -> &[[u128; 3]] {
         &self.sum
+    }
+
+    /// The per-pixel sums as f64 (each rounded once from the exact sum).
+    pub fn sums(&self) -> Vec<[f64; 3]> {
+        self.sum.iter().map(|s| s.map(|v| v as f64 * INV_SCALE)).collect()
     }
 
     /// Stage this pass's camera samples of `pixels` (`samples[i]` for pixel
@@ -117,9 +204,9 @@ impl Film {
         if self.has_camera {
             for (acc, v) in self.sum.iter_mut().zip(&mut self.camera) {
                 if v.is_valid_radiance() {
-                    add(acc, *v, 1.0);
+                    self.tallies.saturated += add(acc, *v, 1.0);
                 } else {
-                    self.discarded += 1;
+                    self.tallies.discarded += 1;
                 }
                 *v = Rgb::ZERO;
             }
@@ -132,12 +219,35 @@ impl Film {
         self.passes += 1;
     }
 
+    /// Add another film's passes to this one's (both must hold only committed passes of
+    /// disjoint pass ranges for the mean to mean anything). Exact: merging in any order
+    /// or grouping gives the same bits.
+    pub fn merge(&mut self, other: &Film) -> Result<(), FilmError> {
+        if (self.width, self.height) != (other.width, other.height) {
+            return Err(FilmError::Size { this: (self.width, self.height), other: (other.width, other.height) });
+        }
+        let passes = self.passes.checked_add(other.passes).ok_or(FilmError::PassCount)?;
+        for (a, b) in self.sum.iter_mut().zip(&other.sum) {
+            for c in 0..3 {
+                a[c] = match a[c].checked_add(b[c]) {
+                    Some(v) => v,
+                    None => {
+                        self.tallies.saturated += 1;
+                        u128::MAX
+                    }
+                };
+            }
+        }
+        self.passes = passes;
+        self.tallies.add(&other.tallies);
+        Ok(())
+    }
+
     /// Back to a black film with no passes and no tallies (the buffers are kept).
     pub fn clear(&mut self) {
-        self.sum.fill([0.0; 3]);
+        self.sum.fill([0; 3]);
         self.passes = 0;
-        self.discarded = 0;
-        self.splats_outside = 0;
+        self.tallies = Tallies::default();
         self.discard_staged();
     }
 
@@ -151,31 +261,54 @@ impl Film {
     fn add_splats(&mut self, splats: &[Splat], scale: f64) {
         for s in splats {
             if !s.value.is_valid_radiance() || !s.film.is_finite() {
-                self.discarded += 1;
+                self.tallies.discarded += 1;
                 continue;
             }
             let (x, y) = (math::floor(s.film.x), math::floor(s.film.y));
             if x < 0.0 || y < 0.0 || x >= self.width as f32 || y >= self.height as f32 {
-                self.splats_outside += 1;
+                self.tallies.splats_outside += 1;
                 continue;
             }
             let i = y as usize * self.width as usize + x as usize;
-            add(&mut self.sum[i], s.value, scale);
+            self.tallies.saturated += add(&mut self.sum[i], s.value, scale);
         }
     }
 
     /// The image: the mean over passes (black before the first pass).
     pub fn to_rgb_f32(&self) -> Vec<[f32; 3]> {
-        let inv = if self.passes == 0 { 0.0 } else { 1.0 / self.passes as f64 };
-        self.sum.iter().map(|s| [(s[0] * inv) as f32, (s[1] * inv) as f32, (s[2] * inv) as f32]).collect()
+        let inv = if self.passes == 0 { 0.0 } else { INV_SCALE / self.passes as f64 };
+        self.sum.iter().map(|s| s.map(|v| (v as f64 * inv) as f32)).collect()
     }
 }
 
+/// `v · scale` in units of the quantum, rounded half up; `None` past the top. `v · scale`
+/// must be finite and non-negative (callers check [`Rgb::is_valid_radiance`]).
 #[inline]
-fn add(acc: &mut [f64; 3], v: Rgb, scale: f64) {
-    acc[0] += v.r as f64 * scale;
-    acc[1] += v.g as f64 * scale;
-    acc[2] += v.b as f64 * scale;
+fn to_fixed(v: f64) -> Option<u128> {
+    // Scaling by a power of two is exact; `as` truncates toward zero (and saturates).
+    let x = v * SCALE;
+    if !(x < u128::MAX as f64) {
+        return None;
+    }
+    let n = x as u128;
+    // Below 2⁵³ both `n` and the fraction are exact in f64; above it x is an integer.
+    Some(if x - n as f64 >= 0.5 { n + 1 } else { n })
+}
+
+/// Add `v · scale` to a pixel's sums; returns how many channels saturated.
+#[inline]
+fn add(acc: &mut [u128; 3], v: Rgb, scale: f64) -> u64 {
+    let mut saturated = 0;
+    for (a, c) in acc.iter_mut().zip([v.r, v.g, v.b]) {
+        match to_fixed(c as f64 * scale).and_then(|n| a.checked_add(n)) {
+            Some(sum) => *a = sum,
+            None => {
+                *a = u128::MAX;
+                saturated += 1;
+            }
+        }
+    }
+    saturated
 }
 
 #[cfg(test)]
@@ -234,10 +367,11 @@ mod tests {
         assert_eq!(f.passes(), 1);
     }
 
-    /// The film's bits depend on the order splats are added: this is why hosts reduce in
-    /// chunk order, and why the determinism tests can detect a merge in completion order.
+    /// The sums are exact integers: the order of splats, and the grouping of passes into
+    /// merged films, leaves every bit unchanged. (With f64 sums the reversed order
+    /// differed in the last bit: this test failed on the film before issue 22.)
     #[test]
-    fn summation_order_is_visible_in_the_bits() {
+    fn summation_order_and_grouping_leave_the_bits_unchanged() {
         let splats: Vec<Splat> =
             (0..64).map(|i| Splat { film: Vec2::new(0.5, 0.5), value: Rgb::splat((1.0 + math::sin(i as f32 * 0.37) * 1e3).abs() * 1.000_123) }).collect();
         let mut forward = Film::new(1, 1);
@@ -247,6 +381,49 @@ mod tests {
         let reversed: Vec<Splat> = splats.iter().rev().copied().collect();
         backward.push_splats(&reversed);
         backward.end_pass(1.0 / 3.0);
-        assert_ne!(forward.sums()[0][0].to_bits(), backward.sums()[0][0].to_bits());
+        assert_eq!(forward.exact_sums(), backward.exact_sums());
+
+        // Passes 0..8 in one film against ((0..3) + (6..8)) + (3..6) merged.
+        let pass = |f: &mut Film, p: usize| {
+            f.set_camera_samples(0..2, &[Rgb::splat(0.1 * p as f32 + 1e-7), Rgb::new(3.3e-9, 1e5, 0.7)]);
+            f.push_splats(&splats[p * 8..p * 8 + 8]);
+            f.end_pass(1.0 / 7.0);
+        };
+        let mut whole = Film::new(2, 1);
+        (0..8).for_each(|p| pass(&mut whole, p));
+        let part = |r: core::ops::Range<usize>| {
+            let mut f = Film::new(2, 1);
+            r.for_each(|p| pass(&mut f, p));
+            f
+        };
+        let mut merged = part(0..3);
+        merged.merge(&part(6..8)).unwrap();
+        merged.merge(&part(3..6)).unwrap();
+        assert_eq!(merged, whole);
+        assert_eq!(merged.to_rgb_f32(), whole.to_rgb_f32());
+        assert!(matches!(merged.merge(&Film::new(1, 2)), Err(FilmError::Size { .. })));
+    }
+
+    /// Rounding happens once per sample, to 2⁻⁶⁴; the top saturates and is counted.
+    #[test]
+    fn fixed_point_rounds_per_sample_and_saturates_at_the_top() {
+        assert_eq!(to_fixed(1.0), Some(1 << 64));
+        assert_eq!(to_fixed(0.0), Some(0));
+        // Half a quantum rounds up, a third rounds away.
+        assert_eq!(to_fixed(0.5 * INV_SCALE), Some(1));
+        assert_eq!(to_fixed(INV_SCALE / 3.0), Some(0));
+        assert_eq!(to_fixed(1e19), Some((1e19f64 * SCALE) as u128));
+        assert_eq!(to_fixed(3.5e19), None);
+        let mut f = Film::new(1, 1);
+        for _ in 0..3 {
+            f.set_camera_samples(0..1, &[Rgb::new(7e18, 1.0, 0.0)]);
+            f.end_pass(1.0);
+        }
+        assert_eq!(f.saturated(), 1, "the third 7e18 passes 2^64");
+        assert_eq!(f.exact_sums()[0][0], u128::MAX);
+        assert_eq!(f.to_rgb_f32()[0][1], 1.0);
+        let restored = Film::from_exact(1, 1, f.exact_sums().to_vec(), f.passes(), f.tallies()).unwrap();
+        assert_eq!(restored, f);
+        assert!(Film::from_exact(2, 1, vec![[0; 3]], 1, Tallies::default()).is_err());
     }
 }

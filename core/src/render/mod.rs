@@ -43,7 +43,7 @@ pub use config::{
     ConfigError, DEFAULT_FILTER_SEGMENTS, EstimatorConfig, EstimatorKind, FilterConfig, FilterReuse, FilterSide, KernelChoice, LvcbptConfig, MAX_DATASET,
     MAX_FILTER_SEGMENTS, MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig, SegmentAlgorithm, SegmentConfig, SpcbptConfig,
 };
-pub use film::Film;
+pub use film::{Film, FilmError, QUANTUM_BITS, Tallies};
 pub use renderer::Renderer;
 
 use alloc::vec::Vec;
