@@ -286,7 +286,7 @@ fn drive(r: &mut (dyn Phased<ember_cli::accel::Accel> + Sync + Send), scene: &Pr
     let ctx = Context { scene: &scene.scene, tracer: &scene.accel };
     let start = Instant::now();
     let cpu = cpu_seconds();
-    let s = driver::render(&mut logged, &ctx, &mut film, Limits { spp, deadline: None, interrupt: None }, config, start).expect("render");
+    let s = driver::render(&mut logged, &ctx, &mut film, Limits { spp, deadline: None, interrupt: None, first_pass: 0 }, config, start).expect("render");
     let cpu = cpu_seconds() - cpu;
     let (idle, worst_wait) = logged.tail_idle(threads, spp);
     (Run { wall: s.render_seconds, cpu, idle, worst_wait, merge: logged.reduce_seconds / spp.max(1) as f64 }, film)

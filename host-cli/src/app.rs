@@ -9,12 +9,12 @@ use std::fmt;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use crate::cli::{Cli, Command, CompareArgs, ConvergenceArgs, DEFAULT_RESOLUTION, RenderArgs};
+use crate::cli::{Cli, Command, CompareArgs, ConvergenceArgs, DEFAULT_RESOLUTION, MergeArgs, RenderArgs};
 use crate::convergence::{self, ConvergenceSetup, Reference};
 use crate::driver::{DriverConfig, DriverError, Limits, RenderSummary};
 use crate::image_io::{self, ImageError};
 use crate::metrics::{self, ErrorMetrics};
-use crate::{estimators, suite};
+use crate::{distributed, estimators, suite};
 use ember_core::render::Film;
 
 /// Everything a command can fail with; each message says what to do or which file.
@@ -69,6 +69,23 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
             Ok(())
         }
         Command::Convergence(args) => run_convergence(args),
+        Command::Merge(args) => {
+            let (header, exr, png) = merge(args)?;
+            let t = header.tallies;
+            println!(
+                "merged     {} parts: {} passes of {} with {}, {}x{}, seed {}",
+                args.parts.len(),
+                header.total,
+                header.scene,
+                header.estimator,
+                header.width,
+                header.height,
+                header.seed
+            );
+            println!("discarded  {} samples (NaN, infinite or negative); {} clamped sums", t.discarded, t.saturated);
+            println!("wrote      {} and {}", exr.display(), png.display());
+            Ok(())
+        }
         Command::Suite(args) => {
             let threads = crate::cli::thread_count(args.threads);
             let results = suite::run(args, threads).map_err(AppError::Estimator)?;
@@ -178,7 +195,10 @@ pub struct RenderReport {
     pub seed: u64,
     pub summary: RenderSummary,
     pub exr: PathBuf,
-    pub png: PathBuf,
+    /// The PNG beside the EXR (none for a partial image).
+    pub png: Option<PathBuf>,
+    /// A split render's share: the passes the partial image holds, of the total.
+    pub partial: Option<(crate::distributed::PassRange, u32)>,
 }
 
 /// Something that renders passes into a film: the core's estimators
@@ -192,6 +212,10 @@ pub trait Render {
     fn memory_report(&self) -> Vec<String> {
         Vec::new()
     }
+    /// What a partial image records about the render (`None`: cannot be split).
+    fn identity(&self) -> Option<crate::distributed::RenderIdentity> {
+        None
+    }
 }
 
 impl Render for estimators::CoreRenderer {
@@ -203,6 +227,9 @@ impl Render for estimators::CoreRenderer {
     }
     fn memory_report(&self) -> Vec<String> {
         estimators::CoreRenderer::memory_report(self)
+    }
+    fn identity(&self) -> Option<crate::distributed::RenderIdentity> {
+        Some(estimators::CoreRenderer::identity(self))
     }
 }
 
@@ -224,8 +251,15 @@ impl fmt::Debug for Built {
 
 /// `ember render` with the renderer built by `make` (the estimator wiring, or a test's).
 pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOnce(&RenderArgs) -> Result<Built, String>) -> Result<RenderReport, AppError> {
-    // Fail early on what needs no work.
-    let (exr, png) = args.output_paths().map_err(AppError::Output)?;
+    // Fail early on what needs no work. A split render's range needs only the options.
+    let split = match args.spp {
+        Some(total) => distributed::requested_range(&args.split, total).map_err(AppError::Output)?,
+        None => None,
+    };
+    let (mut exr, png) = args.output_paths().map_err(AppError::Output)?;
+    if let Some((range, task)) = split {
+        exr = distributed::expand_output(&exr, range, task).map_err(AppError::Output)?;
+    }
     if let Some(dir) = exr.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir()) {
         return Err(AppError::Output(format!("output directory '{}' does not exist", dir.display())));
     }
@@ -234,6 +268,10 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     let built = make(args).map_err(AppError::Estimator)?;
     let mut renderer = built.renderer;
     let (width, height) = renderer.size();
+    let identity = match split {
+        Some(_) => Some(renderer.identity().ok_or_else(|| AppError::Estimator("this renderer cannot be split into pass ranges".into()))?),
+        None => None,
+    };
 
     // Render passes until the spp or time limit.
     let mut film = Film::new(width, height);
@@ -243,15 +281,19 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         (None, None, Some(n)) => n,
         _ => args.spp_limit(),
     };
-    let limits = Limits { spp, deadline, interrupt: Some(crate::interrupt::flag()) };
+    let (first_pass, end) = split.map_or((0, spp), |(r, _)| (r.start, r.end));
+    let limits = Limits { spp: end, deadline, interrupt: Some(crate::interrupt::flag()), first_pass };
     let config = DriverConfig { progress, ..DriverConfig::with_threads(args.thread_count()) };
     if progress && !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
         // A log's first line: what is being rendered and until when.
-        let until = match (args.time, spp) {
+        let mut until = match (args.time, spp) {
             (Some(t), u32::MAX) => format!("for {t} s"),
             (Some(t), n) => format!("{n} passes or {t} s"),
             (None, n) => format!("{n} passes"),
         };
+        if let Some((r, _)) = split {
+            until = format!("passes {r} of {until}");
+        }
         eprintln!("render: {} with {}, {width}x{height}, {until}, {} threads", built.scene, args.estimator.name(), config.threads);
     }
     let summary = renderer.render(&mut film, limits, config, start).map_err(AppError::Driver)?;
@@ -261,13 +303,61 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     for line in renderer.memory_report() {
         eprintln!("{line}");
     }
+    if film.saturated() > 0 {
+        eprintln!("warning: {} additions passed the film's largest sum (2^64 per pixel) and were clamped", film.saturated());
+    }
 
-    // Write the images.
+    // Write the images: a split render's partial image (what it holds: time limits and
+    // interrupts may stop it early), else the EXR and the PNG.
+    let base = RenderReport {
+        scene: built.scene,
+        estimator: args.estimator.name(),
+        width,
+        height,
+        max_depth: built.max_depth,
+        seed: args.seed,
+        summary,
+        exr: exr.clone(),
+        png: None,
+        partial: None,
+    };
+    if let (Some(identity), Some((range, _))) = (identity, split) {
+        let held = distributed::PassRange { start: range.start, end: range.start + film.passes() };
+        let header = distributed::PartialHeader {
+            program: distributed::program_version(),
+            scene: identity.scene,
+            scene_hash: identity.scene_hash,
+            estimator: identity.estimator,
+            config: identity.config,
+            seed: identity.seed,
+            width,
+            height,
+            passes: held,
+            total: spp,
+            tallies: film.tallies(),
+        };
+        distributed::write_partial(&exr, &header, &film).map_err(AppError::Image)?;
+        return Ok(RenderReport { partial: Some((held, spp)), ..base });
+    }
     let image = film.to_rgb_f32();
     image_io::write_exr(&exr, width, height, &image).map_err(AppError::Image)?;
     image_io::write_png(&png, width, height, &image, args.exposure).map_err(AppError::Image)?;
+    Ok(RenderReport { png: Some(png), ..base })
+}
 
-    Ok(RenderReport { scene: built.scene, estimator: args.estimator.name(), width, height, max_depth: built.max_depth, seed: args.seed, summary, exr, png })
+/// `ember merge`: check the parts, merge them, write the EXR and the PNG; returns the
+/// merged header (passes 0..total) and the paths written.
+pub fn merge(args: &MergeArgs) -> Result<(distributed::PartialHeader, PathBuf, PathBuf), AppError> {
+    let (exr, png) = crate::cli::output_paths(&args.output).map_err(AppError::Output)?;
+    // Never overwrite an input.
+    if let Some(part) = args.parts.iter().find(|p| same_file(&exr, p) || same_file(&png, p)) {
+        return Err(AppError::Output(format!("output '{}' is one of the parts being merged; choose another file", part.display())));
+    }
+    let (header, film) = distributed::merge_parts(&args.parts).map_err(AppError::Output)?;
+    let image = film.to_rgb_f32();
+    image_io::write_exr(&exr, header.width, header.height, &image).map_err(AppError::Image)?;
+    image_io::write_png(&png, header.width, header.height, &image, args.exposure).map_err(AppError::Image)?;
+    Ok((header, exr, png))
 }
 
 /// Do two paths name the same file (the same path, or the same existing file)?
@@ -296,7 +386,11 @@ impl fmt::Display for RenderReport {
         writeln!(f, "samples    {}samples/s ({}samples)", si(s.samples_per_second), si(s.stats.samples as f64))?;
         writeln!(f, "rays       {}rays/s ({}rays)", si(s.rays_per_second), si(s.stats.rays as f64))?;
         writeln!(f, "discarded  {} samples (NaN, infinite or negative)", s.discarded)?;
-        write!(f, "wrote      {} and {}", self.exr.display(), self.png.display())
+        match (&self.partial, &self.png) {
+            (Some((held, total)), _) => write!(f, "wrote      {} (partial: passes {held} of {total}; `ember merge` the parts)", self.exr.display()),
+            (None, Some(png)) => write!(f, "wrote      {} and {}", self.exr.display(), png.display()),
+            (None, None) => write!(f, "wrote      {}", self.exr.display()),
+        }
     }
 }
 

@@ -33,6 +33,49 @@ pub enum Command {
     /// Every estimator on every suite scene at equal time, threads and seeds; writes a
     /// markdown table and the plots.
     Suite(SuiteArgs),
+    /// Merge the partial images of a split render (`render --passes` or `--task-index`)
+    /// into the final image: checks that the parts belong together and cover every pass
+    /// once; the result equals a single-process render bit for bit (docs/distributed.md).
+    Merge(MergeArgs),
+}
+
+/// Options of `ember merge`.
+#[derive(Args, Debug, Clone, PartialEq)]
+pub struct MergeArgs {
+    /// The partial images (EXR files written by `render --passes` or `--task-index`).
+    #[arg(value_name = "PARTS", required = true)]
+    pub parts: Vec<PathBuf>,
+    /// Output EXR file; an sRGB PNG with the same stem is written beside it.
+    #[arg(short, long, value_name = "FILE", default_value = "out.exr")]
+    pub output: PathBuf,
+    /// Exposure of the PNG in stops (as for `render`).
+    #[arg(long, value_name = "STOPS", default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
+    pub exposure: f32,
+}
+
+/// Render one share of a split render (docs/distributed.md): a range of passes of a fixed
+/// total, written as a partial image that `ember merge` combines.
+#[derive(Args, Debug, Clone, Default, PartialEq)]
+pub struct SplitArgs {
+    /// Render only passes A, A+1, …, B−1 (half-open: B is not rendered) of the --spp
+    /// total, and write a partial image (exact sums and a header) for `ember merge`.
+    #[arg(long, value_name = "A..B", value_parser = crate::distributed::PassRange::parse, requires = "spp",
+          conflicts_with_all = ["task_index", "task_from_env"])]
+    pub passes: Option<crate::distributed::PassRange>,
+    /// Render task I of --task-count equal shares of the --spp passes (the first
+    /// total mod N tasks get one pass more) as a partial image.
+    #[arg(long, value_name = "I", requires_all = ["task_count", "spp"], conflicts_with = "task_from_env")]
+    pub task_index: Option<u32>,
+    /// The number of tasks the --spp passes are split into (with --task-index, or with
+    /// --task-from-env under Kubernetes).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub task_count: Option<u32>,
+    /// Take the task index from the scheduler: Slurm's SLURM_ARRAY_TASK_ID −
+    /// SLURM_ARRAY_TASK_MIN (count SLURM_ARRAY_TASK_COUNT), or Kubernetes'
+    /// JOB_COMPLETION_INDEX (count from --task-count). Without this flag the environment
+    /// is never read: a render inside an array job stays a whole render.
+    #[arg(long, requires = "spp")]
+    pub task_from_env: bool,
 }
 
 /// Options of `ember convergence`.
@@ -237,8 +280,12 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub defines: Defines,
 
+    #[command(flatten)]
+    pub split: SplitArgs,
+
     /// Output EXR file (linear RGB, 32-bit float); an sRGB PNG with the same stem is
-    /// written beside it.
+    /// written beside it. A split render writes only the partial EXR; `{task}` in the
+    /// name becomes the task index, `{passes}` the range (e.g. `8-16`).
     #[arg(short, long, value_name = "FILE", default_value = "out.exr")]
     pub output: PathBuf,
     /// Refuse a render whose estimated memory exceeds this many bytes (suffixes K, M, G,

@@ -188,7 +188,7 @@ pub fn measure(
                     // The run's own clock: it started `spent` ago as far as it knows.
                     let now = Instant::now();
                     let start = now.checked_sub(run.spent).unwrap_or(now);
-                    let limits = Limits { spp: u32::MAX, deadline: Some(start + target_duration), interrupt: None };
+                    let limits = Limits { spp: u32::MAX, deadline: Some(start + target_duration), interrupt: None, first_pass: 0 };
                     run.renderer.render(&mut run.film, limits, config, start).map_err(|e| e.to_string())?;
                     run.spent += now.elapsed();
                 }

@@ -143,12 +143,19 @@ fn thread_pool(threads: usize, name: &'static str) -> Result<rayon::ThreadPool, 
         .map_err(|e| DriverError::ThreadPool(e.to_string()))
 }
 
-/// When to stop.
+/// Which passes to render, and when to stop.
 #[derive(Clone, Copy, Debug)]
 pub struct Limits {
-    /// Total passes (samples per pixel) the film should hold when the call returns;
-    /// a film that already holds some continues from there.
+    /// The index after the last pass to render: with `first_pass` 0, the total passes
+    /// (samples per pixel) the film should hold when the call returns. A film that
+    /// already holds some continues from there.
     pub spp: u32,
+    /// The first pass's index: 0 for a whole render, A for the range A..B of a split one
+    /// (docs/distributed.md). The film then holds passes `first_pass ..
+    /// first_pass + film.passes()`; an estimator that carries state across passes
+    /// replays passes `0..first_pass` first ([`Phased::replay_pass`]), when the film is
+    /// still empty.
+    pub first_pass: u32,
     /// Wall-clock deadline (checked between passes).
     pub deadline: Option<Instant>,
     /// Set to stop after the pass in progress (checked before every pass).
@@ -248,6 +255,17 @@ where
     // Setup not yet run (a renderer built without `run_setup`) counts as setup time.
     let setup_start = Instant::now();
     pool.install(|| run_pending(est, ctx, &mut Film::new(0, 0), &mut buffers, &mut times));
+    // A range that starts past 0 needs the state earlier passes leave behind (SPCBPT's
+    // reuse FIFOs): replay those passes' state-carrying phases, counted as setup.
+    if film.passes() == 0 && limits.first_pass > 0 && est.replay_pass(0) {
+        pool.install(|| {
+            run_pending(est, ctx, &mut Film::new(0, 0), &mut buffers, &mut times);
+            for pass in 1..limits.first_pass {
+                est.replay_pass(pass);
+                run_pending(est, ctx, &mut Film::new(0, 0), &mut buffers, &mut times);
+            }
+        });
+    }
     progress.setup_done(setup_start.elapsed().as_secs_f64());
 
     let loop_start = Instant::now();
@@ -257,7 +275,7 @@ where
     times.clear();
     // Continue a film that already holds passes (checkpointed renders), so pass indices,
     // and with them the random streams, never repeat.
-    let first_pass = film.passes();
+    let first_pass = limits.first_pass.saturating_add(film.passes());
     let mut interrupted = false;
     for pass in first_pass..limits.spp {
         if limits.interrupted() {
@@ -307,7 +325,7 @@ impl Progress {
         let by_time = limits.deadline.filter(|_| limits.spp == u32::MAX);
         let (len, template) = match by_time {
             Some(d) => (d.saturating_duration_since(program_start).as_millis() as u64, "{elapsed_precise} [{wide_bar}] {msg} (ETA {eta})"),
-            None => (limits.spp as u64, "{elapsed_precise} [{wide_bar}] {pos}/{len} passes (ETA {eta})"),
+            None => (limits.spp.saturating_sub(limits.first_pass) as u64, "{elapsed_precise} [{wide_bar}] {pos}/{len} passes (ETA {eta})"),
         };
         let bar = ProgressBar::with_draw_target(Some(len), target);
         if let Ok(style) = ProgressStyle::with_template(template) {

@@ -25,6 +25,10 @@ pub struct PreparedScene {
     /// The sample count the scene file asks for, if any.
     pub spp: Option<u32>,
     pub warnings: Vec<String>,
+    /// FNV-1a of the built scene's full description (camera, materials, lights, every
+    /// triangle and sphere): equal for equal scenes however they were written, different
+    /// when any value that reaches the renderer differs (split renders check it).
+    pub hash: u64,
 }
 
 /// Build the built-in scene `--builtin` names (the Cornell box by default) at the requested resolution.
@@ -87,8 +91,11 @@ fn finish(
     if scene.light_selection.is_none() {
         notes.push("the scene has no light: the image will be black".into());
     }
+    let mut hasher = crate::distributed::Fnv::default();
+    // Writing to the hasher cannot fail.
+    let _ = std::fmt::Write::write_fmt(&mut hasher, format_args!("{scene:?}{geometry:?}"));
     let accel = Accel::new(geometry);
-    PreparedScene { name, scene, accel, max_depth, spp, warnings: notes }
+    PreparedScene { name, scene, accel, max_depth, spp, warnings: notes, hash: hasher.0 }
 }
 
 /// One of the core's estimators bound to a prepared scene, its setup (SPCBPT's and
@@ -97,6 +104,8 @@ fn finish(
 pub struct CoreRenderer {
     pub prepared: PreparedScene,
     pub renderer: Renderer,
+    /// The configuration it was built with.
+    pub config: EstimatorConfig,
     /// Seconds per setup phase.
     pub setup_times: PhaseTimes,
     /// Seconds the whole setup took.
@@ -124,7 +133,7 @@ impl CoreRenderer {
         let start = Instant::now();
         let ctx = Context { scene: &prepared.scene, tracer: &prepared.accel };
         let setup_times = driver::run_setup(&mut renderer, &ctx, threads).map_err(|e| e.to_string())?;
-        Ok(Self { prepared, renderer, setup_times, setup_seconds: start.elapsed().as_secs_f64() })
+        Ok(Self { prepared, renderer, config, setup_times, setup_seconds: start.elapsed().as_secs_f64() })
     }
 
     pub fn kind(&self) -> EstimatorKind {
@@ -199,6 +208,18 @@ impl CoreRenderer {
             pass.size_bytes() as f64 / pixels,
             pass.r
         )]
+    }
+
+    /// What a partial image of this render records about it.
+    pub fn identity(&self) -> crate::distributed::RenderIdentity {
+        let params = self.renderer.params();
+        crate::distributed::RenderIdentity {
+            scene: self.prepared.name.clone(),
+            scene_hash: self.prepared.hash,
+            estimator: self.kind().name().to_string(),
+            config: format!("{:?}; max depth {}, heuristic {:?}, rr depth {}", self.config, params.max_depth.0, params.heuristic, params.rr_depth),
+            seed: params.seed,
+        }
     }
 
     /// Render passes into `film` (see [`driver::render`]).

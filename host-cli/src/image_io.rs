@@ -39,7 +39,7 @@ pub enum ImageErrorKind {
 }
 
 impl ImageError {
-    fn new(path: &Path, kind: ImageErrorKind) -> Self {
+    pub fn new(path: &Path, kind: ImageErrorKind) -> Self {
         Self { path: path.to_path_buf(), kind }
     }
 }
@@ -133,6 +133,18 @@ pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
     let file = File::open(path).map_err(|e| fail(e.into()))?;
     let len = file.metadata().map_err(|e| fail(e.into()))?.len();
     decode_exr(std::io::BufReader::new(file), len).map_err(fail)
+}
+
+/// Every layer, channel and attribute of an EXR file (the partial images of split
+/// renders, `crate::distributed`), with the same header checks as [`read_exr`].
+pub fn read_exr_any(path: &Path) -> Result<exr::image::FlatImage, ImageError> {
+    use exr::prelude::*;
+    let fail = |e: exr::error::Error| ImageError::new(path, ImageErrorKind::Exr(e));
+    let file = File::open(path).map_err(|e| fail(e.into()))?;
+    let len = file.metadata().map_err(|e| fail(e.into()))?.len();
+    let mut reader = std::io::BufReader::new(file);
+    check_exr_header(&mut reader, len).map_err(fail)?;
+    read().no_deep_data().largest_resolution_level().all_channels().all_layers().all_attributes().non_parallel().from_buffered(reader).map_err(fail)
 }
 
 /// [`read_exr`] on bytes already in memory (the fuzz target's entry point); errors name

@@ -8,6 +8,7 @@ pub mod accel;
 pub mod app;
 pub mod cli;
 pub mod convergence;
+pub mod distributed;
 pub mod driver;
 pub mod estimators;
 pub mod image_io;

@@ -79,7 +79,7 @@ fn render_blocks(scene: &str, estimator: EstimatorKind, passes: u32) -> BlockSta
     let mut stats = vec![[MeanVar::default(); 3]; BLOCKS];
     let config = DriverConfig { progress: false, ..DriverConfig::with_threads(2) };
     for pass in 0..passes {
-        renderer.render(&mut film, Limits { spp: pass + 1, deadline: None, interrupt: None }, config, Instant::now()).expect("render");
+        renderer.render(&mut film, Limits { spp: pass + 1, deadline: None, interrupt: None, first_pass: 0 }, config, Instant::now()).expect("render");
         let mut block = vec![[0.0f64; 3]; BLOCKS];
         for (i, (now, before)) in film.sums().iter().zip(previous.iter_mut()).enumerate() {
             let (x, y) = (i as u32 % W, i as u32 / W);

@@ -101,7 +101,7 @@ fn render(estimator: EstimatorKind, passes: u32) -> Film {
     let mut r = CoreRenderer::with_config(prepared, estimator.default_config(), -1, 3, 2).expect("renderer");
     let mut film = Film::new(64, 48);
     let config = DriverConfig { progress: false, ..DriverConfig::with_threads(2) };
-    r.render(&mut film, Limits { spp: passes, deadline: None, interrupt: None }, config, Instant::now()).expect("render");
+    r.render(&mut film, Limits { spp: passes, deadline: None, interrupt: None, first_pass: 0 }, config, Instant::now()).expect("render");
     film
 }
 

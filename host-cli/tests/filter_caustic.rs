@@ -45,7 +45,7 @@ fn render(config: EstimatorConfig, passes: u32) -> Film {
     let mut r = CoreRenderer::with_config(prepared, config, -1, 17, 2).expect("renderer");
     let mut film = Film::new(W as u32, H as u32);
     let driver = DriverConfig { progress: false, ..DriverConfig::with_threads(2) };
-    r.render(&mut film, Limits { spp: passes, deadline: None, interrupt: None }, driver, Instant::now()).expect("render");
+    r.render(&mut film, Limits { spp: passes, deadline: None, interrupt: None, first_pass: 0 }, driver, Instant::now()).expect("render");
     film
 }
 

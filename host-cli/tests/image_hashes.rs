@@ -93,7 +93,7 @@ fn render_hash(scene: &str, estimator: EstimatorKind, threads: usize) -> u64 {
     let mut renderer = CoreRenderer::with_config(prepared(scene), config, depth(scene), SEED, threads).expect("valid configuration");
     let mut film = Film::new(renderer.width(), renderer.height());
     let driver = DriverConfig { progress: false, ..DriverConfig::with_threads(threads) };
-    renderer.render(&mut film, Limits { spp: PASSES, deadline: None, interrupt: None }, driver, Instant::now()).expect("render");
+    renderer.render(&mut film, Limits { spp: PASSES, deadline: None, interrupt: None, first_pass: 0 }, driver, Instant::now()).expect("render");
     film_hash(&film)
 }
 

@@ -72,7 +72,7 @@ fn render_with_the_cli(scene: &str, estimator: EstimatorKind) -> LinearImage {
     let mut renderer = CoreRenderer::new(prepared, estimator, -1, SEED).expect("renderer");
     let mut film = Film::new(SIZE, SIZE);
     let config = DriverConfig { progress: false, ..DriverConfig::with_threads(2) };
-    renderer.render(&mut film, Limits { spp: PASSES, deadline: None, interrupt: None }, config, Instant::now()).expect("render");
+    renderer.render(&mut film, Limits { spp: PASSES, deadline: None, interrupt: None, first_pass: 0 }, config, Instant::now()).expect("render");
     LinearImage { width: SIZE as usize, height: SIZE as usize, pixels: film.to_rgb_f32() }
 }
 

@@ -331,6 +331,16 @@ pub trait Phased<Q: RayQuery + ?Sized> {
     /// Reduce the phase's outputs, given in chunk order, into the estimator's state and
     /// the film; advances to the next phase.
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film);
+    /// Queue only those phases of pass `pass` that carry state into later passes, and
+    /// nothing that touches the film: how a render that starts at a later pass (one task
+    /// of a split render, docs/distributed.md) reaches the state a render from pass 0
+    /// holds there. Returns false, queueing nothing, when the estimator carries nothing
+    /// from one pass to the next, which is the default and true of every estimator but
+    /// SPCBPT with reuse (its FIFOs of earlier passes' light vertices).
+    fn replay_pass(&mut self, pass: u32) -> bool {
+        let _ = pass;
+        false
+    }
 }
 
 /// Where an estimator stands in its schedule of `setup` setup phases and `pass` phases
@@ -340,7 +350,10 @@ pub struct Cursor {
     setup: u8,
     per_pass: u8,
     state: CursorState,
-    queued: Option<u32>,
+    /// A pass queued behind pending setup, with the phases it runs.
+    queued: Option<(u32, u8)>,
+    /// Phases the current pass runs: `per_pass`, or fewer when it is replayed.
+    runs: u8,
 }
 
 /// A position in a schedule.
@@ -362,7 +375,7 @@ impl Cursor {
     /// A schedule of `setup` setup phases, then `per_pass` phases in every pass.
     pub fn new(setup: u8, per_pass: u8) -> Self {
         let state = if setup > 0 { CursorState::At(Stage::Setup(0)) } else { CursorState::Idle };
-        Self { setup, per_pass, state, queued: None }
+        Self { setup, per_pass, state, queued: None, runs: per_pass }
     }
     /// The pending stage, if any.
     pub fn stage(&self) -> Option<Stage> {
@@ -373,9 +386,20 @@ impl Cursor {
     }
     /// Queue pass `pass` (after setup, if setup is still pending).
     pub fn start_pass(&mut self, pass: u32) {
+        self.queue(pass, self.per_pass);
+    }
+    /// Queue the first `phases` phases of pass `pass` only (a replay: its end is not the
+    /// end of a pass, so [`Cursor::advance`] never reports it).
+    pub fn start_replay(&mut self, pass: u32, phases: u8) {
+        self.queue(pass, phases.min(self.per_pass));
+    }
+    fn queue(&mut self, pass: u32, runs: u8) {
         match self.state {
-            CursorState::At(Stage::Setup(_)) => self.queued = Some(pass),
-            _ if self.per_pass > 0 => self.state = CursorState::At(Stage::Pass(pass, 0)),
+            CursorState::At(Stage::Setup(_)) => self.queued = Some((pass, runs)),
+            _ if runs > 0 => {
+                self.state = CursorState::At(Stage::Pass(pass, 0));
+                self.runs = runs;
+            }
             _ => {}
         }
     }
@@ -388,18 +412,18 @@ impl Cursor {
             }
             CursorState::At(Stage::Setup(_)) => {
                 self.state = CursorState::Idle;
-                if let Some(p) = self.queued.take() {
-                    self.start_pass(p);
+                if let Some((p, runs)) = self.queued.take() {
+                    self.queue(p, runs);
                 }
                 false
             }
-            CursorState::At(Stage::Pass(p, i)) if i + 1 < self.per_pass => {
+            CursorState::At(Stage::Pass(p, i)) if i + 1 < self.runs => {
                 self.state = CursorState::At(Stage::Pass(p, i + 1));
                 false
             }
             CursorState::At(Stage::Pass(..)) => {
                 self.state = CursorState::Idle;
-                true
+                self.runs == self.per_pass
             }
             CursorState::Idle => false,
         }

@@ -189,6 +189,12 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
             Self::BidirectionalFilter(f) => f.map(ctx, phase, out),
         }
     }
+    fn replay_pass(&mut self, pass: u32) -> bool {
+        match self {
+            Self::Spcbpt(s) => Phased::<Q>::replay_pass(&mut **s, pass),
+            _ => false,
+        }
+    }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         match self {
             Self::OnePhase(o) => o.reduce(ctx, phase, outputs, film),

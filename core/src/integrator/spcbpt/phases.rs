@@ -147,6 +147,17 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
         self.cursor.start_pass(pass);
     }
 
+    /// With reuse, each pass's light-path phase pushes light vertices into FIFOs that
+    /// later passes connect to: replaying that phase alone (its tracing and its
+    /// reduction, no splats and no camera samples) rebuilds them exactly.
+    fn replay_pass(&mut self, pass: u32) -> bool {
+        if self.config.reuse == 0 {
+            return false;
+        }
+        self.cursor.start_replay(pass, 1);
+        true
+    }
+
     fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput) {
         let (scene, tracer, params) = (ctx.scene, ctx.tracer, &self.params);
         let items = out.items.clone();

@@ -1,0 +1,422 @@
+//! One image across many machines (docs/distributed.md): pass ranges, scheduler task
+//! indices, partial images and their merge.
+//!
+//! Passes are independent: every random number derives from (seed, pixel or path,
+//! sample, dimension, pass), so passes A..B rendered anywhere are the passes A..B of a
+//! whole render. The film's sums are exact integers ([`Film`]), so adding the parts'
+//! sums in any order gives the whole render's sums bit for bit.
+//!
+//! # The partial image
+//! An EXR file, one layer, the render's resolution:
+//! - `R`, `G`, `B` (f32): the part's own mean, for a look at one task's output;
+//! - `sum.R.w0` … `sum.R.w3` and the same for G and B (32-bit UINT, ZIP-compressed): the
+//!   film's exact per-pixel sums, each a `u128` count of 2⁻⁶⁴ split into four 32-bit
+//!   words, w0 the least significant. Mean = sum · 2⁻⁶⁴ / passes in f64 (what
+//!   `Film::to_rgb_f32` computes);
+//! - text attributes `ember.*` (see [`PartialHeader`]): the format and program version,
+//!   the scene's name and hash, the estimator and its configuration, the seed, the pass
+//!   range held, the total and the film's tallies.
+//!
+//! A task writes its part to a temporary name and renames it when complete, so a task
+//! that dies leaves no file `merge` would accept, and a re-run writes the same bytes.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use ember_core::render::{Film, QUANTUM_BITS, Tallies};
+
+use crate::image_io::{self, ImageError, ImageErrorKind};
+
+/// The partial-image format's name and version (`ember.format`).
+pub const FORMAT: &str = "ember partial film 1";
+
+/// This program's version and build (`ember.program`): parts from different builds are
+/// never merged, since any code change may change the passes' bits.
+pub fn program_version() -> String {
+    format!("ember {} ({})", env!("CARGO_PKG_VERSION"), env!("EMBER_BUILD"))
+}
+
+/// Passes `start..end` (half-open).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub struct PassRange {
+    pub start: u32,
+    pub end: u32,
+}
+
+impl PassRange {
+    /// `A..B` with A < B.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let (a, b) = text.split_once("..").ok_or_else(|| format!("'{text}' is not a range A..B (half-open: passes A to B-1)"))?;
+        let num = |t: &str| t.trim().parse::<u32>().map_err(|_| format!("'{text}': '{t}' is not a pass index (0 to 4294967295)"));
+        let (start, end) = (num(a)?, num(b)?);
+        if start >= end {
+            return Err(format!("'{text}' is empty: need A < B (passes A to B-1)"));
+        }
+        Ok(Self { start, end })
+    }
+
+    /// Number of passes.
+    pub fn len(&self) -> u32 {
+        self.end - self.start
+    }
+
+    /// No passes.
+    pub fn is_empty(&self) -> bool {
+        self.end <= self.start
+    }
+
+    /// Share `index` of `total` passes split into `count` tasks: ⌊total/count⌋ passes
+    /// each, the first total mod count tasks one more, in task order.
+    pub fn of_task(index: u32, count: u32, total: u32) -> Result<Self, String> {
+        if count == 0 || index >= count {
+            return Err(format!("task index {index} is not below the task count {count}"));
+        }
+        if count > total {
+            return Err(format!("{count} tasks cannot share {total} passes: give --spp at least the task count"));
+        }
+        let (base, extra) = (total / count, total % count);
+        let start = index * base + index.min(extra);
+        Ok(Self { start, end: start + base + u32::from(index < extra) })
+    }
+}
+
+impl fmt::Display for PassRange {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}..{}", self.start, self.end)
+    }
+}
+
+/// A task's index and the task count, read from a scheduler's variables through `var`
+/// (the process environment in the program, a map in tests): Slurm's array variables, or
+/// Kubernetes' `JOB_COMPLETION_INDEX` with `count` from `--task-count`.
+pub fn task_from_env(var: impl Fn(&str) -> Option<String>, count: Option<u32>) -> Result<(u32, u32), String> {
+    let read = |name: &str| -> Result<Option<u32>, String> {
+        match var(name) {
+            None => Ok(None),
+            Some(v) => v.trim().parse::<u32>().map(Some).map_err(|_| format!("{name}='{v}' is not a non-negative integer")),
+        }
+    };
+    let slurm = read("SLURM_ARRAY_TASK_ID")?;
+    let k8s = read("JOB_COMPLETION_INDEX")?;
+    match (slurm, k8s) {
+        (Some(_), Some(_)) => Err("both SLURM_ARRAY_TASK_ID and JOB_COMPLETION_INDEX are set: use --task-index and --task-count".into()),
+        (Some(id), None) => {
+            let min = read("SLURM_ARRAY_TASK_MIN")?.ok_or("SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_MIN is not")?;
+            let n = read("SLURM_ARRAY_TASK_COUNT")?.ok_or("SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not")?;
+            if let Some(c) = count.filter(|&c| c != n) {
+                return Err(format!("--task-count {c} disagrees with SLURM_ARRAY_TASK_COUNT={n}"));
+            }
+            let index = id.checked_sub(min).ok_or_else(|| format!("SLURM_ARRAY_TASK_ID={id} is below SLURM_ARRAY_TASK_MIN={min}"))?;
+            // An array with a step (--array=0-15:4) has ids that are not min..min+count.
+            if index >= n {
+                return Err(format!(
+                    "SLURM_ARRAY_TASK_ID={id} − SLURM_ARRAY_TASK_MIN={min} is not below SLURM_ARRAY_TASK_COUNT={n}: submit the array as --array=0-{}",
+                    n.saturating_sub(1)
+                ));
+            }
+            Ok((index, n))
+        }
+        (None, Some(index)) => {
+            let n = count.ok_or("JOB_COMPLETION_INDEX is set: give the Job's completions as --task-count")?;
+            Ok((index, n))
+        }
+        (None, None) => Err("--task-from-env: neither SLURM_ARRAY_TASK_ID (Slurm) nor JOB_COMPLETION_INDEX (Kubernetes) is set".into()),
+    }
+}
+
+/// The pass range a `render` command asks for, with its task index if it names one
+/// (`None` for a whole render).
+pub fn requested_range(split: &crate::cli::SplitArgs, total: u32) -> Result<Option<(PassRange, Option<u32>)>, String> {
+    let task = |index, count| PassRange::of_task(index, count, total).map(|r| Some((r, Some(index))));
+    if let Some(r) = split.passes {
+        if r.end > total {
+            return Err(format!("--passes {r} reaches past the --spp total of {total} passes"));
+        }
+        return Ok(Some((r, None)));
+    }
+    if split.task_from_env {
+        let (index, count) = task_from_env(|name| std::env::var(name).ok(), split.task_count)?;
+        return task(index, count);
+    }
+    match (split.task_index, split.task_count) {
+        (Some(i), Some(n)) => task(i, n),
+        (None, Some(_)) => Err("--task-count needs --task-index or --task-from-env".into()),
+        _ => Ok(None),
+    }
+}
+
+/// `{task}` → the task index, `{passes}` → `A-B`, in an output path.
+pub fn expand_output(path: &Path, range: PassRange, task: Option<u32>) -> Result<PathBuf, String> {
+    let text = path.to_string_lossy();
+    if text.contains("{task}") && task.is_none() {
+        return Err(format!("output '{}' names {{task}} but the render is not one of a task array (--task-index, --task-from-env)", path.display()));
+    }
+    let out = text.replace("{passes}", &format!("{}-{}", range.start, range.end));
+    Ok(PathBuf::from(match task {
+        Some(t) => out.replace("{task}", &t.to_string()),
+        None => out,
+    }))
+}
+
+/// What a partial image says about itself. Parts merge only when everything but `passes`
+/// and `tallies` is equal.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PartialHeader {
+    /// [`program_version`] of the program that wrote it.
+    pub program: String,
+    /// The scene's name (its file) and the hash of what was built from it.
+    pub scene: String,
+    pub scene_hash: u64,
+    pub estimator: String,
+    /// The estimator's configuration and the shared settings (depth, heuristic), as text.
+    pub config: String,
+    pub seed: u64,
+    pub width: u32,
+    pub height: u32,
+    /// The passes the file holds.
+    pub passes: PassRange,
+    /// The passes of the whole render.
+    pub total: u32,
+    pub tallies: Tallies,
+}
+
+/// What a partial image identifies its render by (set by the renderer).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RenderIdentity {
+    pub scene: String,
+    pub scene_hash: u64,
+    pub estimator: String,
+    pub config: String,
+    pub seed: u64,
+}
+
+/// The fields two parts of one render must share, by name, in the order they are
+/// checked and reported.
+fn identity_fields(h: &PartialHeader) -> [(&'static str, String); 7] {
+    [
+        ("program version", h.program.clone()),
+        ("scene hash", format!("{:016x} ({})", h.scene_hash, h.scene)),
+        ("estimator", h.estimator.clone()),
+        ("configuration", h.config.clone()),
+        ("seed", h.seed.to_string()),
+        ("resolution", format!("{}x{}", h.width, h.height)),
+        ("total passes", h.total.to_string()),
+    ]
+}
+
+fn text(value: &str) -> exr::prelude::Text {
+    exr::prelude::Text::from_slice_unchecked(value.as_bytes())
+}
+
+/// Write `film` (holding exactly `header.passes`) as a partial image, atomically.
+pub fn write_partial(path: &Path, header: &PartialHeader, film: &Film) -> Result<(), ImageError> {
+    use exr::prelude::*;
+    let (w, h) = (film.width() as usize, film.height() as usize);
+    let mean = film.to_rgb_f32();
+    let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::with_capacity(15);
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        channels.push(AnyChannel::new(*name, FlatSamples::F32(mean.iter().map(|p| p[c]).collect())));
+        for word in 0..4 {
+            let samples = film.exact_sums().iter().map(|p| (p[c] >> (32 * word)) as u32).collect();
+            channels.push(AnyChannel::new(format!("sum.{name}.w{word}").as_str(), FlatSamples::U32(samples)));
+        }
+    }
+    let mut attributes = LayerAttributes::default();
+    let t = header.tallies;
+    let fields = [
+        ("ember.format", FORMAT.to_string()),
+        ("ember.program", header.program.clone()),
+        ("ember.scene", header.scene.clone()),
+        ("ember.scene_hash", format!("{:016x}", header.scene_hash)),
+        ("ember.estimator", header.estimator.clone()),
+        ("ember.config", header.config.clone()),
+        ("ember.seed", header.seed.to_string()),
+        ("ember.passes", header.passes.to_string()),
+        ("ember.total", header.total.to_string()),
+        ("ember.quantum_bits", QUANTUM_BITS.to_string()),
+        ("ember.tallies", format!("{} {} {}", t.discarded, t.splats_outside, t.saturated)),
+    ];
+    for (name, value) in fields {
+        attributes.other.insert(text(name), AttributeValue::Text(text(&value)));
+    }
+    let encoding = Encoding { compression: Compression::ZIP16, ..Encoding::default() };
+    let layer = Layer::new((w, h), attributes, encoding, AnyChannels::sort(channels.into()));
+    let image = Image::from_layer(layer);
+    image_io::write_atomically(
+        path,
+        |temp| image.write().non_parallel().to_file(temp).map_err(|e| ImageError::new(path, ImageErrorKind::Exr(e))),
+        |e| ImageError::new(path, ImageErrorKind::Io(e)),
+    )
+}
+
+/// Read a partial image: its header and its film. A file that is not a partial image,
+/// or whose header or channels are damaged, is an error naming the file and the problem.
+pub fn read_partial(path: &Path) -> Result<(PartialHeader, Film), String> {
+    use exr::prelude::{AttributeValue, FlatSamples};
+    let name = path.display();
+    let image = image_io::read_exr_any(path).map_err(|e| e.to_string())?;
+    let layer = image.layer_data.first().ok_or_else(|| format!("{name}: no image layer"))?;
+    let attrs = &layer.attributes.other;
+    let get = |key: &str| -> Result<String, String> {
+        match attrs.get(&text(key)) {
+            Some(AttributeValue::Text(t)) => String::from_utf8(t.bytes().to_vec()).map_err(|_| format!("{name}: {key} is not UTF-8")),
+            Some(_) => Err(format!("{name}: {key} is not text")),
+            None => Err(format!("{name}: no {key} attribute")),
+        }
+    };
+    match get("ember.format") {
+        Ok(f) if f == FORMAT => {}
+        Ok(f) => return Err(format!("{name}: partial-image format '{f}', this program reads '{FORMAT}'")),
+        Err(_) => {
+            return Err(format!("{name} is not a partial image (no ember.format attribute): merge takes the files `render --passes` or `--task-index` writes"));
+        }
+    }
+    let number = |key: &str| -> Result<u64, String> { get(key)?.parse::<u64>().map_err(|_| format!("{name}: {key} is not a number")) };
+    let passes = PassRange::parse(&get("ember.passes")?).map_err(|e| format!("{name}: ember.passes {e}"))?;
+    let total = u32::try_from(number("ember.total")?).map_err(|_| format!("{name}: ember.total is too large"))?;
+    if passes.end > total {
+        return Err(format!("{name}: passes {passes} reach past its total of {total}"));
+    }
+    if number("ember.quantum_bits")? != QUANTUM_BITS as u64 {
+        return Err(format!("{name}: sums in units of 2^-{}, this program's are 2^-{QUANTUM_BITS}", get("ember.quantum_bits")?));
+    }
+    let tallies: Vec<u64> =
+        get("ember.tallies")?.split(' ').map(|v| v.parse::<u64>()).collect::<Result<_, _>>().map_err(|_| format!("{name}: damaged ember.tallies"))?;
+    let [discarded, splats_outside, saturated] = tallies[..] else { return Err(format!("{name}: damaged ember.tallies")) };
+    let scene_hash = u64::from_str_radix(&get("ember.scene_hash")?, 16).map_err(|_| format!("{name}: damaged ember.scene_hash"))?;
+    let size = layer.size;
+    let (width, height) = (size.width() as u32, size.height() as u32);
+    let header = PartialHeader {
+        program: get("ember.program")?,
+        scene: get("ember.scene")?,
+        scene_hash,
+        estimator: get("ember.estimator")?,
+        config: get("ember.config")?,
+        seed: number("ember.seed")?,
+        width,
+        height,
+        passes,
+        total,
+        tallies: Tallies { discarded, splats_outside, saturated },
+    };
+    let pixels = size.width() * size.height();
+    let mut sums = vec![[0u128; 3]; pixels];
+    for (c, ch) in ["R", "G", "B"].iter().enumerate() {
+        for word in 0..4 {
+            let channel_name = format!("sum.{ch}.w{word}");
+            let channel = layer.channel_data.list.iter().find(|x| x.name == text(&channel_name)).ok_or_else(|| format!("{name}: no channel {channel_name}"))?;
+            let FlatSamples::U32(values) = &channel.sample_data else { return Err(format!("{name}: channel {channel_name} is not UINT")) };
+            if values.len() != pixels {
+                return Err(format!("{name}: channel {channel_name} holds {} samples for {pixels} pixels", values.len()));
+            }
+            for (s, &v) in sums.iter_mut().zip(values) {
+                s[c] |= (v as u128) << (32 * word);
+            }
+        }
+    }
+    let film = Film::from_exact(width, height, sums, passes.len(), header.tallies).map_err(|e| format!("{name}: {e}"))?;
+    Ok((header, film))
+}
+
+/// Why parts do not merge: every problem found, each naming its files.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MergeError(pub Vec<String>);
+
+impl fmt::Display for MergeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "the parts do not make one image:")?;
+        for p in &self.0 {
+            write!(f, "\n  {p}")?;
+        }
+        Ok(())
+    }
+}
+
+/// Check that `parts` (path, header) belong to one render and cover its passes exactly
+/// once. Problems: a part differing from the first in any identity field (the program
+/// version included), overlapping ranges, and missing ranges.
+pub fn check_parts(parts: &[(PathBuf, PartialHeader)]) -> Result<(), MergeError> {
+    let mut problems = Vec::new();
+    let Some((first_path, first)) = parts.first() else { return Err(MergeError(vec!["no parts given".into()])) };
+    let reference = identity_fields(first);
+    for (path, h) in &parts[1..] {
+        for ((field, want), (_, got)) in reference.iter().zip(identity_fields(h)) {
+            if *want != got {
+                problems.push(format!("'{}' has {field} {got}, but '{}' has {want}", path.display(), first_path.display()));
+            }
+        }
+    }
+    if !problems.is_empty() {
+        return Err(MergeError(problems));
+    }
+    let mut by_start: Vec<(PassRange, &Path)> = parts.iter().map(|(p, h)| (h.passes, p.as_path())).collect();
+    by_start.sort();
+    let mut covered = 0u32;
+    let mut last: Option<(PassRange, &Path)> = None;
+    for &(r, path) in &by_start {
+        if r.start > covered {
+            problems.push(format!("passes {}..{} of {} are missing", covered, r.start, first.total));
+        }
+        if let Some((lr, lp)) = last.filter(|(lr, _)| r.start < lr.end) {
+            problems.push(format!("passes {r} of '{}' overlap passes {lr} of '{}'", path.display(), lp.display()));
+        }
+        if last.is_none_or(|(lr, _)| r.end > lr.end) {
+            last = Some((r, path));
+        }
+        covered = covered.max(r.end);
+    }
+    if covered < first.total {
+        problems.push(format!("passes {}..{} of {} are missing", covered, first.total, first.total));
+    }
+    if problems.is_empty() { Ok(()) } else { Err(MergeError(problems)) }
+}
+
+/// Read, check and merge `paths`: the header of the whole render (passes 0..total,
+/// tallies summed) and its film.
+pub fn merge_parts(paths: &[PathBuf]) -> Result<(PartialHeader, Film), String> {
+    let mut headers = Vec::with_capacity(paths.len());
+    let mut films = Vec::with_capacity(paths.len());
+    for path in paths {
+        let (header, film) = read_partial(path)?;
+        headers.push((path.clone(), header));
+        films.push(film);
+    }
+    check_parts(&headers).map_err(|e| e.to_string())?;
+    let mut whole: Option<Film> = None;
+    for film in films {
+        match &mut whole {
+            None => whole = Some(film),
+            Some(w) => w.merge(&film).map_err(|e| e.to_string())?,
+        }
+    }
+    let film = whole.ok_or("no parts given")?;
+    let mut header = headers.swap_remove(0).1;
+    header.passes = PassRange { start: 0, end: header.total };
+    header.tallies = film.tallies();
+    Ok((header, film))
+}
+
+/// FNV-1a (64-bit) over everything written to it: the scene hash, over the scene's
+/// `Debug` form (f32s print as their shortest round-trip decimal, so equal scenes give
+/// equal text and any changed bit changes it).
+#[derive(Debug)]
+pub struct Fnv(pub u64);
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Self(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl fmt::Write for Fnv {
+    fn write_str(&mut self, s: &str) -> fmt::Result {
+        for b in s.bytes() {
+            self.0 ^= b as u64;
+            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests;
