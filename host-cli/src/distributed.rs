@@ -13,13 +13,15 @@
 //!   film's exact per-pixel sums, each a `u128` count of 2⁻⁶⁴ split into four 32-bit
 //!   words, w0 the least significant. Mean = sum · 2⁻⁶⁴ / passes in f64 (what
 //!   `Film::to_rgb_f32` computes);
-//! - text attributes `ember.*` (see [`PartialHeader`]): the format and program version,
-//!   the scene's name and hash, the estimator and its configuration, the seed, the pass
-//!   range held, the total and the film's tallies.
+//! - the text attribute `ember.partial` ([`PartialHeader`]), one `key: value` per line:
+//!   the format and program version, the scene's name and hash, the estimator and its
+//!   configuration, the seed, the pass range held, the total, the quantum and the
+//!   film's tallies.
 //!
 //! A task writes its part to a temporary name and renames it when complete, so a task
 //! that dies leaves no file `merge` would accept, and a re-run writes the same bytes.
 
+use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -27,10 +29,12 @@ use ember_core::render::{Film, QUANTUM_BITS, Tallies};
 
 use crate::image_io::{self, ImageError, ImageErrorKind};
 
-/// The partial-image format's name and version (`ember.format`).
+/// The partial-image format's name and version (its `format` field).
 pub const FORMAT: &str = "ember partial film 1";
+/// The EXR attribute (text) holding a partial image's header, one `key: value` per line.
+pub const ATTRIBUTE: &str = "ember.partial";
 
-/// This program's version and build (`ember.program`): parts from different builds are
+/// This program's version and build (the `program` field): parts from different builds are
 /// never merged, since any code change may change the passes' bits.
 pub fn program_version() -> String {
     format!("ember {} ({})", env!("CARGO_PKG_VERSION"), env!("EMBER_BUILD"))
@@ -221,24 +225,26 @@ pub fn write_partial(path: &Path, header: &PartialHeader, film: &Film) -> Result
             channels.push(AnyChannel::new(format!("sum.{name}.w{word}").as_str(), FlatSamples::U32(samples)));
         }
     }
-    let mut attributes = LayerAttributes::default();
+    // One attribute holding every field, one `key: value` line each: the crate stores
+    // attributes in a hash map written in a per-process random order, and a part must
+    // have the same bytes every time it is rendered.
     let t = header.tallies;
     let fields = [
-        ("ember.format", FORMAT.to_string()),
-        ("ember.program", header.program.clone()),
-        ("ember.scene", header.scene.clone()),
-        ("ember.scene_hash", format!("{:016x}", header.scene_hash)),
-        ("ember.estimator", header.estimator.clone()),
-        ("ember.config", header.config.clone()),
-        ("ember.seed", header.seed.to_string()),
-        ("ember.passes", header.passes.to_string()),
-        ("ember.total", header.total.to_string()),
-        ("ember.quantum_bits", QUANTUM_BITS.to_string()),
-        ("ember.tallies", format!("{} {} {}", t.discarded, t.splats_outside, t.saturated)),
+        ("format", FORMAT.to_string()),
+        ("program", header.program.clone()),
+        ("scene", header.scene.clone()),
+        ("scene_hash", format!("{:016x}", header.scene_hash)),
+        ("estimator", header.estimator.clone()),
+        ("config", header.config.clone()),
+        ("seed", header.seed.to_string()),
+        ("passes", header.passes.to_string()),
+        ("total", header.total.to_string()),
+        ("quantum_bits", QUANTUM_BITS.to_string()),
+        ("tallies", format!("{} {} {}", t.discarded, t.splats_outside, t.saturated)),
     ];
-    for (name, value) in fields {
-        attributes.other.insert(text(name), AttributeValue::Text(text(&value)));
-    }
+    let lines: String = fields.iter().map(|(k, v)| format!("{k}: {}\n", v.replace('\n', " "))).collect();
+    let mut attributes = LayerAttributes::default();
+    attributes.other.insert(text(ATTRIBUTE), AttributeValue::Text(text(&lines)));
     let encoding = Encoding { compression: Compression::ZIP16, ..Encoding::default() };
     let layer = Layer::new((w, h), attributes, encoding, AnyChannels::sort(channels.into()));
     let image = Image::from_layer(layer);
@@ -256,43 +262,39 @@ pub fn read_partial(path: &Path) -> Result<(PartialHeader, Film), String> {
     let name = path.display();
     let image = image_io::read_exr_any(path).map_err(|e| e.to_string())?;
     let layer = image.layer_data.first().ok_or_else(|| format!("{name}: no image layer"))?;
-    let attrs = &layer.attributes.other;
-    let get = |key: &str| -> Result<String, String> {
-        match attrs.get(&text(key)) {
-            Some(AttributeValue::Text(t)) => String::from_utf8(t.bytes().to_vec()).map_err(|_| format!("{name}: {key} is not UTF-8")),
-            Some(_) => Err(format!("{name}: {key} is not text")),
-            None => Err(format!("{name}: no {key} attribute")),
+    let fields: BTreeMap<String, String> = match layer.attributes.other.get(&text(ATTRIBUTE)) {
+        Some(AttributeValue::Text(t)) => {
+            String::from_utf8_lossy(t.bytes()).lines().filter_map(|l| l.split_once(": ").map(|(k, v)| (k.to_string(), v.to_string()))).collect()
         }
+        _ => return Err(format!("{name} is not a partial image (no {ATTRIBUTE} attribute): merge takes the files `render --passes` or `--task-index` writes")),
     };
-    match get("ember.format") {
+    let get = |key: &str| -> Result<String, String> { fields.get(key).cloned().ok_or_else(|| format!("{name}: no {key} in its {ATTRIBUTE} attribute")) };
+    match get("format") {
         Ok(f) if f == FORMAT => {}
         Ok(f) => return Err(format!("{name}: partial-image format '{f}', this program reads '{FORMAT}'")),
-        Err(_) => {
-            return Err(format!("{name} is not a partial image (no ember.format attribute): merge takes the files `render --passes` or `--task-index` writes"));
-        }
+        Err(e) => return Err(e),
     }
     let number = |key: &str| -> Result<u64, String> { get(key)?.parse::<u64>().map_err(|_| format!("{name}: {key} is not a number")) };
-    let passes = PassRange::parse(&get("ember.passes")?).map_err(|e| format!("{name}: ember.passes {e}"))?;
-    let total = u32::try_from(number("ember.total")?).map_err(|_| format!("{name}: ember.total is too large"))?;
+    let passes = PassRange::parse(&get("passes")?).map_err(|e| format!("{name}: passes {e}"))?;
+    let total = u32::try_from(number("total")?).map_err(|_| format!("{name}: total is too large"))?;
     if passes.end > total {
         return Err(format!("{name}: passes {passes} reach past its total of {total}"));
     }
-    if number("ember.quantum_bits")? != QUANTUM_BITS as u64 {
-        return Err(format!("{name}: sums in units of 2^-{}, this program's are 2^-{QUANTUM_BITS}", get("ember.quantum_bits")?));
+    if number("quantum_bits")? != QUANTUM_BITS as u64 {
+        return Err(format!("{name}: sums in units of 2^-{}, this program's are 2^-{QUANTUM_BITS}", get("quantum_bits")?));
     }
-    let tallies: Vec<u64> =
-        get("ember.tallies")?.split(' ').map(|v| v.parse::<u64>()).collect::<Result<_, _>>().map_err(|_| format!("{name}: damaged ember.tallies"))?;
-    let [discarded, splats_outside, saturated] = tallies[..] else { return Err(format!("{name}: damaged ember.tallies")) };
-    let scene_hash = u64::from_str_radix(&get("ember.scene_hash")?, 16).map_err(|_| format!("{name}: damaged ember.scene_hash"))?;
+    let tallies: Vec<u64> = get("tallies")?.split(' ').map(|v| v.parse::<u64>()).collect::<Result<_, _>>().map_err(|_| format!("{name}: damaged tallies"))?;
+    let [discarded, splats_outside, saturated] = tallies[..] else { return Err(format!("{name}: damaged tallies")) };
+    let scene_hash = u64::from_str_radix(&get("scene_hash")?, 16).map_err(|_| format!("{name}: damaged scene_hash"))?;
     let size = layer.size;
     let (width, height) = (size.width() as u32, size.height() as u32);
     let header = PartialHeader {
-        program: get("ember.program")?,
-        scene: get("ember.scene")?,
+        program: get("program")?,
+        scene: get("scene")?,
         scene_hash,
-        estimator: get("ember.estimator")?,
-        config: get("ember.config")?,
-        seed: number("ember.seed")?,
+        estimator: get("estimator")?,
+        config: get("config")?,
+        seed: number("seed")?,
         width,
         height,
         passes,

@@ -1,0 +1,142 @@
+//! `ember render --passes/--task-*` and `ember merge` as a user runs them: the merged
+//! image equals the whole render's file byte for byte, and merge refuses mismatched,
+//! overlapping and incomplete sets with messages naming the files and passes.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn ember(args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_ember"));
+    c.args(args);
+    for var in ["SLURM_ARRAY_TASK_ID", "SLURM_ARRAY_TASK_MIN", "SLURM_ARRAY_TASK_COUNT", "JOB_COMPLETION_INDEX"] {
+        c.env_remove(var);
+    }
+    c.envs(env.iter().copied());
+    c.output().expect("run ember")
+}
+
+fn ok(o: &Output) -> String {
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn fails(o: &Output) -> String {
+    assert_eq!(o.status.code(), Some(1), "stdout: {}", String::from_utf8_lossy(&o.stdout));
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("ember-dist-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn same_bytes(a: &Path, b: &Path) -> bool {
+    std::fs::read(a).unwrap() == std::fs::read(b).unwrap()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+const BASE: [&str; 10] = ["render", "-e", "bdpt", "--width", "24", "--height", "16", "--spp", "6", "--threads=2"];
+
+fn render(extra: &[&str], env: &[(&str, &str)]) -> Output {
+    let args: Vec<&str> = BASE.iter().copied().chain(extra.iter().copied()).collect();
+    ember(&args, env)
+}
+
+#[test]
+fn tasks_from_slurm_and_kubernetes_merge_into_the_whole_render_byte_for_byte() {
+    let d = dir("tasks");
+    let whole = d.join("whole.exr");
+    ok(&render(&["-o", s(&whole)], &[]));
+
+    // Slurm numbers this array 5-7; Kubernetes' index is 0-based; --passes names a range.
+    let slurm = |id: &'static str| [("SLURM_ARRAY_TASK_ID", id), ("SLURM_ARRAY_TASK_MIN", "5"), ("SLURM_ARRAY_TASK_COUNT", "3")];
+    let pattern = d.join("part-{task}.exr");
+    for id in ["5", "6"] {
+        let out = ok(&render(&["--task-from-env", "-o", s(&pattern)], &slurm(id)));
+        assert!(out.contains("partial: passes"), "{out}");
+    }
+    // Task 2 of 3 holds passes 4..6: the same share from --passes and from Kubernetes.
+    let k8s = d.join("k8s-{task}.exr");
+    ok(&render(&["--task-from-env", "--task-count", "3", "-o", s(&k8s)], &[("JOB_COMPLETION_INDEX", "2")]));
+    ok(&render(&["--passes", "4..6", "-o", s(&d.join("range-{passes}.exr"))], &[]));
+    assert!(same_bytes(&d.join("k8s-2.exr"), &d.join("range-4-6.exr")), "same passes, same bytes");
+
+    let merged = d.join("merged.exr");
+    let parts = [d.join("part-0.exr"), d.join("part-1.exr"), d.join("k8s-2.exr")];
+    let out = ok(&ember(&["merge", s(&parts[2]), s(&parts[0]), s(&parts[1]), "-o", s(&merged)], &[]));
+    assert!(out.contains("merged     3 parts: 6 passes"), "{out}");
+    assert!(same_bytes(&merged, &whole), "merged EXR equals the whole render's");
+    assert!(d.join("merged.png").is_file());
+
+    // Re-running a task is idempotent: the same bytes again.
+    let before = d.join("before.exr");
+    std::fs::copy(&parts[1], &before).unwrap();
+    ok(&render(&["--task-from-env", "-o", s(&pattern)], &slurm("6")));
+    assert!(same_bytes(&parts[1], &before));
+
+    // Without --task-from-env the scheduler's variables are ignored: a whole render.
+    let inside = d.join("inside-array.exr");
+    ok(&render(&["-o", s(&inside)], &slurm("6")));
+    assert!(same_bytes(&inside, &whole));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn merge_refuses_mismatched_overlapping_and_incomplete_sets() {
+    let d = dir("refuse");
+    let p = |name: &str| d.join(name);
+    ok(&render(&["--passes", "0..3", "-o", s(&p("a.exr"))], &[]));
+    ok(&render(&["--passes", "3..6", "-o", s(&p("b.exr"))], &[]));
+    ok(&render(&["--passes", "2..6", "-o", s(&p("overlap.exr"))], &[]));
+    ok(&render(&["--passes", "3..6", "--seed", "9", "-o", s(&p("seed9.exr"))], &[]));
+    ok(&render(&["--passes", "3..6", "--max-depth", "3", "-o", s(&p("depth3.exr"))], &[]));
+    ok(&render(&["--passes", "3..6", "--builtin", "glass-spheres", "-o", s(&p("other-scene.exr"))], &[]));
+    let out = p("out.exr");
+    let merge = |parts: &[&str]| {
+        let mut args = vec!["merge"];
+        args.extend(parts);
+        args.extend(["-o", s(&out)]);
+        fails(&ember(&args, &[]))
+    };
+    let (a, b) = (s(&p("a.exr")).to_string(), s(&p("b.exr")).to_string());
+
+    let e = merge(&[&a]);
+    assert!(e.contains("passes 3..6 of 6 are missing"), "{e}");
+    let e = merge(&[&a, s(&p("overlap.exr"))]);
+    assert!(e.contains("passes 2..6 of") && e.contains("overlap passes 0..3 of") && e.contains("a.exr"), "{e}");
+    let e = merge(&[&a, s(&p("seed9.exr"))]);
+    assert!(e.contains("seed9.exr' has seed 9, but") && e.contains("has 0"), "{e}");
+    let e = merge(&[&a, s(&p("depth3.exr"))]);
+    assert!(e.contains("depth3.exr' has configuration") && e.contains("max depth 3"), "{e}");
+    let e = merge(&[&a, s(&p("other-scene.exr"))]);
+    assert!(e.contains("other-scene.exr' has scene hash"), "{e}");
+    // A plain image, a missing file, an output that is an input.
+    ok(&render(&["-o", s(&p("plain.exr"))], &[]));
+    let e = merge(&[&a, s(&p("plain.exr"))]);
+    assert!(e.contains("plain.exr is not a partial image"), "{e}");
+    let e = merge(&[&a, s(&p("nope.exr"))]);
+    assert!(e.contains("nope.exr"), "{e}");
+    let e = fails(&ember(&["merge", &a, &b, "-o", &a], &[]));
+    assert!(e.contains("is one of the parts"), "{e}");
+    assert!(!out.exists(), "nothing written on a refusal");
+
+    // Options that cannot make a share.
+    for (args, needle) in [
+        (&["render", "--passes", "0..3"][..], "--spp"),
+        (&["render", "--spp", "4", "--passes", "2..9"], "past the --spp total"),
+        (&["render", "--spp", "4", "--passes", "3..3"], "empty"),
+        (&["render", "--spp", "4", "--task-index", "4", "--task-count", "4"], "not below"),
+        (&["render", "--spp", "2", "--task-index", "0", "--task-count", "3"], "cannot share"),
+        (&["render", "--spp", "4", "--task-from-env"], "neither SLURM_ARRAY_TASK_ID"),
+        (&["render", "--spp", "4", "--passes", "0..2", "-o", "p-{task}.exr"], "{task}"),
+    ] {
+        let e = String::from_utf8_lossy(&ember(args, &[]).stderr).into_owned();
+        assert!(e.contains(needle), "{args:?}: {e}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
