@@ -27,3 +27,10 @@ scripts/test-browser.sh
 
 step "fuzz targets: committed seeds replayed, then 30 s of fuzzing each"
 scripts/test-fuzz.sh
+
+step "a split render on a real Slurm (one-node cluster, 4-task array, merge job)"
+if [ "$(id -u)" = 0 ]; then
+  scripts/test-slurm.sh
+else
+  echo "skipped: scripts/test-slurm.sh needs root (it installs slurm-wlm and starts slurmd)"
+fi
