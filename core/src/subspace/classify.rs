@@ -325,6 +325,41 @@ impl DecisionTree {
     pub fn size_bytes(&self) -> usize {
         self.nodes.capacity() * core::mem::size_of::<Node>()
     }
+
+    /// The nodes as (axis, threshold, first child, label), axis 255 marking a leaf: what
+    /// a stored model keeps ([`DecisionTree::from_raw_nodes`] reads it back).
+    pub fn raw_nodes(&self) -> impl Iterator<Item = (u8, f32, u32, u32)> + '_ {
+        self.nodes.iter().map(|n| (n.axis, n.threshold, n.first_child, n.label))
+    }
+
+    /// A tree from [`DecisionTree::raw_nodes`], refused unless it is one `classify` walks
+    /// to a leaf in finitely many steps with a label below `labels`: every inner node's
+    /// two children exist and come after it, axes name a feature coordinate, thresholds
+    /// are not NaN. (A damaged file must give an error, not a loop or a wrong label.)
+    pub fn from_raw_nodes(raw: &[(u8, f32, u32, u32)], labels: u32) -> Result<Self, &'static str> {
+        if raw.is_empty() {
+            return Err("a tree without nodes");
+        }
+        let mut nodes = Vec::with_capacity(raw.len());
+        for (i, &(axis, threshold, first_child, label)) in raw.iter().enumerate() {
+            if label >= labels {
+                return Err("a tree label past the subspace count");
+            }
+            if axis != LEAF {
+                if axis as usize >= crate::subspace::features::FEATURE_AXES {
+                    return Err("a tree node splits on an axis the features do not have");
+                }
+                if threshold.is_nan() {
+                    return Err("a tree node with a NaN threshold");
+                }
+                if first_child as usize <= i || first_child as usize + 1 >= raw.len() {
+                    return Err("a tree node whose children are missing or come before it");
+                }
+            }
+            nodes.push(Node { threshold, first_child, label, axis });
+        }
+        Ok(Self { nodes })
+    }
 }
 
 /// (axis, threshold) splitting `attribute` at the centre of its largest extent among
@@ -440,5 +475,28 @@ impl LightSourceBins {
     /// Heap bytes held.
     pub fn size_bytes(&self) -> usize {
         (self.light_first.capacity() + self.light_rows.capacity()) * 4
+    }
+
+    /// (first id, first bin per light with the total last, rows per light): what a stored
+    /// model keeps ([`LightSourceBins::from_parts`] reads it back).
+    pub fn parts(&self) -> (u32, &[u32], &[u32]) {
+        (self.first_id, &self.light_first, &self.light_rows)
+    }
+
+    /// Bins from [`LightSourceBins::parts`], refused unless they are bins `new` could
+    /// have made for `lights` lights: `light_first` starts at 0 and grows by at least one
+    /// bin per light, and each light's rows lie in 1..=its bins.
+    pub fn from_parts(first_id: u32, light_first: Vec<u32>, light_rows: Vec<u32>, lights: usize) -> Result<Self, &'static str> {
+        if light_rows.len() != lights || light_first.len() != lights + 1 || light_first.first() != Some(&0) {
+            return Err("light-source bins for another number of lights");
+        }
+        for (l, &rows) in light_rows.iter().enumerate() {
+            let bins = light_first[l + 1].checked_sub(light_first[l]).unwrap_or(0);
+            if bins == 0 || rows == 0 || rows > bins {
+                return Err("a light with no bins, or more rows than bins");
+            }
+        }
+        first_id.checked_add(light_first[lights]).ok_or("light-source bin ids past 2^32")?;
+        Ok(Self { first_id, light_first, light_rows })
     }
 }

@@ -72,6 +72,7 @@
 //! j·M·(M_r/M_k)·p(Ȳ)·N·Γ·W/S_k ≈ N·Γ·W/Q_k as before.
 
 pub mod counts;
+pub mod model_file;
 mod phases;
 pub mod prepare;
 

@@ -122,6 +122,30 @@ impl Spcbpt {
         self.light_paths as f64 / self.pixels().max(1) as f64
     }
 
+    /// Use a model trained before (`ember train`, [`Model::decode`]) instead of running
+    /// the preprocessing: the setup phases are skipped. Refused once setup has begun, or
+    /// when the model was trained for another number of connections N or subspaces.
+    pub fn use_model(&mut self, model: Model) -> Result<(), &'static str> {
+        if self.cursor != Cursor::new(4, 4) {
+            return Err("the preprocessing has already begun");
+        }
+        if model.connections != self.config.connections {
+            return Err("the model was trained for another number of connections");
+        }
+        if model.classifier.n_eye > self.subspaces || model.classifier.n_light_surface > self.subspaces {
+            return Err("the model has more subspaces than this configuration");
+        }
+        let c = &model.classifier;
+        self.report.n_eye = c.n_eye;
+        self.report.n_light = c.n_light;
+        self.report.light_source_bins = c.sources.as_ref().map_or(0, |b| b.bin_count());
+        self.report.tree_bytes = c.size_bytes();
+        self.report.gamma_bytes = model.gamma.size_bytes();
+        self.model = Some(model);
+        self.cursor = Cursor::new(0, 4);
+        Ok(())
+    }
+
     fn n_eye(&self) -> u32 {
         self.model.as_ref().map_or(0, |m| m.classifier.n_eye)
     }
