@@ -69,6 +69,17 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
             Ok(())
         }
         Command::Convergence(args) => run_convergence(args),
+        Command::Train(args) => {
+            let out = &args.output;
+            if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir()) {
+                return Err(AppError::Output(format!("output directory '{}' does not exist", dir.display())));
+            }
+            let r = estimators::make_core_renderer(&args.render_args()).map_err(AppError::Estimator)?;
+            let bytes = crate::trained::encode(&r.renderer, &r.identity(), r.width(), r.height()).map_err(AppError::Estimator)?;
+            image_io::write_atomically(out, |temp| std::fs::write(temp, &bytes), |e| e).map_err(|e| AppError::Output(format!("{}: {e}", out.display())))?;
+            println!("trained    {} for {} in {:.2} s; wrote {} ({} bytes)", r.kind().name(), r.prepared.name, r.setup_seconds, out.display(), bytes.len());
+            Ok(())
+        }
         Command::Merge(args) => {
             let (header, exr, png) = merge(args)?;
             let t = header.tallies;

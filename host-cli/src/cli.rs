@@ -33,10 +33,67 @@ pub enum Command {
     /// Every estimator on every suite scene at equal time, threads and seeds; writes a
     /// markdown table and the plots.
     Suite(SuiteArgs),
+    /// Run an estimator's preprocessing once and save its result (SPCBPT's κ trees, Q and
+    /// Γ) for `render --model`: the tasks of a split render then skip it.
+    Train(TrainArgs),
     /// Merge the partial images of a split render (`render --passes` or `--task-index`)
     /// into the final image: checks that the parts belong together and cover every pass
     /// once; the result equals a single-process render bit for bit (docs/distributed.md).
     Merge(MergeArgs),
+}
+
+/// Options of `ember train`: those of `render` that decide the preprocessing.
+#[derive(Args, Debug, Clone, PartialEq)]
+pub struct TrainArgs {
+    /// Mitsuba 3 XML scene file. Omit it to train on the built-in Cornell box.
+    #[arg(value_name = "SCENE")]
+    pub scene: Option<PathBuf>,
+    /// A built-in scene instead of a file (as for `render`).
+    #[arg(long, value_name = "NAME", conflicts_with = "scene", value_parser = ["cornell-box", "glass-spheres"])]
+    pub builtin: Option<String>,
+    /// The estimator whose preprocessing is saved (only spcbpt has one worth saving).
+    #[arg(short, long, value_parser = estimator_parser(), default_value_t = EstimatorKind::Spcbpt)]
+    pub estimator: EstimatorKind,
+    #[command(flatten)]
+    pub cache: CacheArgs,
+    /// Threads [default: all cores].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub threads: Option<u32>,
+    /// Random seed: the renders that load the model must use the same.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u64,
+    /// Image width (as for `render`; the renders must match).
+    #[arg(long, value_name = "PIXELS", value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub width: Option<u32>,
+    /// Image height (as for `render`; the renders must match).
+    #[arg(long, value_name = "PIXELS", value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub height: Option<u32>,
+    /// Longest path (as for `render`; the renders must match).
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = clap::value_parser!(i32).range(-1..))]
+    pub max_depth: Option<i32>,
+    #[command(flatten)]
+    pub defines: Defines,
+    /// The model file to write.
+    #[arg(short, long, value_name = "FILE", default_value = "model.bin")]
+    pub output: PathBuf,
+}
+
+impl TrainArgs {
+    /// The `render` options these stand for (render-only options at their defaults).
+    pub fn render_args(&self) -> RenderArgs {
+        let Command::Render(mut r) = Cli::parse_from(["ember", "render"]).command else { unreachable!("`render` parses to Render") };
+        r.scene = self.scene.clone();
+        r.builtin = self.builtin.clone();
+        r.estimator = self.estimator;
+        r.cache = self.cache.clone();
+        r.threads = self.threads;
+        r.seed = self.seed;
+        r.width = self.width;
+        r.height = self.height;
+        r.max_depth = self.max_depth;
+        r.defines = self.defines.clone();
+        r
+    }
 }
 
 /// Options of `ember merge`.
@@ -282,6 +339,12 @@ pub struct RenderArgs {
 
     #[command(flatten)]
     pub split: SplitArgs,
+
+    /// Load the preprocessing's result from FILE (written by `ember train` with the same
+    /// scene, estimator options, seed and resolution) instead of computing it: SPCBPT's
+    /// κ trees, Q and Γ. A file that does not match, or is damaged, is refused.
+    #[arg(long, value_name = "FILE")]
+    pub model: Option<PathBuf>,
 
     /// Output EXR file (linear RGB, 32-bit float); an sRGB PNG with the same stem is
     /// written beside it. A split render writes only the partial EXR; `{task}` in the

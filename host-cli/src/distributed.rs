@@ -195,16 +195,17 @@ pub struct RenderIdentity {
 }
 
 /// The fields two parts of one render must share, by name, in the order they are
-/// checked and reported.
+/// checked and reported. Not the scene's name: another machine may hold the same scene
+/// at another path; its hash decides.
 fn identity_fields(h: &PartialHeader) -> [(&'static str, String); 7] {
     [
         ("program version", h.program.clone()),
-        ("scene hash", format!("{:016x} ({})", h.scene_hash, h.scene)),
         ("estimator", h.estimator.clone()),
-        ("configuration", h.config.clone()),
-        ("seed", h.seed.to_string()),
         ("resolution", format!("{}x{}", h.width, h.height)),
         ("total passes", h.total.to_string()),
+        ("seed", h.seed.to_string()),
+        ("configuration", h.config.clone()),
+        ("scene hash", format!("{:016x}", h.scene_hash)),
     ]
 }
 
@@ -344,7 +345,8 @@ pub fn check_parts(parts: &[(PathBuf, PartialHeader)]) -> Result<(), MergeError>
     for (path, h) in &parts[1..] {
         for ((field, want), (_, got)) in reference.iter().zip(identity_fields(h)) {
             if *want != got {
-                problems.push(format!("'{}' has {field} {got}, but '{}' has {want}", path.display(), first_path.display()));
+                let scenes = if *field == "scene hash" { format!(" (scenes {} and {})", h.scene, first.scene) } else { String::new() };
+                problems.push(format!("'{}' has {field} {got}, but '{}' has {want}{scenes}", path.display(), first_path.display()));
             }
         }
     }

@@ -126,14 +126,37 @@ impl CoreRenderer {
     /// The estimator `config` names; its setup phases run here on `threads` threads, so a
     /// clock started before counts them.
     pub fn with_config(prepared: PreparedScene, config: EstimatorConfig, max_depth: i32, seed: u64, threads: usize) -> Result<Self, String> {
+        Self::with_model(prepared, config, max_depth, seed, threads, None)
+    }
+
+    /// [`Self::with_config`], with the setup's result loaded from `model` (a file of
+    /// `ember train`, checked against this render) instead of computed.
+    pub fn with_model(
+        prepared: PreparedScene,
+        config: EstimatorConfig,
+        max_depth: i32,
+        seed: u64,
+        threads: usize,
+        model: Option<&Path>,
+    ) -> Result<Self, String> {
         // PT combines its two techniques with the power heuristic (as Mitsuba does);
         // BDPT's weights are the balance heuristic by construction.
         let params = RenderParams { max_depth: MaxDepth(max_depth), seed, heuristic: Heuristic::Power, ..RenderParams::default() };
-        let mut renderer = Renderer::new(&prepared.scene, params, config).map_err(|e| format!("{} {e}", config.kind()))?;
+        let renderer = Renderer::new(&prepared.scene, params, config).map_err(|e| format!("{} {e}", config.kind()))?;
+        let mut r = Self { prepared, renderer, config, setup_times: PhaseTimes::new(), setup_seconds: 0.0 };
+        if let Some(path) = model {
+            let camera = &r.prepared.scene.camera;
+            let loaded = crate::trained::load(path, &r.identity(), camera.width(), camera.height(), &r.prepared.scene)?;
+            let Renderer::Spcbpt(s) = &mut r.renderer else {
+                return Err(format!("--model: {} has no trained state to load (only spcbpt)", config.kind()));
+            };
+            s.use_model(loaded).map_err(|e| format!("--model {}: {e}", path.display()))?;
+        }
         let start = Instant::now();
-        let ctx = Context { scene: &prepared.scene, tracer: &prepared.accel };
-        let setup_times = driver::run_setup(&mut renderer, &ctx, threads).map_err(|e| e.to_string())?;
-        Ok(Self { prepared, renderer, config, setup_times, setup_seconds: start.elapsed().as_secs_f64() })
+        let ctx = Context { scene: &r.prepared.scene, tracer: &r.prepared.accel };
+        r.setup_times = driver::run_setup(&mut r.renderer, &ctx, threads).map_err(|e| e.to_string())?;
+        r.setup_seconds = start.elapsed().as_secs_f64();
+        Ok(r)
     }
 
     pub fn kind(&self) -> EstimatorKind {
@@ -282,12 +305,15 @@ pub fn make_core_renderer(args: &RenderArgs) -> Result<CoreRenderer, String> {
     let max_depth = args.max_depth.or(prepared.max_depth).unwrap_or(-1);
     let config = args.cache.config_for(args.estimator);
     check_memory(&prepared, &config, args.memory_limit)?;
-    let r = CoreRenderer::with_config(prepared, config, max_depth, args.seed, args.thread_count())?;
+    let r = CoreRenderer::with_model(prepared, config, max_depth, args.seed, args.thread_count(), args.model.as_deref())?;
     if let Renderer::Lvcbpt(l) = &r.renderer {
         eprintln!(
             "lvcbpt     M = {} light paths/pass, N = {}, counts: light tracing {:.4}, connection {:.4}",
             l.light_paths, l.config.connections, l.counts.light_tracing, l.counts.connection
         );
+    }
+    if let Some(model) = &args.model {
+        eprintln!("{:<10} model loaded from {} (its preprocessing skipped)", r.kind().name(), model.display());
     }
     if let Renderer::Spcbpt(s) = &r.renderer {
         let rep = &s.report;

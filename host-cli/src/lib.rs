@@ -18,6 +18,7 @@ pub mod metrics;
 pub mod mitsuba;
 pub mod plot;
 pub mod suite;
+pub mod trained;
 
 /// The core's film (one film for every host).
 pub mod film {

@@ -140,3 +140,46 @@ fn merge_refuses_mismatched_overlapping_and_incomplete_sets() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `ember train` once, `--model` in every task: the merge equals the render that trained
+/// for itself, byte for byte; a model for another render, or a damaged one, is refused.
+#[test]
+fn tasks_load_one_trained_model() {
+    let d = dir("model");
+    let model = d.join("model.bin");
+    let spc = ["-e", "spcbpt", "--width", "24", "--height", "16", "--light-paths", "120", "--dataset", "1200", "--subspaces", "16", "--threads=2"];
+    let train: Vec<&str> = ["train", "--seed", "3"].into_iter().chain(spc).chain(["-o", s(&model)]).collect();
+    let out = ok(&ember(&train, &[]));
+    assert!(out.contains("trained    spcbpt"), "{out}");
+    let render = |extra: &[&str]| {
+        let seed = if extra.contains(&"--seed") { [].as_slice() } else { ["--seed", "3"].as_slice() };
+        let args: Vec<&str> = ["render", "--spp", "6"].into_iter().chain(spc).chain(seed.iter().copied()).chain(extra.iter().copied()).collect();
+        ember(&args, &[])
+    };
+    let whole = d.join("whole.exr");
+    ok(&render(&["-o", s(&whole)]));
+    let part = d.join("p-{task}.exr");
+    for i in ["0", "1"] {
+        let o = render(&["--model", s(&model), "--task-index", i, "--task-count", "2", "-o", s(&part)]);
+        assert!(String::from_utf8_lossy(&o.stderr).contains("model loaded from"), "loaded, not trained");
+        ok(&o);
+    }
+    let merged = d.join("merged.exr");
+    ok(&ember(&["merge", s(&d.join("p-0.exr")), s(&d.join("p-1.exr")), "-o", s(&merged)], &[]));
+    assert!(same_bytes(&merged, &whole), "tasks with the trained model equal the render that trained itself");
+
+    let e = fails(&render(&["--model", s(&model), "--seed", "4", "-o", s(&d.join("x.exr"))]));
+    assert!(e.contains("trained with seed 3, but this render has 4"), "{e}");
+    let e = fails(&render(&["--model", s(&model), "--connections", "5", "-o", s(&d.join("x.exr"))]));
+    assert!(e.contains("trained with config"), "{e}");
+    let e = fails(&ember(&["render", "--model", s(&model), "-o", s(&d.join("x.exr"))], &[]));
+    assert!(e.contains("trained with estimator spcbpt, but this render has pt"), "{e}");
+    let bytes = std::fs::read(&model).unwrap();
+    let damaged = d.join("damaged.bin");
+    std::fs::write(&damaged, &bytes[..bytes.len() - 100]).unwrap();
+    let e = fails(&render(&["--model", s(&damaged), "-o", s(&d.join("x.exr"))]));
+    assert!(e.contains("damaged.bin") && e.contains("checksum"), "{e}");
+    let e = fails(&render(&["--model", s(&whole), "-o", s(&d.join("x.exr"))]));
+    assert!(e.contains("is not a model file"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
