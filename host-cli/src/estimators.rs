@@ -264,7 +264,7 @@ pub fn memory_need(prepared: &PreparedScene, config: &EstimatorConfig) -> (u64, 
     let camera = &prepared.scene.camera;
     let pixels = camera.width() as u64 * camera.height() as u64;
     let estimate = config.memory_estimate(pixels.min(u32::MAX as u64) as u32);
-    (estimate.bytes.max(pixels * 36), estimate)
+    (estimate.bytes.max(pixels * ember_core::render::FILM_BYTES_PER_PIXEL), estimate)
 }
 
 /// The memory a run may claim, `limit` or else what the machine has available

@@ -89,6 +89,9 @@ fn truncated_and_altered_files_are_refused() {
     assert_eq!(Model::decode(b"P3\n4 4\n", &scene).err(), Some(ModelError::NotAModel));
 }
 
+/// A change to a model's bytes (before its checksum is recomputed).
+type Edit<'a> = Box<dyn Fn(&mut Vec<u8>) + 'a>;
+
 /// Models whose checksum is right but whose content the estimator could not use.
 #[test]
 fn inconsistent_models_are_refused_with_what_is_wrong() {
@@ -98,7 +101,7 @@ fn inconsistent_models_are_refused_with_what_is_wrong() {
     let word = |b: &mut Vec<u8>, at: usize, v: u32| b[at..at + 4].copy_from_slice(&v.to_le_bytes());
     // Header words: magic (8), version, connections, n_eye, n_light_surface, n_light;
     // the eye tree's node count at 28, its first node at 32 (axis, threshold, child, label).
-    let cases: Vec<(&str, Box<dyn Fn(&mut Vec<u8>)>)> = vec![
+    let cases: Vec<(&str, Edit)> = vec![
         ("no eye or light subspaces", Box::new(move |b| word(b, 16, 0))),
         ("disagrees with the bins", Box::new(move |b| word(b, 24, u32::from_le_bytes(bytes[24..28].try_into().unwrap()) + 1))),
         // The root made an inner node whose children are itself: a loop in `classify`.

@@ -227,8 +227,8 @@ pub struct MemoryEstimate {
     pub lower: &'static str,
 }
 
-/// Bytes per pixel of the film: f64 sums and the staged f32 camera sample.
-const FILM_BYTES_PER_PIXEL: u64 = 24 + 12;
+/// Bytes per pixel of the film: the exact u128 sums and the staged f32 camera sample.
+pub const FILM_BYTES_PER_PIXEL: u64 = 48 + 12;
 /// Assumed vertices per light path for the estimate.
 const VERTICES_PER_PATH: u64 = 8;
 /// Assumed kernel neighbours per node of path filtering for the estimate.
@@ -599,7 +599,7 @@ mod tests {
         let large = EstimatorKind::Vcm.default_config().memory_estimate(4096 * 4096);
         assert!(large.bytes > 1000 * small.bytes && large.lower == "--light-paths");
         let film = EstimatorKind::Pt.default_config().memory_estimate(u32::MAX);
-        assert_eq!((film.bytes, film.lower), (u32::MAX as u64 * 36, "--width/--height"));
+        assert_eq!((film.bytes, film.lower), (u32::MAX as u64 * FILM_BYTES_PER_PIXEL, "--width/--height"));
     }
 
     #[test]

@@ -40,8 +40,8 @@ mod renderer;
 /// What every phase reads: the scene and the ray queries (defined with the scene).
 pub use crate::scene::Context;
 pub use config::{
-    ConfigError, DEFAULT_FILTER_SEGMENTS, EstimatorConfig, EstimatorKind, FilterConfig, FilterReuse, FilterSide, KernelChoice, LvcbptConfig, MAX_DATASET,
-    MAX_FILTER_SEGMENTS, MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig, SegmentAlgorithm, SegmentConfig, SpcbptConfig,
+    ConfigError, DEFAULT_FILTER_SEGMENTS, EstimatorConfig, EstimatorKind, FILM_BYTES_PER_PIXEL, FilterConfig, FilterReuse, FilterSide, KernelChoice,
+    LvcbptConfig, MAX_DATASET, MAX_FILTER_SEGMENTS, MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig, SegmentAlgorithm, SegmentConfig, SpcbptConfig,
 };
 pub use film::{Film, FilmError, QUANTUM_BITS, Tallies};
 pub use renderer::Renderer;

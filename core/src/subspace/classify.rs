@@ -491,7 +491,7 @@ impl LightSourceBins {
             return Err("light-source bins for another number of lights");
         }
         for (l, &rows) in light_rows.iter().enumerate() {
-            let bins = light_first[l + 1].checked_sub(light_first[l]).unwrap_or(0);
+            let bins = light_first[l + 1].saturating_sub(light_first[l]);
             if bins == 0 || rows == 0 || rows > bins {
                 return Err("a light with no bins, or more rows than bins");
             }
