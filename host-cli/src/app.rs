@@ -265,6 +265,10 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     // Fail early on what needs no work. A split render's range needs only the options.
     let split = match args.spp {
         Some(total) => distributed::requested_range(&args.split, total).map_err(AppError::Output)?,
+        // clap requires --spp with the others; --task-count alone must not pass silently.
+        None if args.split != crate::cli::SplitArgs::default() => {
+            return Err(AppError::Output("--task-count needs --task-index or --task-from-env, and --spp (the total)".into()));
+        }
         None => None,
     };
     let (mut exr, png) = args.output_paths().map_err(AppError::Output)?;

@@ -134,6 +134,8 @@ fn merge_refuses_mismatched_overlapping_and_incomplete_sets() {
         (&["render", "--spp", "2", "--task-index", "0", "--task-count", "3"], "cannot share"),
         (&["render", "--spp", "4", "--task-from-env"], "neither SLURM_ARRAY_TASK_ID"),
         (&["render", "--spp", "4", "--passes", "0..2", "-o", "p-{task}.exr"], "{task}"),
+        (&["render", "--task-count", "4"], "--task-count needs"),
+        (&["render", "--spp", "4", "--task-count", "4"], "--task-count needs"),
     ] {
         let e = String::from_utf8_lossy(&ember(args, &[]).stderr).into_owned();
         assert!(e.contains(needle), "{args:?}: {e}");
