@@ -22,6 +22,9 @@ cargo build --release -p ember-core --target x86_64-unknown-none
 step "workspace tests (optimised)"
 cargo test --release --workspace
 
+step "the C API from C: the example and the error table under AddressSanitizer and UBSan"
+scripts/test-capi.sh
+
 step "the renderer in a real browser (host-wasm, headless chromium)"
 scripts/test-browser.sh
 

@@ -1,0 +1,183 @@
+/* Embedding ember from C (docs/embedding.md): build a scene from arrays, render it
+ * once with this program's own ray tracer (two callbacks over the same arrays) and once
+ * with ember's built-in BVH, check that the two images agree, and write both as PFM.
+ *
+ *   render OUTPUT_PREFIX      (writes OUTPUT_PREFIX-callbacks.pfm, -bvh.pfm)
+ *
+ * Built and run under AddressSanitizer and UBSan by scripts/test-capi.sh. */
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ember.h"
+
+#define CHECK(call)                                                               \
+    do {                                                                          \
+        EmberStatus s_ = (call);                                                  \
+        if (s_ != EMBER_STATUS_OK) {                                              \
+            fprintf(stderr, "%s failed (%d): %s\n", #call, (int)s_, ember_last_error()); \
+            exit(1);                                                              \
+        }                                                                         \
+    } while (0)
+
+/* A closed box (floor, ceiling, three walls) with a light on the ceiling and a glass-free
+ * block: 8 quads of 2 triangles. */
+static const float POSITIONS[] = {
+    /* each quad counter-clockwise seen from inside the box (its emitting, lit side) */
+    -1, 0, -1, -1, 0, 1, 1, 0, 1, 1, 0, -1,          /* floor 0-3 */
+    -1, 2, -1, 1, 2, -1, 1, 2, 1, -1, 2, 1,          /* ceiling 4-7 */
+    -1, 0, -1, 1, 0, -1, 1, 2, -1, -1, 2, -1,        /* back 8-11 */
+    -1, 0, -1, -1, 2, -1, -1, 2, 1, -1, 0, 1,        /* left 12-15 */
+    1, 0, -1, 1, 0, 1, 1, 2, 1, 1, 2, -1,            /* right 16-19 */
+    -0.3f, 1.99f, -0.3f, 0.3f, 1.99f, -0.3f, 0.3f, 1.99f, 0.3f, -0.3f, 1.99f, 0.3f, /* light 20-23, facing down */
+    -0.5f, 0.6f, -0.4f, -0.5f, 0.6f, 0.2f, 0.1f, 0.6f, 0.2f, 0.1f, 0.6f, -0.4f,     /* block top 24-27 */
+    -0.5f, 0, 0.2f, 0.1f, 0, 0.2f, 0.1f, 0.6f, 0.2f, -0.5f, 0.6f, 0.2f,            /* block front 28-31 */
+};
+#define QUADS 8
+static uint32_t indices[QUADS * 6];
+static uint32_t tri_materials[QUADS * 2];
+static float tri_emission[QUADS * 2 * 3];
+
+static void build_arrays(void) {
+    for (uint32_t q = 0; q < QUADS; q++) {
+        uint32_t b = 4 * q;
+        uint32_t t[6] = {b, b + 1, b + 2, b, b + 2, b + 3};
+        memcpy(&indices[6 * q], t, sizeof t);
+        /* 0 white, 1 red (left), 2 green (right), 3 black light base */
+        uint32_t m = q == 3 ? 1 : q == 4 ? 2 : q == 5 ? 3 : 0;
+        tri_materials[2 * q] = tri_materials[2 * q + 1] = m;
+        for (int k = 0; k < 6; k++) tri_emission[6 * q + k] = q == 5 ? 12.0f : 0.0f;
+    }
+}
+
+/* The program's own tracer: Möller–Trumbore over every triangle. */
+typedef struct {
+    const float *p;
+    const uint32_t *idx;
+    uint32_t n;
+} Mesh;
+
+static bool hit_triangle(const Mesh *m, uint32_t t, const EmberRay *r, float tmax, float *tt, float *b1, float *b2) {
+    const float *a = &m->p[3 * m->idx[3 * t]], *b = &m->p[3 * m->idx[3 * t + 1]], *c = &m->p[3 * m->idx[3 * t + 2]];
+    double e1[3], e2[3], h[3], s[3], q[3];
+    for (int i = 0; i < 3; i++) { e1[i] = b[i] - a[i]; e2[i] = c[i] - a[i]; s[i] = r->origin[i] - a[i]; }
+    h[0] = r->dir[1] * e2[2] - r->dir[2] * e2[1];
+    h[1] = r->dir[2] * e2[0] - r->dir[0] * e2[2];
+    h[2] = r->dir[0] * e2[1] - r->dir[1] * e2[0];
+    double det = e1[0] * h[0] + e1[1] * h[1] + e1[2] * h[2];
+    if (det == 0.0) return false;
+    double inv = 1.0 / det;
+    double u = inv * (s[0] * h[0] + s[1] * h[1] + s[2] * h[2]);
+    if (u < 0.0 || u > 1.0) return false;
+    q[0] = s[1] * e1[2] - s[2] * e1[1];
+    q[1] = s[2] * e1[0] - s[0] * e1[2];
+    q[2] = s[0] * e1[1] - s[1] * e1[0];
+    double v = inv * (r->dir[0] * q[0] + r->dir[1] * q[1] + r->dir[2] * q[2]);
+    if (v < 0.0 || u + v > 1.0) return false;
+    double d = inv * (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]);
+    if (!(d > 0.0 && d < tmax)) return false;
+    *tt = (float)d; *b1 = (float)u; *b2 = (float)v;
+    return (*tt > 0.0f && *tt < tmax);
+}
+
+static bool my_intersect(void *user, const EmberRay *ray, EmberHit *hit) {
+    const Mesh *m = user;
+    float best = ray->t_max;
+    bool found = false;
+    for (uint32_t t = 0; t < m->n; t++) {
+        float tt, b1, b2;
+        if (hit_triangle(m, t, ray, best, &tt, &b1, &b2)) {
+            best = tt; found = true;
+            hit->t = tt; hit->primitive = t; hit->b1 = b1; hit->b2 = b2;
+        }
+    }
+    return found;
+}
+
+static bool my_occluded(void *user, const EmberRay *ray) {
+    const Mesh *m = user;
+    for (uint32_t t = 0; t < m->n; t++) {
+        float tt, b1, b2;
+        if (hit_triangle(m, t, ray, ray->t_max, &tt, &b1, &b2)) return true;
+    }
+    return false;
+}
+
+static void write_pfm(const char *path, const float *rgb, uint32_t w, uint32_t h) {
+    FILE *f = fopen(path, "wb");
+    if (!f) { perror(path); exit(1); }
+    fprintf(f, "PF\n%u %u\n-1.0\n", w, h);
+    /* PFM rows run bottom to top. */
+    for (uint32_t y = 0; y < h; y++) fwrite(&rgb[3 * (size_t)w * (h - 1 - y)], sizeof(float), 3 * (size_t)w, f);
+    fclose(f);
+}
+
+static float *render(EmberScene scene, const EmberRayCallbacks *callbacks, uint32_t *w, uint32_t *h) {
+    EmberRenderSettings settings = {.estimator = "bdpt", .seed = 7, .max_depth = 6, .threads = 2};
+    EmberRenderer r;
+    CHECK(ember_renderer_create(scene, &settings, callbacks, &r));
+    CHECK(ember_render_passes(r, 24));
+    CHECK(ember_renderer_size(r, w, h));
+    size_t n = 3 * (size_t)*w * *h;
+    float *rgb = malloc(n * sizeof *rgb);
+    CHECK(ember_renderer_image(r, rgb, n));
+    CHECK(ember_renderer_destroy(r));
+    return rgb;
+}
+
+int main(int argc, char **argv) {
+    if (argc != 2) { fprintf(stderr, "usage: %s OUTPUT_PREFIX\n", argv[0]); return 2; }
+    build_arrays();
+    EmberMaterial materials[4] = {
+        {.kind = EMBER_MATERIAL_KIND_DIFFUSE, .color = {0.75f, 0.75f, 0.75f}},
+        {.kind = EMBER_MATERIAL_KIND_DIFFUSE, .color = {0.7f, 0.1f, 0.1f}},
+        {.kind = EMBER_MATERIAL_KIND_DIFFUSE, .color = {0.1f, 0.7f, 0.1f}},
+        {.kind = EMBER_MATERIAL_KIND_DIFFUSE, .color = {0.0f, 0.0f, 0.0f}},
+    };
+    EmberSceneDesc desc = {
+        .positions = POSITIONS, .vertex_count = sizeof POSITIONS / sizeof POSITIONS[0] / 3,
+        .indices = indices, .triangle_count = QUADS * 2,
+        .triangle_materials = tri_materials, .triangle_emission = tri_emission,
+        .materials = materials, .material_count = 4,
+        .camera = {.origin = {0, 1, 3.4f}, .target = {0, 1, 0}, .up = {0, 1, 0}, .fov_degrees = 40, .width = 48, .height = 40},
+    };
+    EmberScene scene;
+    CHECK(ember_scene_create(&desc, &scene));
+    Mesh mesh = {POSITIONS, indices, QUADS * 2};
+    EmberRayCallbacks callbacks = {.user_data = &mesh, .intersect = my_intersect, .occluded = my_occluded};
+
+    uint32_t w, h;
+    float *mine = render(scene, &callbacks, &w, &h);
+    float *bvh = render(scene, NULL, &w, &h);
+    CHECK(ember_scene_destroy(scene));
+
+    /* The two tracers find the same surfaces; the images are two estimates of one image
+     * (same seed, tracers rounding differently): compare per 8x8 block, in the mean. */
+    double worst = 0.0, total_a = 0.0, total_b = 0.0;
+    for (uint32_t by = 0; by + 8 <= h; by += 8) {
+        for (uint32_t bx = 0; bx + 8 <= w; bx += 8) {
+            double a = 0, b = 0;
+            for (uint32_t y = by; y < by + 8; y++)
+                for (uint32_t x = bx; x < bx + 8; x++)
+                    for (int c = 0; c < 3; c++) { a += mine[3 * (y * w + x) + c]; b += bvh[3 * (y * w + x) + c]; }
+            total_a += a; total_b += b;
+            if (b > 1e-3) { double d = fabs(a / b - 1.0); if (d > worst) worst = d; }
+        }
+    }
+    printf("callback tracer / BVH: image mean ratio %.4f, worst 8x8 block %.1f %%\n", total_a / total_b, 100.0 * worst);
+    char path[4096];
+    snprintf(path, sizeof path, "%s-callbacks.pfm", argv[1]);
+    write_pfm(path, mine, w, h);
+    snprintf(path, sizeof path, "%s-bvh.pfm", argv[1]);
+    write_pfm(path, bvh, w, h);
+    free(mine);
+    free(bvh);
+    if (!(total_b > 0.0 && fabs(total_a / total_b - 1.0) < 0.03 && worst < 0.25)) {
+        fprintf(stderr, "the callback tracer's image disagrees with the BVH's\n");
+        return 1;
+    }
+    printf("wrote %s-callbacks.pfm and %s-bvh.pfm\n", argv[1], argv[1]);
+    return 0;
+}

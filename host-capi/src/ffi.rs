@@ -1,0 +1,634 @@
+//! The C functions and types (`include/ember.h` is generated from this file).
+//!
+//! Every function returns an [`EmberStatus`]; on failure, [`ember_last_error`] gives the
+//! message (per thread, valid until the thread's next ember call). Nothing panics across
+//! the boundary: each call runs under `catch_unwind`, and a caught panic is
+//! `EMBER_STATUS_PANIC` with the panic's message.
+//!
+//! The caller's undefined behaviour, which no check can catch: a pointer that is not
+//! null but does not point to as many valid elements as its count says, a `user_data`
+//! or callback that is not valid for the renderer's whole life, and callbacks that are
+//! not safe to call from several threads at once when `threads` is not 1.
+#![allow(unsafe_code)]
+
+use std::cell::RefCell;
+use std::ffi::{CStr, CString, c_char, c_void};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::{Arc, LazyLock, Mutex, RwLock};
+use std::time::Instant;
+
+use ember_cli::accel::Accel;
+use ember_cli::driver::{self, DriverConfig, Limits};
+use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
+use ember_core::math::Vec2;
+use ember_core::render::{ChunkOutput, Context, EstimatorKind, Film, Phase, Phased, Renderer};
+
+use crate::{CameraDesc, EmberStatus, Error, MaterialDesc, Registry, RendererState, Result, SceneData, SceneDesc, Settings};
+
+/// A scene handle (0 is never valid).
+pub type EmberScene = u64;
+/// A renderer handle (0 is never valid).
+pub type EmberRenderer = u64;
+
+/// Material kinds of [`EmberMaterial`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EmberMaterialKind {
+    /// Lambertian; `color` is the albedo.
+    Diffuse = 0,
+    /// A perfect mirror; `color` is the reflectance.
+    Mirror = 1,
+    /// Smooth glass; `ior` is the interior index of refraction (outside: 1).
+    Glass = 2,
+}
+
+/// A material.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct EmberMaterial {
+    pub kind: EmberMaterialKind,
+    pub color: [f32; 3],
+    pub ior: f32,
+}
+
+/// A point light.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct EmberPointLight {
+    pub position: [f32; 3],
+    pub intensity: [f32; 3],
+}
+
+/// A pinhole camera (Mitsuba's `lookat`; the field of view is horizontal).
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct EmberCamera {
+    pub origin: [f32; 3],
+    pub target: [f32; 3],
+    pub up: [f32; 3],
+    pub fov_degrees: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// A scene as arrays. The pointers are read during `ember_scene_create` only; the
+/// scene keeps its own copy.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct EmberSceneDesc {
+    /// `vertex_count` × 3 floats.
+    pub positions: *const f32,
+    pub vertex_count: u32,
+    /// `triangle_count` × 3 vertex indices; the triangle's front is counter-clockwise.
+    pub indices: *const u32,
+    pub triangle_count: u32,
+    /// `triangle_count` material indices.
+    pub triangle_materials: *const u32,
+    /// Null, or `triangle_count` × 3 floats: radiance emitted from each triangle's front
+    /// (all zero: not an emitter).
+    pub triangle_emission: *const f32,
+    /// `material_count` materials.
+    pub materials: *const EmberMaterial,
+    pub material_count: u32,
+    /// Null, or `point_light_count` lights.
+    pub point_lights: *const EmberPointLight,
+    pub point_light_count: u32,
+    pub camera: EmberCamera,
+}
+
+/// How to render. Zero in a count keeps the estimator's default.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct EmberRenderSettings {
+    /// An estimator name (`ember_estimator_name` lists them), e.g. "pt" or "bdpt".
+    pub estimator: *const c_char,
+    pub seed: u64,
+    /// Longest path in segments; -1 unbounded (Russian roulette ends paths).
+    pub max_depth: i32,
+    /// Threads for `ember_render_passes` (0: every core).
+    pub threads: u32,
+    /// Light paths per pass (LVCBPT, SPCBPT, PPM, BPM, VCM).
+    pub light_paths: u32,
+    /// Connections per camera vertex (LVCBPT, SPCBPT).
+    pub connections: u32,
+    /// Initial merging or filtering radius in pixel footprints (PPM, BPM, VCM, MVF, PhF, BPF).
+    pub radius_footprints: f32,
+}
+
+/// A ray: points `origin + t·dir` for t in (0, t_max).
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct EmberRay {
+    pub origin: [f32; 3],
+    pub dir: [f32; 3],
+    pub t_max: f32,
+}
+
+/// The closest hit an engine's tracer found: the distance, the triangle's index in the
+/// scene description, and the barycentrics of the hit point
+/// `(1 − b1 − b2)·p0 + b1·p1 + b2·p2`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct EmberHit {
+    pub t: f32,
+    pub primitive: u32,
+    pub b1: f32,
+    pub b2: f32,
+}
+
+/// The engine's ray tracer. `intersect` fills `hit` and returns true for the closest hit
+/// with t in (0, t_max), false for none; `occluded` returns true if anything is hit in
+/// (0, t_max). Both are called from the render threads, concurrently unless `threads` is 1.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct EmberRayCallbacks {
+    pub user_data: *mut c_void,
+    pub intersect: Option<extern "C" fn(user_data: *mut c_void, ray: *const EmberRay, hit: *mut EmberHit) -> bool>,
+    pub occluded: Option<extern "C" fn(user_data: *mut c_void, ray: *const EmberRay) -> bool>,
+}
+
+/// The phase `ember_phase_begin` opened.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct EmberPhaseInfo {
+    /// Chunks to map, `0..chunks`, each once, on any threads.
+    pub chunks: u32,
+    /// The pass it belongs to, or -1 for a setup phase.
+    pub pass: i64,
+}
+
+/// The engine's callbacks, checked non-null.
+#[derive(Clone, Copy, Debug)]
+pub struct Callbacks {
+    user_data: *mut c_void,
+    intersect: extern "C" fn(*mut c_void, *const EmberRay, *mut EmberHit) -> bool,
+    occluded: extern "C" fn(*mut c_void, *const EmberRay) -> bool,
+}
+
+// SAFETY: the embedder promises (ember.h, docs/embedding.md) that `user_data` and the
+// callbacks may be used from several threads at once when `threads` is not 1.
+unsafe impl Send for Callbacks {}
+// SAFETY: as above.
+unsafe impl Sync for Callbacks {}
+
+fn c_ray(ray: &Ray) -> EmberRay {
+    EmberRay { origin: ray.origin.to_array(), dir: ray.dir.to_array(), t_max: ray.t_max }
+}
+
+/// The engine's tracer as the core's `RayQuery`: the core builds the surface hit from the
+/// triangle the callback names (as the built-in BVH does).
+struct CallbackTracer<'a> {
+    cb: &'a Callbacks,
+    scene: &'a SceneData,
+}
+
+impl RayQuery for CallbackTracer<'_> {
+    fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
+        let mut hit = EmberHit::default();
+        if !(self.cb.intersect)(self.cb.user_data, &c_ray(ray), &mut hit) {
+            return None;
+        }
+        // A hit outside (0, t_max), on a triangle that does not exist, or with
+        // non-finite barycentrics breaks the callback's contract: a panic, caught at the
+        // boundary and returned as EMBER_STATUS_PANIC naming it.
+        let index = self
+            .scene
+            .triangle_index
+            .get(hit.primitive as usize)
+            .unwrap_or_else(|| panic!("the intersect callback returned primitive {} of {} triangles", hit.primitive, self.scene.triangle_index.len()));
+        if !(hit.t > 0.0 && hit.t < ray.t_max && hit.b1.is_finite() && hit.b2.is_finite()) {
+            panic!("the intersect callback returned t = {} (t_max {}) and barycentrics ({}, {})", hit.t, ray.t_max, hit.b1, hit.b2);
+        }
+        // A degenerate triangle was dropped from the scene: it has no area to be hit.
+        let tri = &self.scene.geometry.triangles[(*index)? as usize];
+        let ng = (tri.p[1] - tri.p[0]).cross(tri.p[2] - tri.p[0]).normalize();
+        let p = tri.p[0] * (1.0 - hit.b1 - hit.b2) + tri.p[1] * hit.b1 + tri.p[2] * hit.b2;
+        Some(SurfaceHit { t: hit.t, p, ng, ns: ng, uv: Vec2::new(hit.b1, hit.b2), material: tri.material, emitter: tri.emitter })
+    }
+    fn occluded(&self, ray: &Ray) -> bool {
+        (self.cb.occluded)(self.cb.user_data, &c_ray(ray))
+    }
+}
+
+/// The built-in BVH or the engine's callbacks.
+enum Tracer<'a> {
+    Bvh(&'a Accel),
+    Callbacks(CallbackTracer<'a>),
+}
+
+impl RayQuery for Tracer<'_> {
+    fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
+        match self {
+            Self::Bvh(a) => a.intersect(ray),
+            Self::Callbacks(c) => c.intersect(ray),
+        }
+    }
+    fn occluded(&self, ray: &Ray) -> bool {
+        match self {
+            Self::Bvh(a) => a.occluded(ray),
+            Self::Callbacks(c) => c.occluded(ray),
+        }
+    }
+}
+
+fn tracer<'a>(scene: &'a SceneData, callbacks: &'a Option<Callbacks>) -> Tracer<'a> {
+    match callbacks {
+        Some(cb) => Tracer::Callbacks(CallbackTracer { cb, scene }),
+        None => Tracer::Bvh(&scene.accel),
+    }
+}
+
+/// A renderer with the phase a host's own threads are mapping, if any.
+#[derive(Debug)]
+struct Shared {
+    state: RwLock<RendererState>,
+    /// Filled by `ember_phase_begin`, mapped under a read lock, reduced by `ember_phase_end`.
+    phase: RwLock<Option<(Phase, Vec<Mutex<ChunkOutput>>)>>,
+}
+
+static SCENES: LazyLock<Mutex<Registry<Arc<SceneData>>>> = LazyLock::new(Default::default);
+static RENDERERS: LazyLock<Mutex<Registry<Arc<Shared>>>> = LazyLock::new(Default::default);
+
+thread_local! {
+    static LAST_ERROR: RefCell<CString> = RefCell::new(CString::default());
+}
+
+fn set_error(message: &str) {
+    let text = CString::new(message.replace('\0', " ")).unwrap_or_default();
+    LAST_ERROR.with(|e| *e.borrow_mut() = text);
+}
+
+/// Run `f` at the boundary: its status, the message kept for `ember_last_error`, and any
+/// panic caught and turned into `Panic`.
+fn guard(f: impl FnOnce() -> Result<EmberStatus>) -> EmberStatus {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(Ok(status)) => {
+            set_error("");
+            status
+        }
+        Ok(Err(e)) => {
+            set_error(&e.message);
+            e.status
+        }
+        Err(payload) => {
+            let what = payload.downcast_ref::<&str>().map(|s| s.to_string()).or_else(|| payload.downcast_ref::<String>().cloned()).unwrap_or_default();
+            set_error(&format!("panic inside ember: {what}"));
+            EmberStatus::Panic
+        }
+    }
+}
+
+fn null(what: &str) -> Error {
+    Error::new(EmberStatus::NullPointer, format!("{what} is null"))
+}
+
+/// `count` elements at `ptr` (null allowed only when `count` is 0).
+///
+/// # Safety
+/// A non-null `ptr` must point to `count` valid, initialised `T`s.
+unsafe fn slice<'a, T>(ptr: *const T, count: u32, what: &str) -> Result<&'a [T]> {
+    if count == 0 {
+        return Ok(&[]);
+    }
+    if ptr.is_null() {
+        return Err(null(&format!("{what} (with a count of {count})")));
+    }
+    // SAFETY: the caller guarantees `count` valid elements at a non-null `ptr`.
+    Ok(unsafe { std::slice::from_raw_parts(ptr, count as usize) })
+}
+
+/// The output `ptr` points to, or an error naming it when null.
+///
+/// # Safety
+/// A non-null `ptr` must point to a valid, writable `T` for the call's duration.
+unsafe fn out<'a, T>(ptr: *mut T, what: &str) -> Result<&'a mut T> {
+    // SAFETY: the caller's contract.
+    unsafe { ptr.as_mut() }.ok_or_else(|| null(what))
+}
+
+fn scene_of(handle: EmberScene) -> Result<Arc<SceneData>> {
+    let reg = SCENES.lock().map_err(|_| Error::new(EmberStatus::Panic, "the scene registry is poisoned"))?;
+    reg.get(handle).cloned().ok_or_else(|| Error::new(EmberStatus::InvalidHandle, format!("scene handle {handle:#x} is not a live scene")))
+}
+
+fn renderer_of(handle: EmberRenderer) -> Result<Arc<Shared>> {
+    let reg = RENDERERS.lock().map_err(|_| Error::new(EmberStatus::Panic, "the renderer registry is poisoned"))?;
+    reg.get(handle).cloned().ok_or_else(|| Error::new(EmberStatus::InvalidHandle, format!("renderer handle {handle:#x} is not a live renderer")))
+}
+
+/// The message of the calling thread's last failed call ("" after a success). Valid
+/// until the thread's next ember call.
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_last_error() -> *const c_char {
+    LAST_ERROR.with(|e| e.borrow().as_ptr())
+}
+
+/// Number of estimators.
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_estimator_count() -> u32 {
+    EstimatorKind::ALL.len() as u32
+}
+
+/// The name of estimator `index` (static), or null past the end.
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_estimator_name(index: u32) -> *const c_char {
+    static NAMES: LazyLock<Vec<CString>> = LazyLock::new(|| EstimatorKind::ALL.iter().map(|k| CString::new(k.name()).unwrap_or_default()).collect());
+    NAMES.get(index as usize).map_or(std::ptr::null(), |n| n.as_ptr())
+}
+
+/// Build a scene from arrays; `*scene` receives its handle.
+///
+/// # Safety
+/// `desc` must be null or point to a valid description whose non-null pointers hold
+/// as many elements as its counts say.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn ember_scene_create(desc: *const EmberSceneDesc, scene: *mut EmberScene) -> EmberStatus {
+    guard(|| {
+        // SAFETY: null or valid, by the caller's contract.
+        let d = unsafe { desc.as_ref() }.ok_or_else(|| null("desc"))?;
+        let out = unsafe { out(scene, "scene") }?;
+        let (n, v) = (d.triangle_count, d.vertex_count);
+        let too_many =
+            |count: u32, what: &str| (count > u32::MAX / 3).then(|| Error::new(EmberStatus::InvalidArgument, format!("{what} {count} is too large")));
+        if let Some(e) = too_many(n, "triangle_count").or_else(|| too_many(v, "vertex_count")) {
+            return Err(e);
+        }
+        // SAFETY (each `slice`): the caller's contract on the description's pointers.
+        let positions = unsafe { slice(d.positions, v * 3, "positions") }?;
+        let indices = unsafe { slice(d.indices, n * 3, "indices") }?;
+        let materials = unsafe { slice(d.triangle_materials, n, "triangle_materials") }?;
+        let emission = if d.triangle_emission.is_null() { &[][..] } else { unsafe { slice(d.triangle_emission, n * 3, "triangle_emission") }? };
+        let mats = unsafe { slice(d.materials, d.material_count, "materials") }?;
+        let lights = unsafe { slice(d.point_lights, d.point_light_count, "point_lights") }?;
+        let c = d.camera;
+        let desc = SceneDesc {
+            positions: positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect(),
+            triangles: indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+            triangle_materials: materials.to_vec(),
+            triangle_emission: emission.chunks_exact(3).map(|e| [e[0], e[1], e[2]]).collect(),
+            materials: mats
+                .iter()
+                .map(|m| match m.kind {
+                    EmberMaterialKind::Diffuse => MaterialDesc::Diffuse(m.color),
+                    EmberMaterialKind::Mirror => MaterialDesc::Mirror(m.color),
+                    EmberMaterialKind::Glass => MaterialDesc::Glass(m.ior),
+                })
+                .collect(),
+            point_lights: lights.iter().map(|l| (l.position, l.intensity)).collect(),
+            camera: CameraDesc { origin: c.origin, target: c.target, up: c.up, fov_degrees: c.fov_degrees, width: c.width, height: c.height },
+        };
+        let data = SceneData::from_desc(&desc)?;
+        *out = SCENES.lock().map_err(|_| Error::new(EmberStatus::Panic, "the scene registry is poisoned"))?.insert(Arc::new(data));
+        Ok(EmberStatus::Ok)
+    })
+}
+
+/// A built-in scene ("cornell-box" or "glass-spheres") at `width` × `height`.
+///
+/// # Safety
+/// `name` must be null or a NUL-terminated string.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn ember_scene_builtin(name: *const c_char, width: u32, height: u32, scene: *mut EmberScene) -> EmberStatus {
+    guard(|| {
+        if name.is_null() {
+            return Err(null("name"));
+        }
+        // SAFETY: non-null and NUL-terminated by the caller's contract.
+        let name = unsafe { CStr::from_ptr(name) }.to_string_lossy().into_owned();
+        let out = unsafe { out(scene, "scene") }?;
+        let data = SceneData::builtin(&name, width, height)?;
+        *out = SCENES.lock().map_err(|_| Error::new(EmberStatus::Panic, "the scene registry is poisoned"))?.insert(Arc::new(data));
+        Ok(EmberStatus::Ok)
+    })
+}
+
+/// Destroy a scene handle. Renderers made from it keep the scene alive until they are
+/// destroyed.
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_scene_destroy(scene: EmberScene) -> EmberStatus {
+    guard(|| {
+        let mut reg = SCENES.lock().map_err(|_| Error::new(EmberStatus::Panic, "the scene registry is poisoned"))?;
+        reg.remove(scene).map(|_| EmberStatus::Ok).ok_or_else(|| Error::new(EmberStatus::InvalidHandle, format!("scene handle {scene:#x} is not a live scene")))
+    })
+}
+
+/// A renderer for `scene` with `settings`; `callbacks` null uses the built-in BVH.
+///
+/// # Safety
+/// `settings` must be null or valid, its `estimator` null or NUL-terminated; a non-null
+/// `callbacks` must stay valid (with its `user_data`) until the renderer is destroyed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn ember_renderer_create(
+    scene: EmberScene,
+    settings: *const EmberRenderSettings,
+    callbacks: *const EmberRayCallbacks,
+    renderer: *mut EmberRenderer,
+) -> EmberStatus {
+    guard(|| {
+        let data = scene_of(scene)?;
+        // SAFETY: null or valid, by the caller's contract.
+        let s = unsafe { settings.as_ref() }.ok_or_else(|| null("settings"))?;
+        if s.estimator.is_null() {
+            return Err(null("settings.estimator"));
+        }
+        // SAFETY: non-null and NUL-terminated by the caller's contract.
+        let estimator = unsafe { CStr::from_ptr(s.estimator) }.to_string_lossy().into_owned();
+        let settings = Settings {
+            estimator,
+            seed: s.seed,
+            max_depth: s.max_depth,
+            threads: s.threads,
+            light_paths: s.light_paths,
+            connections: s.connections,
+            radius_footprints: s.radius_footprints,
+        };
+        let callbacks = match unsafe { callbacks.as_ref() } {
+            None => None,
+            Some(cb) => match (cb.intersect, cb.occluded) {
+                (Some(intersect), Some(occluded)) => Some(Callbacks { user_data: cb.user_data, intersect, occluded }),
+                _ => return Err(null("callbacks.intersect or callbacks.occluded")),
+            },
+        };
+        let out = unsafe { out(renderer, "renderer") }?;
+        let (config, params) = settings.config()?;
+        let r = Renderer::new(&data.scene, params, config).map_err(|e| Error::new(EmberStatus::InvalidConfig, e.to_string()))?;
+        let camera = &data.scene.camera;
+        let film = Film::new(camera.width(), camera.height());
+        let threads = if settings.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { settings.threads as usize };
+        let state = RendererState { scene: data, renderer: r, film, threads, callbacks, ready: false };
+        let shared = Arc::new(Shared { state: RwLock::new(state), phase: RwLock::new(None) });
+        *out = RENDERERS.lock().map_err(|_| Error::new(EmberStatus::Panic, "the renderer registry is poisoned"))?.insert(shared);
+        Ok(EmberStatus::Ok)
+    })
+}
+
+/// Destroy a renderer handle (its film with it).
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_renderer_destroy(renderer: EmberRenderer) -> EmberStatus {
+    guard(|| {
+        let mut reg = RENDERERS.lock().map_err(|_| Error::new(EmberStatus::Panic, "the renderer registry is poisoned"))?;
+        reg.remove(renderer)
+            .map(|_| EmberStatus::Ok)
+            .ok_or_else(|| Error::new(EmberStatus::InvalidHandle, format!("renderer handle {renderer:#x} is not a live renderer")))
+    })
+}
+
+/// Render `passes` more passes on the renderer's threads (its setup first, the first
+/// time). The image is then the mean of every pass rendered so far.
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_render_passes(renderer: EmberRenderer, passes: u32) -> EmberStatus {
+    guard(|| {
+        let shared = renderer_of(renderer)?;
+        if shared.phase.read().map_err(|_| Error::new(EmberStatus::Panic, "a previous phase call panicked: destroy the renderer"))?.is_some() {
+            return Err(Error::arg("a phase is open (ember_phase_begin): end it before rendering passes"));
+        }
+        let mut guard = crate::write(&shared.state)?;
+        let st = &mut *guard;
+        let end = st.film.passes().checked_add(passes).ok_or_else(|| Error::arg(format!("{passes} more passes would pass 2^32 - 1")))?;
+        let q = tracer(&st.scene, &st.callbacks);
+        let ctx = Context { scene: &st.scene.scene, tracer: &q };
+        let limits = Limits { spp: end, deadline: None, interrupt: None, first_pass: 0 };
+        let config = DriverConfig { threads: st.threads, progress: false };
+        driver::render(&mut st.renderer, &ctx, &mut st.film, limits, config, Instant::now())
+            .map_err(|e| Error::new(EmberStatus::InvalidArgument, e.to_string()))?;
+        st.ready = true;
+        Ok(EmberStatus::Ok)
+    })
+}
+
+/// The film's size in pixels.
+///
+/// # Safety
+/// Non-null `width` and `height` must point to writable `uint32_t`s.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn ember_renderer_size(renderer: EmberRenderer, width: *mut u32, height: *mut u32) -> EmberStatus {
+    guard(|| {
+        let shared = renderer_of(renderer)?;
+        let st = crate::read(&shared.state)?;
+        let (w, h) = (unsafe { out(width, "width") }?, unsafe { out(height, "height") }?);
+        (*w, *h) = (st.film.width(), st.film.height());
+        Ok(EmberStatus::Ok)
+    })
+}
+
+/// The passes the film holds.
+///
+/// # Safety
+/// A non-null `passes` must point to a writable `uint32_t`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn ember_renderer_passes(renderer: EmberRenderer, passes: *mut u32) -> EmberStatus {
+    guard(|| {
+        let shared = renderer_of(renderer)?;
+        let st = crate::read(&shared.state)?;
+        *unsafe { out(passes, "passes") }? = st.film.passes();
+        Ok(EmberStatus::Ok)
+    })
+}
+
+/// Copy the image (the mean over passes, linear RGB, rows top to bottom) into `rgb`,
+/// which holds `floats` floats: exactly 3 × width × height.
+///
+/// # Safety
+/// A non-null `rgb` must point to `floats` writable floats.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn ember_renderer_image(renderer: EmberRenderer, rgb: *mut f32, floats: usize) -> EmberStatus {
+    guard(|| {
+        let shared = renderer_of(renderer)?;
+        let st = crate::read(&shared.state)?;
+        if rgb.is_null() {
+            return Err(null("rgb"));
+        }
+        let need = st.film.pixels() * 3;
+        if floats != need {
+            return Err(Error::arg(format!("the image holds {need} floats (3 × {} × {}), not {floats}", st.film.width(), st.film.height())));
+        }
+        // SAFETY: `floats` writable floats at a non-null `rgb`, by the caller's contract.
+        let dst = unsafe { std::slice::from_raw_parts_mut(rgb, floats) };
+        for (d, p) in dst.chunks_exact_mut(3).zip(st.film.to_rgb_f32()) {
+            d.copy_from_slice(&p);
+        }
+        Ok(EmberStatus::Ok)
+    })
+}
+
+/// For a host that brings its own threads: queue pass `pass` (after any pending setup),
+/// then open its phases one by one with `ember_phase_begin`.
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_pass_start(renderer: EmberRenderer, pass: u32) -> EmberStatus {
+    guard(|| {
+        let shared = renderer_of(renderer)?;
+        if shared.phase.read().map_err(|_| Error::new(EmberStatus::Panic, "poisoned"))?.is_some() {
+            return Err(Error::arg("a phase is open: map its chunks and end it first"));
+        }
+        let mut st = crate::write(&shared.state)?;
+        Phased::<Tracer<'_>>::start_pass(&mut st.renderer, pass);
+        Ok(EmberStatus::Ok)
+    })
+}
+
+/// Open the next pending phase (setup or pass): `*info` gets its chunk count. Returns
+/// `EMBER_STATUS_DONE` when nothing is pending. Then call `ember_phase_map` once for
+/// every chunk (on any threads, concurrently), then `ember_phase_end`.
+///
+/// # Safety
+/// A non-null `info` must point to a writable `EmberPhaseInfo`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn ember_phase_begin(renderer: EmberRenderer, info: *mut EmberPhaseInfo) -> EmberStatus {
+    guard(|| {
+        let shared = renderer_of(renderer)?;
+        let info = unsafe { out(info, "info") }?;
+        let mut open = shared.phase.write().map_err(|_| Error::new(EmberStatus::Panic, "a previous phase call panicked: destroy the renderer"))?;
+        if open.is_some() {
+            return Err(Error::arg("a phase is already open: end it first"));
+        }
+        let st = crate::read(&shared.state)?;
+        let Some(phase) = Phased::<Tracer<'_>>::next_phase(&st.renderer) else { return Ok(EmberStatus::Done) };
+        let chunks = phase.chunk_count();
+        let outputs = (0..chunks)
+            .map(|c| {
+                let mut o = ChunkOutput::default();
+                o.reset(phase.chunk_range(c));
+                Mutex::new(o)
+            })
+            .collect();
+        *info = EmberPhaseInfo { chunks: chunks as u32, pass: phase.pass.map_or(-1, i64::from) };
+        *open = Some((phase, outputs));
+        Ok(EmberStatus::Ok)
+    })
+}
+
+/// Map chunk `chunk` of the open phase. Any thread; chunks may run concurrently.
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_phase_map(renderer: EmberRenderer, chunk: u32) -> EmberStatus {
+    guard(|| {
+        let shared = renderer_of(renderer)?;
+        let open = shared.phase.read().map_err(|_| Error::new(EmberStatus::Panic, "a previous phase call panicked: destroy the renderer"))?;
+        let Some((phase, outputs)) = open.as_ref() else { return Err(Error::arg("no phase is open: call ember_phase_begin")) };
+        let slot = outputs.get(chunk as usize).ok_or_else(|| Error::arg(format!("chunk {chunk} of a phase of {} chunks", outputs.len())))?;
+        let mut o = slot.try_lock().map_err(|_| Error::new(EmberStatus::Busy, format!("chunk {chunk} is being mapped by another call")))?;
+        // The estimator is only read while chunks map: a read lock, shared by the threads.
+        let st = crate::read(&shared.state)?;
+        let q = tracer(&st.scene, &st.callbacks);
+        let ctx = Context { scene: &st.scene.scene, tracer: &q };
+        Phased::<Tracer<'_>>::map(&st.renderer, &ctx, phase, &mut o);
+        Ok(EmberStatus::Ok)
+    })
+}
+
+/// Reduce the open phase (every chunk mapped) into the estimator and the film.
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_phase_end(renderer: EmberRenderer) -> EmberStatus {
+    guard(|| {
+        let shared = renderer_of(renderer)?;
+        let mut open = shared.phase.write().map_err(|_| Error::new(EmberStatus::Panic, "a previous phase call panicked: destroy the renderer"))?;
+        let Some((phase, outputs)) = open.take() else { return Err(Error::arg("no phase is open: call ember_phase_begin")) };
+        let mut outputs: Vec<ChunkOutput> = outputs.into_iter().map(|m| m.into_inner().unwrap_or_default()).collect();
+        let mut guard = crate::write(&shared.state)?;
+        let st = &mut *guard;
+        let q = tracer(&st.scene, &st.callbacks);
+        let ctx = Context { scene: &st.scene.scene, tracer: &q };
+        Phased::<Tracer<'_>>::reduce(&mut st.renderer, &ctx, &phase, &mut outputs, &mut st.film);
+        st.ready = true;
+        Ok(EmberStatus::Ok)
+    })
+}

@@ -1,0 +1,343 @@
+//! ember for engines written in C, C++ or anything with a C FFI (docs/embedding.md).
+//!
+//! The model is Embree's: opaque handles with create and destroy, a status code from
+//! every call plus a message for the last error, and callbacks with a user-data pointer
+//! where the engine brings its own ray tracer. The C declarations are in
+//! `include/ember.h`, generated from [`ffi`] by cbindgen and checked to be current by
+//! `tests/header.rs`.
+//!
+//! Layers: this module is the safe part (the handle registry with generation-checked
+//! ids, scenes built from plain descriptions, renderers driving the core's render
+//! protocol on the CLI host's threads and BVH); [`ffi`] is the only module with
+//! `unsafe`: it turns pointers and lengths into slices, calls the engine's callbacks, and
+//! catches every panic at the boundary.
+
+pub mod ffi;
+
+use std::sync::{Arc, RwLock, RwLockReadGuard, RwLockWriteGuard, TryLockError};
+
+use ember_cli::accel::Accel;
+use ember_core::camera::{FovAxis, PerspectiveCamera};
+use ember_core::integrator::{Heuristic, MaxDepth, RenderParams};
+use ember_core::math::Vec3;
+use ember_core::merge::RadiusRule;
+use ember_core::render::{EstimatorConfig, EstimatorKind, Film, Renderer};
+use ember_core::scene::{AreaEmission, Scene, SceneBuilder, SceneGeometry};
+use ember_core::spectrum::Rgb;
+
+/// What a call returned. Every function returns one; `Ok` is 0.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EmberStatus {
+    /// Success.
+    Ok = 0,
+    /// A required pointer was null.
+    NullPointer = 1,
+    /// A count, index, size or value is out of its range (the message says which).
+    InvalidArgument = 2,
+    /// The handle was never created, or was destroyed.
+    InvalidHandle = 3,
+    /// The estimator name or a configuration value is not valid (the message names it).
+    InvalidConfig = 4,
+    /// The renderer is in use by another call (calls on one renderer do not overlap).
+    Busy = 5,
+    /// A panic inside ember was caught at the boundary; the object involved should be
+    /// destroyed (its state is unknown).
+    Panic = 6,
+    /// `ember_phase_begin`: no phase is pending (the pass is complete).
+    Done = 7,
+}
+
+/// An error: its status and message.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Error {
+    pub status: EmberStatus,
+    pub message: String,
+}
+
+impl Error {
+    pub fn new(status: EmberStatus, message: impl Into<String>) -> Self {
+        Self { status, message: message.into() }
+    }
+    fn arg(message: impl Into<String>) -> Self {
+        Self::new(EmberStatus::InvalidArgument, message)
+    }
+}
+
+/// A result of the safe layer.
+pub type Result<T> = std::result::Result<T, Error>;
+
+/// Handles: the slot index in the low 32 bits, the slot's generation in the high 32. A
+/// destroyed handle's slot gets a new generation, so the old id is refused even after
+/// the slot is reused. 0 is never a valid handle.
+#[derive(Debug)]
+pub struct Registry<T> {
+    slots: Vec<(u32, Option<T>)>,
+}
+
+impl<T> Default for Registry<T> {
+    fn default() -> Self {
+        Self { slots: Vec::new() }
+    }
+}
+
+impl<T> Registry<T> {
+    /// Store `value`; its handle.
+    pub fn insert(&mut self, value: T) -> u64 {
+        let index = match self.slots.iter().position(|(_, v)| v.is_none()) {
+            Some(i) => i,
+            None => {
+                self.slots.push((0, None));
+                self.slots.len() - 1
+            }
+        };
+        let slot = &mut self.slots[index];
+        slot.0 = slot.0.wrapping_add(1).max(1);
+        slot.1 = Some(value);
+        ((slot.0 as u64) << 32) | index as u64
+    }
+
+    fn slot(&self, handle: u64) -> Option<&(u32, Option<T>)> {
+        let (generation, index) = ((handle >> 32) as u32, handle as u32 as usize);
+        self.slots.get(index).filter(|(g, v)| *g == generation && generation != 0 && v.is_some())
+    }
+
+    /// The value behind `handle`, if it is live.
+    pub fn get(&self, handle: u64) -> Option<&T> {
+        self.slot(handle).and_then(|(_, v)| v.as_ref())
+    }
+
+    /// Remove the value behind `handle`; `None` if it was not live.
+    pub fn remove(&mut self, handle: u64) -> Option<T> {
+        self.slot(handle)?;
+        let slot = &mut self.slots[handle as u32 as usize];
+        slot.1.take()
+    }
+}
+
+/// A material of a scene description.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MaterialDesc {
+    /// Lambertian with this albedo.
+    Diffuse([f32; 3]),
+    /// A perfect mirror with this reflectance.
+    Mirror([f32; 3]),
+    /// Smooth glass with this interior index of refraction (outside: 1).
+    Glass(f32),
+}
+
+/// A scene as plain data: triangles indexing positions, a material and optional
+/// emitted radiance per triangle, point lights and a camera.
+#[derive(Clone, Debug, Default)]
+pub struct SceneDesc {
+    pub positions: Vec<[f32; 3]>,
+    pub triangles: Vec<[u32; 3]>,
+    pub triangle_materials: Vec<u32>,
+    /// Per triangle, or empty: radiance emitted from the triangle's front.
+    pub triangle_emission: Vec<[f32; 3]>,
+    pub materials: Vec<MaterialDesc>,
+    /// (position, intensity).
+    pub point_lights: Vec<([f32; 3], [f32; 3])>,
+    pub camera: CameraDesc,
+}
+
+/// A pinhole camera looking from `origin` at `target`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CameraDesc {
+    pub origin: [f32; 3],
+    pub target: [f32; 3],
+    pub up: [f32; 3],
+    /// Horizontal field of view in degrees, in (0, 180).
+    pub fov_degrees: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// A built scene: what the estimators read, the tracer's geometry, the built-in BVH and,
+/// per triangle of the description, its index in the geometry (`None`: dropped as
+/// degenerate).
+#[derive(Debug)]
+pub struct SceneData {
+    pub scene: Scene,
+    pub geometry: SceneGeometry,
+    pub accel: Accel,
+    pub triangle_index: Vec<Option<u32>>,
+}
+
+fn finite3(v: [f32; 3], what: &str) -> Result<Vec3> {
+    if v.iter().all(|x| x.is_finite()) { Ok(Vec3::from(v)) } else { Err(Error::arg(format!("{what} is not finite"))) }
+}
+
+fn colour(v: [f32; 3], what: &str) -> Result<Rgb> {
+    if v.iter().all(|x| x.is_finite() && *x >= 0.0) { Ok(Rgb::new(v[0], v[1], v[2])) } else { Err(Error::arg(format!("{what} is negative or not finite"))) }
+}
+
+impl SceneData {
+    /// Build `desc`, checking every index and value.
+    pub fn from_desc(desc: &SceneDesc) -> Result<Self> {
+        let cam = &desc.camera;
+        if cam.width == 0 || cam.height == 0 || cam.width > 65536 || cam.height > 65536 {
+            return Err(Error::arg(format!("camera size {}x{} is outside 1..=65536", cam.width, cam.height)));
+        }
+        if !(cam.fov_degrees > 0.0 && cam.fov_degrees < 180.0) {
+            return Err(Error::arg(format!("camera fov_degrees {} is outside (0, 180)", cam.fov_degrees)));
+        }
+        let (origin, target, up) = (finite3(cam.origin, "camera origin")?, finite3(cam.target, "camera target")?, finite3(cam.up, "camera up")?);
+        let forward = target - origin;
+        if forward.length_squared() == 0.0 || forward.cross(up).length_squared() == 0.0 {
+            return Err(Error::arg("camera target equals its origin, or up is parallel to the view direction"));
+        }
+        let mut b = SceneBuilder::new();
+        b.set_camera(PerspectiveCamera::new(ember_core::scene::builtin::look_at(origin, target, up), cam.fov_degrees, FovAxis::X, cam.width, cam.height));
+        let mut materials = Vec::with_capacity(desc.materials.len());
+        for (i, m) in desc.materials.iter().enumerate() {
+            let material = match *m {
+                MaterialDesc::Diffuse(c) => ember_core::bsdf::Material::diffuse(colour(c, &format!("material {i}'s albedo"))?),
+                MaterialDesc::Mirror(c) => ember_core::bsdf::Material::conductor(Rgb::ZERO, Rgb::ONE, colour(c, &format!("material {i}'s reflectance"))?),
+                MaterialDesc::Glass(ior) if ior.is_finite() && ior > 0.0 => ember_core::bsdf::Material::dielectric(ior, 1.0, Rgb::ONE, Rgb::ONE),
+                MaterialDesc::Glass(ior) => return Err(Error::arg(format!("material {i}'s index of refraction {ior} is not positive and finite"))),
+            };
+            materials.push(b.add_material(material));
+        }
+        let n = desc.triangles.len();
+        if desc.triangle_materials.len() != n {
+            return Err(Error::arg(format!("{} triangle materials for {n} triangles", desc.triangle_materials.len())));
+        }
+        if !desc.triangle_emission.is_empty() && desc.triangle_emission.len() != n {
+            return Err(Error::arg(format!("{} triangle emissions for {n} triangles (give none or one per triangle)", desc.triangle_emission.len())));
+        }
+        let positions: Vec<Vec3> = desc.positions.iter().enumerate().map(|(i, p)| finite3(*p, &format!("position {i}"))).collect::<Result<_>>()?;
+        let mut triangle_index = Vec::with_capacity(n);
+        let mut kept = 0u32;
+        for (t, tri) in desc.triangles.iter().enumerate() {
+            let p = tri.map(|v| positions.get(v as usize).copied());
+            let [Some(p0), Some(p1), Some(p2)] = p else {
+                return Err(Error::arg(format!("triangle {t} indexes a vertex past the {} positions", positions.len())));
+            };
+            let m = desc.triangle_materials[t];
+            let material =
+                *materials.get(m as usize).ok_or_else(|| Error::arg(format!("triangle {t}'s material {m} is past the {} materials", materials.len())))?;
+            let emission = match desc.triangle_emission.get(t) {
+                Some(e) if e.iter().any(|&x| x != 0.0) => Some(AreaEmission { radiance: colour(*e, &format!("triangle {t}'s emission"))?, two_sided: false }),
+                _ => None,
+            };
+            if b.add_triangle([p0, p1, p2], None, material, emission) {
+                triangle_index.push(Some(kept));
+                kept += 1;
+            } else {
+                triangle_index.push(None);
+            }
+        }
+        for (i, (p, intensity)) in desc.point_lights.iter().enumerate() {
+            let light = ember_core::light::Light::point(
+                finite3(*p, &format!("point light {i}'s position"))?,
+                colour(*intensity, &format!("point light {i}'s intensity"))?,
+            );
+            b.add_light(light);
+        }
+        let (scene, geometry, _) = b.build().map_err(|e| Error::arg(format!("the scene cannot be built: {e}")))?;
+        Ok(Self::new(scene, geometry, triangle_index))
+    }
+
+    /// A built-in scene: `cornell-box` or `glass-spheres`, as `ember render --builtin`.
+    pub fn builtin(name: &str, width: u32, height: u32) -> Result<Self> {
+        if width == 0 || height == 0 || width > 65536 || height > 65536 {
+            return Err(Error::arg(format!("size {width}x{height} is outside 1..=65536")));
+        }
+        let builder = match name {
+            "cornell-box" => ember_core::scene::builtin::cornell_box(width, height),
+            "glass-spheres" => ember_core::scene::builtin_glass::glass_spheres(width, height),
+            other => return Err(Error::arg(format!("no built-in scene '{other}' (cornell-box, glass-spheres)"))),
+        };
+        let (scene, geometry, _) = builder.build().map_err(|e| Error::arg(format!("built-in scene: {e}")))?;
+        let triangle_index = (0..geometry.triangles.len() as u32).map(Some).collect();
+        Ok(Self::new(scene, geometry, triangle_index))
+    }
+
+    fn new(scene: Scene, geometry: SceneGeometry, triangle_index: Vec<Option<u32>>) -> Self {
+        let accel = Accel::new(&geometry);
+        Self { scene, geometry, accel, triangle_index }
+    }
+}
+
+/// Rendering settings: the estimator by name and the core configuration's main knobs
+/// (0 keeps the estimator's default).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    pub estimator: String,
+    pub seed: u64,
+    pub max_depth: i32,
+    pub threads: u32,
+    pub light_paths: u32,
+    pub connections: u32,
+    pub radius_footprints: f32,
+}
+
+impl Settings {
+    /// The core's configuration for these settings, validated by the core.
+    pub fn config(&self) -> Result<(EstimatorConfig, RenderParams)> {
+        let kind = EstimatorKind::from_name(&self.estimator).ok_or_else(|| {
+            let names: Vec<&str> = EstimatorKind::ALL.iter().map(|k| k.name()).collect();
+            Error::new(EmberStatus::InvalidConfig, format!("no estimator '{}' ({})", self.estimator, names.join(", ")))
+        })?;
+        if self.max_depth < -1 {
+            return Err(Error::new(EmberStatus::InvalidConfig, format!("max_depth {} is below -1 (-1: unbounded)", self.max_depth)));
+        }
+        let light_paths = (self.light_paths > 0).then_some(self.light_paths);
+        let mut config = kind.default_config();
+        match &mut config {
+            EstimatorConfig::Lvcbpt(c) => {
+                c.light_paths = light_paths.or(c.light_paths);
+                c.connections = if self.connections > 0 { self.connections } else { c.connections };
+            }
+            EstimatorConfig::Spcbpt(c) => {
+                c.light_paths = light_paths.or(c.light_paths);
+                c.connections = if self.connections > 0 { self.connections } else { c.connections };
+            }
+            EstimatorConfig::Merging(_, c) => {
+                c.light_paths = light_paths.or(c.light_paths);
+                if self.radius_footprints != 0.0 {
+                    c.radius = RadiusRule::Footprints(self.radius_footprints);
+                }
+            }
+            EstimatorConfig::Filter(_, c) if self.radius_footprints != 0.0 => c.radius = RadiusRule::Footprints(self.radius_footprints),
+            _ => {}
+        }
+        config.validate().map_err(|e| Error::new(EmberStatus::InvalidConfig, format!("{} {e}", kind.name())))?;
+        // As `ember render`: PT's two techniques under the power heuristic.
+        let params = RenderParams { max_depth: MaxDepth(self.max_depth), seed: self.seed, heuristic: Heuristic::Power, ..RenderParams::default() };
+        Ok((config, params))
+    }
+}
+
+/// A renderer: an estimator bound to a scene (kept alive by the renderer), its film,
+/// and the engine's ray callbacks when it brought some.
+#[derive(Debug)]
+pub struct RendererState {
+    pub scene: Arc<SceneData>,
+    pub renderer: Renderer,
+    pub film: Film,
+    pub threads: usize,
+    pub callbacks: Option<ffi::Callbacks>,
+    /// Set up (setup phases run).
+    pub ready: bool,
+}
+
+/// Lock a renderer for a call that changes it, or say it is busy (or was left broken by
+/// a panic).
+pub fn write(r: &RwLock<RendererState>) -> Result<RwLockWriteGuard<'_, RendererState>> {
+    r.try_write().map_err(busy_or_poisoned)
+}
+
+/// Lock a renderer for a call that reads it (several may read at once: the chunks of a
+/// phase mapped on the host's threads).
+pub fn read(r: &RwLock<RendererState>) -> Result<RwLockReadGuard<'_, RendererState>> {
+    r.try_read().map_err(busy_or_poisoned)
+}
+
+fn busy_or_poisoned<G>(e: TryLockError<G>) -> Error {
+    match e {
+        TryLockError::WouldBlock => Error::new(EmberStatus::Busy, "the renderer is in use by another call"),
+        TryLockError::Poisoned(_) => Error::new(EmberStatus::Panic, "a previous call on this renderer panicked: destroy it"),
+    }
+}
