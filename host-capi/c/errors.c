@@ -65,6 +65,10 @@ static EmberStatus c_estimator_unknown(void) { EmberRenderSettings st = pt(); st
 static EmberStatus c_depth(void) { EmberRenderSettings st = pt(); st.max_depth = -5; return settings_with(st); }
 static EmberStatus c_light_paths(void) { EmberRenderSettings st = pt(); st.estimator = "lvcbpt"; st.light_paths = 0xffffffffu; return settings_with(st); }
 static EmberStatus c_radius(void) { EmberRenderSettings st = pt(); st.estimator = "vcm"; st.radius_footprints = -1.0f; return settings_with(st); }
+static EmberStatus c_option_unknown(void) { EmberRenderSettings st = pt(); st.estimator = "spcbpt"; st.options = "subspaces=16 spp=4"; return settings_with(st); }
+static EmberStatus c_option_value(void) { EmberRenderSettings st = pt(); st.estimator = "spcbpt"; st.options = "subspaces=many"; return settings_with(st); }
+static EmberStatus c_option_form(void) { EmberRenderSettings st = pt(); st.options = "reuse"; return settings_with(st); }
+static EmberStatus c_option_range(void) { EmberRenderSettings st = pt(); st.estimator = "bpf"; st.options = "beta=-1"; return settings_with(st); }
 static EmberStatus c_callback_null(void) {
     EmberRenderSettings st = pt(); EmberRayCallbacks cb = {.user_data = NULL, .intersect = NULL, .occluded = never}; EmberRenderer r;
     return ember_renderer_create(scene, &st, &cb, &r);
@@ -121,6 +125,10 @@ int main(void) {
         {"max_depth -5", c_depth, EMBER_STATUS_INVALID_CONFIG, "max_depth -5"},
         {"light_paths out of range", c_light_paths, EMBER_STATUS_INVALID_CONFIG, "light-paths = 4294967295 is outside"},
         {"negative radius", c_radius, EMBER_STATUS_INVALID_CONFIG, "vcm"},
+        {"option that is not an estimator's", c_option_unknown, EMBER_STATUS_INVALID_CONFIG, "no estimator option 'spp'"},
+        {"option value not a number", c_option_value, EMBER_STATUS_INVALID_CONFIG, "'many'"},
+        {"option without a value", c_option_form, EMBER_STATUS_INVALID_CONFIG, "not name=value"},
+        {"option value out of range", c_option_range, EMBER_STATUS_INVALID_CONFIG, "beta"},
         {"callback null", c_callback_null, EMBER_STATUS_NULL_POINTER, "callbacks.intersect"},
         {"image of the wrong size", c_image_size, EMBER_STATUS_INVALID_ARGUMENT, "holds 192 floats"},
         {"image null", c_image_null, EMBER_STATUS_NULL_POINTER, "rgb is null"},

@@ -103,6 +103,10 @@ typedef struct EmberRenderSettings {
   uint32_t connections;
   // Initial merging or filtering radius in pixel footprints (PPM, BPM, VCM, MVF, PhF, BPF).
   float radius_footprints;
+  // Null, or further options of the estimator's configuration: space-separated
+  // `name=value` with the names of `ember render`'s options, e.g.
+  // "subspaces=64 reuse=0" (SPCBPT) or "kernel=disk beta=1" (segments, filters).
+  const char *options;
 } EmberRenderSettings;
 
 // A ray: points `origin + t·dir` for t in (0, t_max).
@@ -179,7 +183,8 @@ enum EmberStatus ember_scene_destroy(EmberScene scene);
 // A renderer for `scene` with `settings`; `callbacks` null uses the built-in BVH.
 //
 // # Safety
-// `settings` must be null or valid, its `estimator` null or NUL-terminated; a non-null
+// `settings` must be null or valid, its `estimator` and `options` null or
+// NUL-terminated; a non-null
 // `callbacks` must stay valid (with its `user_data`) until the renderer is destroyed.
 enum EmberStatus ember_renderer_create(EmberScene scene,
                                        const struct EmberRenderSettings *settings,

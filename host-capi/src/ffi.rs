@@ -113,6 +113,10 @@ pub struct EmberRenderSettings {
     pub connections: u32,
     /// Initial merging or filtering radius in pixel footprints (PPM, BPM, VCM, MVF, PhF, BPF).
     pub radius_footprints: f32,
+    /// Null, or further options of the estimator's configuration: space-separated
+    /// `name=value` with the names of `ember render`'s options, e.g.
+    /// "subspaces=64 reuse=0" (SPCBPT) or "kernel=disk beta=1" (segments, filters).
+    pub options: *const c_char,
 }
 
 /// A ray: points `origin + t·dir` for t in (0, t_max).
@@ -415,7 +419,8 @@ pub extern "C" fn ember_scene_destroy(scene: EmberScene) -> EmberStatus {
 /// A renderer for `scene` with `settings`; `callbacks` null uses the built-in BVH.
 ///
 /// # Safety
-/// `settings` must be null or valid, its `estimator` null or NUL-terminated; a non-null
+/// `settings` must be null or valid, its `estimator` and `options` null or
+/// NUL-terminated; a non-null
 /// `callbacks` must stay valid (with its `user_data`) until the renderer is destroyed.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn ember_renderer_create(
@@ -433,6 +438,8 @@ pub unsafe extern "C" fn ember_renderer_create(
         }
         // SAFETY: non-null and NUL-terminated by the caller's contract.
         let estimator = unsafe { CStr::from_ptr(s.estimator) }.to_string_lossy().into_owned();
+        // SAFETY: null or NUL-terminated by the caller's contract.
+        let options = if s.options.is_null() { String::new() } else { unsafe { CStr::from_ptr(s.options) }.to_string_lossy().into_owned() };
         let settings = Settings {
             estimator,
             seed: s.seed,
@@ -441,6 +448,7 @@ pub unsafe extern "C" fn ember_renderer_create(
             light_paths: s.light_paths,
             connections: s.connections,
             radius_footprints: s.radius_footprints,
+            options,
         };
         let callbacks = match unsafe { callbacks.as_ref() } {
             None => None,

@@ -20,7 +20,6 @@ use ember_cli::accel::Accel;
 use ember_core::camera::{FovAxis, PerspectiveCamera};
 use ember_core::integrator::{Heuristic, MaxDepth, RenderParams};
 use ember_core::math::Vec3;
-use ember_core::merge::RadiusRule;
 use ember_core::render::{EstimatorConfig, EstimatorKind, Film, Renderer};
 use ember_core::scene::{AreaEmission, Scene, SceneBuilder, SceneGeometry};
 use ember_core::spectrum::Rgb;
@@ -260,8 +259,8 @@ impl SceneData {
     }
 }
 
-/// Rendering settings: the estimator by name and the core configuration's main knobs
-/// (0 keeps the estimator's default).
+/// Rendering settings: the estimator by name, the shared settings, and the estimator's
+/// configuration as options.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
     pub estimator: String,
@@ -271,43 +270,58 @@ pub struct Settings {
     pub light_paths: u32,
     pub connections: u32,
     pub radius_footprints: f32,
+    /// Further options of the estimator's configuration, space-separated `name=value`
+    /// with the names of `ember render`'s options (`subspaces=64 reuse=0 kernel=disk`).
+    pub options: String,
 }
 
 impl Settings {
-    /// The core's configuration for these settings, validated by the core.
+    /// The core's configuration for these settings, validated by the core. The options
+    /// go through the command line's own parser (`ember_cli::cli::CacheArgs`), so every
+    /// configuration field the CLI sets is settable here with the same names, defaults
+    /// and messages; anything but an estimator option is refused.
     pub fn config(&self) -> Result<(EstimatorConfig, RenderParams)> {
+        use clap::{Args, FromArgMatches};
+        let invalid = |m: String| Error::new(EmberStatus::InvalidConfig, m);
         let kind = EstimatorKind::from_name(&self.estimator).ok_or_else(|| {
             let names: Vec<&str> = EstimatorKind::ALL.iter().map(|k| k.name()).collect();
-            Error::new(EmberStatus::InvalidConfig, format!("no estimator '{}' ({})", self.estimator, names.join(", ")))
+            invalid(format!("no estimator '{}' ({})", self.estimator, names.join(", ")))
         })?;
         if self.max_depth < -1 {
-            return Err(Error::new(EmberStatus::InvalidConfig, format!("max_depth {} is below -1 (-1: unbounded)", self.max_depth)));
+            return Err(invalid(format!("max_depth {} is below -1 (-1: unbounded)", self.max_depth)));
         }
-        let light_paths = (self.light_paths > 0).then_some(self.light_paths);
-        let mut config = kind.default_config();
-        match &mut config {
-            EstimatorConfig::Lvcbpt(c) => {
-                c.light_paths = light_paths.or(c.light_paths);
-                c.connections = if self.connections > 0 { self.connections } else { c.connections };
-            }
-            EstimatorConfig::Spcbpt(c) => {
-                c.light_paths = light_paths.or(c.light_paths);
-                c.connections = if self.connections > 0 { self.connections } else { c.connections };
-            }
-            EstimatorConfig::Merging(_, c) => {
-                c.light_paths = light_paths.or(c.light_paths);
-                if self.radius_footprints != 0.0 {
-                    c.radius = RadiusRule::Footprints(self.radius_footprints);
-                }
-            }
-            EstimatorConfig::Filter(_, c) if self.radius_footprints != 0.0 => c.radius = RadiusRule::Footprints(self.radius_footprints),
-            _ => {}
+        let mut args: Vec<String> = Vec::new();
+        if self.light_paths > 0 {
+            args.push(format!("--light-paths={}", self.light_paths));
         }
-        config.validate().map_err(|e| Error::new(EmberStatus::InvalidConfig, format!("{} {e}", kind.name())))?;
+        if self.connections > 0 {
+            args.push(format!("--connections={}", self.connections));
+        }
+        if self.radius_footprints != 0.0 {
+            args.push(format!("--radius-footprints={}", self.radius_footprints));
+        }
+        let command = ember_cli::cli::CacheArgs::augment_args(clap::Command::new("options").no_binary_name(true));
+        let known: Vec<String> = command.get_arguments().filter_map(|a| a.get_long().map(str::to_string)).collect();
+        for option in self.options.split_whitespace() {
+            let (name, value) = option.split_once('=').ok_or_else(|| invalid(format!("option '{option}' is not name=value")))?;
+            if !known.iter().any(|k| k == name) {
+                return Err(invalid(format!("no estimator option '{name}' (options: {})", known.join(", "))));
+            }
+            args.push(format!("--{name}={value}"));
+        }
+        let matches = command.try_get_matches_from(&args).map_err(|e| invalid(first_line(&e.to_string())))?;
+        let cache = ember_cli::cli::CacheArgs::from_arg_matches(&matches).map_err(|e| invalid(first_line(&e.to_string())))?;
+        let config = cache.config_for(kind);
+        config.validate().map_err(|e| invalid(format!("{} {e}", kind.name())))?;
         // As `ember render`: PT's two techniques under the power heuristic.
         let params = RenderParams { max_depth: MaxDepth(self.max_depth), seed: self.seed, heuristic: Heuristic::Power, ..RenderParams::default() };
         Ok((config, params))
     }
+}
+
+/// A clap message's first line, without its `error: ` prefix.
+fn first_line(message: &str) -> String {
+    message.lines().next().unwrap_or_default().trim_start_matches("error: ").to_string()
 }
 
 /// A renderer: an estimator bound to a scene (kept alive by the renderer), its film,

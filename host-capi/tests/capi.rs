@@ -37,7 +37,16 @@ fn builtin_renderer(estimator: &str, seed: u64) -> (EmberScene, EmberRenderer) {
     let name = CString::new("cornell-box").unwrap();
     assert_eq!(unsafe { ember_scene_builtin(name.as_ptr(), W, H, &mut scene) }, EmberStatus::Ok);
     let est = CString::new(estimator).unwrap();
-    let settings = EmberRenderSettings { estimator: est.as_ptr(), seed, max_depth: -1, threads: 2, light_paths: 0, connections: 0, radius_footprints: 0.0 };
+    let settings = EmberRenderSettings {
+        estimator: est.as_ptr(),
+        seed,
+        max_depth: -1,
+        threads: 2,
+        light_paths: 0,
+        connections: 0,
+        radius_footprints: 0.0,
+        options: std::ptr::null(),
+    };
     assert_eq!(unsafe { ember_renderer_create(scene, &settings, std::ptr::null(), &mut renderer) }, EmberStatus::Ok);
     (scene, renderer)
 }
@@ -111,4 +120,42 @@ fn handles_are_generation_checked() {
     assert_eq!(reg.remove(a), None);
     assert_eq!(reg.get(b), Some(&"b"));
     assert_eq!(reg.get(0), None);
+}
+
+/// The options string sets the same configuration the CLI's flags do.
+#[test]
+fn options_configure_the_estimator_as_the_cli_flags_do() {
+    use clap::Parser;
+    let settings = ember_capi::Settings {
+        estimator: "spcbpt".into(),
+        seed: 0,
+        max_depth: 5,
+        threads: 1,
+        light_paths: 150,
+        connections: 0,
+        radius_footprints: 0.0,
+        options: "subspaces=24  dataset=2000 reuse=0 light-source-share=0".into(),
+    };
+    let (config, params) = settings.config().expect("valid options");
+    let cli = ember_cli::cli::Cli::parse_from([
+        "ember",
+        "render",
+        "-e",
+        "spcbpt",
+        "--light-paths",
+        "150",
+        "--subspaces",
+        "24",
+        "--dataset",
+        "2000",
+        "--reuse",
+        "0",
+        "--light-source-share",
+        "0",
+    ]);
+    let ember_cli::cli::Command::Render(args) = cli.command else { unreachable!() };
+    assert_eq!(config, args.cache.config_for(EstimatorKind::Spcbpt));
+    assert_eq!(params.max_depth.0, 5);
+    let bad = ember_capi::Settings { options: "subspaces=24 subspaces=30".into(), ..settings };
+    assert_eq!(bad.config().unwrap_err().status, EmberStatus::InvalidConfig, "a repeated option is refused");
 }
