@@ -206,8 +206,11 @@ impl RayQuery for CallbackTracer<'_> {
         // A degenerate triangle was dropped from the scene: it has no area to be hit.
         let tri = &self.scene.geometry.triangles[(*index)? as usize];
         let ng = (tri.p[1] - tri.p[0]).cross(tri.p[2] - tri.p[0]).normalize();
-        let p = tri.p[0] * (1.0 - hit.b1 - hit.b2) + tri.p[1] * hit.b1 + tri.p[2] * hit.b2;
-        Some(SurfaceHit { t: hit.t, p, ng, ns: ng, uv: Vec2::new(hit.b1, hit.b2), material: tri.material, emitter: tri.emitter })
+        let b0 = 1.0 - hit.b1 - hit.b2;
+        let p = tri.p[0] * b0 + tri.p[1] * hit.b1 + tri.p[2] * hit.b2;
+        // Interpolated shading normals where the triangle has them, on ng's side (as the BVH).
+        let ns = tri.n.map(|n| n[0] * b0 + n[1] * hit.b1 + n[2] * hit.b2).and_then(|n| n.try_normalize()).map_or(ng, |n| if n.dot(ng) < 0.0 { -n } else { n });
+        Some(SurfaceHit { t: hit.t, p, ng, ns, uv: Vec2::new(hit.b1, hit.b2), material: tri.material, emitter: tri.emitter })
     }
     fn occluded(&self, ray: &Ray) -> bool {
         (self.cb.occluded)(self.cb.user_data, &c_ray(ray))
