@@ -259,9 +259,20 @@ pub fn write_partial(path: &Path, header: &PartialHeader, film: &Film) -> Result
 /// Read a partial image: its header and its film. A file that is not a partial image,
 /// or whose header or channels are damaged, is an error naming the file and the problem.
 pub fn read_partial(path: &Path) -> Result<(PartialHeader, Film), String> {
+    let image = image_io::read_exr_any(path).map_err(|e| e.to_string())?;
+    partial_from_image(path, &image)
+}
+
+/// [`read_partial`] on bytes in memory, errors naming `name` (the fuzz target's entry
+/// point). Never panics on malformed input.
+pub fn read_partial_from_bytes(name: &Path, bytes: &[u8]) -> Result<(PartialHeader, Film), String> {
+    let image = image_io::read_exr_any_from_bytes(name, bytes).map_err(|e| e.to_string())?;
+    partial_from_image(name, &image)
+}
+
+fn partial_from_image(path: &Path, image: &exr::image::FlatImage) -> Result<(PartialHeader, Film), String> {
     use exr::prelude::{AttributeValue, FlatSamples};
     let name = path.display();
-    let image = image_io::read_exr_any(path).map_err(|e| e.to_string())?;
     let layer = image.layer_data.first().ok_or_else(|| format!("{name}: no image layer"))?;
     let fields: BTreeMap<String, String> = match layer.attributes.other.get(&text(ATTRIBUTE)) {
         Some(AttributeValue::Text(t)) => {

@@ -138,13 +138,22 @@ pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
 /// Every layer, channel and attribute of an EXR file (the partial images of split
 /// renders, `crate::distributed`), with the same header checks as [`read_exr`].
 pub fn read_exr_any(path: &Path) -> Result<exr::image::FlatImage, ImageError> {
-    use exr::prelude::*;
     let fail = |e: exr::error::Error| ImageError::new(path, ImageErrorKind::Exr(e));
     let file = File::open(path).map_err(|e| fail(e.into()))?;
     let len = file.metadata().map_err(|e| fail(e.into()))?.len();
-    let mut reader = std::io::BufReader::new(file);
-    check_exr_header(&mut reader, len).map_err(fail)?;
-    read().no_deep_data().largest_resolution_level().all_channels().all_layers().all_attributes().non_parallel().from_buffered(reader).map_err(fail)
+    decode_any(std::io::BufReader::new(file), len).map_err(fail)
+}
+
+/// [`read_exr_any`] on bytes in memory, errors naming `name` (the partial-image fuzz
+/// target's entry point). Never panics on malformed input.
+pub fn read_exr_any_from_bytes(name: &Path, bytes: &[u8]) -> Result<exr::image::FlatImage, ImageError> {
+    decode_any(std::io::Cursor::new(bytes), bytes.len() as u64).map_err(|e| ImageError::new(name, ImageErrorKind::Exr(e)))
+}
+
+fn decode_any(mut reader: impl std::io::Read + std::io::Seek, len: u64) -> Result<exr::image::FlatImage, exr::error::Error> {
+    use exr::prelude::*;
+    check_exr_header(&mut reader, len)?;
+    read().no_deep_data().largest_resolution_level().all_channels().all_layers().all_attributes().non_parallel().from_buffered(reader)
 }
 
 /// [`read_exr`] on bytes already in memory (the fuzz target's entry point); errors name
