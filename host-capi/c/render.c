@@ -129,6 +129,7 @@ static float *render(EmberScene scene, const EmberRayCallbacks *callbacks, uint3
 
 int main(int argc, char **argv) {
     if (argc != 2) { fprintf(stderr, "usage: %s OUTPUT_PREFIX\n", argv[0]); return 2; }
+    printf("%s\n", ember_version());
     build_arrays();
     EmberMaterial materials[4] = {
         {.kind = EMBER_MATERIAL_KIND_DIFFUSE, .color = {0.75f, 0.75f, 0.75f}},

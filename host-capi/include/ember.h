@@ -154,6 +154,10 @@ extern "C" {
 // until the thread's next ember call.
 const char *ember_last_error(void);
 
+// This library's version and build, e.g. "ember 0.1.0 (commit 0123456789ab)" (static):
+// the same string split renders record, so an engine can log which build rendered.
+const char *ember_version(void);
+
 // Number of estimators.
 uint32_t ember_estimator_count(void);
 

@@ -330,6 +330,14 @@ pub extern "C" fn ember_last_error() -> *const c_char {
     LAST_ERROR.with(|e| e.borrow().as_ptr())
 }
 
+/// This library's version and build, e.g. "ember 0.1.0 (commit 0123456789ab)" (static):
+/// the same string split renders record, so an engine can log which build rendered.
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_version() -> *const c_char {
+    static VERSION: LazyLock<CString> = LazyLock::new(|| CString::new(ember_cli::distributed::program_version()).unwrap_or_default());
+    VERSION.as_ptr()
+}
+
 /// Number of estimators.
 #[unsafe(no_mangle)]
 pub extern "C" fn ember_estimator_count() -> u32 {
