@@ -270,11 +270,19 @@ pub fn read_partial_from_bytes(name: &Path, bytes: &[u8]) -> Result<(PartialHead
     partial_from_image(name, &image)
 }
 
-fn partial_from_image(path: &Path, image: &exr::image::FlatImage) -> Result<(PartialHeader, Film), String> {
-    use exr::prelude::{AttributeValue, FlatSamples};
+/// A partial image's header alone (the file's EXR header, not its pixels): what
+/// `merge` checks before it reads any film.
+pub fn read_partial_header(path: &Path) -> Result<PartialHeader, String> {
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| format!("{}: {e}", path.display()))?;
+    let header = meta.headers.first().ok_or_else(|| format!("{}: no image layer", path.display()))?;
+    header_from(path, &header.own_attributes, header.layer_size)
+}
+
+/// The [`PartialHeader`] in a layer's attributes, for a layer of `size`.
+fn header_from(path: &Path, attributes: &exr::meta::header::LayerAttributes, size: exr::math::Vec2<usize>) -> Result<PartialHeader, String> {
+    use exr::prelude::AttributeValue;
     let name = path.display();
-    let layer = image.layer_data.first().ok_or_else(|| format!("{name}: no image layer"))?;
-    let fields: BTreeMap<String, String> = match layer.attributes.other.get(&text(ATTRIBUTE)) {
+    let fields: BTreeMap<String, String> = match attributes.other.get(&text(ATTRIBUTE)) {
         Some(AttributeValue::Text(t)) => {
             String::from_utf8_lossy(t.bytes()).lines().filter_map(|l| l.split_once(": ").map(|(k, v)| (k.to_string(), v.to_string()))).collect()
         }
@@ -298,9 +306,9 @@ fn partial_from_image(path: &Path, image: &exr::image::FlatImage) -> Result<(Par
     let tallies: Vec<u64> = get("tallies")?.split(' ').map(|v| v.parse::<u64>()).collect::<Result<_, _>>().map_err(|_| format!("{name}: damaged tallies"))?;
     let [discarded, splats_outside, saturated] = tallies[..] else { return Err(format!("{name}: damaged tallies")) };
     let scene_hash = u64::from_str_radix(&get("scene_hash")?, 16).map_err(|_| format!("{name}: damaged scene_hash"))?;
-    let size = layer.size;
-    let (width, height) = (size.width() as u32, size.height() as u32);
-    let header = PartialHeader {
+    let (width, height) = (u32::try_from(size.width()), u32::try_from(size.height()));
+    let (Ok(width), Ok(height)) = (width, height) else { return Err(format!("{name}: a {}x{} image", size.width(), size.height())) };
+    Ok(PartialHeader {
         program: get("program")?,
         scene: get("scene")?,
         scene_hash,
@@ -312,7 +320,17 @@ fn partial_from_image(path: &Path, image: &exr::image::FlatImage) -> Result<(Par
         passes,
         total,
         tallies: Tallies { discarded, splats_outside, saturated },
-    };
+    })
+}
+
+fn partial_from_image(path: &Path, image: &exr::image::FlatImage) -> Result<(PartialHeader, Film), String> {
+    use exr::prelude::FlatSamples;
+    let name = path.display();
+    let layer = image.layer_data.first().ok_or_else(|| format!("{name}: no image layer"))?;
+    let size = layer.size;
+    let header = header_from(path, &layer.attributes, size)?;
+    let (width, height) = (header.width, header.height);
+    let passes = header.passes;
     let pixels = size.width() * size.height();
     let mut sums = vec![[0u128; 3]; pixels];
     for (c, ch) in ["R", "G", "B"].iter().enumerate() {
@@ -387,18 +405,21 @@ pub fn check_parts(parts: &[(PathBuf, PartialHeader)]) -> Result<(), MergeError>
 }
 
 /// Read, check and merge `paths`: the header of the whole render (passes 0..total,
-/// tallies summed) and its film.
+/// tallies summed) and its film. The headers are read and checked first, without any
+/// pixels; then the films are read one at a time and added, so memory holds two films
+/// however many parts there are.
 pub fn merge_parts(paths: &[PathBuf]) -> Result<(PartialHeader, Film), String> {
     let mut headers = Vec::with_capacity(paths.len());
-    let mut films = Vec::with_capacity(paths.len());
     for path in paths {
-        let (header, film) = read_partial(path)?;
-        headers.push((path.clone(), header));
-        films.push(film);
+        headers.push((path.clone(), read_partial_header(path)?));
     }
     check_parts(&headers).map_err(|e| e.to_string())?;
     let mut whole: Option<Film> = None;
-    for film in films {
+    for (path, checked) in &headers {
+        let (header, film) = read_partial(path)?;
+        if header != *checked {
+            return Err(format!("{} changed while the parts were merged", path.display()));
+        }
         match &mut whole {
             None => whole = Some(film),
             Some(w) => w.merge(&film).map_err(|e| e.to_string())?,

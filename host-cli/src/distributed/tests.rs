@@ -140,6 +140,7 @@ fn partial_images_round_trip_exactly() {
     write_partial(&path, &h, &film).unwrap();
     let (back, restored) = read_partial(&path).unwrap();
     assert_eq!(back, h);
+    assert_eq!(read_partial_header(&path).unwrap(), h, "the header alone, as merge checks it");
     assert_eq!(restored.exact_sums(), film.exact_sums());
     assert_eq!(restored.passes(), 4);
     assert_eq!(restored.to_rgb_f32(), film.to_rgb_f32());
