@@ -79,6 +79,20 @@ static EmberStatus c_size_null(void) { uint32_t w; return ember_renderer_size(re
 static EmberStatus c_dead_renderer(void) { return ember_render_passes(dead_renderer, 1); }
 static EmberStatus c_map_unopened(void) { return ember_phase_map(renderer, 0); }
 static EmberStatus c_end_unopened(void) { return ember_phase_end(renderer); }
+/* A fresh renderer's first phase (setup or pass 0), ended with no chunk mapped, then a
+ * chunk mapped twice. */
+static EmberRenderer phased;
+static EmberStatus c_end_unmapped(void) {
+    EmberPhaseInfo info;
+    EmberStatus s = ember_pass_start(phased, 0);
+    if (s == EMBER_STATUS_OK) s = ember_phase_begin(phased, &info);
+    return s == EMBER_STATUS_OK ? ember_phase_end(phased) : s;
+}
+static EmberStatus c_map_twice(void) {
+    EmberStatus s = ember_phase_map(phased, 0);
+    return s == EMBER_STATUS_OK ? ember_phase_map(phased, 0) : s;
+}
+static EmberStatus c_begin_open(void) { EmberPhaseInfo info; return ember_phase_begin(phased, &info); }
 static EmberStatus c_panic(void) {
     EmberRenderSettings st = pt(); EmberRayCallbacks cb = {.user_data = NULL, .intersect = bad_intersect, .occluded = never}; EmberRenderer r;
     EmberStatus s = ember_renderer_create(scene, &st, &cb, &r);
@@ -100,6 +114,7 @@ int main(void) {
     EmberRenderSettings st = pt();
     if (ember_renderer_create(scene, &st, NULL, &renderer) != EMBER_STATUS_OK) { fprintf(stderr, "setup: %s\n", ember_last_error()); return 1; }
     if (ember_renderer_create(scene, &st, NULL, &dead_renderer) != EMBER_STATUS_OK || ember_renderer_destroy(dead_renderer) != EMBER_STATUS_OK) return 1;
+    if (ember_renderer_create(scene, &st, NULL, &phased) != EMBER_STATUS_OK) return 1;
     /* A new scene may reuse the destroyed one's slot: the old handle must stay dead. */
     EmberScene reuse;
     if (ember_scene_create(&d, &reuse) != EMBER_STATUS_OK) return 1;
@@ -136,6 +151,9 @@ int main(void) {
         {"destroyed renderer", c_dead_renderer, EMBER_STATUS_INVALID_HANDLE, "not a live renderer"},
         {"map with no phase open", c_map_unopened, EMBER_STATUS_INVALID_ARGUMENT, "no phase is open"},
         {"end with no phase open", c_end_unopened, EMBER_STATUS_INVALID_ARGUMENT, "no phase is open"},
+        {"end with a chunk not mapped", c_end_unmapped, EMBER_STATUS_INVALID_ARGUMENT, "chunk 0 of 1 was not mapped"},
+        {"a chunk mapped twice", c_map_twice, EMBER_STATUS_INVALID_ARGUMENT, "chunk 0 was already mapped"},
+        {"begin while a phase is open", c_begin_open, EMBER_STATUS_INVALID_ARGUMENT, "already open"},
         {"panic in the core (callback names triangle 1000)", c_panic, EMBER_STATUS_PANIC, ""},
     };
     int failed = 0;
@@ -149,6 +167,9 @@ int main(void) {
     /* A success clears the message. */
     uint32_t w, h;
     if (ember_renderer_size(renderer, &w, &h) != EMBER_STATUS_OK || strcmp(ember_last_error(), "") != 0 || w != 8) { printf("success did not clear the message\n"); failed++; }
+    /* The phase left open above still ends once its chunk is mapped. */
+    if (ember_phase_end(phased) != EMBER_STATUS_OK) { printf("the open phase did not end: %s\n", ember_last_error()); failed++; }
+    ember_renderer_destroy(phased);
     ember_renderer_destroy(renderer);
     ember_scene_destroy(scene);
     ember_scene_destroy(reuse);

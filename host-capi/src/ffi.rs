@@ -245,12 +245,16 @@ fn tracer<'a>(scene: &'a SceneData, callbacks: &'a Option<Callbacks>) -> Tracer<
     }
 }
 
+/// One chunk of an open phase: its output and whether it has been mapped.
+type ChunkSlot = Mutex<(ChunkOutput, bool)>;
+
 /// A renderer with the phase a host's own threads are mapping, if any.
 #[derive(Debug)]
 struct Shared {
     state: RwLock<RendererState>,
     /// Filled by `ember_phase_begin`, mapped under a read lock, reduced by `ember_phase_end`.
-    phase: RwLock<Option<(Phase, Vec<Mutex<ChunkOutput>>)>>,
+    /// Each chunk's output with whether it has been mapped.
+    phase: RwLock<Option<(Phase, Vec<ChunkSlot>)>>,
 }
 
 static SCENES: LazyLock<Mutex<Registry<Arc<SceneData>>>> = LazyLock::new(Default::default);
@@ -607,7 +611,7 @@ pub unsafe extern "C" fn ember_phase_begin(renderer: EmberRenderer, info: *mut E
             .map(|c| {
                 let mut o = ChunkOutput::default();
                 o.reset(phase.chunk_range(c));
-                Mutex::new(o)
+                Mutex::new((o, false))
             })
             .collect();
         *info = EmberPhaseInfo { chunks: chunks as u32, pass: phase.pass.map_or(-1, i64::from) };
@@ -624,12 +628,20 @@ pub extern "C" fn ember_phase_map(renderer: EmberRenderer, chunk: u32) -> EmberS
         let open = shared.phase.read().map_err(|_| Error::new(EmberStatus::Panic, "a previous phase call panicked: destroy the renderer"))?;
         let Some((phase, outputs)) = open.as_ref() else { return Err(Error::arg("no phase is open: call ember_phase_begin")) };
         let slot = outputs.get(chunk as usize).ok_or_else(|| Error::arg(format!("chunk {chunk} of a phase of {} chunks", outputs.len())))?;
-        let mut o = slot.try_lock().map_err(|_| Error::new(EmberStatus::Busy, format!("chunk {chunk} is being mapped by another call")))?;
+        let mut slot = match slot.try_lock() {
+            Ok(g) => g,
+            Err(std::sync::TryLockError::WouldBlock) => return Err(Error::new(EmberStatus::Busy, format!("chunk {chunk} is being mapped by another call"))),
+            Err(std::sync::TryLockError::Poisoned(_)) => return Err(Error::new(EmberStatus::Panic, format!("mapping chunk {chunk} panicked before"))),
+        };
+        if slot.1 {
+            return Err(Error::arg(format!("chunk {chunk} was already mapped in this phase")));
+        }
         // The estimator is only read while chunks map: a read lock, shared by the threads.
         let st = crate::read(&shared.state)?;
         let q = tracer(&st.scene, &st.callbacks);
         let ctx = Context { scene: &st.scene.scene, tracer: &q };
-        Phased::<Tracer<'_>>::map(&st.renderer, &ctx, phase, &mut o);
+        Phased::<Tracer<'_>>::map(&st.renderer, &ctx, phase, &mut slot.0);
+        slot.1 = true;
         Ok(EmberStatus::Ok)
     })
 }
@@ -640,8 +652,24 @@ pub extern "C" fn ember_phase_end(renderer: EmberRenderer) -> EmberStatus {
     guard(|| {
         let shared = renderer_of(renderer)?;
         let mut open = shared.phase.write().map_err(|_| Error::new(EmberStatus::Panic, "a previous phase call panicked: destroy the renderer"))?;
-        let Some((phase, outputs)) = open.take() else { return Err(Error::arg("no phase is open: call ember_phase_begin")) };
-        let mut outputs: Vec<ChunkOutput> = outputs.into_iter().map(|m| m.into_inner().unwrap_or_default()).collect();
+        let Some((_, slots)) = open.as_ref() else { return Err(Error::arg("no phase is open: call ember_phase_begin")) };
+        // Every chunk mapped once, and none of them panicked; a missing chunk leaves the
+        // phase open for the host to map it, a panicked one closes it.
+        let problem = slots.iter().enumerate().find_map(|(c, slot)| match slot.lock() {
+            Ok(s) if s.1 => None,
+            Ok(_) => Some((false, format!("chunk {c} of {} was not mapped: map it, then end the phase", slots.len()))),
+            Err(_) => Some((true, format!("mapping chunk {c} panicked: destroy the renderer"))),
+        });
+        match problem {
+            None => {}
+            Some((false, message)) => return Err(Error::arg(message)),
+            Some((true, message)) => {
+                *open = None;
+                return Err(Error::new(EmberStatus::Panic, message));
+            }
+        }
+        let Some((phase, slots)) = open.take() else { return Err(Error::arg("no phase is open: call ember_phase_begin")) };
+        let mut outputs: Vec<ChunkOutput> = slots.into_iter().filter_map(|m| m.into_inner().ok().map(|(o, _)| o)).collect();
         let mut guard = crate::write(&shared.state)?;
         let st = &mut *guard;
         let q = tracer(&st.scene, &st.callbacks);
