@@ -3,7 +3,11 @@
 //! `render`: check the options that can fail cheaply (scene file, output path) before
 //! any work; build the renderer ([`crate::estimators::make_built`]: scene, ray
 //! queries, estimator); run the [`driver`] into a [`Film`]; write the
-//! EXR and the PNG; print a summary.
+//! EXR and the PNG; print a summary. A split render (`--passes`, `--task-*`) renders
+//! its range and writes a partial image instead ([`crate::distributed`]).
+//!
+//! `merge`: check the parts' headers, add their films, write the image. `train`: run
+//! SPCBPT's preprocessing and store it ([`crate::trained`]).
 
 use std::fmt;
 use std::path::PathBuf;
@@ -70,6 +74,10 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
         }
         Command::Convergence(args) => run_convergence(args),
         Command::Train(args) => {
+            if args.estimator != ember_core::render::EstimatorKind::Spcbpt {
+                // Refused before the scene loads: only SPCBPT's preprocessing is worth storing.
+                return Err(AppError::Estimator(format!("{} has no trained state to save: only spcbpt trains a model", args.estimator.name())));
+            }
             let out = &args.output;
             if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir()) {
                 return Err(AppError::Output(format!("output directory '{}' does not exist", dir.display())));

@@ -181,6 +181,8 @@ fn tasks_load_one_trained_model() {
     std::fs::write(&damaged, &bytes[..bytes.len() - 100]).unwrap();
     let e = fails(&render(&["--model", s(&damaged), "-o", s(&d.join("x.exr"))]));
     assert!(e.contains("damaged.bin") && e.contains("checksum"), "{e}");
+    let e = fails(&ember(&["train", "-e", "lvcbpt", "-o", s(&d.join("m.bin"))], &[]));
+    assert!(e.contains("only spcbpt trains a model"), "{e}");
     let e = fails(&render(&["--model", s(&whole), "-o", s(&d.join("x.exr"))]));
     assert!(e.contains("is not a model file"), "{e}");
     let _ = std::fs::remove_dir_all(&d);
