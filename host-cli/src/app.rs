@@ -92,8 +92,9 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
             let (header, exr, png) = merge(args)?;
             let t = header.tallies;
             println!(
-                "merged     {} parts: {} passes of {} with {}, {}x{}, seed {}",
+                "merged     {} parts: passes {} of {} of {} with {}, {}x{}, seed {}",
                 args.parts.len(),
+                header.passes,
                 header.total,
                 header.scene,
                 header.estimator,
@@ -102,7 +103,10 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
                 header.seed
             );
             println!("discarded  {} samples (NaN, infinite or negative); {} clamped sums", t.discarded, t.saturated);
-            println!("wrote      {} and {}", exr.display(), png.display());
+            match png {
+                Some(png) => println!("wrote      {} and {}", exr.display(), png.display()),
+                None => println!("wrote      {} (partial: passes {} of {}; merge it with the others)", exr.display(), header.passes, header.total),
+            }
             Ok(())
         }
         Command::Suite(args) => {
@@ -368,19 +372,25 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     Ok(RenderReport { png: Some(png), ..base })
 }
 
-/// `ember merge`: check the parts, merge them, write the EXR and the PNG; returns the
-/// merged header (passes 0..total) and the paths written.
-pub fn merge(args: &MergeArgs) -> Result<(distributed::PartialHeader, PathBuf, PathBuf), AppError> {
+/// `ember merge`: check the parts, merge them, write the EXR and the PNG (or, with
+/// `--partial`, one partial image of their contiguous range); returns the merged header
+/// and the paths written (no PNG for a partial).
+pub fn merge(args: &MergeArgs) -> Result<(distributed::PartialHeader, PathBuf, Option<PathBuf>), AppError> {
     let (exr, png) = crate::cli::output_paths(&args.output).map_err(AppError::Output)?;
     // Never overwrite an input.
     if let Some(part) = args.parts.iter().find(|p| same_file(&exr, p) || same_file(&png, p)) {
         return Err(AppError::Output(format!("output '{}' is one of the parts being merged; choose another file", part.display())));
     }
-    let (header, film) = distributed::merge_parts(&args.parts).map_err(AppError::Output)?;
+    let cover = if args.partial { distributed::Cover::Contiguous } else { distributed::Cover::All };
+    let (header, film) = distributed::merge_parts(&args.parts, cover).map_err(AppError::Output)?;
+    if args.partial {
+        distributed::write_partial(&exr, &header, &film).map_err(AppError::Image)?;
+        return Ok((header, exr, None));
+    }
     let image = film.to_rgb_f32();
     image_io::write_exr(&exr, header.width, header.height, &image).map_err(AppError::Image)?;
     image_io::write_png(&png, header.width, header.height, &image, args.exposure).map_err(AppError::Image)?;
-    Ok((header, exr, png))
+    Ok((header, exr, Some(png)))
 }
 
 /// Do two paths name the same file (the same path, or the same existing file)?

@@ -108,6 +108,10 @@ pub struct MergeArgs {
     /// Exposure of the PNG in stops (as for `render`).
     #[arg(long, value_name = "STOPS", default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
     pub exposure: f32,
+    /// Merge in stages: the parts' ranges must join into one contiguous range, written
+    /// as a partial image again (no PNG), which a later merge takes like any part.
+    #[arg(long)]
+    pub partial: bool,
 }
 
 /// Render one share of a split render (docs/distributed.md): a range of passes of a fixed

@@ -364,10 +364,20 @@ impl fmt::Display for MergeError {
     }
 }
 
-/// Check that `parts` (path, header) belong to one render and cover its passes exactly
-/// once. Problems: a part differing from the first in any identity field (the program
-/// version included), overlapping ranges, and missing ranges.
-pub fn check_parts(parts: &[(PathBuf, PartialHeader)]) -> Result<(), MergeError> {
+/// What a merge must cover.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cover {
+    /// Every pass of the render: the final image.
+    All,
+    /// One contiguous range, from the first part's start to the last part's end: a
+    /// partial image again, for merging in stages.
+    Contiguous,
+}
+
+/// Check that `parts` (path, header) belong to one render and cover `cover` exactly once;
+/// the range they cover. Problems: a part differing from the first in any identity field
+/// (the program version included), overlapping ranges, and missing ranges.
+pub fn check_parts(parts: &[(PathBuf, PartialHeader)], cover: Cover) -> Result<PassRange, MergeError> {
     let mut problems = Vec::new();
     let Some((first_path, first)) = parts.first() else { return Err(MergeError(vec!["no parts given".into()])) };
     let reference = identity_fields(first);
@@ -384,7 +394,11 @@ pub fn check_parts(parts: &[(PathBuf, PartialHeader)]) -> Result<(), MergeError>
     }
     let mut by_start: Vec<(PassRange, &Path)> = parts.iter().map(|(p, h)| (h.passes, p.as_path())).collect();
     by_start.sort();
-    let mut covered = 0u32;
+    let want = match cover {
+        Cover::All => PassRange { start: 0, end: first.total },
+        Cover::Contiguous => PassRange { start: by_start[0].0.start, end: by_start.iter().map(|(r, _)| r.end).max().unwrap_or(0) },
+    };
+    let mut covered = want.start;
     let mut last: Option<(PassRange, &Path)> = None;
     for &(r, path) in &by_start {
         if r.start > covered {
@@ -398,22 +412,22 @@ pub fn check_parts(parts: &[(PathBuf, PartialHeader)]) -> Result<(), MergeError>
         }
         covered = covered.max(r.end);
     }
-    if covered < first.total {
-        problems.push(format!("passes {}..{} of {} are missing", covered, first.total, first.total));
+    if covered < want.end {
+        problems.push(format!("passes {}..{} of {} are missing", covered, want.end, first.total));
     }
-    if problems.is_empty() { Ok(()) } else { Err(MergeError(problems)) }
+    if problems.is_empty() { Ok(want) } else { Err(MergeError(problems)) }
 }
 
-/// Read, check and merge `paths`: the header of the whole render (passes 0..total,
-/// tallies summed) and its film. The headers are read and checked first, without any
-/// pixels; then the films are read one at a time and added, so memory holds two films
-/// however many parts there are.
-pub fn merge_parts(paths: &[PathBuf]) -> Result<(PartialHeader, Film), String> {
+/// Read, check and merge `paths` to cover `cover`: the merged header (the range
+/// covered, tallies summed) and its film. The headers are read and checked first,
+/// without any pixels; then the films are read one at a time and added, so memory holds
+/// two films however many parts there are.
+pub fn merge_parts(paths: &[PathBuf], cover: Cover) -> Result<(PartialHeader, Film), String> {
     let mut headers = Vec::with_capacity(paths.len());
     for path in paths {
         headers.push((path.clone(), read_partial_header(path)?));
     }
-    check_parts(&headers).map_err(|e| e.to_string())?;
+    let covered = check_parts(&headers, cover).map_err(|e| e.to_string())?;
     let mut whole: Option<Film> = None;
     for (path, checked) in &headers {
         let (header, film) = read_partial(path)?;
@@ -427,7 +441,7 @@ pub fn merge_parts(paths: &[PathBuf]) -> Result<(PartialHeader, Film), String> {
     }
     let film = whole.ok_or("no parts given")?;
     let mut header = headers.swap_remove(0).1;
-    header.passes = PassRange { start: 0, end: header.total };
+    header.passes = covered;
     header.tallies = film.tallies();
     Ok((header, film))
 }

@@ -69,8 +69,15 @@ fn tasks_from_slurm_and_kubernetes_merge_into_the_whole_render_byte_for_byte() {
     let merged = d.join("merged.exr");
     let parts = [d.join("part-0.exr"), d.join("part-1.exr"), d.join("k8s-2.exr")];
     let out = ok(&ember(&["merge", s(&parts[2]), s(&parts[0]), s(&parts[1]), "-o", s(&merged)], &[]));
-    assert!(out.contains("merged     3 parts: 6 passes"), "{out}");
+    assert!(out.contains("merged     3 parts: passes 0..6 of 6"), "{out}");
     assert!(same_bytes(&merged, &whole), "merged EXR equals the whole render's");
+    // In stages: parts 1 and 2 into one partial, then that with part 0.
+    let stage = d.join("stage-1-2.exr");
+    let out = ok(&ember(&["merge", "--partial", s(&parts[1]), s(&parts[2]), "-o", s(&stage)], &[]));
+    assert!(out.contains("partial: passes 2..6 of 6"), "{out}");
+    let staged = d.join("staged.exr");
+    ok(&ember(&["merge", s(&stage), s(&parts[0]), "-o", s(&staged)], &[]));
+    assert!(same_bytes(&staged, &whole), "a merge in stages equals the whole render");
     assert!(d.join("merged.png").is_file());
 
     // Re-running a task is idempotent: the same bytes again.
@@ -107,6 +114,10 @@ fn merge_refuses_mismatched_overlapping_and_incomplete_sets() {
 
     let e = merge(&[&a]);
     assert!(e.contains("passes 3..6 of 6 are missing"), "{e}");
+    // A staged merge needs a contiguous run: 0..3 and 4..6 leave 3..4 out.
+    ok(&render(&["--passes", "4..6", "-o", s(&p("c.exr"))], &[]));
+    let e = fails(&ember(&["merge", "--partial", &a, s(&p("c.exr")), "-o", s(&out)], &[]));
+    assert!(e.contains("passes 3..4 of 6 are missing"), "{e}");
     let e = merge(&[&a, s(&p("overlap.exr"))]);
     assert!(e.contains("passes 2..6 of") && e.contains("overlap passes 0..3 of") && e.contains("a.exr"), "{e}");
     let e = merge(&[&a, s(&p("seed9.exr"))]);

@@ -78,7 +78,7 @@ fn four_task_shares_merge_into_the_single_render_for_every_estimator() {
             distributed::write_partial(&path, &header, &film).expect("write part");
             paths.push(path);
         }
-        let (header, merged) = distributed::merge_parts(&paths).expect("parts merge");
+        let (header, merged) = distributed::merge_parts(&paths, distributed::Cover::All).expect("parts merge");
         assert_eq!(header.passes, PassRange { start: 0, end: TOTAL });
         if merged != whole {
             let differing = merged.exact_sums().iter().zip(whole.exact_sums()).filter(|(a, b)| a != b).count();

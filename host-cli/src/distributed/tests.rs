@@ -87,18 +87,18 @@ fn part(path: &str, start: u32, end: u32) -> (PathBuf, PartialHeader) {
 /// `0..10` overlapping `5..6` once `3..4` sat between them.
 #[test]
 fn merge_checks_name_mismatches_overlaps_and_gaps() {
-    assert_eq!(check_parts(&[part("a", 0, 4), part("b", 4, 10)]), Ok(()));
-    assert_eq!(check_parts(&[part("b", 4, 10), part("a", 0, 4)]), Ok(()), "any order");
+    assert_eq!(check_parts(&[part("a", 0, 4), part("b", 4, 10)], Cover::All), Ok(PassRange { start: 0, end: 10 }));
+    assert_eq!(check_parts(&[part("b", 4, 10), part("a", 0, 4)], Cover::All), Ok(PassRange { start: 0, end: 10 }), "any order");
 
-    let gaps = check_parts(&[part("a", 0, 3), part("b", 5, 8)]).unwrap_err().0;
+    let gaps = check_parts(&[part("a", 0, 3), part("b", 5, 8)], Cover::All).unwrap_err().0;
     assert_eq!(gaps, vec!["passes 3..5 of 10 are missing".to_string(), "passes 8..10 of 10 are missing".to_string()]);
 
-    let overlap = check_parts(&[part("a", 0, 6), part("b", 4, 10)]).unwrap_err().0;
+    let overlap = check_parts(&[part("a", 0, 6), part("b", 4, 10)], Cover::All).unwrap_err().0;
     assert_eq!(overlap, vec!["passes 4..10 of 'b' overlap passes 0..6 of 'a'".to_string()]);
-    let nested = check_parts(&[part("a", 0, 10), part("b", 3, 4), part("c", 5, 6)]).unwrap_err().0;
+    let nested = check_parts(&[part("a", 0, 10), part("b", 3, 4), part("c", 5, 6)], Cover::All).unwrap_err().0;
     assert_eq!(nested.len(), 2, "{nested:?}");
     assert!(nested[1].contains("5..6 of 'c' overlap passes 0..10 of 'a'"), "{nested:?}");
-    let twice = check_parts(&[part("a", 0, 10), part("a-again", 0, 10)]).unwrap_err().0;
+    let twice = check_parts(&[part("a", 0, 10), part("a-again", 0, 10)], Cover::All).unwrap_err().0;
     assert!(twice[0].contains("'a-again' overlap"), "{twice:?}");
 
     let mut other_seed = part("b", 4, 10);
@@ -107,12 +107,17 @@ fn merge_checks_name_mismatches_overlaps_and_gaps() {
     other_version.1.program = "ember 0.0.9 (commit 123)".into();
     let mut other_scene = part("d", 4, 10);
     other_scene.1.scene_hash = 0xbeef;
-    let mismatch = check_parts(&[part("a", 0, 4), other_seed, other_version, other_scene]).unwrap_err().0;
+    let mismatch = check_parts(&[part("a", 0, 4), other_seed, other_version, other_scene], Cover::All).unwrap_err().0;
     assert_eq!(mismatch.len(), 3, "{mismatch:?}");
     assert!(mismatch[0].contains("'b' has seed 4, but 'a' has 3"), "{mismatch:?}");
     assert!(mismatch[1].contains("'c' has program version ember 0.0.9"), "{mismatch:?}");
     assert!(mismatch[2].contains("'d' has scene hash 000000000000beef"), "{mismatch:?}");
-    assert!(check_parts(&[]).is_err());
+    assert!(check_parts(&[], Cover::All).is_err());
+    // Staged merges: a contiguous run of parts covers its own range; a gap inside it is
+    // still missing.
+    assert_eq!(check_parts(&[part("c", 6, 8), part("b", 4, 6)], Cover::Contiguous), Ok(PassRange { start: 4, end: 8 }));
+    let gap = check_parts(&[part("c", 7, 8), part("b", 4, 6)], Cover::Contiguous).unwrap_err().0;
+    assert_eq!(gap, vec!["passes 6..7 of 10 are missing".to_string()]);
 }
 
 fn temp(name: &str) -> PathBuf {
@@ -173,6 +178,6 @@ fn damaged_or_foreign_files_are_refused() {
     let e = read_partial(&lying).unwrap_err();
     assert!(e.contains("reach past its total"), "{e}");
 
-    let e = merge_parts(&[good.clone(), temp("missing.exr")]).unwrap_err();
+    let e = merge_parts(&[good.clone(), temp("missing.exr")], Cover::All).unwrap_err();
     assert!(e.contains("missing.exr"), "{e}");
 }
