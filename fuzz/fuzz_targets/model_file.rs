@@ -19,15 +19,6 @@ fn scene() -> &'static Scene {
     SCENE.get_or_init(|| ember_core::scene::builtin::cornell_box(8, 8).build().expect("built-in box").0)
 }
 
-fn fnv(bytes: &[u8]) -> u64 {
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for &b in bytes {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
-
 fn check(bytes: &[u8]) {
     let Ok(model) = Model::decode(bytes, scene()) else { return };
     assert_eq!(model.encode(), bytes, "an accepted model re-encodes to its bytes");
@@ -43,7 +34,7 @@ fuzz_target!(|data: &[u8]| {
     check(data);
     if data.len() > 8 {
         let mut fixed = data[..data.len() - 8].to_vec();
-        let sum = fnv(&fixed);
+        let sum = ember_core::fnv::fnv1a(&fixed);
         fixed.extend_from_slice(&sum.to_le_bytes());
         check(&fixed);
     }

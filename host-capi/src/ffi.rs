@@ -14,7 +14,7 @@
 use std::cell::RefCell;
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::sync::{Arc, LazyLock, Mutex, RwLock};
+use std::sync::{Arc, LazyLock, Mutex, MutexGuard, RwLock, RwLockReadGuard, RwLockWriteGuard};
 use std::time::Instant;
 
 use ember_cli::accel::Accel;
@@ -23,7 +23,7 @@ use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
 use ember_core::math::Vec2;
 use ember_core::render::{ChunkOutput, Context, EstimatorKind, Film, Phase, Phased, Renderer};
 
-use crate::{CameraDesc, EmberStatus, Error, MaterialDesc, Registry, RendererState, Result, SceneData, SceneDesc, Settings};
+use crate::{EmberStatus, Error, MaterialDesc, Registry, RendererState, Result, SceneData, SceneDesc, Settings};
 
 /// A scene handle (0 is never valid).
 pub type EmberScene = u64;
@@ -61,7 +61,7 @@ pub struct EmberPointLight {
 
 /// A pinhole camera (Mitsuba's `lookat`; the field of view is horizontal).
 #[repr(C)]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct EmberCamera {
     pub origin: [f32; 3],
     pub target: [f32; 3],
@@ -254,11 +254,39 @@ struct Shared {
     state: RwLock<RendererState>,
     /// Filled by `ember_phase_begin`, mapped under a read lock, reduced by `ember_phase_end`.
     /// Each chunk's output with whether it has been mapped.
-    phase: RwLock<Option<(Phase, Vec<ChunkSlot>)>>,
+    phase: RwLock<OpenPhase>,
+}
+
+/// An open phase: the phase and its chunks.
+type OpenPhase = Option<(Phase, Vec<ChunkSlot>)>;
+
+impl Shared {
+    fn phase_read(&self) -> Result<RwLockReadGuard<'_, OpenPhase>> {
+        self.phase.read().map_err(|_| Error::new(EmberStatus::Panic, "a previous phase call panicked: destroy the renderer"))
+    }
+    fn phase_write(&self) -> Result<RwLockWriteGuard<'_, OpenPhase>> {
+        self.phase.write().map_err(|_| Error::new(EmberStatus::Panic, "a previous phase call panicked: destroy the renderer"))
+    }
 }
 
 static SCENES: LazyLock<Mutex<Registry<Arc<SceneData>>>> = LazyLock::new(Default::default);
 static RENDERERS: LazyLock<Mutex<Registry<Arc<Shared>>>> = LazyLock::new(Default::default);
+
+fn scenes() -> Result<MutexGuard<'static, Registry<Arc<SceneData>>>> {
+    SCENES.lock().map_err(|_| Error::new(EmberStatus::Panic, "the scene registry is poisoned"))
+}
+
+fn renderers() -> Result<MutexGuard<'static, Registry<Arc<Shared>>>> {
+    RENDERERS.lock().map_err(|_| Error::new(EmberStatus::Panic, "the renderer registry is poisoned"))
+}
+
+fn dead_scene(handle: EmberScene) -> Error {
+    Error::new(EmberStatus::InvalidHandle, format!("scene handle {handle:#x} is not a live scene"))
+}
+
+fn dead_renderer(handle: EmberRenderer) -> Error {
+    Error::new(EmberStatus::InvalidHandle, format!("renderer handle {handle:#x} is not a live renderer"))
+}
 
 thread_local! {
     static LAST_ERROR: RefCell<CString> = RefCell::new(CString::default());
@@ -318,13 +346,11 @@ unsafe fn out<'a, T>(ptr: *mut T, what: &str) -> Result<&'a mut T> {
 }
 
 fn scene_of(handle: EmberScene) -> Result<Arc<SceneData>> {
-    let reg = SCENES.lock().map_err(|_| Error::new(EmberStatus::Panic, "the scene registry is poisoned"))?;
-    reg.get(handle).cloned().ok_or_else(|| Error::new(EmberStatus::InvalidHandle, format!("scene handle {handle:#x} is not a live scene")))
+    scenes()?.get(handle).cloned().ok_or_else(|| dead_scene(handle))
 }
 
 fn renderer_of(handle: EmberRenderer) -> Result<Arc<Shared>> {
-    let reg = RENDERERS.lock().map_err(|_| Error::new(EmberStatus::Panic, "the renderer registry is poisoned"))?;
-    reg.get(handle).cloned().ok_or_else(|| Error::new(EmberStatus::InvalidHandle, format!("renderer handle {handle:#x} is not a live renderer")))
+    renderers()?.get(handle).cloned().ok_or_else(|| dead_renderer(handle))
 }
 
 /// The message of the calling thread's last failed call ("" after a success). Valid
@@ -379,7 +405,6 @@ pub unsafe extern "C" fn ember_scene_create(desc: *const EmberSceneDesc, scene: 
         let emission = if d.triangle_emission.is_null() { &[][..] } else { unsafe { slice(d.triangle_emission, n * 3, "triangle_emission") }? };
         let mats = unsafe { slice(d.materials, d.material_count, "materials") }?;
         let lights = unsafe { slice(d.point_lights, d.point_light_count, "point_lights") }?;
-        let c = d.camera;
         let desc = SceneDesc {
             positions: positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect(),
             triangles: indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
@@ -394,10 +419,10 @@ pub unsafe extern "C" fn ember_scene_create(desc: *const EmberSceneDesc, scene: 
                 })
                 .collect(),
             point_lights: lights.iter().map(|l| (l.position, l.intensity)).collect(),
-            camera: CameraDesc { origin: c.origin, target: c.target, up: c.up, fov_degrees: c.fov_degrees, width: c.width, height: c.height },
+            camera: d.camera,
         };
         let data = SceneData::from_desc(&desc)?;
-        *out = SCENES.lock().map_err(|_| Error::new(EmberStatus::Panic, "the scene registry is poisoned"))?.insert(Arc::new(data));
+        *out = scenes()?.insert(Arc::new(data));
         Ok(EmberStatus::Ok)
     })
 }
@@ -416,7 +441,7 @@ pub unsafe extern "C" fn ember_scene_builtin(name: *const c_char, width: u32, he
         let name = unsafe { CStr::from_ptr(name) }.to_string_lossy().into_owned();
         let out = unsafe { out(scene, "scene") }?;
         let data = SceneData::builtin(&name, width, height)?;
-        *out = SCENES.lock().map_err(|_| Error::new(EmberStatus::Panic, "the scene registry is poisoned"))?.insert(Arc::new(data));
+        *out = scenes()?.insert(Arc::new(data));
         Ok(EmberStatus::Ok)
     })
 }
@@ -425,10 +450,7 @@ pub unsafe extern "C" fn ember_scene_builtin(name: *const c_char, width: u32, he
 /// destroyed.
 #[unsafe(no_mangle)]
 pub extern "C" fn ember_scene_destroy(scene: EmberScene) -> EmberStatus {
-    guard(|| {
-        let mut reg = SCENES.lock().map_err(|_| Error::new(EmberStatus::Panic, "the scene registry is poisoned"))?;
-        reg.remove(scene).map(|_| EmberStatus::Ok).ok_or_else(|| Error::new(EmberStatus::InvalidHandle, format!("scene handle {scene:#x} is not a live scene")))
-    })
+    guard(|| scenes()?.remove(scene).map(|_| EmberStatus::Ok).ok_or_else(|| dead_scene(scene)))
 }
 
 /// A renderer for `scene` with `settings`; `callbacks` null uses the built-in BVH.
@@ -480,7 +502,7 @@ pub unsafe extern "C" fn ember_renderer_create(
         let threads = if settings.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { settings.threads as usize };
         let state = RendererState { scene: data, renderer: r, film, threads, callbacks, ready: false };
         let shared = Arc::new(Shared { state: RwLock::new(state), phase: RwLock::new(None) });
-        *out = RENDERERS.lock().map_err(|_| Error::new(EmberStatus::Panic, "the renderer registry is poisoned"))?.insert(shared);
+        *out = renderers()?.insert(shared);
         Ok(EmberStatus::Ok)
     })
 }
@@ -488,12 +510,7 @@ pub unsafe extern "C" fn ember_renderer_create(
 /// Destroy a renderer handle (its film with it).
 #[unsafe(no_mangle)]
 pub extern "C" fn ember_renderer_destroy(renderer: EmberRenderer) -> EmberStatus {
-    guard(|| {
-        let mut reg = RENDERERS.lock().map_err(|_| Error::new(EmberStatus::Panic, "the renderer registry is poisoned"))?;
-        reg.remove(renderer)
-            .map(|_| EmberStatus::Ok)
-            .ok_or_else(|| Error::new(EmberStatus::InvalidHandle, format!("renderer handle {renderer:#x} is not a live renderer")))
-    })
+    guard(|| renderers()?.remove(renderer).map(|_| EmberStatus::Ok).ok_or_else(|| dead_renderer(renderer)))
 }
 
 /// Render `passes` more passes on the renderer's threads (its setup first, the first
@@ -502,7 +519,7 @@ pub extern "C" fn ember_renderer_destroy(renderer: EmberRenderer) -> EmberStatus
 pub extern "C" fn ember_render_passes(renderer: EmberRenderer, passes: u32) -> EmberStatus {
     guard(|| {
         let shared = renderer_of(renderer)?;
-        if shared.phase.read().map_err(|_| Error::new(EmberStatus::Panic, "a previous phase call panicked: destroy the renderer"))?.is_some() {
+        if shared.phase_read()?.is_some() {
             return Err(Error::arg("a phase is open (ember_phase_begin): end it before rendering passes"));
         }
         let mut guard = crate::write(&shared.state)?;
@@ -580,7 +597,7 @@ pub unsafe extern "C" fn ember_renderer_image(renderer: EmberRenderer, rgb: *mut
 pub extern "C" fn ember_pass_start(renderer: EmberRenderer, pass: u32) -> EmberStatus {
     guard(|| {
         let shared = renderer_of(renderer)?;
-        if shared.phase.read().map_err(|_| Error::new(EmberStatus::Panic, "poisoned"))?.is_some() {
+        if shared.phase_read()?.is_some() {
             return Err(Error::arg("a phase is open: map its chunks and end it first"));
         }
         let mut st = crate::write(&shared.state)?;
@@ -600,7 +617,7 @@ pub unsafe extern "C" fn ember_phase_begin(renderer: EmberRenderer, info: *mut E
     guard(|| {
         let shared = renderer_of(renderer)?;
         let info = unsafe { out(info, "info") }?;
-        let mut open = shared.phase.write().map_err(|_| Error::new(EmberStatus::Panic, "a previous phase call panicked: destroy the renderer"))?;
+        let mut open = shared.phase_write()?;
         if open.is_some() {
             return Err(Error::arg("a phase is already open: end it first"));
         }
@@ -625,7 +642,7 @@ pub unsafe extern "C" fn ember_phase_begin(renderer: EmberRenderer, info: *mut E
 pub extern "C" fn ember_phase_map(renderer: EmberRenderer, chunk: u32) -> EmberStatus {
     guard(|| {
         let shared = renderer_of(renderer)?;
-        let open = shared.phase.read().map_err(|_| Error::new(EmberStatus::Panic, "a previous phase call panicked: destroy the renderer"))?;
+        let open = shared.phase_read()?;
         let Some((phase, outputs)) = open.as_ref() else { return Err(Error::arg("no phase is open: call ember_phase_begin")) };
         let slot = outputs.get(chunk as usize).ok_or_else(|| Error::arg(format!("chunk {chunk} of a phase of {} chunks", outputs.len())))?;
         let mut slot = match slot.try_lock() {
@@ -651,7 +668,7 @@ pub extern "C" fn ember_phase_map(renderer: EmberRenderer, chunk: u32) -> EmberS
 pub extern "C" fn ember_phase_end(renderer: EmberRenderer) -> EmberStatus {
     guard(|| {
         let shared = renderer_of(renderer)?;
-        let mut open = shared.phase.write().map_err(|_| Error::new(EmberStatus::Panic, "a previous phase call panicked: destroy the renderer"))?;
+        let mut open = shared.phase_write()?;
         let Some((_, slots)) = open.as_ref() else { return Err(Error::arg("no phase is open: call ember_phase_begin")) };
         // Every chunk mapped once, and none of them panicked; a missing chunk leaves the
         // phase open for the host to map it, a panicked one closes it.

@@ -137,19 +137,8 @@ pub struct SceneDesc {
     pub materials: Vec<MaterialDesc>,
     /// (position, intensity).
     pub point_lights: Vec<([f32; 3], [f32; 3])>,
-    pub camera: CameraDesc,
-}
-
-/// A pinhole camera looking from `origin` at `target`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct CameraDesc {
-    pub origin: [f32; 3],
-    pub target: [f32; 3],
-    pub up: [f32; 3],
-    /// Horizontal field of view in degrees, in (0, 180).
-    pub fov_degrees: f32,
-    pub width: u32,
-    pub height: u32,
+    /// The camera: the C struct itself (plain values, no pointers).
+    pub camera: ffi::EmberCamera,
 }
 
 /// A built scene: what the estimators read, the tracer's geometry, the built-in BVH and,

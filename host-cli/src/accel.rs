@@ -270,6 +270,34 @@ impl<B: TriangleBvh> AccelWith<B> {
         self.spheres.len()
     }
 
+    /// Feed every value of the geometry the queries see (vertices, shading normals,
+    /// materials, emitters, original indices, spheres) to `h` as raw bits, in leaf order
+    /// (the build is deterministic): the geometry part of a scene's content hash, without
+    /// formatting a float.
+    pub fn hash_geometry(&self, h: &mut impl std::hash::Hasher) {
+        let bits = |h: &mut dyn std::hash::Hasher, v: Vec3| [v.x, v.y, v.z].iter().for_each(|c| h.write_u32(c.to_bits()));
+        h.write_usize(self.tris.len());
+        for (t, a) in self.tris.iter().zip(&self.attrs) {
+            t.iter().for_each(|&p| bits(h, p.into()));
+            match a.normals {
+                Some(n) => n.iter().for_each(|&v| bits(h, v)),
+                None => h.write_u8(0),
+            }
+            h.write_u32(a.material);
+            h.write_u32(a.emitter.map_or(u32::MAX, |e| e));
+            h.write_u32(a.original);
+        }
+        h.write_usize(self.spheres.len());
+        for (s, &id) in self.spheres.iter().zip(&self.sphere_ids) {
+            bits(h, s.center);
+            h.write_u32(s.radius.to_bits());
+            h.write_u8(s.flip_normals as u8);
+            h.write_u32(s.material);
+            h.write_u32(s.emitter.map_or(u32::MAX, |e| e));
+            h.write_u32(id);
+        }
+    }
+
     /// Closest hit and the primitive it belongs to.
     pub fn intersect_primitive(&self, ray: &Ray) -> Option<(SurfaceHit, PrimitiveRef)> {
         let q = Query::new(ray)?;

@@ -446,27 +446,5 @@ pub fn merge_parts(paths: &[PathBuf], cover: Cover) -> Result<(PartialHeader, Fi
     Ok((header, film))
 }
 
-/// FNV-1a (64-bit) over everything written to it: the scene hash, over the scene's
-/// `Debug` form (f32s print as their shortest round-trip decimal, so equal scenes give
-/// equal text and any changed bit changes it).
-#[derive(Debug)]
-pub struct Fnv(pub u64);
-
-impl Default for Fnv {
-    fn default() -> Self {
-        Self(0xcbf2_9ce4_8422_2325)
-    }
-}
-
-impl fmt::Write for Fnv {
-    fn write_str(&mut self, s: &str) -> fmt::Result {
-        for b in s.bytes() {
-            self.0 ^= b as u64;
-            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
-        }
-        Ok(())
-    }
-}
-
 #[cfg(test)]
 mod tests;

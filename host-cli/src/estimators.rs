@@ -25,10 +25,21 @@ pub struct PreparedScene {
     /// The sample count the scene file asks for, if any.
     pub spp: Option<u32>,
     pub warnings: Vec<String>,
-    /// FNV-1a of the built scene's full description (camera, materials, lights, every
-    /// triangle and sphere): equal for equal scenes however they were written, different
-    /// when any value that reaches the renderer differs (split renders check it).
-    pub hash: u64,
+}
+
+impl PreparedScene {
+    /// FNV-1a of the built scene's full content: the camera, materials and lights (their
+    /// `Debug` form: f32s print as their shortest round-trip decimal) and every triangle
+    /// and sphere the queries see (raw bits). Equal for equal scenes however they were
+    /// written, different when any value that reaches the renderer differs. Computed on
+    /// demand (split renders and trained models check it), not for every render.
+    pub fn hash(&self) -> u64 {
+        let mut h = ember_core::fnv::Fnv1a::new();
+        // Writing to the hasher cannot fail.
+        let _ = std::fmt::Write::write_fmt(&mut h, format_args!("{:?}", self.scene));
+        self.accel.hash_geometry(&mut h);
+        h.value()
+    }
 }
 
 /// Build the built-in scene `--builtin` names (the Cornell box by default) at the requested resolution.
@@ -91,11 +102,8 @@ fn finish(
     if scene.light_selection.is_none() {
         notes.push("the scene has no light: the image will be black".into());
     }
-    let mut hasher = crate::distributed::Fnv::default();
-    // Writing to the hasher cannot fail.
-    let _ = std::fmt::Write::write_fmt(&mut hasher, format_args!("{scene:?}{geometry:?}"));
     let accel = Accel::new(geometry);
-    PreparedScene { name, scene, accel, max_depth, spp, warnings: notes, hash: hasher.0 }
+    PreparedScene { name, scene, accel, max_depth, spp, warnings: notes }
 }
 
 /// One of the core's estimators bound to a prepared scene, its setup (SPCBPT's and
@@ -238,7 +246,7 @@ impl CoreRenderer {
         let params = self.renderer.params();
         crate::distributed::RenderIdentity {
             scene: self.prepared.name.clone(),
-            scene_hash: self.prepared.hash,
+            scene_hash: self.prepared.hash(),
             estimator: self.kind().name().to_string(),
             config: format!("{:?}; max depth {}, heuristic {:?}, rr depth {}", self.config, params.max_depth.0, params.heuristic, params.rr_depth),
             seed: params.seed,

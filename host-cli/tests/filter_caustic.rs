@@ -41,7 +41,7 @@ fn render(config: EstimatorConfig, passes: u32) -> Film {
     let loaded = load_scene_from_str(&text, &path, &LoadOptions { defaults: Vec::new(), width: Some(W as u32), height: Some(H as u32) }).expect("scene loads");
     let (scene, geometry, _) = loaded.builder.build().expect("scene builds");
     let accel = ember_cli::accel::Accel::new(&geometry);
-    let prepared = PreparedScene { name: "caustic".into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new(), hash: 0 };
+    let prepared = PreparedScene { name: "caustic".into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new() };
     let mut r = CoreRenderer::with_config(prepared, config, -1, 17, 2).expect("renderer");
     let mut film = Film::new(W as u32, H as u32);
     let driver = DriverConfig { progress: false, ..DriverConfig::with_threads(2) };

@@ -48,16 +48,12 @@ fn cache_args() -> CacheArgs {
     CacheArgs { light_paths: Some(200), dataset: Some(2000), q_paths: Some(2000), subspaces: Some(32), batch: 200, ..CacheArgs::default() }
 }
 
-/// FNV-1a over 64-bit words.
+/// FNV-1a over 64-bit words (little-endian bytes).
 fn fnv(words: impl Iterator<Item = u64>) -> u64 {
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for w in words {
-        for b in w.to_le_bytes() {
-            h ^= b as u64;
-            h = h.wrapping_mul(0x0000_0100_0000_01b3);
-        }
-    }
-    h
+    use std::hash::Hasher;
+    let mut h = ember_core::fnv::Fnv1a::new();
+    words.for_each(|w| h.write_u64(w));
+    h.finish()
 }
 
 fn film_hash(film: &Film) -> u64 {

@@ -27,18 +27,9 @@ fn trained() -> (Scene, BruteForce, RenderParams, Model) {
     (scene, tracer, params, model)
 }
 
-/// FNV-1a 64, as the file's checksum (to build invalid models with valid checksums).
-fn fnv(bytes: &[u8]) -> u64 {
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for &b in bytes {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
-
 fn with_checksum(mut body: Vec<u8>) -> Vec<u8> {
-    let sum = fnv(&body);
+    // The file's checksum, recomputed (to build invalid models with valid checksums).
+    let sum = ember_core::fnv::fnv1a(&body);
     body.extend_from_slice(&sum.to_le_bytes());
     body
 }

@@ -17,6 +17,7 @@
 use alloc::vec::Vec;
 
 use super::{Classifier, Model};
+use crate::fnv::fnv1a;
 use crate::scene::Scene;
 use crate::subspace::{DecisionTree, LightSourceBins, SubspaceMatrix};
 
@@ -50,15 +51,6 @@ impl core::fmt::Display for ModelError {
             Self::Invalid(what) => write!(f, "the model is inconsistent: {what}"),
         }
     }
-}
-
-fn fnv(bytes: &[u8]) -> u64 {
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for &b in bytes {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
 }
 
 struct Writer(Vec<u8>);
@@ -158,7 +150,7 @@ impl Model {
         w.u32(self.gamma.n_light() as u32);
         w.u32(self.gamma.n_eye() as u32);
         w.f32s(self.gamma.as_slice());
-        let sum = fnv(&w.0);
+        let sum = fnv1a(&w.0);
         w.0.extend_from_slice(&sum.to_le_bytes());
         w.0
     }
@@ -175,7 +167,7 @@ impl Model {
             return Err(ModelError::Version(version));
         }
         let (body, sum) = bytes.split_at_checked(bytes.len().saturating_sub(8)).ok_or(ModelError::Truncated)?;
-        if body.len() < MAGIC.len() + 4 || fnv(body).to_le_bytes() != sum {
+        if body.len() < MAGIC.len() + 4 || fnv1a(body).to_le_bytes() != sum {
             return Err(ModelError::Checksum);
         }
         let mut r = Reader(&body[MAGIC.len() + 4..]);
