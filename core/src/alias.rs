@@ -5,6 +5,7 @@ use alloc::vec::Vec;
 
 /// One bin: the probability of keeping it and the index to take otherwise.
 #[derive(Clone, Copy, Debug, Default)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 struct Bin {
     keep: f32,
     alias: u32,
@@ -12,6 +13,7 @@ struct Bin {
 
 /// A discrete distribution over `0..n` proportional to non-negative weights.
 #[derive(Clone, Debug, Default)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct AliasTable {
     bins: Vec<Bin>,
     pmf: Vec<f32>,

@@ -30,6 +30,7 @@ pub type LightId = u32;
 
 /// What a closest-hit query reports: enough to shade, nothing engine-specific.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct SurfaceHit {
     /// Ray parameter of the hit.
     pub t: f32,

@@ -160,6 +160,7 @@ pub fn lerp(t: f32, a: f32, b: f32) -> f32 {
 ///
 /// Local coordinates put the normal on +z, so `cos_theta(w) = w.z`.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct Frame {
     pub s: Vec3,
     pub t: Vec3,

@@ -103,6 +103,7 @@ density_ops!(AreaPdf);
 /// solid-angle density never becomes a vertex density without its conversion; the MIS
 /// walk takes ratios of two densities of the SAME vertex, which are measure-free.
 #[derive(Clone, Copy, Debug, Default, PartialEq, PartialOrd)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct VertexPdf(f32);
 
 impl VertexPdf {

@@ -4,6 +4,7 @@ use core::ops::{Add, AddAssign, Div, DivAssign, Index, Mul, MulAssign, Sub};
 
 /// A linear-RGB triple: radiance, throughput, reflectance or importance.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct Rgb {
     pub r: f32,
     pub g: f32,

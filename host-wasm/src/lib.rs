@@ -1,49 +1,47 @@
-//! ember in the browser: the core's estimators (`ember_core::integrator::{pt, lt, bdpt}`;
-//! the others need the render protocol on the workers, issue 19)
-//! over an obvhs BVH2 ([`accel`]), compiled to `wasm32-unknown-unknown` and driven by a
-//! static page (`host-wasm/www/`) through plain C exports. No wasm-bindgen, no imports:
-//! the module needs nothing from JavaScript, and JavaScript reads the results straight
-//! out of the module's linear memory.
+//! ember in the browser: every estimator of the core, driven through the core's render
+//! protocol ([`ember_core::render`]) on Web Workers, over an obvhs BVH2 ([`accel`]),
+//! compiled to `wasm32-unknown-unknown` and driven by a static page (`host-wasm/www/`)
+//! through plain C exports. No wasm-bindgen, no imports: the module needs nothing from
+//! JavaScript, and JavaScript reads the results straight out of the module's linear
+//! memory.
 //!
 //! # Protocol
-//! Workers (one module instance each):
-//! 1. `ember_setup(scene, estimator, width, height, max_depth, seed_hi, seed_lo)` builds
-//!    the scene and the BVH; 0 on success, a negative [`SetupError`] code otherwise.
-//!    Scene and estimator are indices into [`SCENES`] and `EstimatorKind::ALL` (the page
-//!    reads both lists from the module: [`page`]).
-//! 2. Each pass, `ember_render(pass, pixel_start, pixel_end, path_start, path_end)` renders
-//!    the camera samples of pixels `pixel_start..pixel_end` (PT, BDPT) and the light
-//!    paths `path_start..path_end` (LT; `ember_light_paths_per_pass` of them per pass):
-//!    camera values, 3 × f32 per band pixel, at `ember_camera_ptr()`, and the call's
-//!    splats, 5 × f32 each (film x, y, r, g, b), at `ember_splat_ptr()`
-//!    (`ember_splat_count()` of them), both raw.
+//! Every instance (the page's and one per worker) calls
+//! `ember_setup(scene, estimator, width, height, max_depth, seed_hi, seed_lo, role)`
+//! (role 1 for the page's instance, which holds the film; 0 for a worker). Scene and
+//! estimator are indices into [`SCENES`] and [`EstimatorKind::ALL`], listed by
+//! `ember_text`. Then, pass by pass ([`session`] has the why):
+//! 1. `ember_start_pass(p)` on every instance; then, while `ember_next_phase()` returns 1
+//!    on the page's instance, every instance takes the same phase (its `ember_phase_*`
+//!    numbers must agree, else the page stops with an error);
+//! 2. workers run `ember_map(chunk)` for the chunks the page hands them and send back the
+//!    two parts (`ember_part_ptr/len(0 film | 1 state)`) as transferable buffers;
+//! 3. the page's instance receives both parts of every chunk, each worker every chunk's
+//!    state part (`ember_input(len)` for the bytes, then `ember_receive(chunk, part)`),
+//!    and each calls `ember_reduce()` (1 when a pass was committed).
 //!
-//! The page's own instance holds the core's [`ember_core::render::Film`] ([`page`]): per
-//! pass it stages every band's camera values, then every worker's splats in worker
-//! order (that is, in pixel or light-path order, as the CLI's driver reduces them), and
-//! commits the pass with `ember_splat_scale()`. Invalid values are discarded and counted
-//! there, as in the CLI, and the image is the CLI's bit for bit up to ray-query
-//! differences between the two BVHs.
+//! Errors: a negative [`Failure`] code, and `ember_text(TEXT_ERROR, 0)` says what.
 //!
-//! Random numbers derive from (seed, pixel or path index, pass) only
-//! (`SampleStream::for_sample`), so how the page cuts the image into bands, and how
-//! many workers it runs, changes nothing.
+//! Random numbers derive from (seed, index, pass) only and every reduction takes the
+//! chunks in index order, so neither the worker count nor which worker maps which chunk
+//! changes the image: it is the CLI's bit for bit up to ray-query differences between
+//! the two BVHs.
 
 pub mod accel;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod compare;
-pub mod page;
+pub mod session;
 #[cfg(test)]
 mod tests;
 
 use core::cell::RefCell;
 
-use ember_core::Rgb;
-use ember_core::integrator::{Counters, Heuristic, MaxDepth, RenderParams, Splat, bdpt, lt, pt};
 use ember_core::render::EstimatorKind;
-use ember_core::scene::{Scene, SceneBuilder, builtin, builtin_glass};
+use ember_core::render::wire::Part;
+use ember_core::scene::{SceneBuilder, builtin, builtin_glass};
 
 pub use accel::WasmAccel;
+pub use session::{Failure, Role, Session};
 
 /// The built-in scenes the page offers, by the index it passes to `ember_setup`.
 pub const SCENES: [&str; 2] = ["cornell-box", builtin_glass::GLASS_SPHERES];
@@ -57,201 +55,264 @@ pub fn builtin_scene(index: u32, width: u32, height: u32) -> Option<SceneBuilder
     }
 }
 
-/// The estimators the page can run (their indices in [`EstimatorKind::ALL`]: 0 pt,
-/// 1 lt, 2 bdpt); the cache-based ones need the phase protocol on the workers (issue 19).
-pub fn supported(kind: EstimatorKind) -> bool {
-    matches!(kind, EstimatorKind::Pt | EstimatorKind::Lt | EstimatorKind::Bdpt)
+/// `ember_text` subjects.
+pub const TEXT_SCENE: u32 = 0;
+pub const TEXT_ESTIMATOR: u32 = 1;
+pub const TEXT_SUMMARY: u32 = 2;
+/// An estimator's default configuration, as the core prints it.
+pub const TEXT_CONFIG: u32 = 3;
+/// The last error's message.
+pub const TEXT_ERROR: u32 = 4;
+/// The current phase's name.
+pub const TEXT_PHASE: u32 = 5;
+
+/// The text `ember_text(what, i)` returns; `None` for an unknown subject or index.
+pub fn text(what: u32, i: u32, session: Option<&Session>, error: &str) -> Option<String> {
+    let kind = || EstimatorKind::from_index(i);
+    match what {
+        TEXT_SCENE => SCENES.get(i as usize).map(|s| s.to_string()),
+        TEXT_ESTIMATOR => kind().map(|k| k.name().to_string()),
+        TEXT_SUMMARY => kind().map(|k| k.summary().to_string()),
+        TEXT_CONFIG => kind().map(|k| format!("{:?}", k.default_config())),
+        TEXT_ERROR => Some(error.to_string()),
+        TEXT_PHASE => session.and_then(|s| s.phase()).map(|p| p.name.to_string()),
+        _ => None,
+    }
 }
 
-/// Why `ember_setup` failed (returned negated).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SetupError {
-    UnknownScene = 1,
-    UnknownEstimator = 2,
-    /// Width or height zero, or more than 4096.
-    BadResolution = 3,
-    /// The scene builder rejected the scene.
-    SceneBuild = 4,
-}
-
-/// Why `ember_render` failed (returned negated).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum RenderError {
-    NotSetUp = 1,
-    /// A pixel or path range outside the image / the pass's light paths.
-    BadRange = 2,
-}
-
-/// A scene, its ray queries, the estimator and the output buffers of the last call.
-#[derive(Debug)]
-pub struct Renderer {
-    pub scene: Scene,
-    pub accel: WasmAccel,
-    pub estimator: EstimatorKind,
-    pub params: RenderParams,
-    camera: Vec<Rgb>,
-    camera_out: Vec<f32>,
-    /// The call's splats as plain floats, 5 per splat (film x, y, r, g, b).
-    splats: Vec<f32>,
-    pub last: Counters,
-}
-
-impl Renderer {
-    /// Build a built-in scene; `max_depth` −1 is unbounded (the CLI's default).
-    pub fn new(scene: u32, estimator: u32, width: u32, height: u32, max_depth: i32, seed: u64) -> Result<Self, SetupError> {
-        let estimator = EstimatorKind::from_index(estimator).filter(|&e| supported(e)).ok_or(SetupError::UnknownEstimator)?;
-        if width == 0 || height == 0 || width > 4096 || height > 4096 {
-            return Err(SetupError::BadResolution);
-        }
-        let builder = builtin_scene(scene, width, height).ok_or(SetupError::UnknownScene)?;
-        let (scene, geometry, _warnings) = builder.build().map_err(|_| SetupError::SceneBuild)?;
-        let accel = WasmAccel::new(&geometry);
-        // As the CLI: PT with the power heuristic; BDPT's weights are balance by construction.
-        let params = RenderParams { max_depth: MaxDepth(max_depth), seed, heuristic: Heuristic::Power, ..RenderParams::default() };
-        Ok(Self { scene, accel, estimator, params, camera: Vec::new(), camera_out: Vec::new(), splats: Vec::new(), last: Counters::default() })
-    }
-
-    pub fn width(&self) -> u32 {
-        self.scene.camera.width()
-    }
-
-    pub fn height(&self) -> u32 {
-        self.scene.camera.height()
-    }
-
-    fn pixels(&self) -> u32 {
-        self.width() * self.height()
-    }
-
-    /// Light paths per pass: W·H for LT (as the CLI), none otherwise.
-    pub fn light_paths_per_pass(&self) -> u32 {
-        if self.estimator == EstimatorKind::Lt { self.pixels() } else { 0 }
-    }
-
-    /// Render one pass's share; see the crate documentation.
-    pub fn render(&mut self, pass: u32, pixels: core::ops::Range<u32>, paths: core::ops::Range<u32>) -> Result<(), RenderError> {
-        if pixels.start > pixels.end || pixels.end > self.pixels() || paths.start > paths.end || paths.end > self.light_paths_per_pass() {
-            return Err(RenderError::BadRange);
-        }
-        self.splats.clear();
-        self.camera.clear();
-        self.camera.resize(pixels.len(), Rgb::ZERO);
-        let splats = &mut self.splats;
-        let mut splat = |s: Splat| splats.extend_from_slice(&[s.film.x, s.film.y, s.value.r, s.value.g, s.value.b]);
-        let (scene, accel, params) = (&self.scene, &self.accel, &self.params);
-        self.last = match self.estimator {
-            EstimatorKind::Pt => pt::render_pixels(scene, accel, params, pass, pixels, &mut self.camera),
-            EstimatorKind::Bdpt => bdpt::render_pixels(scene, accel, params, pass, pixels, &mut self.camera, &mut splat),
-            EstimatorKind::Lt => lt::trace_paths(scene, accel, params, pass, paths, &mut splat),
-            _ => Counters::default(),
-        };
-        // Raw values: the page's film (the core's) discards and counts invalid ones.
-        self.camera_out.clear();
-        self.camera_out.extend(self.camera.iter().flat_map(|v| [v.r, v.g, v.b]));
-        Ok(())
-    }
-
-    /// The factor the page's film multiplies this estimator's splats by: 1/(W·H) (LT traces
-    /// W·H light paths per pass; BDPT one per pixel).
-    pub fn splat_scale(&self) -> f64 {
-        1.0 / self.pixels().max(1) as f64
-    }
-
-    /// Camera values of the last call, 3 × f32 per pixel of its band (not sanitised).
-    pub fn camera_values(&self) -> &[f32] {
-        &self.camera_out
-    }
-
-    /// Splats of the last call, 5 × f32 each (film x, y, r, g, b), in emission order.
-    pub fn splat_values(&self) -> &[f32] {
-        &self.splats
-    }
+/// The module's state: one session (wasm32 is single-threaded; one instance per worker),
+/// the last error and the text buffer.
+#[derive(Debug, Default)]
+struct Module {
+    session: Option<Session>,
+    error: String,
+    text: String,
 }
 
 thread_local! {
-    /// The module's one renderer (wasm32 is single-threaded; one instance per worker).
-    static RENDERER: RefCell<Option<Renderer>> = const { RefCell::new(None) };
+    static MODULE: RefCell<Module> = RefCell::new(Module::default());
 }
 
-fn with_renderer<T>(default: T, f: impl FnOnce(&mut Renderer) -> T) -> T {
-    RENDERER.with_borrow_mut(|r| r.as_mut().map_or(default, f))
+/// Run `f` on the session; a failure's message is kept for `ember_text(TEXT_ERROR)`.
+fn with_session(f: impl FnOnce(&mut Session) -> Result<i32, (Failure, String)>) -> i32 {
+    MODULE.with_borrow_mut(|m| {
+        let result = match m.session.as_mut() {
+            Some(s) => f(s),
+            None => Err((Failure::NotReady, "no ember_setup yet".into())),
+        };
+        result.unwrap_or_else(|(code, message)| {
+            m.error = message;
+            -(code as i32)
+        })
+    })
+}
+
+fn read<T>(default: T, f: impl FnOnce(&Session) -> T) -> T {
+    MODULE.with_borrow(|m| m.session.as_ref().map_or(default, f))
+}
+
+fn part(p: u32) -> Part {
+    if p == 0 { Part::Film } else { Part::State }
 }
 
 // The exports below need `#[unsafe(no_mangle)]` so the page can call them by name; the
 // attribute is the only unsafe thing in this crate (it trusts no other symbol has the
 // same name, and every name carries the `ember_` prefix).
 
-/// Build scene `scene` ([`SCENES`]) for estimator `estimator` (0 pt, 1 lt, 2 bdpt);
-/// 0 on success, −[`SetupError`] otherwise.
+/// Number of built-in scenes.
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
-pub extern "C" fn ember_setup(scene: u32, estimator: u32, width: u32, height: u32, max_depth: i32, seed_hi: u32, seed_lo: u32) -> i32 {
-    let seed = (u64::from(seed_hi) << 32) | u64::from(seed_lo);
-    match Renderer::new(scene, estimator, width, height, max_depth, seed) {
-        Ok(r) => {
-            RENDERER.with_borrow_mut(|slot| *slot = Some(r));
-            0
+pub extern "C" fn ember_scene_count() -> u32 {
+    SCENES.len() as u32
+}
+
+/// Number of estimators (the core's list).
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_estimator_count() -> u32 {
+    EstimatorKind::ALL.len() as u32
+}
+
+/// Put text `what` (a `TEXT_*` subject) of item `i` in the text buffer; its length in
+/// bytes (UTF-8), or −1 for an unknown subject or index. `ember_text_ptr` gives its
+/// address.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_text(what: u32, i: u32) -> i32 {
+    MODULE.with_borrow_mut(|m| match text(what, i, m.session.as_ref(), &m.error) {
+        Some(t) => {
+            m.text = t;
+            m.text.len() as i32
         }
-        Err(e) => -(e as i32),
-    }
-}
-
-/// Light paths per pass (W·H for LT, 0 otherwise); 0 before setup.
-#[allow(unsafe_code)]
-#[unsafe(no_mangle)]
-pub extern "C" fn ember_light_paths_per_pass() -> u32 {
-    with_renderer(0, |r| r.light_paths_per_pass())
-}
-
-/// Number of triangles in the ray-query structure (for the page's status line).
-#[allow(unsafe_code)]
-#[unsafe(no_mangle)]
-pub extern "C" fn ember_triangle_count() -> u32 {
-    with_renderer(0, |r| r.accel.triangle_count() as u32)
-}
-
-/// Render pass `pass` for pixels `pixel_start..pixel_end` and light paths
-/// `path_start..path_end`; 0 on success, −[`RenderError`] otherwise.
-#[allow(unsafe_code)]
-#[unsafe(no_mangle)]
-pub extern "C" fn ember_render(pass: u32, pixel_start: u32, pixel_end: u32, path_start: u32, path_end: u32) -> i32 {
-    with_renderer(-(RenderError::NotSetUp as i32), |r| match r.render(pass, pixel_start..pixel_end, path_start..path_end) {
-        Ok(()) => 0,
-        Err(e) => -(e as i32),
+        None => -1,
     })
 }
 
-/// Address of the last call's camera values (3 × f32 per band pixel).
+/// Address of the text buffer.
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
-pub extern "C" fn ember_camera_ptr() -> usize {
-    with_renderer(0, |r| r.camera_values().as_ptr() as usize)
+pub extern "C" fn ember_text_ptr() -> usize {
+    MODULE.with_borrow(|m| m.text.as_ptr() as usize)
 }
 
-/// Address of the last call's splats (5 × f32 each: film x, y, r, g, b).
+/// Build scene `scene` for estimator `estimator`; `role` 1 for the page's instance (it
+/// holds the film), 0 for a worker. 0 on success, −[`Failure`] otherwise.
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
-pub extern "C" fn ember_splat_ptr() -> usize {
-    with_renderer(0, |r| r.splat_values().as_ptr() as usize)
+pub extern "C" fn ember_setup(scene: u32, estimator: u32, width: u32, height: u32, max_depth: i32, seed_hi: u32, seed_lo: u32, role: u32) -> i32 {
+    let seed = (u64::from(seed_hi) << 32) | u64::from(seed_lo);
+    let role = if role == 1 { Role::Page } else { Role::Worker };
+    MODULE.with_borrow_mut(|m| match Session::new(scene, estimator, width, height, max_depth, seed, role) {
+        Ok(s) => {
+            m.session = Some(s);
+            0
+        }
+        Err((code, message)) => {
+            m.session = None;
+            m.error = message;
+            -(code as i32)
+        }
+    })
 }
 
-/// Splats made in the last call.
+/// Triangles in the ray-query structure (for the page's status line).
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
-pub extern "C" fn ember_splat_count() -> u32 {
-    with_renderer(0, |r| (r.splat_values().len() / 5) as u32)
+pub extern "C" fn ember_triangle_count() -> u32 {
+    read(0, |s| s.accel.triangle_count() as u32)
 }
 
-/// The factor the page's film multiplies this estimator's splats by; 0 before setup.
+/// Queue pass `pass`.
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
-pub extern "C" fn ember_splat_scale() -> f64 {
-    with_renderer(0.0, |r| r.splat_scale())
+pub extern "C" fn ember_start_pass(pass: u32) -> i32 {
+    with_session(|s| {
+        s.start_pass(pass);
+        Ok(0)
+    })
 }
 
-/// Rays traced in the last call (f64: exact up to 2⁵³).
+/// Take the next phase: 1 if one is pending, 0 if not.
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
-pub extern "C" fn ember_last_rays() -> f64 {
-    with_renderer(0.0, |r| r.last.rays as f64)
+pub extern "C" fn ember_next_phase() -> i32 {
+    with_session(|s| Ok(i32::from(s.next_phase().is_some())))
+}
+
+/// The current phase's id (stable across passes), or −1 without one.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_phase_id() -> i32 {
+    read(-1, |s| s.phase().map_or(-1, |p| i32::from(p.id)))
+}
+
+/// The current phase's pass, or −1 for a setup phase (or without a phase).
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_phase_pass() -> f64 {
+    read(-1.0, |s| s.phase().and_then(|p| p.pass).map_or(-1.0, f64::from))
+}
+
+/// Items the current phase maps.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_phase_items() -> u32 {
+    read(0, |s| s.phase().map_or(0, |p| p.items))
+}
+
+/// Chunks of the current phase.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_phase_chunks() -> u32 {
+    read(0, |s| s.phase().map_or(0, |p| p.chunk_count() as u32))
+}
+
+/// 1 when the current phase's items count as samples (camera samples, light paths).
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_phase_samples() -> u32 {
+    read(0, |s| s.phase().map_or(0, |p| u32::from(p.samples)))
+}
+
+/// Map chunk `chunk` of the current phase; its parts are then at `ember_part_ptr`.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_map(chunk: u32) -> i32 {
+    with_session(|s| s.map(chunk).map(|()| 0))
+}
+
+/// Address of the last map's part `p` (0 film, 1 state).
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_part_ptr(p: u32) -> usize {
+    read(0, |s| match part(p) {
+        Part::Film => s.film_bytes.as_ptr() as usize,
+        Part::State => s.state_bytes.as_ptr() as usize,
+    })
+}
+
+/// Length in bytes of the last map's part `p`.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_part_len(p: u32) -> u32 {
+    read(0, |s| match part(p) {
+        Part::Film => s.film_bytes.len() as u32,
+        Part::State => s.state_bytes.len() as u32,
+    })
+}
+
+/// Rays traced by the last map (f64: exact up to 2⁵³).
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_map_rays() -> f64 {
+    read(0.0, |s| s.last_rays as f64)
+}
+
+/// The input buffer, `len` bytes, for a part before `ember_receive`; 0 without setup.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_input(len: u32) -> usize {
+    MODULE.with_borrow_mut(|m| {
+        m.session.as_mut().map_or(0, |s| {
+            s.input.clear();
+            s.input.resize(len as usize, 0);
+            s.input.as_ptr() as usize
+        })
+    })
+}
+
+/// Take the input buffer as part `p` (0 film, 1 state) of chunk `chunk`'s output.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_receive(chunk: u32, p: u32) -> i32 {
+    with_session(|s| s.receive(chunk, part(p)).map(|()| 0))
+}
+
+/// Reduce the current phase: 1 when that committed a pass, 0 otherwise.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_reduce() -> i32 {
+    with_session(|s| s.reduce().map(i32::from))
+}
+
+/// Address of the film's mean image (3 × f32 per pixel, row 0 at the top); 0 without
+/// setup.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_image() -> usize {
+    MODULE.with_borrow_mut(|m| m.session.as_mut().map_or(0, |s| s.image().as_ptr() as usize))
+}
+
+/// Passes committed to the film.
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_film_passes() -> u32 {
+    read(0, |s| s.film.passes())
+}
+
+/// Camera samples and splats the film discarded (NaN, infinite or negative).
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_film_discarded() -> f64 {
+    read(0.0, |s| s.film.discarded() as f64)
 }

@@ -3,12 +3,13 @@
 //! protocol or ray-query structure in seconds and without one.
 //!
 //! Injected bugs these tests were seen to catch:
-//! * splat scale 1/(W·H) dropped in `Renderer::render` (scale = 1) →
-//!   `page_protocol_matches_the_cli_film` fails (cornell lt: mean 123 against 0.12);
 //! * barycentrics of the closest hit replaced by (⅓, ⅓, ⅓) in `accel.rs` →
 //!   `page_protocol_matches_the_cli_film` fails (cornell pt: 974 of 1024 pixels differ);
-//! * band end off by one (`p0..p1 - 1` in `render_like_the_page`) →
-//!   `bands_do_not_change_the_image` fails (4 pixels differ);
+//! * the page's instance skipping the state part of every chunk but the first →
+//!   `page_protocol_matches_the_cli_film` fails at LVCBPT (its cache holds one chunk's
+//!   paths), and `Session::reduce` refuses first (chunk 1 missing) unless its check is
+//!   also removed;
+//! * workers mapping with their own film part dropped (splats lost) → LT and BDPT differ;
 //! * PFM rows written top to bottom (no flip) → `pfm_round_trip_keeps_rows_in_place` fails;
 //! * the block z-test's standard error taken from both images (hot pixels widen their
 //!   own bound: |z| 2.3) → the hot-pixel case of
@@ -16,14 +17,15 @@
 
 use std::time::Instant;
 
-use ember_cli::cli::{Cli, Command, EstimatorKind, RenderArgs};
+use ember_cli::cli::{Cli, Command, RenderArgs};
 use ember_cli::driver::{DriverConfig, Limits};
 use ember_cli::estimators::{CoreRenderer, prepare_builtin};
 use ember_cli::film::Film;
+use ember_core::render::EstimatorKind;
+use ember_core::render::wire::Part;
 
-use crate::Renderer;
 use crate::compare::{Criteria, LinearImage, compare, parse_pfm};
-use crate::page::PageFilm;
+use crate::{Failure, Role, Session};
 
 fn args(extra: &[&str]) -> RenderArgs {
     let mut v = vec!["ember", "render"];
@@ -38,29 +40,47 @@ const SIZE: u32 = 32;
 const PASSES: u32 = 2;
 const SEED: u64 = 11;
 
-/// Render as the page does: `bands` workers, each a band of pixels and of light paths;
-/// the page's film (the core's) stages every band's camera values, then every band's
-/// splats in band order, and commits the pass with the renderer's splat scale.
-fn render_like_the_page(scene: u32, estimator: u32, bands: u32) -> LinearImage {
-    let mut r = Renderer::new(scene, estimator, SIZE, SIZE, -1, SEED).expect("setup");
-    let mut film = PageFilm::new(SIZE, SIZE).expect("film");
-    let n = SIZE * SIZE;
-    let paths = r.light_paths_per_pass();
-    let cut = |total: u32, k: u32| (total as u64 * k as u64 / bands as u64) as u32;
+fn session(scene: u32, estimator: u32, role: Role) -> Session {
+    Session::new(scene, estimator, SIZE, SIZE, -1, SEED, role).expect("setup")
+}
+
+/// Render as the page does with `workers` workers: every instance takes the same phase;
+/// chunk c goes to worker (3c + pass) mod `workers` (any assignment gives the same image);
+/// the page's instance receives both parts of every chunk, each worker the state parts.
+fn render_like_the_page(scene: u32, estimator: u32, workers: usize) -> LinearImage {
+    let mut page = session(scene, estimator, Role::Page);
+    let mut pool: Vec<Session> = (0..workers).map(|_| session(scene, estimator, Role::Worker)).collect();
     for pass in 0..PASSES {
-        let mut splats: Vec<Vec<f32>> = Vec::new();
-        for k in 0..bands {
-            let (p0, p1) = (cut(n, k), cut(n, k + 1));
-            r.render(pass, p0..p1, cut(paths, k)..cut(paths, k + 1)).expect("render");
-            film.camera(p0, r.camera_values());
-            splats.push(r.splat_values().to_vec());
+        page.start_pass(pass);
+        pool.iter_mut().for_each(|w| w.start_pass(pass));
+        while let Some(phase) = page.next_phase() {
+            for w in &mut pool {
+                assert_eq!(w.next_phase(), Some(phase), "a worker left step");
+            }
+            let mut parts = Vec::new();
+            for c in 0..phase.chunk_count() as u32 {
+                let w = &mut pool[(3 * c as usize + pass as usize) % workers];
+                w.map(c).expect("map");
+                parts.push((w.film_bytes.clone(), w.state_bytes.clone()));
+            }
+            for (c, (film, state)) in parts.iter().enumerate() {
+                page.input = film.clone();
+                page.receive(c as u32, Part::Film).expect("film part");
+                page.input = state.clone();
+                page.receive(c as u32, Part::State).expect("state part");
+                for w in &mut pool {
+                    w.input = state.clone();
+                    w.receive(c as u32, Part::State).expect("state part");
+                }
+            }
+            page.reduce().expect("page reduce");
+            for w in &mut pool {
+                w.reduce().expect("worker reduce");
+            }
         }
-        for s in &splats {
-            film.splats(s);
-        }
-        film.film.end_pass(r.splat_scale());
     }
-    let pixels = film.image().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    assert_eq!(page.film.passes(), PASSES);
+    let pixels = page.image().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     LinearImage { width: SIZE as usize, height: SIZE as usize, pixels }
 }
 
@@ -76,31 +96,69 @@ fn render_with_the_cli(scene: &str, estimator: EstimatorKind) -> LinearImage {
     LinearImage { width: SIZE as usize, height: SIZE as usize, pixels: film.to_rgb_f32() }
 }
 
+/// Every estimator of the core, both scenes: the page's protocol (three workers) gives
+/// the CLI's image (same seed) up to the two BVHs' tie-breaking.
 #[test]
 fn page_protocol_matches_the_cli_film() {
-    let estimators = [(0, EstimatorKind::Pt), (1, EstimatorKind::Lt), (2, EstimatorKind::Bdpt)];
     for (scene, name) in crate::SCENES.iter().enumerate() {
-        for &(e, arg) in &estimators {
-            let page = render_like_the_page(scene as u32, e, 3);
-            let cli = render_with_the_cli(name, arg);
+        for (e, kind) in EstimatorKind::ALL.into_iter().enumerate() {
+            let page = render_like_the_page(scene as u32, e as u32, 3);
+            let cli = render_with_the_cli(name, kind);
             let v = compare(&page, &cli, Criteria::default());
-            eprintln!("{name} / {arg:?}: {}", v.report.replace('\n', "; "));
-            assert!(v.ok, "{name} / {arg:?}:\n{}", v.report);
+            eprintln!("{name} / {kind}: {}", v.report.replace('\n', "; "));
+            assert!(v.ok, "{name} / {kind}:\n{}", v.report);
         }
     }
 }
 
 #[test]
-fn bands_do_not_change_the_image() {
-    for e in 0..3 {
+fn workers_do_not_change_the_image() {
+    for e in 0..EstimatorKind::ALL.len() as u32 {
         let one = render_like_the_page(1, e, 1);
-        let five = render_like_the_page(1, e, 5);
-        // The film reduces in pixel and light-path order whatever the bands: the same bits.
+        let four = render_like_the_page(1, e, 4);
+        // Reductions take the chunks in index order whoever mapped them: the same bits.
         assert!(
-            five.pixels.iter().flatten().map(|v| v.to_bits()).eq(one.pixels.iter().flatten().map(|v| v.to_bits())),
-            "estimator {e}: bands changed the image"
+            four.pixels.iter().flatten().map(|v| v.to_bits()).eq(one.pixels.iter().flatten().map(|v| v.to_bits())),
+            "estimator {e}: the worker count changed the image"
         );
     }
+}
+
+/// What the page relies on to stop instead of showing a wrong image: a missing chunk, a
+/// chunk outside the phase, another chunk's bytes and garbage are errors.
+#[test]
+fn sessions_refuse_missing_and_foreign_chunks() {
+    let lvcbpt = EstimatorKind::ALL.iter().position(|&k| k == EstimatorKind::Lvcbpt).expect("listed") as u32;
+    let mut page = session(0, lvcbpt, Role::Page);
+    let mut worker = session(0, lvcbpt, Role::Worker);
+    page.start_pass(0);
+    worker.start_pass(0);
+    let phase = page.next_phase().expect("a phase");
+    assert_eq!(worker.next_phase(), Some(phase));
+    assert!(phase.chunk_count() >= 2, "the test needs two chunks");
+    assert_eq!(worker.map(phase.chunk_count() as u32).map_err(|e| e.0), Err(Failure::OutOfStep));
+    for c in 0..phase.chunk_count() as u32 {
+        worker.map(c).expect("map");
+        page.input = worker.film_bytes.clone();
+        page.receive(c, Part::Film).expect("film");
+        if c == 1 {
+            // Chunk 0's bytes offered as chunk 1's: refused.
+            let mut other = session(0, lvcbpt, Role::Worker);
+            other.start_pass(0);
+            other.next_phase();
+            other.map(0).expect("map");
+            page.input = other.state_bytes.clone();
+            assert_eq!(page.receive(1, Part::State).map_err(|e| e.0), Err(Failure::BadBytes));
+            page.input = vec![0xff; 40];
+            assert_eq!(page.receive(1, Part::State).map_err(|e| e.0), Err(Failure::BadBytes));
+            continue; // the injected drop: chunk 1's light paths never arrive
+        }
+        page.input = worker.state_bytes.clone();
+        page.receive(c, Part::State).expect("state");
+    }
+    let (code, message) = page.reduce().expect_err("a chunk is missing");
+    assert_eq!(code, Failure::Missing);
+    assert!(message.contains("chunk 1") && message.contains("state part missing"), "{message}");
 }
 
 #[test]

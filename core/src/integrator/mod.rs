@@ -84,6 +84,7 @@ impl Default for RenderParams {
 /// (light tracing, BDPT's t = 1 strategy). The host scales a pass's splats by
 /// 1 / (light paths per pass).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct Splat {
     /// Continuous pixel coordinates.
     pub film: Vec2,
@@ -92,6 +93,7 @@ pub struct Splat {
 
 /// Work counters of one call, summed by the host.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct Counters {
     /// Rays traced (closest-hit and shadow).
     pub rays: u64,

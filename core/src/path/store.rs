@@ -11,6 +11,7 @@ use crate::scene::Scene;
 
 /// Light sub-paths of one pass (or of one chunk of it), vertices stored contiguously.
 #[derive(Clone, Debug, Default)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct LightPaths {
     pub vertices: Vec<Vertex>,
     /// Index of each path's first vertex in `vertices`.

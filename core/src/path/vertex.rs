@@ -28,6 +28,7 @@ use crate::spectrum::Rgb;
 
 /// What a vertex is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub enum VertexKind {
     /// The pinhole.
     Camera,
@@ -42,6 +43,7 @@ pub enum VertexKind {
 
 /// One vertex of a camera or light sub-path.
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct Vertex {
     pub kind: VertexKind,
     pub p: Vec3,
@@ -72,6 +74,7 @@ pub struct Vertex {
 
 /// The start of a vertex's segment toward the light side.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct Exit {
     pub p: Vec3,
     /// Geometric normal (`Vec3::ZERO` off surfaces).

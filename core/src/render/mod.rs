@@ -36,6 +36,8 @@
 mod config;
 mod film;
 mod renderer;
+#[cfg(feature = "wire")]
+pub mod wire;
 
 /// What every phase reads: the scene and the ray queries (defined with the scene).
 pub use crate::scene::Context;
@@ -90,6 +92,7 @@ impl Phase {
 
 /// Estimator-specific plain data a chunk produces.
 #[derive(Clone, Debug, Default)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub enum PhaseData {
     /// Nothing beyond samples and splats.
     #[default]
@@ -139,6 +142,7 @@ pub enum PhaseData {
 
 /// What mapping one chunk produced. Plain data; cleared and refilled in place.
 #[derive(Clone, Debug, Default)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct ChunkOutput {
     /// The chunk's index range.
     pub items: Range<u32>,
@@ -314,6 +318,20 @@ impl PhaseBuffers {
         }
         for (c, out) in list[..n].iter_mut().enumerate() {
             out.reset(phase.chunk_range(c));
+        }
+        &mut list[..n]
+    }
+    /// The outputs for `phase` as they stand: what [`Self::for_phase`] reset and the host
+    /// filled since (a host that receives chunk outputs one message at a time).
+    pub fn outputs(&mut self, phase: &Phase) -> &mut [ChunkOutput] {
+        let id = phase.id as usize;
+        if self.lists.len() <= id {
+            self.lists.resize_with(id + 1, Vec::new);
+        }
+        let list = &mut self.lists[id];
+        let n = phase.chunk_count();
+        if list.len() < n {
+            list.resize_with(n, ChunkOutput::default);
         }
         &mut list[..n]
     }

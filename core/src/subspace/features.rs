@@ -9,6 +9,7 @@ use crate::math::Vec3;
 
 /// The end vertex of a sub-path as the classifiers see it.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct SubpathFeature {
     /// World-space position of the end vertex.
     pub position: Vec3,

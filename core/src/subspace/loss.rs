@@ -40,6 +40,7 @@ use super::subspace_matrix::{column_sigmoid_sum, sigmoid, sigmoid_and_derivative
 /// One Γ-dependent strategy (a split t ≥ 2) of a dataset path: it contributes
 /// `coef·Γ(light | eye)` to F.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct TrainingSplit {
     /// Eye subspace κ_E(Z̄) of the split's eye sub-path.
     pub eye: u32,
@@ -52,6 +53,7 @@ pub struct TrainingSplit {
 /// The training dataset in flat arrays (struct of arrays; splits of path i are
 /// `splits[split_start[i]..split_start[i + 1]]`).
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct TrainingSet {
     weights: Vec<f64>,
     fixed: Vec<f64>,

@@ -77,6 +77,7 @@ fn light_prefix_weights_from(scene: &Scene, x: &[Vertex], known: &[PrefixMemo], 
 /// from the light path alone ([`memoize_light_path`]), for every connection to a
 /// prefix of that path.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct PrefixMemo {
     /// κ_L(y_k) seen from y_{k−1} (k ≥ 1, surfaces), or y₀'s light-source bin; u32::MAX
     /// where undefined.

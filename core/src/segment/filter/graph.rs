@@ -88,6 +88,7 @@ pub const REFLECTED: u32 = 1 << 31;
 
 /// One pass's rows (compressed sparse rows over the nodes).
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct FilterGraph<T> {
     /// L_e per node.
     pub emission: Vec<Rgb3<T>>,

@@ -22,6 +22,7 @@ const DIMS_PER_BOUNCE: u32 = 8;
 
 /// The BSDF-sampled continuation segment leaving a node.
 #[derive(Clone, Copy, Debug, Default)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct Continuation {
     /// Probability that it was attempted (roulette and the depth cap), q.
     pub q: f32,
@@ -46,6 +47,7 @@ pub struct Continuation {
 
 /// The light-sampled segment leaving a node (next-event estimation).
 #[derive(Clone, Copy, Debug, Default)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct LightSegment {
     /// Was a light sample attempted (non-Dirac material, depth allows)?
     pub attempted: bool,
@@ -64,6 +66,7 @@ pub struct LightSegment {
 /// A segment's end on a light (what the emission and light-sampling techniques' densities
 /// read): the light, the point and its normal (zero for point, spot and infinite lights).
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct LightEnd {
     /// The light's index, or [`NONE`]: the end is on no light.
     pub light: u32,
@@ -90,6 +93,7 @@ impl LightEnd {
 
 /// Which walk a node belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub enum NodeKind {
     /// A camera path's segment end (`wo` toward the camera).
     Camera,
@@ -102,6 +106,7 @@ pub enum NodeKind {
 
 /// One segment end of a camera or light path.
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct Node {
     pub hit: SurfaceHit,
     /// Unit direction back along the segment that reached it.

@@ -25,6 +25,7 @@ fn grid_point(n: &Node) -> crate::math::Vec3 {
 
 /// What one chunk of a filtering phase produces (reused across passes).
 #[derive(Clone, Debug, Default)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct FilterChunk {
     /// Path tracing phase: the chunk's nodes, indices local to it.
     pub nodes: Vec<Node>,
@@ -39,7 +40,8 @@ pub struct FilterChunk {
     pub rows: FilterGraph<f32>,
     /// `propagate`: L_i (or A_i) of the chunk's nodes.
     pub radiance: Vec<Rgb3<f32>>,
-    /// `filter`: scratch for one row's pairs.
+    /// `filter`: scratch for one row's pairs (never sent between workers).
+    #[cfg_attr(feature = "wire", serde(skip))]
     pub pairs: Vec<(u32, Rgb3<f32>)>,
 }
 

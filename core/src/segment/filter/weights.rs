@@ -42,6 +42,7 @@ pub struct Neighbourhood<'a> {
 
 /// The MMIS denominators of one node's two segments (per solid angle at its end).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct Denominators {
     /// D of its continuation.
     pub next: f64,
