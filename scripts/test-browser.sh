@@ -1,17 +1,25 @@
 #!/usr/bin/env bash
-# The browser test (issue 7): builds the wasm module, serves host-wasm/www on 127.0.0.1,
-# renders built-in scenes in headless Debian chromium (playwright-core) and checks each
-# image against the native CLI's render of the same scene, seed and passes
-# (ember-wasm-compare: pixels equal up to rounding except paths diverging at tied hits,
-# and a Šidák-corrected z-test per 8×8 block). Fails if the module does not load, a
-# worker errors, the page logs an error, the canvas is blank or the images disagree.
+# The browser test (issues 7, 19): builds the wasm module, serves host-wasm/www on
+# 127.0.0.1 and, in headless Debian chromium (playwright-core), renders every estimator
+# in the core's list (ember-wasm-compare --estimators) through the core's render
+# protocol on two Web Workers. Each image is checked against sixteen native CLI renders of
+# the same scene and passes with seeds *different* from the browser's (ember-wasm-compare
+# independent: a Šidák-corrected t-test per 8×8 block and channel, the noise taken from
+# the sixteen, so that kernel estimators' correlated pixels are held to the right bound;
+# no NaN, not blank). Fails if the
+# module does not load, a worker errors, the page logs an error, the canvas is blank or
+# the images disagree. One more case renders with the page dropping one light-path chunk
+# (fault=drop-light-chunk) and must end in the page's error, not in an image.
 # Artifacts (screenshots, PFM, EXR, per-case JSON): target/browser-artifacts/.
-# Injected bugs it was seen to catch (docs/wasm.md): the page dropping worker 1's splat
-# film (lt/bdpt cases disagree, block |z| 8-10); a worker throwing on pass 2 (console and
-# page errors); a wrong module URL (404: module not loaded, canvas blank).
+# Injected bugs it was seen to catch (docs/wasm.md): the page dropping a light-path chunk
+# (the fault case, run without its expectation: "reduced without chunk 1"); the page
+# dropping worker 1's splat film (lt/bdpt cases disagree, block |z| 8-10); a worker
+# throwing on pass 2 (console and page errors); a wrong module URL (404: module not
+# loaded, canvas blank).
 #
-#   scripts/test-browser.sh          the test (64×64, 4 passes, 2 workers per case)
-#   scripts/test-browser.sh bench    also measure samples/s (1 worker vs all cores) at 128×128
+#   scripts/test-browser.sh          the test (48×48, 4 passes, 2 workers per case)
+#   scripts/test-browser.sh bench    also measure samples/s per estimator: 1 worker
+#                                    against the native CLI on 1 thread, at 64×64
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -34,12 +42,7 @@ if [ ! -d host-wasm/tests/node_modules/playwright-core ]; then
 fi
 
 step "wasm module (release, wasm32-unknown-unknown, simd128)"
-rustup target add wasm32-unknown-unknown >/dev/null
-# No debug info in the module (the workspace's release profile keeps line tables).
-CARGO_PROFILE_RELEASE_DEBUG=false CARGO_PROFILE_RELEASE_STRIP=true \
-  cargo build --release -p ember-wasm --lib --target wasm32-unknown-unknown
-cp "$TARGET_DIR/wasm32-unknown-unknown/release/ember_wasm.wasm" host-wasm/www/ember_wasm.wasm
-echo "module: $(stat -c %s host-wasm/www/ember_wasm.wasm) bytes"
+scripts/build-wasm.sh
 
 step "native CLI and checker"
 cargo build --release -p ember-cli -p ember-wasm --bins
@@ -53,20 +56,27 @@ SERVER=$!
 trap 'kill $SERVER 2>/dev/null || true' EXIT
 for _ in $(seq 50); do curl -sf "http://127.0.0.1:$PORT/index.html" >/dev/null && break; sleep 0.1; done
 
-SIZE=64 PASSES=4 SEED=7
+SIZE=48 PASSES=4 BROWSER_SEED=1234567
+NATIVE_SEEDS=($(seq 101 116))
 scene_index() { case $1 in cornell-box) echo 0;; glass-spheres) echo 1;; esac; }
-est_index() { case $1 in pt) echo 0;; lt) echo 1;; bdpt) echo 2;; esac; }
-CASES=("cornell-box pt" "cornell-box lt" "glass-spheres bdpt" "glass-spheres pt")
+mapfile -t ESTIMATORS < <("$CHECK" --estimators)
+CASES=()
+for e in "${ESTIMATORS[@]}"; do CASES+=("cornell-box $e"); done
+CASES+=("glass-spheres bdpt" "glass-spheres spcbpt")
 
-step "native renders ($SIZE×$SIZE, $PASSES passes, seed $SEED)"
+step "native renders ($SIZE×$SIZE, $PASSES passes, seeds ${NATIVE_SEEDS[*]}; the browser's seed is $BROWSER_SEED)"
 JSON="["
 for c in "${CASES[@]}"; do
   set -- $c
-  "$EMBER" render --builtin "$1" -e "$2" --spp $PASSES --seed $SEED --width $SIZE --height $SIZE \
-    -o "$ART/$1-$2-native.exr" >/dev/null
-  Q="scene=$(scene_index "$1")&estimator=$(est_index "$2")&width=$SIZE&height=$SIZE&passes=$PASSES&seed=$SEED&workers=2"
-  JSON+="{\"name\":\"$1-$2\",\"query\":\"$Q\",\"timeoutS\":60},"
+  for seed in "${NATIVE_SEEDS[@]}"; do
+    "$EMBER" render --builtin "$1" -e "$2" --spp $PASSES --seed $seed --width $SIZE --height $SIZE --threads 2 \
+      -o "$ART/$1-$2-native-$seed.exr" >/dev/null 2>&1
+  done
+  Q="scene=$(scene_index "$1")&estimator=$2&width=$SIZE&height=$SIZE&passes=$PASSES&seed=$BROWSER_SEED&workers=2"
+  JSON+="{\"name\":\"$1-$2\",\"query\":\"$Q\",\"timeoutS\":120},"
 done
+Q="scene=0&estimator=lvcbpt&width=$SIZE&height=$SIZE&passes=2&seed=1&workers=2&fault=drop-light-chunk"
+JSON+="{\"name\":\"fault-drop-light-chunk\",\"query\":\"$Q\",\"timeoutS\":60,\"expectError\":\"reduced without chunk 1\"}"
 JSON="${JSON%,}]"
 
 step "browser renders (headless chromium)"
@@ -77,26 +87,25 @@ STATUS=0
 for c in "${CASES[@]}"; do
   set -- $c
   echo "-- $1 / $2"
-  "$CHECK" "$ART/$1-$2.pfm" "$ART/$1-$2-native.exr" || STATUS=1
+  "$CHECK" "$ART/$1-$2.pfm" independent "$ART/$1-$2-native-"*.exr || STATUS=1
 done
 
 if [ "$MODE" = bench ] || [ "${BENCH:-}" = 1 ]; then
-  # Interleaved rounds (the machine may be shared): native 1 thread, browser 1 worker,
-  # native all threads, browser one worker per core; compare the best of the rounds.
-  step "throughput at 128×128, 8 passes: browser workers vs native CLI threads"
-  B=128 BP=8
-  for round in 1 2 3; do
-    for c in "cornell-box pt" "glass-spheres bdpt"; do
-      set -- $c
-      for w in 1 0; do
-        t=$([ $w = 1 ] && echo 1 || nproc)
-        printf 'round %s native  %s %s %s thread(s): ' "$round" "$1" "$2" "$t"
-        "$EMBER" render --builtin "$1" -e "$2" --spp $BP --seed 1 --width $B --height $B --threads "$t" \
-          -o "$ART/bench-native.exr" 2>&1 | grep -E "^samples" || true
-        Q="scene=$(scene_index "$1")&estimator=$(est_index "$2")&width=$B&height=$B&passes=$BP&seed=1&workers=$w"
-        printf 'round %s browser ' "$round"
+  # Per estimator: native CLI on 1 thread against the browser with 1 worker, then the
+  # browser with 2 workers, interleaved (the machine may be shared); 64×64, 8 passes,
+  # setup included in both. Samples/s as each reports it.
+  step "throughput at 64×64, 8 passes: browser workers against the native CLI"
+  B=64 BP=8
+  for e in "${ESTIMATORS[@]}"; do
+    for round in 1 2; do
+      printf '%s round %s native 1 thread: ' "$e" "$round"
+      "$EMBER" render --builtin cornell-box -e "$e" --spp $BP --seed 1 --width $B --height $B --threads 1 \
+        -o "$ART/bench-native.exr" 2>&1 | grep -E "^samples" || echo
+      for w in 1 2; do
+        Q="scene=0&estimator=$e&width=$B&height=$B&passes=$BP&seed=1&workers=$w"
+        printf '%s round %s browser ' "$e" "$round"
         node host-wasm/tests/browser.mjs "http://127.0.0.1:$PORT" "$ART" \
-          "[{\"name\":\"bench-$1-$2-w$w\",\"query\":\"$Q\",\"timeoutS\":300,\"noDownload\":true}]"
+          "[{\"name\":\"bench-$e-w$w\",\"query\":\"$Q\",\"timeoutS\":300,\"noDownload\":true}]"
       done
     done
   done

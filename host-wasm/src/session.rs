@@ -140,9 +140,9 @@ impl Session {
         self.renderer.map(&ctx, &phase, &mut self.scratch);
         self.last_rays = self.scratch.counters.rays;
         self.film_bytes.clear();
-        self.scratch.encode(Part::Film, &mut self.film_bytes);
+        self.scratch.encode(&phase, Part::Film, &mut self.film_bytes);
         self.state_bytes.clear();
-        self.scratch.encode(Part::State, &mut self.state_bytes);
+        self.scratch.encode(&phase, Part::State, &mut self.state_bytes);
         Ok(())
     }
 
@@ -155,7 +155,7 @@ impl Session {
         }
         let outputs = self.buffers.outputs(&phase);
         outputs[c]
-            .decode(part, phase.chunk_range(c), &self.input, &self.scene)
+            .decode(&phase, c, part, &self.input, &self.scene)
             .map_err(|e| (Failure::BadBytes, format!("chunk {chunk} of phase '{}': {e}", phase.name)))?;
         match part {
             Part::Film => self.received[c].0 = true,

@@ -41,15 +41,23 @@ const PASSES: u32 = 2;
 const SEED: u64 = 11;
 
 fn session(scene: u32, estimator: u32, role: Role) -> Session {
-    Session::new(scene, estimator, SIZE, SIZE, -1, SEED, role).expect("setup")
+    session_seeded(scene, estimator, role, SEED)
+}
+
+fn session_seeded(scene: u32, estimator: u32, role: Role, seed: u64) -> Session {
+    Session::new(scene, estimator, SIZE, SIZE, -1, seed, role).expect("setup")
 }
 
 /// Render as the page does with `workers` workers: every instance takes the same phase;
 /// chunk c goes to worker (3c + pass) mod `workers` (any assignment gives the same image);
 /// the page's instance receives both parts of every chunk, each worker the state parts.
 fn render_like_the_page(scene: u32, estimator: u32, workers: usize) -> LinearImage {
-    let mut page = session(scene, estimator, Role::Page);
-    let mut pool: Vec<Session> = (0..workers).map(|_| session(scene, estimator, Role::Worker)).collect();
+    render_seeded(scene, estimator, workers, SEED)
+}
+
+fn render_seeded(scene: u32, estimator: u32, workers: usize, seed: u64) -> LinearImage {
+    let mut page = session_seeded(scene, estimator, Role::Page, seed);
+    let mut pool: Vec<Session> = (0..workers).map(|_| session_seeded(scene, estimator, Role::Worker, seed)).collect();
     for pass in 0..PASSES {
         page.start_pass(pass);
         pool.iter_mut().for_each(|w| w.start_pass(pass));
@@ -159,6 +167,42 @@ fn sessions_refuse_missing_and_foreign_chunks() {
     let (code, message) = page.reduce().expect_err("a chunk is missing");
     assert_eq!(code, Failure::Missing);
     assert!(message.contains("chunk 1") && message.contains("state part missing"), "{message}");
+}
+
+/// The browser test's independent-seed verdict. On a kernel estimator (PhF: neighbouring
+/// pixels share photons) a render with a seed of its own passes against twelve others
+/// and the same render with one 8 × 8 block twice too bright (a chunk counted twice)
+/// fails; on PT, so does a render 30 % too bright everywhere (worst block |t| 10.2
+/// against a bound of 5.4). Injected bug it caught: the standard error of the native
+/// mean alone (s / √K, leaving out the browser render's own noise) failed the correct
+/// PhF render (|t| 7.9 against 7.1).
+#[test]
+fn independent_seeds_accept_fresh_noise_and_reject_bias() {
+    let index = |kind| EstimatorKind::ALL.iter().position(|&k| k == kind).expect("listed") as u32;
+    let check = |b: &LinearImage, n: &[LinearImage]| crate::compare::compare_independent(b, n, Criteria::default());
+    let phf = index(EstimatorKind::Phf);
+    let natives: Vec<LinearImage> = (1..=12).map(|seed| render_seeded(0, phf, 1, seed)).collect();
+    let browser = render_seeded(0, phf, 2, 99);
+    let v = check(&browser, &natives);
+    assert!(v.ok, "{}", v.report);
+    let mut block = browser.clone();
+    for y in 8..16 {
+        for x in 8..16 {
+            block.pixels[y * SIZE as usize + x].iter_mut().for_each(|c| *c *= 2.0);
+        }
+    }
+    let v = check(&block, &natives);
+    assert!(!v.ok, "a block twice too bright passed:\n{}", v.report);
+    assert!(!check(&browser, &natives[..2]).ok, "two natives are too few");
+
+    let pt = index(EstimatorKind::Pt);
+    let natives: Vec<LinearImage> = (1..=24).map(|seed| render_seeded(0, pt, 1, seed)).collect();
+    let browser = render_seeded(0, pt, 2, 99);
+    assert!(check(&browser, &natives).ok);
+    let mut flat = browser.clone();
+    flat.pixels.iter_mut().flatten().for_each(|c| *c *= 1.3);
+    let v = check(&flat, &natives);
+    assert!(!v.ok, "30 % too bright passed:\n{}", v.report);
 }
 
 #[test]

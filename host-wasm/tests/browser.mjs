@@ -2,11 +2,14 @@
 //
 //   node browser.mjs BASE_URL OUT_DIR CASES_JSON
 //
-// CASES_JSON: [{ "name", "query" }] where query is the page's URL parameters. For each
-// case: load the page, wait until it reports its passes done, read the canvas (must
-// not be blank), download the linear image (PFM) through the page's own button, save
-// a screenshot, and record the page's numbers in OUT_DIR/<name>.json. Exits 1 if the
-// module fails to load, a worker errors, the page logs an error or a case times out.
+// CASES_JSON: [{ "name", "query", "timeoutS"?, "noDownload"?, "expectError"? }] where
+// query is the page's URL parameters. For each case: load the page, wait until it
+// reports its passes done, read the canvas (must not be blank), download the linear
+// image (PFM) through the page's own button, save a screenshot, and record the page's
+// numbers (time per phase included) in OUT_DIR/<name>.json. Exits 1 if the module fails
+// to load, a worker errors, the page logs an error or a case times out. A case with
+// expectError passes only if the page stops with an error containing that text (an
+// injected fault must stop the render, never yield an image).
 import { chromium } from 'playwright-core';
 import fs from 'node:fs';
 import os from 'node:os';
@@ -30,6 +33,7 @@ try {
   for (const c of cases) {
     const page = await context.newPage();
     const log = [];
+    const before = problems.length;
     page.on('console', (m) => {
       log.push(`${m.type()}: ${m.text()}`);
       if (m.type() === 'error') problems.push(`${c.name}: console error: ${m.text()}`);
@@ -55,9 +59,21 @@ try {
         sum += s;
       }
       return { loaded: e.loaded, finished: e.finished, errors: e.errors, passes: e.passes, workers: e.workers,
-        elapsedMs: e.elapsedMs, samples: e.samples, samplesPerSecond: e.samplesPerSecond, rays: e.rays,
+        estimator: e.estimator, elapsedMs: e.elapsedMs, setupMs: e.setupMs, phaseMs: e.phaseMs,
+        samples: e.samples, samplesPerSecond: e.samplesPerSecond, rays: e.rays,
         discarded: e.discarded, canvas: { width: cv.width, height: cv.height, litPixels: lit, meanByte: sum / (3 * cv.width * cv.height) } };
     });
+    if (c.expectError) {
+      // Only the expected error may happen, and it must.
+      problems.length = before;
+      if (!state.errors.some((e) => e.includes(c.expectError))) {
+        problems.push(`${c.name}: expected the page to stop with "${c.expectError}", got ${state.finished ? 'a finished render' : JSON.stringify(state.errors)}`);
+      }
+      fs.writeFileSync(path.join(outDir, `${c.name}.json`), JSON.stringify({ ...state, log }, null, 2));
+      console.log(`${c.name}: stopped with ${JSON.stringify(state.errors)}`);
+      await page.close();
+      continue;
+    }
     for (const err of state.errors) problems.push(`${c.name}: page reported: ${err}`);
     if (!state.loaded) problems.push(`${c.name}: the module did not load`);
     const pixels = state.canvas.width * state.canvas.height;
@@ -70,7 +86,7 @@ try {
     }
     await page.screenshot({ path: path.join(outDir, `${c.name}.png`) });
     fs.writeFileSync(path.join(outDir, `${c.name}.json`), JSON.stringify({ ...state, log }, null, 2));
-    console.log(`${c.name}: ${state.passes} passes, ${state.workers} workers, ${(state.elapsedMs / 1000).toFixed(2)} s, ` +
+    console.log(`${c.name}: ${state.passes} passes, ${state.workers} workers, ${(state.elapsedMs / 1000).toFixed(2)} s (setup ${(state.setupMs / 1000).toFixed(2)} s), ` +
       `${Math.round(state.samplesPerSecond)} samples/s, canvas ${state.canvas.litPixels}/${pixels} lit`);
     await page.close();
   }

@@ -1,89 +1,104 @@
 // The hand-written loader: instantiate the module (no imports) and wrap its C exports.
-// Workers use `Renderer`; the page uses `Core` (its own instance: the core's film and
-// the lists of scenes and estimators). The page compiles the module once and hands the
-// compiled WebAssembly.Module to every worker.
+// The page and every worker hold one `Instance` each: same scene, same estimator, same
+// phases (the core's render protocol; host-wasm/src/lib.rs has the protocol). The page
+// compiles the module once and hands the compiled WebAssembly.Module to every worker.
 
-const SETUP_ERRORS = { 1: 'unknown scene', 2: 'unknown estimator', 3: 'bad resolution', 4: 'the scene failed to build' };
-const RENDER_ERRORS = { 1: 'not set up', 2: 'pixel or path range out of bounds' };
+export const PART_FILM = 0;
+export const PART_STATE = 1;
+const TEXT = { scene: 0, estimator: 1, summary: 2, config: 3, error: 4, phase: 5 };
+export const ROLE_WORKER = 0;
+export const ROLE_PAGE = 1;
+const U64_MAX = (1n << 64n) - 1n;
 
 export async function compileModule(url) {
   const response = await fetch(url);
-  if (!response.ok) throw new Error(`fetching ${url}: HTTP ${response.status}`);
+  if (!response.ok) throw new Error(`fetching ${url}: HTTP ${response.status} (build it with scripts/build-wasm.sh)`);
   return WebAssembly.compile(await response.arrayBuffer());
 }
 
-function utf8(x, ptr, len) {
-  return new TextDecoder().decode(new Uint8Array(x.memory.buffer, ptr, len));
+// A decimal seed in 0..2^64-1 as a BigInt, or an error message.
+export function parseSeed(text) {
+  const s = String(text).trim();
+  if (!/^[0-9]+$/.test(s)) return { error: `seed "${s}": a whole number from 0 to ${U64_MAX} is needed` };
+  const v = BigInt(s);
+  if (v > U64_MAX) return { error: `seed ${s}: above ${U64_MAX}` };
+  return { value: v };
 }
 
-export class Renderer {
-  constructor(module) {
-    this.instance = new WebAssembly.Instance(module, {});
-    this.x = this.instance.exports;
-  }
-  // seed: BigInt (u64).
-  setup(scene, estimator, width, height, maxDepth, seed) {
-    const hi = Number((seed >> 32n) & 0xffffffffn);
-    const lo = Number(seed & 0xffffffffn);
-    const rc = this.x.ember_setup(scene, estimator, width, height, maxDepth, hi, lo);
-    if (rc !== 0) throw new Error(`ember_setup: ${SETUP_ERRORS[-rc] ?? rc}`);
-    this.width = width;
-    this.height = height;
-    return { lightPaths: this.x.ember_light_paths_per_pass(), triangles: this.x.ember_triangle_count(), splatScale: this.x.ember_splat_scale() };
-  }
-  // Renders one pass's share; returns copies (safe to transfer) of the camera band
-  // (3 × f32 per band pixel) and of the splats (5 × f32 each: x, y, r, g, b; null if none).
-  render(pass, p0, p1, l0, l1) {
-    const rc = this.x.ember_render(pass, p0, p1, l0, l1);
-    if (rc !== 0) throw new Error(`ember_render: ${RENDER_ERRORS[-rc] ?? rc}`);
-    const mem = this.x.memory.buffer;
-    const camera = new Float32Array(mem, this.x.ember_camera_ptr(), 3 * (p1 - p0)).slice();
-    const n = this.x.ember_splat_count();
-    const splats = n > 0 ? new Float32Array(mem, this.x.ember_splat_ptr(), 5 * n).slice() : null;
-    return { camera, splats, rays: this.x.ember_last_rays() };
-  }
+// An integer in lo..=hi, or an error message naming `name`.
+export function parseInteger(name, text, lo, hi) {
+  const s = String(text).trim();
+  if (!/^[0-9]+$/.test(s) || Number(s) < lo || Number(s) > hi) return { error: `${name} "${s}": a whole number from ${lo} to ${hi} is needed` };
+  return { value: Number(s) };
 }
 
-// The page's instance: the core's film and the module's lists.
-export class Core {
+export class Instance {
   constructor(module) {
     this.x = new WebAssembly.Instance(module, {}).exports;
   }
-  scenes() {
-    const x = this.x;
-    return Array.from({ length: x.ember_scene_count() }, (_, i) => utf8(x, x.ember_scene_name(i), x.ember_scene_name_len(i)));
+  text(what, i = 0) {
+    const n = this.x.ember_text(what, i);
+    if (n < 0) return null;
+    return new TextDecoder().decode(new Uint8Array(this.x.memory.buffer, this.x.ember_text_ptr(), n));
   }
-  // [{ name, supported }] in the core's order (the index is the estimator's id).
+  // Throws with the module's message when an export returned a negative code.
+  check(rc, call) {
+    if (rc < 0) throw new Error(`${call}: ${this.text(TEXT.error)} (code ${-rc})`);
+    return rc;
+  }
+  scenes() {
+    return Array.from({ length: this.x.ember_scene_count() }, (_, i) => this.text(TEXT.scene, i));
+  }
+  // The core's estimator list, in its order (the index is what setup takes).
   estimators() {
-    const x = this.x;
-    return Array.from({ length: x.ember_estimator_count() }, (_, i) => ({
-      name: utf8(x, x.ember_estimator_name(i), x.ember_estimator_name_len(i)), supported: x.ember_estimator_supported(i) === 1,
+    return Array.from({ length: this.x.ember_estimator_count() }, (_, i) => ({
+      name: this.text(TEXT.estimator, i), summary: this.text(TEXT.summary, i), config: this.text(TEXT.config, i),
     }));
   }
-  newFilm(width, height) {
-    const rc = this.x.ember_film_new(width, height);
-    if (rc !== 0) throw new Error(`ember_film_new: ${SETUP_ERRORS[-rc] ?? rc}`);
+  // seed: BigInt (u64); role: ROLE_PAGE (holds the film) or ROLE_WORKER.
+  setup(scene, estimator, width, height, maxDepth, seed, role) {
+    const hi = Number((seed >> 32n) & 0xffffffffn);
+    const lo = Number(seed & 0xffffffffn);
+    this.check(this.x.ember_setup(scene, estimator, width, height, maxDepth, hi, lo, role), 'setup');
     this.pixels = width * height;
+    return { triangles: this.x.ember_triangle_count() };
   }
-  #input(values) {
-    const ptr = this.x.ember_film_input(values.length);
-    new Float32Array(this.x.memory.buffer, ptr, values.length).set(values);
+  startPass(pass) {
+    this.check(this.x.ember_start_pass(pass), 'start pass');
   }
-  // Stage a worker's camera band (pixels first..) and, after all bands, its splats.
-  camera(first, values) {
-    this.#input(values);
-    this.x.ember_film_camera(first);
+  // The next phase (taken as the current one), or null when the pass is done.
+  nextPhase() {
+    if (this.check(this.x.ember_next_phase(), 'next phase') === 0) return null;
+    const pass = this.x.ember_phase_pass();
+    return {
+      id: this.x.ember_phase_id(), pass: pass < 0 ? null : pass, items: this.x.ember_phase_items(),
+      chunks: this.x.ember_phase_chunks(), samples: this.x.ember_phase_samples() === 1, name: this.text(TEXT.phase),
+    };
   }
-  splats(values) {
-    this.#input(values);
-    this.x.ember_film_splats();
+  #part(p) {
+    const ptr = this.x.ember_part_ptr(p), len = this.x.ember_part_len(p);
+    return new Uint8Array(this.x.memory.buffer, ptr, len).slice().buffer;
   }
-  endPass(scale) {
-    this.x.ember_film_end_pass(scale);
+  // Map chunk `chunk` of the current phase: its two parts as fresh (transferable) buffers.
+  map(chunk) {
+    this.check(this.x.ember_map(chunk), `map chunk ${chunk}`);
+    return { film: this.#part(PART_FILM), state: this.#part(PART_STATE), rays: this.x.ember_map_rays() };
   }
-  // The mean image (3 × f32 per pixel, row 0 at the top), a copy.
+  // Hand part `part` (PART_FILM or PART_STATE) of chunk `chunk` to this instance.
+  receive(chunk, part, buffer) {
+    const bytes = new Uint8Array(buffer);
+    const ptr = this.x.ember_input(bytes.length);
+    new Uint8Array(this.x.memory.buffer, ptr, bytes.length).set(bytes);
+    this.check(this.x.ember_receive(chunk, part), `receive chunk ${chunk}`);
+  }
+  // Reduce the current phase; true when it committed a pass to the film.
+  reduce() {
+    return this.check(this.x.ember_reduce(), 'reduce') === 1;
+  }
+  // The film's mean (3 × f32 per pixel, row 0 at the top), a copy.
   image() {
-    const ptr = this.x.ember_film_image();
+    // The call may grow the memory, which detaches the old buffer: read it after.
+    const ptr = this.x.ember_image();
     return new Float32Array(this.x.memory.buffer, ptr, 3 * this.pixels).slice();
   }
   passes() {
@@ -92,4 +107,9 @@ export class Core {
   discarded() {
     return this.x.ember_film_discarded();
   }
+}
+
+// Two phases agree when every number the protocol depends on agrees.
+export function samePhase(a, b) {
+  return !!a && !!b && a.id === b.id && a.pass === b.pass && a.items === b.items && a.chunks === b.chunks;
 }

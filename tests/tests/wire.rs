@@ -53,10 +53,10 @@ fn bytes_between_instances_give_the_serial_image() {
                     a.map(&ctx, &phase, &mut worker);
                     for (part, to_b) in [(Part::Film, false), (Part::State, false), (Part::State, true)] {
                         bytes.clear();
-                        worker.encode(part, &mut bytes);
+                        worker.encode(&phase, part, &mut bytes);
                         sent += bytes.len();
                         let dst = if to_b { &mut *r } else { &mut *m };
-                        dst.decode(part, phase.chunk_range(c), &bytes, &scene).expect("own bytes decode");
+                        dst.decode(&phase, c, part, &bytes, &scene).expect("own bytes decode");
                     }
                 }
                 a.reduce(&ctx, &phase, mapped, &mut film_a);

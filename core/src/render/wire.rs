@@ -18,7 +18,8 @@
 //! (`Film::new(0, 0)` ignores camera samples and counts splats as outside), so the film's
 //! bytes never reach the workers that do not need them.
 //!
-//! **Format.** A header (`EMBW`, [`WIRE_VERSION`], the part, the chunk's index range) and
+//! **Format.** A header (`EMBW`, [`WIRE_VERSION`], the part, the phase's id and pass and
+//! the chunk's index range: an output of another phase or of an earlier pass is refused) and
 //! then the part's fields in postcard, serde's compact no_std format (integers as varints,
 //! floats as their bits, so values survive exactly). The field layout is the derived one,
 //! so the version goes up whenever a type inside [`PhaseData`] changes; both ends of a
@@ -38,7 +39,7 @@ use core::ops::Range;
 
 use serde::{Deserialize, Serialize};
 
-use super::{ChunkOutput, PhaseData};
+use super::{ChunkOutput, Phase, PhaseData};
 use crate::integrator::{Counters, Splat};
 use crate::path::{LightPaths, VertexKind};
 use crate::scene::Scene;
@@ -65,12 +66,12 @@ pub enum WireError {
     Header,
     /// A different part than the one asked for.
     WrongPart(Part),
-    /// The output of another chunk than the one expected.
+    /// The output of another chunk, phase or pass than the one expected.
     WrongChunk {
-        /// The range the bytes hold.
-        found: Range<u32>,
-        /// The range the host expected.
-        expected: Range<u32>,
+        /// What the bytes hold.
+        found: ChunkId,
+        /// What the host expected.
+        expected: ChunkId,
     },
     /// The fields do not parse.
     Malformed,
@@ -83,9 +84,36 @@ impl fmt::Display for WireError {
         match self {
             Self::Header => write!(f, "not an ember chunk output of wire version {WIRE_VERSION}"),
             Self::WrongPart(p) => write!(f, "a {p:?} part where another was expected"),
-            Self::WrongChunk { found, expected } => write!(f, "the output of items {found:?} where items {expected:?} were expected"),
+            Self::WrongChunk { found, expected } => write!(f, "the output of {found} where {expected} was expected"),
             Self::Malformed => write!(f, "malformed chunk output"),
             Self::Invalid(what) => write!(f, "invalid chunk output: {what}"),
+        }
+    }
+}
+
+/// Which chunk of which phase of which pass an output belongs to.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ChunkId {
+    /// [`Phase::id`].
+    pub phase: u8,
+    /// [`Phase::pass`].
+    pub pass: Option<u32>,
+    /// The chunk's items.
+    pub items: Range<u32>,
+}
+
+impl ChunkId {
+    /// Chunk `chunk` of `phase`.
+    pub fn of(phase: &Phase, chunk: usize) -> Self {
+        Self { phase: phase.id, pass: phase.pass, items: phase.chunk_range(chunk) }
+    }
+}
+
+impl fmt::Display for ChunkId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.pass {
+            Some(p) => write!(f, "items {:?} of phase {} of pass {p}", self.items, self.phase),
+            None => write!(f, "items {:?} of setup phase {}", self.items, self.phase),
         }
     }
 }
@@ -95,7 +123,7 @@ struct Header {
     magic: [u8; 4],
     version: u16,
     part: Part,
-    items: Range<u32>,
+    chunk: ChunkId,
 }
 
 #[derive(Serialize)]
@@ -113,9 +141,11 @@ struct FilmOwned {
 }
 
 impl ChunkOutput {
-    /// Append part `part` of this output to `out` (see the module notes).
-    pub fn encode(&self, part: Part, out: &mut Vec<u8>) {
-        let header = Header { magic: MAGIC, version: WIRE_VERSION, part, items: self.items.clone() };
+    /// Append part `part` of this output, mapped for `phase`, to `out` (see the module
+    /// notes).
+    pub fn encode(&self, phase: &Phase, part: Part, out: &mut Vec<u8>) {
+        let chunk = ChunkId { phase: phase.id, pass: phase.pass, items: self.items.clone() };
+        let header = Header { magic: MAGIC, version: WIRE_VERSION, part, chunk };
         // Serialising plain values into a growing vector cannot fail; on the impossible
         // error the vector is lost, never half-written into `out`.
         let buffer = core::mem::take(out);
@@ -129,9 +159,10 @@ impl ChunkOutput {
     }
 
     /// Replace this output's part `part` with the one in `bytes`, which must be the
-    /// output of the chunk over `expected`. The other part is left as it was; on error
+    /// output of chunk `chunk` of `phase`. The other part is left as it was; on error
     /// nothing is changed.
-    pub fn decode(&mut self, part: Part, expected: Range<u32>, bytes: &[u8], scene: &Scene) -> Result<(), WireError> {
+    pub fn decode(&mut self, phase: &Phase, chunk: usize, part: Part, bytes: &[u8], scene: &Scene) -> Result<(), WireError> {
+        let expected = ChunkId::of(phase, chunk);
         let (header, rest): (Header, &[u8]) = postcard::take_from_bytes(bytes).map_err(|_| WireError::Header)?;
         if header.magic != MAGIC || header.version != WIRE_VERSION {
             return Err(WireError::Header);
@@ -139,9 +170,10 @@ impl ChunkOutput {
         if header.part != part {
             return Err(WireError::WrongPart(header.part));
         }
-        if header.items != expected {
-            return Err(WireError::WrongChunk { found: header.items, expected });
+        if header.chunk != expected {
+            return Err(WireError::WrongChunk { found: header.chunk, expected });
         }
+        let expected = expected.items;
         match part {
             Part::Film => {
                 let film: FilmOwned = from_all(rest)?;
@@ -229,23 +261,30 @@ mod tests {
     #[test]
     fn refuses_what_it_cannot_trust() {
         let (scene, _, _) = builtin::cornell_box(4, 4).build().expect("builds");
+        let phase = Phase { name: "camera", id: 0, pass: Some(3), items: 8, chunk: 4, samples: true };
         let mut out = ChunkOutput::default();
         out.reset(0..4);
         out.pixel_buffer();
         let mut film = Vec::new();
-        out.encode(Part::Film, &mut film);
+        out.encode(&phase, Part::Film, &mut film);
         let mut got = ChunkOutput::default();
-        assert_eq!(got.decode(Part::Film, 0..4, &film, &scene), Ok(()));
-        assert_eq!(got.decode(Part::State, 0..4, &film, &scene), Err(WireError::WrongPart(Part::Film)));
-        assert!(matches!(got.decode(Part::Film, 4..8, &film, &scene), Err(WireError::WrongChunk { .. })));
-        assert_eq!(got.decode(Part::Film, 0..4, &film[..film.len() - 1], &scene), Err(WireError::Malformed));
+        assert_eq!(got.decode(&phase, 0, Part::Film, &film, &scene), Ok(()));
+        assert_eq!(got.decode(&phase, 0, Part::State, &film, &scene), Err(WireError::WrongPart(Part::Film)));
+        assert!(matches!(got.decode(&phase, 1, Part::Film, &film, &scene), Err(WireError::WrongChunk { .. })));
+        // The same chunk of the next pass, or of another phase: stale, refused.
+        let next = Phase { pass: Some(4), ..phase };
+        assert!(matches!(got.decode(&next, 0, Part::Film, &film, &scene), Err(WireError::WrongChunk { .. })));
+        let other = Phase { id: 1, ..phase };
+        assert!(matches!(got.decode(&other, 0, Part::Film, &film, &scene), Err(WireError::WrongChunk { .. })));
+        assert_eq!(got.decode(&phase, 0, Part::Film, &film[..film.len() - 1], &scene), Err(WireError::Malformed));
         let mut long = film.clone();
         long.push(0);
-        assert_eq!(got.decode(Part::Film, 0..4, &long, &scene), Err(WireError::Invalid("trailing bytes")));
+        assert_eq!(got.decode(&phase, 0, Part::Film, &long, &scene), Err(WireError::Invalid("trailing bytes")));
         let mut old = film.clone();
         old[4] ^= 1; // the version's varint
-        assert_eq!(got.decode(Part::Film, 0..4, &old, &scene), Err(WireError::Header));
+        assert_eq!(got.decode(&phase, 0, Part::Film, &old, &scene), Err(WireError::Header));
         // A light vertex naming a material the scene lacks.
+        let light = Phase { name: "light paths", id: 0, pass: Some(0), items: 1, chunk: 1, samples: true };
         let mut paths = ChunkOutput::default();
         paths.reset(0..1);
         let (store, _) = paths.light_paths();
@@ -254,7 +293,7 @@ mod tests {
         v.material = scene.materials.len() as u32;
         store.push(&[v]);
         let mut state = Vec::new();
-        paths.encode(Part::State, &mut state);
-        assert!(matches!(got.decode(Part::State, 0..1, &state, &scene), Err(WireError::Invalid(_))));
+        paths.encode(&light, Part::State, &mut state);
+        assert!(matches!(got.decode(&light, 0, Part::State, &state, &scene), Err(WireError::Invalid(_))));
     }
 }
