@@ -19,7 +19,7 @@
 #
 #   scripts/test-browser.sh          the test (48×48, 4 passes, 2 workers per case)
 #   scripts/test-browser.sh bench    also measure samples/s per estimator: 1 worker
-#                                    against the native CLI on 1 thread, at 64×64
+#                                    against the native CLI on 1 thread, at 128×128
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -76,7 +76,10 @@ for c in "${CASES[@]}"; do
   JSON+="{\"name\":\"$1-$2\",\"query\":\"$Q\",\"timeoutS\":120},"
 done
 Q="scene=0&estimator=lvcbpt&width=$SIZE&height=$SIZE&passes=2&seed=1&workers=2&fault=drop-light-chunk"
-JSON+="{\"name\":\"fault-drop-light-chunk\",\"query\":\"$Q\",\"timeoutS\":60,\"expectError\":\"reduced without chunk 1\"}"
+JSON+="{\"name\":\"fault-drop-light-chunk\",\"query\":\"$Q\",\"timeoutS\":60,\"expectError\":\"reduced without chunk 1\"},"
+# Form validation: the page refuses, naming the field, and starts nothing.
+JSON+="{\"name\":\"bad-seed\",\"query\":\"scene=0&estimator=pt&seed=1.5\",\"timeoutS\":20,\"expectError\":\"seed \\\"1.5\\\"\"},"
+JSON+="{\"name\":\"bad-workers\",\"query\":\"scene=0&estimator=pt&seed=-3&workers=-1\",\"timeoutS\":20,\"expectError\":\"workers \\\"-1\\\"\"}"
 JSON="${JSON%,}]"
 
 step "browser renders (headless chromium)"
@@ -92,10 +95,10 @@ done
 
 if [ "$MODE" = bench ] || [ "${BENCH:-}" = 1 ]; then
   # Per estimator: native CLI on 1 thread against the browser with 1 worker, then the
-  # browser with 2 workers, interleaved (the machine may be shared); 64×64, 8 passes,
+  # browser with 2 workers, interleaved (the machine may be shared); 128×128, 8 passes,
   # setup included in both. Samples/s as each reports it.
-  step "throughput at 64×64, 8 passes: browser workers against the native CLI"
-  B=64 BP=8
+  step "throughput at 128×128, 8 passes: browser workers against the native CLI"
+  B=128 BP=8
   for e in "${ESTIMATORS[@]}"; do
     for round in 1 2; do
       printf '%s round %s native 1 thread: ' "$e" "$round"

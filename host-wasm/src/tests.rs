@@ -6,10 +6,10 @@
 //! * barycentrics of the closest hit replaced by (⅓, ⅓, ⅓) in `accel.rs` →
 //!   `page_protocol_matches_the_cli_film` fails (cornell pt: 974 of 1024 pixels differ);
 //! * the page's instance skipping the state part of every chunk but the first →
-//!   `page_protocol_matches_the_cli_film` fails at LVCBPT (its cache holds one chunk's
-//!   paths), and `Session::reduce` refuses first (chunk 1 missing) unless its check is
-//!   also removed;
-//! * workers mapping with their own film part dropped (splats lost) → LT and BDPT differ;
+//!   `Session::reduce` refuses (LVCBPT's "c̄ probe reduced without chunk 1"); with that
+//!   check removed too, `page_protocol_matches_the_cli_film` fails at MVF, whose
+//!   reduction computes the image from the state (mean 0.071 against 0.124; LVCBPT
+//!   passes: its page instance never maps, the workers' caches were whole);
 //! * PFM rows written top to bottom (no flip) → `pfm_round_trip_keeps_rows_in_place` fails;
 //! * the block z-test's standard error taken from both images (hot pixels widen their
 //!   own bound: |z| 2.3) → the hot-pixel case of

@@ -59,7 +59,7 @@ try {
         sum += s;
       }
       return { loaded: e.loaded, finished: e.finished, errors: e.errors, passes: e.passes, workers: e.workers,
-        estimator: e.estimator, elapsedMs: e.elapsedMs, setupMs: e.setupMs, phaseMs: e.phaseMs,
+        estimator: e.estimator, elapsedMs: e.elapsedMs, startupMs: e.startupMs, setupMs: e.setupMs, phaseMs: e.phaseMs,
         samples: e.samples, samplesPerSecond: e.samplesPerSecond, rays: e.rays,
         discarded: e.discarded, canvas: { width: cv.width, height: cv.height, litPixels: lit, meanByte: sum / (3 * cv.width * cv.height) } };
     });
@@ -86,7 +86,7 @@ try {
     }
     await page.screenshot({ path: path.join(outDir, `${c.name}.png`) });
     fs.writeFileSync(path.join(outDir, `${c.name}.json`), JSON.stringify({ ...state, log }, null, 2));
-    console.log(`${c.name}: ${state.passes} passes, ${state.workers} workers, ${(state.elapsedMs / 1000).toFixed(2)} s (setup ${(state.setupMs / 1000).toFixed(2)} s), ` +
+    console.log(`${c.name}: ${state.passes} passes, ${state.workers} workers, ${(state.elapsedMs / 1000).toFixed(2)} s (workers ${(state.startupMs / 1000).toFixed(2)} s, setup ${(state.setupMs / 1000).toFixed(2)} s), ` +
       `${Math.round(state.samplesPerSecond)} samples/s, canvas ${state.canvas.litPixels}/${pixels} lit`);
     await page.close();
   }

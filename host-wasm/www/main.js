@@ -20,7 +20,7 @@ const ctx = canvas.getContext('2d');
 
 const ember = {
   loaded: false, running: false, finished: false, passes: 0, errors: [],
-  elapsedMs: 0, setupMs: 0, samples: 0, rays: 0, samplesPerSecond: 0, workers: 0, discarded: 0,
+  elapsedMs: 0, startupMs: 0, setupMs: 0, samples: 0, rays: 0, samplesPerSecond: 0, workers: 0, discarded: 0,
   width: 0, height: 0, image: null, estimator: null, phaseMs: {},
   linear: () => linearImage(),
   pfm: () => pfmBytes(),
@@ -139,7 +139,7 @@ async function start() {
   const gen = generation;
   const { scene, estimator, width, height, workers: count } = form;
   const maxPasses = form.passes || Infinity;
-  Object.assign(ember, { running: true, finished: false, passes: 0, elapsedMs: 0, setupMs: 0, samples: 0, rays: 0,
+  Object.assign(ember, { running: true, finished: false, passes: 0, elapsedMs: 0, startupMs: 0, setupMs: 0, samples: 0, rays: 0,
     samplesPerSecond: 0, workers: count, width, height, discarded: 0, image: null, estimator: estimators[estimator].name, phaseMs: {} });
   canvas.width = width;
   canvas.height = height;
@@ -154,6 +154,8 @@ async function start() {
   const setup = { type: 'setup', module, scene, estimator, width, height, maxDepth: -1, seed: String(form.seed) };
   await Promise.all(pool.map((w) => w.request(setup)));
   if (gen !== generation) return;
+  // Starting the workers and building the scene and BVH in each: not rendering.
+  ember.startupMs = performance.now() - t0;
   const label = `${scenes[scene]} / ${estimators[estimator].name} / ${width}×${height} / ${count} worker${count > 1 ? 's' : ''} / ${triangles} triangles`;
   let dropped = params.get('fault') !== 'drop-light-chunk';
 
@@ -198,12 +200,14 @@ async function start() {
       }
     }
     ember.elapsedMs = performance.now() - t0;
-    ember.samplesPerSecond = ember.samples / (ember.elapsedMs / 1000);
+    // Samples over the time since the workers were ready (the estimator's own setup
+    // phases included, as the CLI counts them).
+    ember.samplesPerSecond = ember.samples / ((ember.elapsedMs - ember.startupMs) / 1000);
     $('progress').value = Number.isFinite(maxPasses) ? ember.passes : 1;
     const eta = Number.isFinite(maxPasses) ? `  ETA ${((ember.elapsedMs / ember.passes) * (maxPasses - ember.passes) / 1000).toFixed(1)} s` : '';
     status(`${label}\npass ${ember.passes}${Number.isFinite(maxPasses) ? ` of ${maxPasses}` : ''}  elapsed ${(ember.elapsedMs / 1000).toFixed(2)} s` +
-      ` (setup ${(ember.setupMs / 1000).toFixed(2)} s)${eta}\n${(ember.samplesPerSecond / 1e3).toFixed(1)} k samples/s  ` +
-      `${(ember.rays / ember.elapsedMs / 1e3).toFixed(2)} M rays/s`);
+      ` (workers ${(ember.startupMs / 1000).toFixed(2)} s, estimator setup ${(ember.setupMs / 1000).toFixed(2)} s)${eta}\n${(ember.samplesPerSecond / 1e3).toFixed(1)} k samples/s  ` +
+      `${(ember.rays / (ember.elapsedMs - ember.startupMs) / 1e3).toFixed(2)} M rays/s`);
   }
   ember.running = false;
   ember.finished = true;

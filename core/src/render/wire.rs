@@ -195,6 +195,16 @@ impl ChunkOutput {
     }
 }
 
+/// What part of which chunk `bytes` hold, from the header alone (a host routing parts
+/// before decoding them).
+pub fn peek(bytes: &[u8]) -> Result<(Part, ChunkId), WireError> {
+    let (header, _): (Header, &[u8]) = postcard::take_from_bytes(bytes).map_err(|_| WireError::Header)?;
+    if header.magic != MAGIC || header.version != WIRE_VERSION {
+        return Err(WireError::Header);
+    }
+    Ok((header.part, header.chunk))
+}
+
 /// Parse `bytes` whole: trailing bytes are an error too.
 fn from_all<'a, T: Deserialize<'a>>(bytes: &'a [u8]) -> Result<T, WireError> {
     match postcard::take_from_bytes(bytes) {
