@@ -55,6 +55,11 @@ pub fn cornell_with_delta_lights(width: u32, height: u32) -> SceneBuilder {
 /// window_env, built here without the parser). Camera paths that escape end on an
 /// infinite light: BDPT's special cases for infinite vertices all occur.
 pub fn window_room(width: u32, height: u32) -> SceneBuilder {
+    window_room_lit(width, height, ember_core::light::Light::constant_environment(Rgb::new(1.0, 1.1, 1.3)))
+}
+
+/// [`window_room`] lit by `light` (a light at infinity) instead of the constant sky.
+pub fn window_room_lit(width: u32, height: u32, light: ember_core::light::Light) -> SceneBuilder {
     let mut b = SceneBuilder::new();
     b.set_camera(PerspectiveCamera::new(builtin::look_at(Vec3::new(0.5, 1.2, 1.3), Vec3::new(0.226, 1.131, 0.341), Vec3::Y), 60.0, FovAxis::Y, width, height));
     let wall = b.add_material(Material::diffuse(Rgb::splat(0.73)).two_sided());
@@ -74,6 +79,23 @@ pub fn window_room(width: u32, height: u32) -> SceneBuilder {
     for m in walls {
         b.add_rectangle(m, false, wall, None);
     }
-    b.add_light(ember_core::light::Light::constant_environment(Rgb::new(1.0, 1.1, 1.3)));
+    b.add_light(light);
+    b
+}
+
+/// An open scene under a light at infinity: a 4 × 4 diffuse floor, a diffuse cube and a
+/// glossy sphere on it, seen from above at an angle. No walls, so light paths from the
+/// scene disk reach the floor as often as camera paths reach the sky: light tracing is
+/// efficient here, unlike in [`window_room`].
+pub fn open_floor(width: u32, height: u32, light: ember_core::light::Light) -> SceneBuilder {
+    let mut b = SceneBuilder::new();
+    b.set_camera(PerspectiveCamera::new(builtin::look_at(Vec3::new(0.0, 2.2, 3.0), Vec3::new(0.0, 0.2, 0.0), Vec3::Y), 50.0, FovAxis::Y, width, height));
+    let floor = b.add_material(Material::diffuse(Rgb::new(0.6, 0.6, 0.55)));
+    let cube = b.add_material(Material::diffuse(Rgb::new(0.7, 0.3, 0.2)));
+    let glossy = b.add_material(Material::rough_conductor(MicrofacetKind::Ggx, 0.3, Rgb::splat(0.2), Rgb::splat(3.0), Rgb::ONE));
+    b.add_rectangle(Mat4::from_rotation_x(-core::f32::consts::FRAC_PI_2) * Mat4::from_scale(Vec3::splat(2.0)), false, floor, None);
+    b.add_cube(Mat4::from_translation(Vec3::new(-0.6, 0.35, 0.0)) * Mat4::from_rotation_y(0.5) * Mat4::from_scale(Vec3::splat(0.35)), false, cube, None);
+    b.add_sphere(Vec3::new(0.7, 0.4, 0.3), 0.4, false, glossy, None);
+    b.add_light(light);
     b
 }

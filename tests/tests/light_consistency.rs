@@ -252,7 +252,7 @@ fn degenerate_input_gives_no_sample_and_no_nan() {
         }
     }
     // Zero-area triangles, zero-radius spheres and unbounded environments sample nothing.
-    for light in [lights[0], lights[1], lights[2], lights[3]] {
+    for light in &lights[..4] {
         assert!(light.sample_li(Vec3::new(0.0, 5.0, 0.0), Vec2::splat(0.3)).is_none());
         assert!(light.sample_le(Vec2::splat(0.3), Vec2::splat(0.6)).is_none());
         assert_eq!(light.power(), 0.0);
@@ -314,7 +314,7 @@ fn kinds_report_delta_and_infinite() {
     let f = (false, false);
     assert_eq!(kinds, vec![f, f, f, f, (true, false), (true, false), (true, true), (false, true)]);
     // Lights at infinity report the environment's radiance only; area lights none there.
-    let (_, env) = all_lights()[7];
+    let (_, env) = all_lights()[7].clone();
     assert_eq!(env.environment_radiance(Vec3::Y), Rgb::new(0.5, 1.0, 1.5));
     assert_eq!(all_lights()[0].1.environment_radiance(Vec3::Y), Rgb::ZERO);
     assert_eq!(all_lights()[6].1.environment_radiance(Vec3::Y), Rgb::ZERO);

@@ -31,14 +31,14 @@ impl SceneDisk {
     /// A point along `wi` from `p_ref` outside the bounding sphere: at distance
     /// 2(R + |p_ref − c|), which exceeds R + |p_ref − c| by R + |p_ref − c| (at least 1).
     #[inline]
-    fn far_point(&self, p_ref: Vec3, wi: Vec3) -> Vec3 {
+    pub(super) fn far_point(&self, p_ref: Vec3, wi: Vec3) -> Vec3 {
         let reach = (2.0 * (self.radius + (p_ref - self.center).length())).max(1.0);
         p_ref + wi * reach
     }
 
     /// Uniform point on the disk perpendicular to `dir`, one radius upstream of the centre.
     #[inline]
-    fn sample(&self, u: Vec2, dir: Vec3) -> Vec3 {
+    pub(super) fn sample(&self, u: Vec2, dir: Vec3) -> Vec3 {
         let q = warp::sample_concentric_disk(u) * self.radius;
         let frame = Frame::from_normal(dir);
         self.center + frame.to_world(Vec3::new(q.x, q.y, 0.0)) - self.radius * dir
@@ -46,13 +46,13 @@ impl SceneDisk {
 
     /// 1/(πR²).
     #[inline]
-    fn pdf(&self) -> AreaPdf {
+    pub(super) fn pdf(&self) -> AreaPdf {
         if self.radius > 0.0 { AreaPdf(warp::concentric_disk_pdf(Vec2::ZERO).value() / (self.radius * self.radius)) } else { AreaPdf::ZERO }
     }
 
     /// πR².
     #[inline]
-    fn area(&self) -> f32 {
+    pub(super) fn area(&self) -> f32 {
         PI * self.radius * self.radius
     }
 }

@@ -1,5 +1,5 @@
 //! Light sources: area emitters (triangles, spheres), point and spot lights, and lights
-//! at infinity (directional, constant environment).
+//! at infinity (directional, constant environment, environment map).
 //!
 //! Every light offers two sampling techniques, each with its density beside it:
 //! - **Direct lighting** ([`Light::sample_li`] / [`Light::pdf_li`]): a point on the light
@@ -28,6 +28,7 @@
 //!   emission starts on a disk of that radius perpendicular to the direction, one radius
 //!   upstream of the centre (pbrt-v4 `DirectionalLight::SampleLe`).
 
+mod envmap;
 mod infinite;
 mod point;
 mod sphere;
@@ -37,6 +38,8 @@ use crate::math::{Vec2, Vec3};
 use crate::measure::{AreaPdf, SolidAnglePdf};
 use crate::spectrum::Rgb;
 
+pub use envmap::EnvMapError;
+use envmap::EnvMapLight;
 use infinite::{DirectionalLight, EnvironmentLight};
 use point::{PointLight, SpotLight};
 use sphere::SphereLight;
@@ -84,12 +87,12 @@ pub struct EmissionSample {
 }
 
 /// A light source (a closed set of kinds, dispatched by `match`).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Light {
     kind: Kind,
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 enum Kind {
     Triangle(TriangleLight),
     Sphere(SphereLight),
@@ -97,6 +100,7 @@ enum Kind {
     Spot(SpotLight),
     Directional(DirectionalLight),
     Environment(EnvironmentLight),
+    EnvMap(EnvMapLight),
 }
 
 /// A density that overflowed (a nearly degenerate light) is no density at all.
@@ -144,11 +148,20 @@ impl Light {
         Self { kind: Kind::Environment(EnvironmentLight::new(radiance)) }
     }
 
+    /// Mitsuba's `envmap`: radiance at infinity from a latitude–longitude image of
+    /// `width × height` linear RGB texels (row 0 at the zenith, +y of the local frame),
+    /// times `scale`, in the frame whose axes in world space are `to_world` (a rotation);
+    /// importance-sampled by the image (see `envmap.rs`). The image is shared by clones.
+    pub fn environment_map(width: u32, height: u32, texels: &[Rgb], scale: f32, to_world: [Vec3; 3]) -> Result<Self, EnvMapError> {
+        Ok(Self { kind: Kind::EnvMap(EnvMapLight::new(width, height, texels, scale, to_world)?) })
+    }
+
     /// Tell a light at infinity the scene's bounding sphere; a no-op for other lights.
     pub fn set_scene_bounds(&mut self, center: Vec3, radius: f32) {
         match &mut self.kind {
             Kind::Directional(l) => l.disk.set(center, radius),
             Kind::Environment(l) => l.disk.set(center, radius),
+            Kind::EnvMap(l) => l.disk.set(center, radius),
             _ => {}
         }
     }
@@ -163,6 +176,7 @@ impl Light {
             Kind::Spot(l) => l.sample_li(p_ref),
             Kind::Directional(l) => l.sample_li(p_ref),
             Kind::Environment(l) => l.sample_li(p_ref, u),
+            Kind::EnvMap(l) => l.sample_li(p_ref, u),
         }
     }
 
@@ -176,6 +190,7 @@ impl Light {
             Kind::Triangle(l) => l.pdf_li(p_ref, wi, p_light),
             Kind::Sphere(l) => l.pdf_li(p_ref, wi),
             Kind::Environment(l) => l.pdf_li(),
+            Kind::EnvMap(l) => l.pdf_li(wi),
             Kind::Point(_) | Kind::Spot(_) | Kind::Directional(_) => SolidAnglePdf::ZERO,
         }
     }
@@ -196,9 +211,9 @@ impl Light {
     /// that no ray can hit).
     #[inline]
     pub fn environment_radiance(&self, dir: Vec3) -> Rgb {
-        let _ = dir;
         match &self.kind {
             Kind::Environment(l) => l.radiance,
+            Kind::EnvMap(l) => l.radiance(dir),
             _ => Rgb::ZERO,
         }
     }
@@ -214,6 +229,7 @@ impl Light {
             Kind::Spot(l) => l.sample_le(u_dir),
             Kind::Directional(l) => l.sample_le(u_pos),
             Kind::Environment(l) => l.sample_le(u_pos, u_dir),
+            Kind::EnvMap(l) => l.sample_le(u_pos, u_dir),
         }
     }
 
@@ -247,6 +263,7 @@ impl Light {
             Kind::Spot(l) => l.pdf_le(dir),
             Kind::Directional(l) => l.pdf_le(),
             Kind::Environment(l) => l.pdf_le(),
+            Kind::EnvMap(l) => l.pdf_le(dir),
         }
     }
 
@@ -263,6 +280,7 @@ impl Light {
             Kind::Spot(l) => l.power(),
             Kind::Directional(l) => l.power(),
             Kind::Environment(l) => l.power(),
+            Kind::EnvMap(l) => l.power(),
         };
         if power == f32::INFINITY { f32::MAX } else { power }
     }
@@ -288,6 +306,6 @@ impl Light {
     /// Directional and environment lights.
     #[inline]
     pub fn is_infinite(&self) -> bool {
-        matches!(self.kind, Kind::Directional(_) | Kind::Environment(_))
+        matches!(self.kind, Kind::Directional(_) | Kind::Environment(_) | Kind::EnvMap(_))
     }
 }

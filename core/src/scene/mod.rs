@@ -140,7 +140,7 @@ impl SceneBuilder {
         // The power of a light at infinity scales with the scene's radius, unknown until
         // `build` (before it, every environment's power is 0); whether it is positive does
         // not depend on the radius, so ask at radius 1.
-        let mut probe = light;
+        let mut probe = light.clone();
         probe.set_scene_bounds(Vec3::ZERO, 1.0);
         if !(probe.power() > 0.0) {
             self.warnings.dark_lights += 1;
