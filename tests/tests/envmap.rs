@@ -1,9 +1,9 @@
 //! The environment map (`core/src/light/envmap.rs`): Mitsuba 3's lookup convention, a
 //! density that integrates to one and covers every direction with radiance, an unbiased
-//! direct-lighting estimate of its integral, and PT against BDPT in a room it lights
-//! through a window (every infinite-light strategy of BDPT: escaped camera paths, light
-//! paths from the scene disk, next-event estimation). The χ² tests of its sampling are
-//! in `light_sampling.rs`.
+//! direct-lighting estimate of its integral, and PT, LT and BDPT agreeing on an open
+//! floor and in a room it lights through a window (every infinite-light strategy:
+//! escaped camera paths, light paths from the scene disk, next-event estimation). The χ²
+//! tests of its sampling are in `light_sampling.rs`.
 
 use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::light::Light;
@@ -34,8 +34,8 @@ fn dir(u: f32, v: f32) -> Vec3 {
 
 /// Texel (i, j) sits at u = (i + ½)/W (texel centres in φ) and v = j/(H − 1) (rows at the
 /// poles' corners in θ), and halfway between two texels is their mean, across the seam
-/// at u = 0 too. Injected bug it caught: v = (j + ½)/H for the rows (Mitsuba 3's older
-/// convention): row 2 read as 0.43 of the way to row 3.
+/// at u = 0 too. Injected bug it caught: rows at texel centres (y = vH − ½) instead of
+/// at the corners: texel (0, 1) read green 3.29 for 4.
 #[test]
 fn lookup_follows_mitsuba() {
     let t = texels();
@@ -74,7 +74,7 @@ fn lookup_follows_mitsuba() {
 /// direction with radiance has density (light tracing draws its directions from here
 /// alone). A map whose lower half is black checks the support at the black/lit border.
 /// Injected bug it caught: cell weights from the cell's own texel only (no neighbours):
-/// directions just below the border have radiance and no density.
+/// 91 200 grid directions just below the border had radiance and no density.
 #[test]
 fn density_integrates_to_one_and_covers_the_radiance() {
     let mut t = texels();
@@ -181,7 +181,9 @@ fn assert_agree(name: &str, stats: &[Vec<MeanVar>]) {
 /// a black band at the nadir, and PT and BDPT in the window room it lights through the
 /// window, as they do under the constant sky (`estimator_agreement.rs`). Injected bug it
 /// caught: the emitted radiance of a light path read at its travel direction instead
-/// of the direction toward the sky (`sample_le`): LT against PT, block z = 12.
+/// of the direction toward the sky (`sample_le`): PT against BDPT on the open floor,
+/// block z = 5.5. (Halving `pdf_le` went unseen here: it enters only MIS weights of
+/// strategies that carry little; the emission χ² test in `light_sampling.rs` sees it.)
 #[test]
 fn estimators_agree_under_an_environment_map() {
     let (scene, geometry, _) = ember_tests::scenes::open_floor(16, 12, sky_light()).build().expect("scene");

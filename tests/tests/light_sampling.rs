@@ -372,9 +372,8 @@ fn environment_map() -> Light {
     l
 }
 
-// Injected bugs: the sin θ Jacobian left out of the density (`p_uv / (2π²)`) fails this
-// with p ≈ 0 (χ² 2.0e5); the cell weights without sin θ do not (the density stays the
-// sampler's own), which is what `environment_map_density_integrates_to_one` is for.
+// Injected bug: the sin θ Jacobian left out of the density (`p_uv / (2π²)`) fails this
+// with p ≈ 0 (χ² 1.7e5, ∫pdf 0.79).
 #[test]
 fn environment_map_li_matches_its_density() {
     let light = environment_map();
@@ -383,8 +382,8 @@ fn environment_map_li_matches_its_density() {
 }
 
 // The same density from emission, where the direction travels away from the sky.
-// Injected bug: `pdf_le` reading the density at `dir` instead of `-dir` fails this with
-// p ≈ 0.
+// Injected bug: `pdf_le` reading the density at `dir` instead of `-dir` fails this at
+// once (samples in bins of zero density: the black band below the horizon).
 #[test]
 fn environment_map_emission_directions_match_their_density() {
     let light = environment_map();
