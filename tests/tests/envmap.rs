@@ -41,7 +41,9 @@ fn lookup_follows_mitsuba() {
     let t = texels();
     let mut light = Light::environment_map(W, H, &t, 2.0, IDENTITY).expect("valid");
     light.set_scene_bounds(Vec3::ZERO, 1.0);
-    let close = |a: Rgb, b: Rgb| (a.r - b.r).abs() <= 1e-3 * b.r.abs().max(1.0) && (a.g - b.g).abs() <= 1e-3 * b.g.abs().max(1.0) && (a.b - b.b).abs() <= 1e-3 * b.b.abs().max(1.0);
+    let close = |a: Rgb, b: Rgb| {
+        (a.r - b.r).abs() <= 1e-3 * b.r.abs().max(1.0) && (a.g - b.g).abs() <= 1e-3 * b.g.abs().max(1.0) && (a.b - b.b).abs() <= 1e-3 * b.b.abs().max(1.0)
+    };
     for (i, j) in [(0u32, 1u32), (5, 2), (15, 6), (7, 4)] {
         let d = dir((i as f32 + 0.5) / W as f32, j as f32 / (H - 1) as f32);
         let want = t[(j * W + i) as usize] * 2.0;
@@ -116,7 +118,8 @@ fn direct_lighting_estimates_the_integral() {
         for b in 0..np {
             let phi = (b as f64 + 0.5) / np as f64 * 2.0 * core::f64::consts::PI;
             let w = Vec3::new((phi.sin() * theta.sin()) as f32, theta.cos() as f32, (-phi.cos() * theta.sin()) as f32);
-            quad += light.environment_radiance(w).average() as f64 * theta.sin() * (core::f64::consts::PI / nt as f64) * (2.0 * core::f64::consts::PI / np as f64);
+            quad +=
+                light.environment_radiance(w).average() as f64 * theta.sin() * (core::f64::consts::PI / nt as f64) * (2.0 * core::f64::consts::PI / np as f64);
         }
     }
     let mut est = MeanVar::default();
@@ -133,7 +136,13 @@ fn sky(w: u32, h: u32) -> Vec<Rgb> {
     (0..w * h)
         .map(|k| {
             let (i, j) = (k % w, k / w);
-            if (15..=16).contains(&i) && j == 5 { Rgb::new(60.0, 50.0, 40.0) } else if j >= h - 2 { Rgb::ZERO } else { Rgb::new(0.3, 0.4, 0.6) * (1.0 + j as f32 / 4.0) }
+            if (15..=16).contains(&i) && j == 5 {
+                Rgb::new(60.0, 50.0, 40.0)
+            } else if j >= h - 2 {
+                Rgb::ZERO
+            } else {
+                Rgb::new(0.3, 0.4, 0.6) * (1.0 + j as f32 / 4.0)
+            }
         })
         .collect()
 }

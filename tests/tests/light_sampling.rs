@@ -91,7 +91,8 @@ fn li_dirs(light: Light, p_ref: Vec3) -> impl FnMut(&mut SampleStream) -> Option
 fn triangle_li(name: &str, two_sided: bool, p_ref: Vec3, binning: SphereBinning, config: Chi2Config) {
     let light = triangle(two_sided);
     let n = Vec3::Z;
-    chi2_sphere(name, &config, &binning, li_dirs(light.clone(), p_ref), |w| hit_triangle(p_ref, w).map_or(0.0, |p| light.pdf_li(p_ref, w, p, n).0 as f64)).pass();
+    chi2_sphere(name, &config, &binning, li_dirs(light.clone(), p_ref), |w| hit_triangle(p_ref, w).map_or(0.0, |p| light.pdf_li(p_ref, w, p, n).0 as f64))
+        .pass();
 }
 
 fn toward_centroid(p_ref: Vec3) -> SphereBinning {
@@ -274,8 +275,10 @@ fn environment() -> Light {
 fn environment_li_is_uniform() {
     let light = environment();
     let p_ref = Vec3::new(0.2, 0.1, 0.3);
-    chi2_sphere("environment li", &cfg(12), &SphereBinning::uniform(), li_dirs(light.clone(), p_ref), |w| light.pdf_li(p_ref, w, p_ref + w, Vec3::ZERO).0 as f64)
-        .pass();
+    chi2_sphere("environment li", &cfg(12), &SphereBinning::uniform(), li_dirs(light.clone(), p_ref), |w| {
+        light.pdf_li(p_ref, w, p_ref + w, Vec3::ZERO).0 as f64
+    })
+    .pass();
 }
 
 // Injected bug: `pdf_le`'s direction density 1/(2π) for the environment fails this with
@@ -378,7 +381,8 @@ fn environment_map() -> Light {
 fn environment_map_li_matches_its_density() {
     let light = environment_map();
     let p_ref = Vec3::new(0.2, 0.1, 0.3);
-    chi2_sphere("envmap li", &cfg(21), &SphereBinning::uniform(), li_dirs(light.clone(), p_ref), |w| light.pdf_li(p_ref, w, p_ref + w, Vec3::ZERO).0 as f64).pass();
+    chi2_sphere("envmap li", &cfg(21), &SphereBinning::uniform(), li_dirs(light.clone(), p_ref), |w| light.pdf_li(p_ref, w, p_ref + w, Vec3::ZERO).0 as f64)
+        .pass();
 }
 
 // The same density from emission, where the direction travels away from the sky.

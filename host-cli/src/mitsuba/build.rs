@@ -10,7 +10,7 @@ use glam::{DMat4, DVec3};
 
 use ember_core::camera::{FovAxis, PerspectiveCamera};
 use ember_core::geometry::MaterialId;
-use ember_core::light::Light;
+use ember_core::light::{EnvMapError, Light};
 use ember_core::scene::{AreaEmission, SceneBuilder};
 use ember_core::spectrum::Rgb;
 
@@ -258,17 +258,42 @@ impl<'a> Ctx<'a> {
                 let radiance = nonnegative(&p, "radiance", radiance)?;
                 Light::constant_environment(radiance)
             }
+            "envmap" => self.envmap(obj, &mut p)?,
             "area" => return Err(Fail::at(obj.loc, "an `area` emitter must be nested in the <shape> that emits")),
             other => {
                 return Err(Fail::at(
                     obj.loc,
-                    format!("unsupported emitter type \"{other}\" (supported: area inside a shape; point, spot, directional, constant)"),
+                    format!("unsupported emitter type \"{other}\" (supported: area inside a shape; point, spot, directional, constant, envmap)"),
                 ));
             }
         };
         p.finish()?;
         self.sb.add_light(light);
         Ok(())
+    }
+
+    /// Mitsuba's `envmap`: a latitude–longitude EXR (linear RGB) at `filename`, relative
+    /// to the scene file, times `scale`, in the frame of `to_world` (a rotation).
+    fn envmap(&self, obj: &Obj, p: &mut Props) -> Res<Light> {
+        let file_loc = p.loc_of("filename");
+        let filename = p.string_opt("filename")?.ok_or_else(|| Fail::at(obj.loc, "the envmap needs a `filename` (a latitude-longitude EXR)"))?;
+        let scale = p.float("scale", 1.0)?;
+        if !(scale >= 0.0 && scale.is_finite()) {
+            return Err(Fail::at(p.loc_of("scale"), format!("`scale` must be non-negative and finite, got {scale}")));
+        }
+        let m = self.render_frame * p.transform("to_world")?;
+        let axes = [m.x_axis.truncate().as_vec3(), m.y_axis.truncate().as_vec3(), m.z_axis.truncate().as_vec3()];
+        let path = self.base_dir.join(filename);
+        let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        if !is_exr {
+            return Err(Fail::at(file_loc, format!("envmap \"{}\": only OpenEXR (.exr) environment maps are supported", path.display())));
+        }
+        let image = crate::image_io::read_exr(&path).map_err(|e| Fail::at(file_loc, format!("envmap: {e}")))?;
+        let texels: Vec<Rgb> = image.pixels.iter().map(|&[r, g, b]| Rgb::new(r, g, b)).collect();
+        Light::environment_map(image.width, image.height, &texels, scale as f32, axes).map_err(|e| match e {
+            EnvMapError::NotRotation => Fail::at(p.loc_of("to_world"), format!("envmap: {e}")),
+            _ => Fail::at(file_loc, format!("envmap \"{}\": {e}", path.display())),
+        })
     }
 
     fn sensor(&mut self, idx: usize) -> Res<SensorSpec> {

@@ -52,9 +52,9 @@ fn unknown_plugins_name_the_supported_ones() {
     let c = "<shape type=\"cube\">\n   <bsdf type=\"plastic\"/></shape>";
     let e = fail("plugin_bsdf", c);
     check(&e, 5, col(c, 5, "<bsdf"), &["unsupported bsdf type \"plastic\"", "roughdielectric, twosided"]);
-    let c = "<emitter type=\"envmap\"/>";
+    let c = "<emitter type=\"hdrsky\"/>";
     let e = fail("plugin_emitter", c);
-    check(&e, 4, col(c, 4, "<emitter"), &["unsupported emitter type \"envmap\"", "point, spot, directional, constant"]);
+    check(&e, 4, col(c, 4, "<emitter"), &["unsupported emitter type \"hdrsky\"", "point, spot, directional, constant, envmap"]);
     // A gaussian reconstruction filter is rejected.
     let dir = temp_dir("plugin_rfilter2");
     let path = dir.join("scene.xml");
@@ -242,4 +242,31 @@ fn garbage_never_panics() {
         std::fs::write(dir.join("j.obj"), junk).unwrap();
         let _ = super::mesh::load_obj(&dir.join("j.obj"));
     }
+}
+
+/// Environment maps: a missing, corrupt or non-EXR file and a `to_world` that is not a
+/// rotation each name the file (or the transform) and the problem; the scene's other
+/// content is never reached.
+#[test]
+fn envmap_files_fail_with_their_name() {
+    let c = "<emitter type=\"envmap\"><string name=\"filename\" value=\"missing.exr\"/></emitter>";
+    let e = fail("envmap_missing", c);
+    check(&e, 4, col(c, 4, "<string"), &["envmap", "missing.exr"]);
+    let c = "<emitter type=\"envmap\"><string name=\"filename\" value=\"sky.exr\"/></emitter>";
+    let e = fail_with("envmap_corrupt", c, &[("sky.exr", b"v/1\x01 not an exr at all")], &LoadOptions::default());
+    check(&e, 4, col(c, 4, "<string"), &["envmap", "sky.exr"]);
+    let c = "<emitter type=\"envmap\"><string name=\"filename\" value=\"sky.png\"/></emitter>";
+    let e = fail_with("envmap_png", c, &[("sky.png", b"\x89PNG")], &LoadOptions::default());
+    check(&e, 4, col(c, 4, "<string"), &["sky.png", "only OpenEXR"]);
+    let c = "<emitter type=\"envmap\"/>";
+    let e = fail("envmap_no_file", c);
+    check(&e, 4, col(c, 4, "<emitter"), &["needs a `filename`"]);
+    // A valid map, scaled by its transform: refused, at the transform.
+    let dir = temp_dir("envmap_scaled");
+    crate::image_io::write_exr(&dir.join("sky.exr"), 4, 2, &[[1.0, 1.0, 1.0]; 8]).unwrap();
+    let path = dir.join("scene.xml");
+    let c = "<emitter type=\"envmap\"><string name=\"filename\" value=\"sky.exr\"/>\n<transform name=\"to_world\"><scale value=\"2\"/></transform></emitter>";
+    std::fs::write(&path, format!("<scene version=\"3.0.0\">\n{SENSOR}\n{c}\n</scene>\n")).unwrap();
+    let Err(e) = load_scene(&path, &LoadOptions::default()) else { panic!("a scaled envmap loaded") };
+    assert!(e.to_string().contains("must be a rotation") && e.to_string().contains(":5:"), "{e}");
 }
