@@ -67,6 +67,12 @@ fn materials() -> Vec<Named> {
             }
         }
         v.push(Named {
+            name: format!("rough plastic {kind:?} α=0.2"),
+            material: Material::rough_plastic(kind, 0.2, 1.49, 1.000277, Rgb::new(0.7, 0.15, 0.1), Rgb::ONE, false),
+            eta: None,
+            alpha: 0.2,
+        });
+        v.push(Named {
             name: format!("twosided rough conductor {kind:?} α=0.3"),
             material: Material::rough_conductor(kind, 0.3, eta, k, Rgb::ONE).two_sided(),
             eta: None,

@@ -9,7 +9,7 @@
 //!
 //! The models and their conventions are Mitsuba 3's (the suite's references are Mitsuba
 //! renders): `diffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`
-//! and the `twosided` adapter. Microfacet models use Smith's separable masking and
+//! `roughplastic` and the `twosided` adapter. Microfacet models use Smith's separable masking and
 //! sample visible normals (see `microfacet.rs`).
 //!
 //! [`TransportMode`] matters only for refraction: in `Radiance` mode (camera paths,
@@ -32,6 +32,7 @@ mod fresnel;
 mod microfacet;
 mod rough_conductor;
 mod rough_dielectric;
+mod rough_plastic;
 
 use crate::math::{Vec2, Vec3};
 use crate::measure::SolidAnglePdf;
@@ -42,6 +43,7 @@ use diffuse::Diffuse;
 use microfacet::Microfacet;
 use rough_conductor::RoughConductor;
 use rough_dielectric::RoughDielectric;
+use rough_plastic::RoughPlastic;
 
 /// Which quantity a path carries, which decides whether a BSDF or its adjoint applies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -101,6 +103,10 @@ impl BsdfSample {
 }
 
 /// The closed set of scattering models.
+// Rough plastic carries its 64-entry transmittance table inline (≈ 300 bytes) so that
+// `Material` stays `Copy`; materials are read by reference from the scene's table, so
+// the size costs memory per material, not copies per sample.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Kind {
     Diffuse(Diffuse),
@@ -108,6 +114,7 @@ enum Kind {
     RoughConductor(RoughConductor),
     Dielectric(Dielectric),
     RoughDielectric(RoughDielectric),
+    RoughPlastic(RoughPlastic),
 }
 
 /// A surface's scattering model (a closed enum) and whether it is mirrored to the back.
@@ -180,6 +187,14 @@ impl Material {
         }))
     }
 
+    /// Rough plastic (Mitsuba `roughplastic`, isotropic): a diffuse base of reflectance
+    /// `diffuse` under a rough dielectric coating of index `int_ior` in a medium of index
+    /// `ext_ior`, roughness `alpha` (clamped to ≥ 10⁻⁴); `nonlinear` as Mitsuba's. Builds the
+    /// coating's transmittance table (see `rough_plastic.rs`).
+    pub fn rough_plastic(kind: MicrofacetKind, alpha: f32, int_ior: f32, ext_ior: f32, diffuse: Rgb, specular_reflectance: Rgb, nonlinear: bool) -> Self {
+        Self::new(Kind::RoughPlastic(RoughPlastic::new(Microfacet::new(kind, alpha), relative_ior(int_ior, ext_ior), diffuse, specular_reflectance, nonlinear)))
+    }
+
     /// Mitsuba's `twosided`: the back side (wo.z < 0) behaves like the front, mirrored
     /// through the surface plane. No effect on dielectrics, which are two-sided already.
     pub fn two_sided(self) -> Self {
@@ -206,6 +221,7 @@ impl Material {
             Kind::Diffuse(b) => b.eval(wo, wi),
             Kind::RoughConductor(b) => b.eval(wo, wi),
             Kind::RoughDielectric(b) => b.eval(wo, wi, mode),
+            Kind::RoughPlastic(b) => b.eval(wo, wi),
             Kind::Conductor(_) | Kind::Dielectric(_) => Rgb::ZERO,
         };
         if f.is_finite() { f } else { Rgb::ZERO }
@@ -219,6 +235,7 @@ impl Material {
             Kind::Diffuse(b) => b.pdf(wo, wi),
             Kind::RoughConductor(b) => b.pdf(wo, wi),
             Kind::RoughDielectric(b) => b.pdf(wo, wi),
+            Kind::RoughPlastic(b) => b.pdf(wo, wi),
             Kind::Conductor(_) | Kind::Dielectric(_) => SolidAnglePdf::ZERO,
         };
         // Denormal cosines can overflow the Jacobians (found by fuzzing): no density.
@@ -254,6 +271,7 @@ impl Material {
             Kind::RoughConductor(b) => b.sample(wo, u),
             Kind::Dielectric(b) => b.sample(wo, u_lobe, mode),
             Kind::RoughDielectric(b) => b.sample(wo, u_lobe, u, mode),
+            Kind::RoughPlastic(b) => b.sample(wo, u_lobe, u),
         }?;
         // No sample rather than a non-finite one.
         (s.f.is_finite() && s.pdf.value().is_finite() && s.pdf_rev.value().is_finite()).then_some(s)
@@ -279,6 +297,7 @@ impl Material {
             Kind::RoughConductor(b) => fresnel::conductor(1.0, b.eta, b.k) * b.specular_reflectance,
             Kind::Dielectric(b) => b.albedo_hint(),
             Kind::RoughDielectric(b) => b.albedo_hint(),
+            Kind::RoughPlastic(b) => b.albedo_hint(),
         }
     }
 }

@@ -13,7 +13,7 @@ use super::{Fail, Res};
 /// `twosided` chains (through `ref`) deeper than this are rejected.
 const MAX_BSDF_DEPTH: u32 = 8;
 
-const BSDF_TYPES: &str = "diffuse, conductor, roughconductor, dielectric, roughdielectric, twosided";
+const BSDF_TYPES: &str = "diffuse, conductor, roughconductor, dielectric, roughdielectric, roughplastic, twosided";
 
 /// Named conductors as Mitsuba 3.9.1's `scalar_rgb` variant resolves them
 /// (`shared/scenes/README.md`): (name, eta, k).
@@ -108,6 +108,25 @@ impl Ctx<'_> {
                     let (kind, alpha) = microfacet(&mut p)?;
                     Material::rough_dielectric(kind, alpha, int_ior, ext_ior, refl, trans)
                 }
+            }
+            "roughplastic" => {
+                self.no_children(obj)?;
+                // Mitsuba's defaults: polypropylene in air, ρ = 0.5, Beckmann α = 0.1.
+                let int_ior = ior(&mut p, "int_ior", 1.49)?;
+                let ext_ior = ior(&mut p, "ext_ior", 1.000277)?;
+                if int_ior == ext_ior {
+                    return Err(Fail::at(p.loc_of("int_ior"), "`int_ior` and `ext_ior` must differ (a coating without an interface)"));
+                }
+                let diffuse = p.color("diffuse_reflectance", Rgb::splat(0.5))?;
+                let specular = p.color("specular_reflectance", Rgb::ONE)?;
+                for (name, c) in [("diffuse_reflectance", diffuse), ("specular_reflectance", specular)] {
+                    if !c.is_valid_radiance() {
+                        return Err(Fail::at(p.loc_of(name), format!("`{name}` must be non-negative")));
+                    }
+                }
+                let nonlinear = p.bool("nonlinear", false)?;
+                let (kind, alpha) = microfacet(&mut p)?;
+                Material::rough_plastic(kind, alpha, int_ior, ext_ior, diffuse, specular, nonlinear)
             }
             "twosided" => {
                 self.check_children(obj, &[Tag::Bsdf])?;

@@ -51,7 +51,7 @@ fn unknown_plugins_name_the_supported_ones() {
     check(&e, 4, col(c, 4, "<shape"), &["unsupported shape type \"torus\"", "obj, ply, rectangle, cube, sphere, disk"]);
     let c = "<shape type=\"cube\">\n   <bsdf type=\"plastic\"/></shape>";
     let e = fail("plugin_bsdf", c);
-    check(&e, 5, col(c, 5, "<bsdf"), &["unsupported bsdf type \"plastic\"", "roughdielectric, twosided"]);
+    check(&e, 5, col(c, 5, "<bsdf"), &["unsupported bsdf type \"plastic\"", "roughdielectric, roughplastic, twosided"]);
     let c = "<emitter type=\"hdrsky\"/>";
     let e = fail("plugin_emitter", c);
     check(&e, 4, col(c, 4, "<emitter"), &["unsupported emitter type \"hdrsky\"", "point, spot, directional, constant, envmap"]);
