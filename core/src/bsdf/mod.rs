@@ -43,6 +43,7 @@ use diffuse::Diffuse;
 use microfacet::Microfacet;
 use rough_conductor::RoughConductor;
 use rough_dielectric::RoughDielectric;
+pub use rough_plastic::PlasticCoating;
 use rough_plastic::RoughPlastic;
 
 /// Which quantity a path carries, which decides whether a BSDF or its adjoint applies.
@@ -190,9 +191,19 @@ impl Material {
     /// Rough plastic (Mitsuba `roughplastic`, isotropic): a diffuse base of reflectance
     /// `diffuse` under a rough dielectric coating of index `int_ior` in a medium of index
     /// `ext_ior`, roughness `alpha` (clamped to ≥ 10⁻⁴); `nonlinear` as Mitsuba's. Builds the
-    /// coating's transmittance table (see `rough_plastic.rs`).
+    /// coating's tables (see `rough_plastic.rs`; [`Self::rough_plastic_coated`] shares them).
     pub fn rough_plastic(kind: MicrofacetKind, alpha: f32, int_ior: f32, ext_ior: f32, diffuse: Rgb, specular_reflectance: Rgb, nonlinear: bool) -> Self {
-        Self::new(Kind::RoughPlastic(RoughPlastic::new(Microfacet::new(kind, alpha), relative_ior(int_ior, ext_ior), diffuse, specular_reflectance, nonlinear)))
+        Self::rough_plastic_coated(&Self::plastic_coating(kind, alpha, int_ior, ext_ior), diffuse, specular_reflectance, nonlinear)
+    }
+
+    /// The coating of [`Self::rough_plastic`], to build once and share.
+    pub fn plastic_coating(kind: MicrofacetKind, alpha: f32, int_ior: f32, ext_ior: f32) -> PlasticCoating {
+        PlasticCoating::new(Microfacet::new(kind, alpha), relative_ior(int_ior, ext_ior))
+    }
+
+    /// Rough plastic with a coating built before.
+    pub fn rough_plastic_coated(coating: &PlasticCoating, diffuse: Rgb, specular_reflectance: Rgb, nonlinear: bool) -> Self {
+        Self::new(Kind::RoughPlastic(RoughPlastic::new(coating, diffuse, specular_reflectance, nonlinear)))
     }
 
     /// Mitsuba's `twosided`: the back side (wo.z < 0) behaves like the front, mirrored

@@ -8,6 +8,7 @@ use std::path::Path;
 
 use glam::{DMat4, DVec3};
 
+use ember_core::bsdf::PlasticCoating;
 use ember_core::camera::{FovAxis, PerspectiveCamera};
 use ember_core::geometry::MaterialId;
 use ember_core::light::{EnvMapError, Light};
@@ -41,6 +42,8 @@ pub(crate) struct Ctx<'a> {
     /// f64 with every `to_world` before anything is rounded to f32 (see
     /// [`camera_centred_frame`]).
     pub render_frame: DMat4,
+    /// Rough plastic coatings built so far, by (GGX?, α, int_ior, ext_ior) bits.
+    pub plastic_coatings: HashMap<(bool, u32, u32, u32), PlasticCoating>,
 }
 
 /// The camera-centred render frame (pbrt-v4's "camera-world" space): a translation by
@@ -78,6 +81,7 @@ pub(crate) fn instantiate(parsed: Parsed, base_dir: &Path, options: &LoadOptions
         default_material: None,
         used: vec![false; parsed.objs.len()],
         render_frame: camera_centred_frame(&parsed),
+        plastic_coatings: HashMap::new(),
     };
     let mut sensor: Option<(SensorSpec, Loc)> = None;
     let mut integrator: Option<(Option<i32>, Loc)> = None;

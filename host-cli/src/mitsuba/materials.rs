@@ -126,7 +126,11 @@ impl Ctx<'_> {
                 }
                 let nonlinear = p.bool("nonlinear", false)?;
                 let (kind, alpha) = microfacet(&mut p)?;
-                Material::rough_plastic(kind, alpha, int_ior, ext_ior, diffuse, specular, nonlinear)
+                // One coating table per distinct (distribution, α, indices): they cost up to
+                // a second each to build (Beckmann).
+                let key = (kind == MicrofacetKind::Ggx, alpha.to_bits(), int_ior.to_bits(), ext_ior.to_bits());
+                let coating = *self.plastic_coatings.entry(key).or_insert_with(|| Material::plastic_coating(kind, alpha, int_ior, ext_ior));
+                Material::rough_plastic_coated(&coating, diffuse, specular, nonlinear)
             }
             "twosided" => {
                 self.check_children(obj, &[Tag::Bsdf])?;
