@@ -5,12 +5,16 @@
 //!   1e-6 absolute: at grazing angles f32 recomputes cos θ only to ~1e-8), a
 //!   finite non-negative `pdf_rev` equal to `pdf_rev(wo, wi)`, and a finite η > 0;
 //! - `eval`, `pdf` and `pdf_rev` at an arbitrary second direction are finite and ≥ 0;
+//! Materials: diffuse, conductor, rough conductor, dielectric, rough dielectric and rough
+//! plastic (over four prebuilt coatings), each optionally two-sided.
 //! - a diffuse surface seen from the front always samples, and at least 30 % of all
 //!   inputs not grazing within 1e-3 produce a sample (so the target cannot pass by
 //!   rejecting everything).
 #![no_main]
 
-use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
+use std::sync::OnceLock;
+
+use ember_core::bsdf::{Material, MicrofacetKind, PlasticCoating, TransportMode};
 use ember_core::spectrum::Rgb;
 use ember_fuzz::{Bytes, ShareFloor, close, finite_nonneg3};
 use libfuzzer_sys::fuzz_target;
@@ -30,6 +34,23 @@ fn ior(b: &mut Bytes) -> f32 {
     }
 }
 
+/// Rough plastic coatings, built once: a coating's tables take up to a second (Beckmann),
+/// far too long per input. Extreme roughness and indices on both sides of 1.
+fn coatings() -> &'static [PlasticCoating] {
+    static C: OnceLock<Vec<PlasticCoating>> = OnceLock::new();
+    C.get_or_init(|| {
+        [
+            (MicrofacetKind::Ggx, 1e-4, 1.49, 1.0),
+            (MicrofacetKind::Ggx, 0.3, 1.0, 1.33),
+            (MicrofacetKind::Beckmann, 1.0, 2.5, 1.0),
+            (MicrofacetKind::Ggx, 5.0, 1e3, 1.0),
+        ]
+        .into_iter()
+        .map(|(k, a, i, e)| Material::plastic_coating(k, a, i, e))
+        .collect()
+    })
+}
+
 /// The material and whether it is diffuse.
 fn material(b: &mut Bytes) -> (Material, bool) {
     let distr = if b.u8() & 1 == 0 { MicrofacetKind::Beckmann } else { MicrofacetKind::Ggx };
@@ -37,13 +58,17 @@ fn material(b: &mut Bytes) -> (Material, bool) {
         0 => b.finite().abs(),
         _ => b.log_uniform(1e-5, 1.0),
     };
-    let kind = b.u8() % 5;
+    let kind = b.u8() % 6;
     let m = match kind {
         0 => Material::diffuse(colour(b)),
         1 => Material::conductor(Rgb::splat(ior(b)), Rgb::splat(b.log_uniform(1e-3, 10.0)), colour(b)),
         2 => Material::rough_conductor(distr, alpha, Rgb::new(ior(b), ior(b), ior(b)), Rgb::splat(b.log_uniform(1e-3, 10.0)), colour(b)),
         3 => Material::dielectric(ior(b), ior(b), colour(b), colour(b)),
-        _ => Material::rough_dielectric(distr, alpha, ior(b), ior(b), colour(b), colour(b)),
+        4 => Material::rough_dielectric(distr, alpha, ior(b), ior(b), colour(b), colour(b)),
+        _ => {
+            let c = &coatings()[b.u8() as usize % coatings().len()];
+            Material::rough_plastic_coated(c, colour(b), colour(b), b.u8() & 1 == 1)
+        }
     };
     (if b.u8() & 1 == 1 { m.two_sided() } else { m }, kind == 0)
 }
