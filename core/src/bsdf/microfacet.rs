@@ -208,6 +208,23 @@ fn beckmann_visible_slopes_11(cos_theta_i: f32, u: Vec2) -> Vec2 {
     Vec2::new(erfinv(x), erfinv(2.0 * u.y - 1.0))
 }
 
+/// The half vector of a reflection configuration: both directions above the surface and
+/// on the front of the facet between them, or `None` (shared by the microfacet
+/// reflection models).
+#[inline]
+pub(super) fn reflection_half(wo: Vec3, wi: Vec3) -> Option<Vec3> {
+    if !(wo.z > 0.0 && wi.z > 0.0) {
+        return None;
+    }
+    let h = wo + wi;
+    let l2 = h.length_squared();
+    if !(l2 > 0.0) {
+        return None;
+    }
+    let m = h / crate::math::sqrt(l2);
+    if wo.dot(m) > 0.0 && wi.dot(m) > 0.0 { Some(m) } else { None }
+}
+
 #[cfg(test)]
 mod tests {
     extern crate std;

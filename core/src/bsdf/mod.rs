@@ -101,6 +101,13 @@ impl BsdfSample {
     fn continuous_reflection(wi: Vec3, f: Rgb, pdf: SolidAnglePdf, pdf_rev: SolidAnglePdf) -> Self {
         Self { wi, f, pdf, pdf_rev, is_delta: false, is_transmission: false, eta: 1.0 }
     }
+
+    /// [`Self::continuous_reflection`], or `None` unless the density is positive and
+    /// finite and the value finite (the glossy reflection models' samplers).
+    #[inline]
+    fn checked_reflection(wi: Vec3, f: Rgb, pdf: SolidAnglePdf, pdf_rev: SolidAnglePdf) -> Option<Self> {
+        (pdf.value() > 0.0 && pdf.value().is_finite() && f.is_finite()).then(|| Self::continuous_reflection(wi, f, pdf, pdf_rev))
+    }
 }
 
 /// The closed set of scattering models.

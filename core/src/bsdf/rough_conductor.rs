@@ -7,9 +7,9 @@
 //! eq. 20), sampled by reflecting a visible normal: p(wi) = D_wo(h) / (4 wi·h) (ibid.,
 //! eq. 14 for the Jacobian of the half-vector map).
 
-use super::microfacet::Microfacet;
+use super::microfacet::{Microfacet, reflection_half};
 use super::{BsdfSample, fresnel};
-use crate::math::{Vec2, Vec3, reflect, sqrt};
+use crate::math::{Vec2, Vec3, reflect};
 use crate::measure::SolidAnglePdf;
 use crate::spectrum::Rgb;
 
@@ -25,26 +25,10 @@ pub(crate) struct RoughConductor {
 }
 
 impl RoughConductor {
-    /// The half vector of a valid reflection configuration (both directions above the
-    /// surface and on the front of the facet), or `None`.
-    #[inline]
-    fn half(wo: Vec3, wi: Vec3) -> Option<Vec3> {
-        if !(wo.z > 0.0 && wi.z > 0.0) {
-            return None;
-        }
-        let h = wo + wi;
-        let l2 = h.length_squared();
-        if !(l2 > 0.0) {
-            return None;
-        }
-        let m = h / sqrt(l2);
-        if wo.dot(m) > 0.0 && wi.dot(m) > 0.0 { Some(m) } else { None }
-    }
-
     /// BSDF value (module docs), without the cosine.
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
-        let Some(m) = Self::half(wo, wi) else { return Rgb::ZERO };
+        let Some(m) = reflection_half(wo, wi) else { return Rgb::ZERO };
         let d = self.distr.d(m);
         if d == 0.0 {
             return Rgb::ZERO;
@@ -61,7 +45,7 @@ impl RoughConductor {
     /// Density of [`Self::sample`]: D_wo(h) / (4 wi·h).
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> SolidAnglePdf {
-        let Some(m) = Self::half(wo, wi) else { return SolidAnglePdf::ZERO };
+        let Some(m) = reflection_half(wo, wi) else { return SolidAnglePdf::ZERO };
         // The Jacobian's wi·m equals wo·m for the exact half vector; dividing by wo·m lets
         // it cancel the VNDF's own wo·m. With wi·m, a grazing pair (wo + wi nearly
         // cancelling) turned f32 rounding in |wi| into a wrong ratio wi·m / wo·m: albedo
@@ -78,11 +62,6 @@ impl RoughConductor {
         if !(wi.z > 0.0) {
             return None;
         }
-        let pdf = self.pdf(wo, wi);
-        let f = self.eval(wo, wi);
-        if !(pdf.value() > 0.0 && pdf.value().is_finite() && f.is_finite()) {
-            return None;
-        }
-        Some(BsdfSample::continuous_reflection(wi, f, pdf, self.pdf(wi, wo)))
+        BsdfSample::checked_reflection(wi, self.eval(wo, wi), self.pdf(wo, wi), self.pdf(wi, wo))
     }
 }

@@ -22,7 +22,7 @@
 
 use alloc::vec::Vec;
 
-use super::microfacet::Microfacet;
+use super::microfacet::{Microfacet, reflection_half};
 use super::{BsdfSample, fresnel};
 use crate::math::{Vec2, Vec3, reflect, sqrt};
 use crate::measure::SolidAnglePdf;
@@ -173,18 +173,6 @@ impl RoughPlastic {
         if ps + pd > 0.0 { ps / (ps + pd) } else { 0.0 }
     }
 
-    /// The half vector of two directions above the surface, if it faces both.
-    #[inline]
-    fn half(wo: Vec3, wi: Vec3) -> Option<Vec3> {
-        let h = wo + wi;
-        let l2 = h.length_squared();
-        if !(l2 > 0.0) {
-            return None;
-        }
-        let m = h / sqrt(l2);
-        (wo.dot(m) > 0.0 && wi.dot(m) > 0.0).then_some(m)
-    }
-
     /// BSDF value (module notes), without the cosine.
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
@@ -192,7 +180,7 @@ impl RoughPlastic {
             return Rgb::ZERO;
         }
         let mut value = self.diffuse * (self.t(wo.z) * self.t(wi.z) / (core::f32::consts::PI * self.eta * self.eta));
-        if let Some(m) = Self::half(wo, wi) {
+        if let Some(m) = reflection_half(wo, wi) {
             let d = self.distr.d(m);
             let g = self.distr.g1(wo, m) * self.distr.g1(wi, m);
             let s = fresnel::dielectric(wo.dot(m), self.eta).f * d * g / (4.0 * wo.z * wi.z);
@@ -210,7 +198,7 @@ impl RoughPlastic {
             return SolidAnglePdf::ZERO;
         }
         let ps = self.p_specular(wo);
-        let spec = Self::half(wo, wi).map_or(0.0, |m| self.distr.visible_pdf(wo, m) / (4.0 * wo.dot(m)));
+        let spec = reflection_half(wo, wi).map_or(0.0, |m| self.distr.visible_pdf(wo, m) / (4.0 * wo.dot(m)));
         SolidAnglePdf(ps * spec + (1.0 - ps) * warp::cosine_hemisphere_pdf(wi).value())
     }
 
@@ -225,12 +213,7 @@ impl RoughPlastic {
         if !(wi.z > 0.0) {
             return None;
         }
-        let pdf = self.pdf(wo, wi);
-        let f = self.eval(wo, wi);
-        if !(pdf.value() > 0.0 && pdf.value().is_finite() && f.is_finite()) {
-            return None;
-        }
-        Some(BsdfSample::continuous_reflection(wi, f, pdf, self.pdf(wi, wo)))
+        BsdfSample::checked_reflection(wi, self.eval(wo, wi), self.pdf(wo, wi), self.pdf(wi, wo))
     }
 
     /// A reflectance-like colour: the base's, plus the coating's at normal incidence.

@@ -18,7 +18,8 @@
 //! remapped uniforms place the point inside the cell. The density of (u, v) is
 //! p(u, v) = P(j) P(i | j) W H, and per unit solid angle p_ω = p(u, v) / (2π² sin θ)
 //! (dω = 2π² sin θ du dv), with sin θ = √(d.x² + d.z²) of the direction itself on both
-//! the sampling and the density side. Mitsuba samples a bilinear (`Hierarchical2D`)
+//! the sampling and the density side (the sampler takes the drawn cell's probabilities,
+//! the density finds the cell again from the direction). Mitsuba samples a bilinear (`Hierarchical2D`)
 //! distribution instead; any density positive where the radiance is gives the same
 //! expectation.
 //!
@@ -188,24 +189,31 @@ impl EnvMapLight {
         let (sin_phi, cos_phi) = libm::sincosf(2.0 * PI * uu);
         let (sin_t, cos_t) = libm::sincosf(PI * vv);
         let local = Vec3::new(sin_phi * sin_t, cos_t, -cos_phi * sin_t);
-        let pdf = self.pdf_local(local);
+        // The sampled cell's own probabilities (what `pdf_local` finds again from the
+        // direction, without its atan2 and acos).
+        let pdf = Self::solid_angle(row.pmf * cell.pmf * (m.width * m.height) as f32, local);
         (pdf.value() > 0.0).then(|| (apply(&m.to_world, local).normalize(), pdf))
+    }
+
+    /// p_ω = p(u, v) / (2π² sin θ), with sin θ of the local direction `d`.
+    #[inline]
+    fn solid_angle(p_uv: f32, d: Vec3) -> SolidAnglePdf {
+        let sin_theta = libm::sqrtf(d.x * d.x + d.z * d.z);
+        if !(sin_theta > 0.0) {
+            return SolidAnglePdf::ZERO;
+        }
+        super::finite_or_zero(SolidAnglePdf(p_uv / (2.0 * PI * PI * sin_theta)))
     }
 
     /// Density per steradian of a local unit direction.
     fn pdf_local(&self, d: Vec3) -> SolidAnglePdf {
         let m = &*self.map;
         let Some(rows) = &m.rows else { return SolidAnglePdf::ZERO };
-        let sin_theta = libm::sqrtf(d.x * d.x + d.z * d.z);
-        if !(sin_theta > 0.0) {
-            return SolidAnglePdf::ZERO;
-        }
         let uv = Self::uv(d);
         let i = ((uv.x * m.width as f32) as usize).min(m.width - 1);
         let j = ((uv.y * m.height as f32) as usize).min(m.height - 1);
         let Some(cells) = &m.cells[j] else { return SolidAnglePdf::ZERO };
-        let p_uv = rows.pmf(j) * cells.pmf(i) * (m.width * m.height) as f32;
-        super::finite_or_zero(SolidAnglePdf(p_uv / (2.0 * PI * PI * sin_theta)))
+        Self::solid_angle(rows.pmf(j) * cells.pmf(i) * (m.width * m.height) as f32, d)
     }
 
     /// Density per steradian with which [`Self::sample_li`] returns world direction `wi`.
@@ -216,28 +224,14 @@ impl EnvMapLight {
 
     pub(super) fn sample_li(&self, p_ref: Vec3, u: Vec2) -> Option<LightSample> {
         let (wi, pdf) = self.sample_dir(u)?;
-        Some(LightSample { wi, dist: f32::INFINITY, p: self.disk.far_point(p_ref, wi), n: Vec3::ZERO, radiance: self.radiance(wi), pdf, is_delta: false })
+        Some(self.disk.environment_li(p_ref, wi, self.radiance(wi), pdf))
     }
 
     /// A direction from the image's distribution, travelling the opposite way, and a
     /// uniform point on the scene disk across it.
     pub(super) fn sample_le(&self, u_pos: Vec2, u_dir: Vec2) -> Option<EmissionSample> {
-        let pdf_pos = self.disk.pdf();
-        if !pdf_pos.is_positive() || !pdf_pos.value().is_finite() {
-            return None;
-        }
         let (toward_sky, pdf_dir) = self.sample_dir(u_dir)?;
-        let dir = -toward_sky;
-        Some(EmissionSample {
-            p: self.disk.sample(u_pos, dir),
-            n: Vec3::ZERO,
-            dir,
-            radiance: self.radiance(toward_sky),
-            pdf_pos,
-            pdf_dir,
-            delta_pos: false,
-            delta_dir: false,
-        })
+        self.disk.environment_le(u_pos, -toward_sky, self.radiance(toward_sky), pdf_dir)
     }
 
     /// (1/(πR²), the density of the direction the path came from).

@@ -55,6 +55,25 @@ impl SceneDisk {
     pub(super) fn area(&self) -> f32 {
         PI * self.radius * self.radius
     }
+
+    /// The direct-lighting sample of an environment (any light at infinity that rays can
+    /// hit): direction `wi` from `p_ref` toward the sky, radiance and density given.
+    #[inline]
+    pub(super) fn environment_li(&self, p_ref: Vec3, wi: Vec3, radiance: Rgb, pdf: SolidAnglePdf) -> LightSample {
+        LightSample { wi, dist: f32::INFINITY, p: self.far_point(p_ref, wi), n: Vec3::ZERO, radiance, pdf, is_delta: false }
+    }
+
+    /// The emission sample of an environment: a path travelling along `dir` (drawn with
+    /// density `pdf_dir`) from a uniform point of the disk across it; `None` before the
+    /// scene's bounds are known.
+    #[inline]
+    pub(super) fn environment_le(&self, u_pos: Vec2, dir: Vec3, radiance: Rgb, pdf_dir: SolidAnglePdf) -> Option<EmissionSample> {
+        let pdf_pos = self.pdf();
+        if !pdf_pos.is_positive() || !pdf_pos.value().is_finite() {
+            return None;
+        }
+        Some(EmissionSample { p: self.sample(u_pos, dir), n: Vec3::ZERO, dir, radiance, pdf_pos, pdf_dir, delta_pos: false, delta_dir: false })
+    }
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -125,16 +144,7 @@ impl EnvironmentLight {
 
     /// Uniform direction on the sphere.
     pub(super) fn sample_li(&self, p_ref: Vec3, u: Vec2) -> Option<LightSample> {
-        let wi = warp::sample_uniform_sphere(u);
-        Some(LightSample {
-            wi,
-            dist: f32::INFINITY,
-            p: self.disk.far_point(p_ref, wi),
-            n: Vec3::ZERO,
-            radiance: self.radiance,
-            pdf: self.pdf_li(),
-            is_delta: false,
-        })
+        Some(self.disk.environment_li(p_ref, warp::sample_uniform_sphere(u), self.radiance, self.pdf_li()))
     }
 
     /// 1/(4π) for every direction.
@@ -145,21 +155,7 @@ impl EnvironmentLight {
     /// Uniform direction toward the sky, travelling the opposite way; a uniform point on
     /// the scene disk across it.
     pub(super) fn sample_le(&self, u_pos: Vec2, u_dir: Vec2) -> Option<EmissionSample> {
-        let (pdf_pos, pdf_dir) = self.pdf_le();
-        if !pdf_pos.is_positive() || !pdf_pos.value().is_finite() {
-            return None;
-        }
-        let dir = -warp::sample_uniform_sphere(u_dir);
-        Some(EmissionSample {
-            p: self.disk.sample(u_pos, dir),
-            n: Vec3::ZERO,
-            dir,
-            radiance: self.radiance,
-            pdf_pos,
-            pdf_dir,
-            delta_pos: false,
-            delta_dir: false,
-        })
+        self.disk.environment_le(u_pos, -warp::sample_uniform_sphere(u_dir), self.radiance, warp::uniform_sphere_pdf())
     }
 
     /// (1/(πR²), 1/(4π)).

@@ -307,19 +307,11 @@ impl PhaseBuffers {
     }
     /// The outputs for `phase`, one per chunk, each reset to its chunk's range.
     pub fn for_phase(&mut self, phase: &Phase) -> &mut [ChunkOutput] {
-        let id = phase.id as usize;
-        if self.lists.len() <= id {
-            self.lists.resize_with(id + 1, Vec::new);
-        }
-        let list = &mut self.lists[id];
-        let n = phase.chunk_count();
-        if list.len() < n {
-            list.resize_with(n, ChunkOutput::default);
-        }
-        for (c, out) in list[..n].iter_mut().enumerate() {
+        let outputs = self.outputs(phase);
+        for (c, out) in outputs.iter_mut().enumerate() {
             out.reset(phase.chunk_range(c));
         }
-        &mut list[..n]
+        outputs
     }
     /// The outputs for `phase` as they stand: what [`Self::for_phase`] reset and the host
     /// filled since (a host that receives chunk outputs one message at a time).
