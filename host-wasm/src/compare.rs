@@ -24,6 +24,9 @@
 
 use std::fmt::Write as _;
 
+use ember_tests::chi2::sidak;
+use ember_tests::stats::{normal_two_sided_p, student_t_two_sided_p};
+
 /// A linear RGB image, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LinearImage {
@@ -83,19 +86,91 @@ pub struct Verdict {
     pub critical_z: f64,
 }
 
-/// Two-sided standard normal tail probability P(|Z| > z).
-fn two_sided_p(z: f64) -> f64 {
-    libm::erfc(z.abs() / core::f64::consts::SQRT_2)
-}
-
-/// The z with P(|Z| > z) = p, by bisection (p in (0, 1)).
-fn critical_z(p: f64) -> f64 {
-    let (mut lo, mut hi) = (0.0f64, 40.0f64);
+/// The |x| whose two-sided tail probability `tail(|x|)` is `p`, by bisection (`tail`
+/// decreasing, p in (0, 1)).
+fn critical(p: f64, tail: impl Fn(f64) -> f64) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 1e4f64);
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
-        if two_sided_p(mid) > p { lo = mid } else { hi = mid }
+        if tail(mid) > p { lo = mid } else { hi = mid }
     }
     0.5 * (lo + hi)
+}
+
+/// The verdict's text and outcome as the checks add to them.
+struct Report {
+    text: String,
+    ok: bool,
+}
+
+impl Report {
+    fn new() -> Self {
+        Self { text: String::new(), ok: true }
+    }
+    fn fail(&mut self, msg: impl std::fmt::Display) {
+        self.ok = false;
+        let _ = writeln!(self.text, "FAIL: {msg}");
+    }
+    /// A verdict for inputs that could not be compared at all.
+    fn refused(mut self, msg: impl std::fmt::Display) -> Verdict {
+        self.fail(msg);
+        Verdict { ok: self.ok, report: self.text, pixels_differing: usize::MAX, worst_z: f64::INFINITY, critical_z: 0.0 }
+    }
+}
+
+/// Mean over every pixel and channel.
+fn image_mean(img: &LinearImage) -> f64 {
+    img.pixels.iter().flatten().map(|&v| v as f64).sum::<f64>() / (3 * img.pixels.len()).max(1) as f64
+}
+
+/// What both verdicts require of the browser image: no NaN or infinity, not blank.
+/// Reports the means (`native` describes the native side).
+fn check_browser_image(report: &mut Report, browser: &LinearImage, native_mean: f64, native: &str) {
+    let non_finite = browser.pixels.iter().flatten().filter(|v| !v.is_finite()).count();
+    if non_finite > 0 {
+        report.fail(format!("{non_finite} non-finite values in the browser image"));
+    }
+    let mb = image_mean(browser);
+    let lit = browser.pixels.iter().filter(|p| p.iter().any(|&v| v > 0.0)).count();
+    let _ = writeln!(report.text, "means: browser {mb:.6}, native {native_mean:.6}{native}; {lit} of {} browser pixels non-black", browser.pixels.len());
+    if !(mb > 0.0) || lit < browser.pixels.len() / 10 {
+        report.fail("the browser image is blank");
+    }
+}
+
+/// |diff| / se, where identical blocks score 0 whatever their spread and a difference in
+/// a flat block (se = 0) or a NaN is infinitely significant.
+fn score(diff: f64, se: f64) -> f64 {
+    let s = if diff == 0.0 {
+        0.0
+    } else if se > 0.0 {
+        diff.abs() / se
+    } else {
+        f64::INFINITY
+    };
+    if s.is_nan() { f64::INFINITY } else { s }
+}
+
+/// The worst per-block score of a verdict and where it is.
+struct Worst {
+    score: f64,
+    at: (usize, usize, usize),
+}
+
+impl Worst {
+    fn new() -> Self {
+        Self { score: 0.0, at: (0, 0, 0) }
+    }
+    fn add(&mut self, score: f64, at: (usize, usize, usize)) {
+        if !(score <= self.score) {
+            *self = Self { score, at };
+        }
+    }
+}
+
+/// The top-left corners of the `b × b` blocks of `img`, row by row.
+fn blocks(img: &LinearImage, b: usize) -> impl Iterator<Item = (usize, usize)> + '_ {
+    (0..img.height).step_by(b).flat_map(move |by| (0..img.width).step_by(b).map(move |bx| (bx, by)))
 }
 
 /// How two renders are held to agree; see the module documentation.
@@ -120,27 +195,12 @@ impl Default for Criteria {
 
 /// Compare `browser` with `native`; see the module documentation.
 pub fn compare(browser: &LinearImage, native: &LinearImage, criteria: Criteria) -> Verdict {
-    let mut report = String::new();
-    let mut ok = true;
-    let mut fail = |report: &mut String, msg: String| {
-        ok = false;
-        let _ = writeln!(report, "FAIL: {msg}");
-    };
+    let mut report = Report::new();
     if (browser.width, browser.height) != (native.width, native.height) || browser.pixels.len() != browser.width * browser.height {
-        fail(&mut report, format!("sizes differ: browser {}x{}, native {}x{}", browser.width, browser.height, native.width, native.height));
-        return Verdict { ok, report, pixels_differing: usize::MAX, worst_z: f64::INFINITY, critical_z: 0.0 };
+        return report.refused(format!("sizes differ: browser {}x{}, native {}x{}", browser.width, browser.height, native.width, native.height));
     }
-    let non_finite = browser.pixels.iter().flatten().filter(|v| !v.is_finite()).count();
-    if non_finite > 0 {
-        fail(&mut report, format!("{non_finite} non-finite values in the browser image"));
-    }
-    let mean = |img: &LinearImage| img.pixels.iter().flatten().map(|&v| v as f64).sum::<f64>() / (3 * img.pixels.len()).max(1) as f64;
-    let (mb, mn) = (mean(browser), mean(native));
-    let lit = browser.pixels.iter().filter(|p| p.iter().any(|&v| v > 0.0)).count();
-    let _ = writeln!(report, "means: browser {mb:.6}, native {mn:.6}; {lit} of {} browser pixels non-black", browser.pixels.len());
-    if !(mb > 0.0) || lit < browser.pixels.len() / 10 {
-        fail(&mut report, "the browser image is blank".into());
-    }
+    let mn = image_mean(native);
+    check_browser_image(&mut report, browser, mn, "");
 
     // 1. Pixel by pixel: the same value up to summation order, except diverged paths.
     let same = |a: f32, b: f32| {
@@ -150,70 +210,53 @@ pub fn compare(browser: &LinearImage, native: &LinearImage, criteria: Criteria) 
     let pixels_differing = browser.pixels.iter().zip(&native.pixels).filter(|(a, b)| !(0..3).all(|c| same(a[c], b[c]))).count();
     let allowed = (criteria.max_differing_fraction * browser.pixels.len() as f64).floor() as usize;
     let _ = writeln!(
-        report,
+        report.text,
         "{pixels_differing} of {} pixels differ by more than {:.0e} relative (allowed {allowed})",
         browser.pixels.len(),
         criteria.pixel_tolerance
     );
     if pixels_differing > allowed {
-        fail(&mut report, format!("{pixels_differing} pixels differ, more than {allowed}"));
+        report.fail(format!("{pixels_differing} pixels differ, more than {allowed}"));
     }
 
     // 2. Per block and channel, a z-test of the difference of means against the
     // combined standard error (see the module documentation).
     let b = criteria.block.max(1);
-    let blocks = browser.width.div_ceil(b) * browser.height.div_ceil(b);
-    let tests = 3 * blocks;
-    let per_test = 1.0 - (1.0 - criteria.alpha).powf(1.0 / tests as f64);
-    let z_crit = critical_z(per_test);
-    let mut worst_z = 0.0f64;
-    let mut worst_at = (0, 0, 0);
-    for by in (0..browser.height).step_by(b) {
-        for bx in (0..browser.width).step_by(b) {
-            for c in 0..3 {
-                let mut stats = [(0.0f64, 0.0f64); 2];
-                let mut n = 0.0;
-                for y in by..(by + b).min(browser.height) {
-                    for x in bx..(bx + b).min(browser.width) {
-                        let i = y * browser.width + x;
-                        for (s, img) in stats.iter_mut().zip([browser, native]) {
-                            let v = img.pixels[i][c] as f64;
-                            s.0 += v;
-                            s.1 += v * v;
-                        }
-                        n += 1.0;
+    let tests = 3 * browser.width.div_ceil(b) * browser.height.div_ceil(b);
+    let z_crit = critical(sidak(criteria.alpha, tests), normal_two_sided_p);
+    let mut worst = Worst::new();
+    for (bx, by) in blocks(browser, b) {
+        for c in 0..3 {
+            let mut stats = [(0.0f64, 0.0f64); 2];
+            let mut n = 0.0;
+            for y in by..(by + b).min(browser.height) {
+                for x in bx..(bx + b).min(browser.width) {
+                    let i = y * browser.width + x;
+                    for (s, img) in stats.iter_mut().zip([browser, native]) {
+                        let v = img.pixels[i][c] as f64;
+                        s.0 += v;
+                        s.1 += v * v;
                     }
-                }
-                let var_of_mean = |(s, s2): (f64, f64)| ((s2 - s * s / n) / (n - 1.0).max(1.0)).max(0.0) / n;
-                // Both renders have the same noise; the native one's estimate is used for
-                // both (√2 ×), so outliers in the browser image cannot widen their own bound.
-                let se = (2.0 * var_of_mean(stats[1])).sqrt();
-                let diff = (stats[0].0 - stats[1].0) / n;
-                // Identical blocks have z = 0 whatever their spread; a difference in a
-                // flat block (se = 0) is infinitely significant.
-                let z = if diff == 0.0 {
-                    0.0
-                } else if se > 0.0 {
-                    diff.abs() / se
-                } else {
-                    f64::INFINITY
-                };
-                if !(z <= worst_z) {
-                    worst_z = if z.is_nan() { f64::INFINITY } else { z };
-                    worst_at = (bx, by, c);
+                    n += 1.0;
                 }
             }
+            let var_of_mean = |(s, s2): (f64, f64)| ((s2 - s * s / n) / (n - 1.0).max(1.0)).max(0.0) / n;
+            // Both renders have the same noise; the native one's estimate is used for
+            // both (√2 ×), so outliers in the browser image cannot widen their own bound.
+            let se = (2.0 * var_of_mean(stats[1])).sqrt();
+            worst.add(score((stats[0].0 - stats[1].0) / n, se), (bx, by, c));
         }
     }
+    let worst_z = worst.score;
     let _ = writeln!(
-        report,
+        report.text,
         "worst {b}x{b} block |z| = {worst_z:.3} at ({}, {}) channel {}; Šidák critical |z| = {z_crit:.3} ({tests} tests, family α = {})",
-        worst_at.0, worst_at.1, worst_at.2, criteria.alpha
+        worst.at.0, worst.at.1, worst.at.2, criteria.alpha
     );
     if !(worst_z <= z_crit) {
-        fail(&mut report, format!("block means differ significantly (|z| {worst_z:.3} > {z_crit:.3})"));
+        report.fail(format!("block means differ significantly (|z| {worst_z:.3} > {z_crit:.3})"));
     }
-    Verdict { ok, report, pixels_differing, worst_z, critical_z: z_crit }
+    Verdict { ok: report.ok, report: report.text, pixels_differing, worst_z, critical_z: z_crit }
 }
 
 /// Compare `browser` with `natives`, renders of the same scene and passes with seeds
@@ -232,35 +275,18 @@ pub fn compare(browser: &LinearImage, native: &LinearImage, criteria: Criteria) 
 /// image mean is dominated by the noisiest region, and on PT with a 30 % bias everywhere
 /// it reached |t| 4.9 where the worst block reached 10.2.)
 pub fn compare_independent(browser: &LinearImage, natives: &[LinearImage], criteria: Criteria) -> Verdict {
-    let mut report = String::new();
-    let mut ok = true;
-    let mut fail = |report: &mut String, msg: String| {
-        ok = false;
-        let _ = writeln!(report, "FAIL: {msg}");
-    };
+    let mut report = Report::new();
     let k = natives.len();
     let bad_size = natives.iter().any(|n| (n.width, n.height) != (browser.width, browser.height) || n.pixels.len() != n.width * n.height);
     if k < 3 || bad_size || browser.pixels.len() != browser.width * browser.height {
-        fail(&mut report, format!("need 3 or more native renders of the browser's size ({k} given, sizes differ: {bad_size})"));
-        return Verdict { ok, report, pixels_differing: usize::MAX, worst_z: f64::INFINITY, critical_z: 0.0 };
+        return report.refused(format!("need 3 or more native renders of the browser's size ({k} given, sizes differ: {bad_size})"));
     }
-    let non_finite = browser.pixels.iter().flatten().filter(|v| !v.is_finite()).count();
-    if non_finite > 0 {
-        fail(&mut report, format!("{non_finite} non-finite values in the browser image"));
-    }
-    let mean = |img: &LinearImage| img.pixels.iter().flatten().map(|&v| v as f64).sum::<f64>() / (3 * img.pixels.len()).max(1) as f64;
-    let mb = mean(browser);
-    let mn = natives.iter().map(mean).sum::<f64>() / k as f64;
-    let lit = browser.pixels.iter().filter(|p| p.iter().any(|&v| v > 0.0)).count();
-    let _ = writeln!(report, "means: browser {mb:.6}, native {mn:.6} ({k} seeds); {lit} of {} browser pixels non-black", browser.pixels.len());
-    if !(mb > 0.0) || lit < browser.pixels.len() / 10 {
-        fail(&mut report, "the browser image is blank".into());
-    }
+    let mn = natives.iter().map(image_mean).sum::<f64>() / k as f64;
+    check_browser_image(&mut report, browser, mn, &format!(" ({k} seeds)"));
     let b = criteria.block.max(1);
     let tests = 3 * browser.width.div_ceil(b) * browser.height.div_ceil(b);
-    let per_test = 1.0 - (1.0 - criteria.alpha).powf(1.0 / tests as f64);
     let nu = (k - 1) as f64;
-    let t_crit = critical_t(per_test, nu);
+    let t_crit = critical(sidak(criteria.alpha, tests), |t| student_t_two_sided_p(t, nu));
     let block_mean = |img: &LinearImage, bx: usize, by: usize, c: usize| {
         let (mut s, mut n) = (0.0f64, 0.0f64);
         for y in by..(by + b).min(img.height) {
@@ -271,127 +297,42 @@ pub fn compare_independent(browser: &LinearImage, natives: &[LinearImage], crite
         }
         s / n
     };
-    let (mut worst, mut worst_at) = (0.0f64, (0, 0, 0));
-    let blocks = (0..browser.height).step_by(b).flat_map(|by| (0..browser.width).step_by(b).map(move |bx| (bx, by)));
-    for (bx, by) in blocks {
+    let mut worst = Worst::new();
+    for (bx, by) in blocks(browser, b) {
         for c in 0..3 {
             let m: Vec<f64> = natives.iter().map(|n| block_mean(n, bx, by, c)).collect();
             let avg = m.iter().sum::<f64>() / k as f64;
             let var = m.iter().map(|v| (v - avg) * (v - avg)).sum::<f64>() / nu;
-            let diff = block_mean(browser, bx, by, c) - avg;
             let se = (var * (1.0 + 1.0 / k as f64)).sqrt();
-            let t = if diff == 0.0 {
-                0.0
-            } else if se > 0.0 {
-                diff.abs() / se
-            } else {
-                f64::INFINITY
-            };
-            let t = if t.is_nan() { f64::INFINITY } else { t };
-            if !(t <= worst) {
-                worst = t;
-                worst_at = (bx, by, c);
-            }
+            worst.add(score(block_mean(browser, bx, by, c) - avg, se), (bx, by, c));
         }
     }
+    let worst_t = worst.score;
     let _ = writeln!(
-        report,
-        "worst {b}x{b} block |t| = {worst:.3} at ({}, {}) channel {}; Šidák critical |t| = {t_crit:.3} ({tests} tests, {nu} dof, family α = {})",
-        worst_at.0, worst_at.1, worst_at.2, criteria.alpha
+        report.text,
+        "worst {b}x{b} block |t| = {worst_t:.3} at ({}, {}) channel {}; Šidák critical |t| = {t_crit:.3} ({tests} tests, {nu} dof, family α = {})",
+        worst.at.0, worst.at.1, worst.at.2, criteria.alpha
     );
-    if !(worst <= t_crit) {
-        fail(&mut report, format!("block means differ significantly (|t| {worst:.3} > {t_crit:.3})"));
+    if !(worst_t <= t_crit) {
+        report.fail(format!("block means differ significantly (|t| {worst_t:.3} > {t_crit:.3})"));
     }
-    Verdict { ok, report, pixels_differing: 0, worst_z: worst, critical_z: t_crit }
-}
-
-/// ln Γ(x) for x > 0 (Lanczos, g = 7, nine coefficients; |error| < 1e-13 here).
-fn ln_gamma(x: f64) -> f64 {
-    const G: [f64; 9] = [
-        0.999_999_999_999_809_9,
-        676.520_368_121_885_1,
-        -1_259.139_216_722_402_8,
-        771.323_428_777_653_1,
-        -176.615_029_162_140_6,
-        12.507_343_278_686_905,
-        -0.138_571_095_265_720_12,
-        9.984_369_578_019_572e-6,
-        1.505_632_735_149_311_6e-7,
-    ];
-    let x = x - 1.0;
-    let t = x + 7.5;
-    let s = G[0] + (1..9).map(|i| G[i] / (x + i as f64)).sum::<f64>();
-    0.5 * (2.0 * core::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + s.ln()
-}
-
-/// The regularised incomplete beta function I_x(a, b), by its continued fraction
-/// (modified Lentz), using the symmetry I_x(a, b) = 1 − I_{1−x}(b, a) where it converges
-/// faster.
-fn incomplete_beta(a: f64, b: f64, x: f64) -> f64 {
-    if x <= 0.0 {
-        return 0.0;
-    }
-    if x >= 1.0 {
-        return 1.0;
-    }
-    let front = (ln_gamma(a + b) - ln_gamma(a) - ln_gamma(b) + a * x.ln() + b * (1.0 - x).ln()).exp();
-    if x > (a + 1.0) / (a + b + 2.0) {
-        return 1.0 - incomplete_beta(b, a, 1.0 - x);
-    }
-    let tiny = 1e-300;
-    let (mut c, mut d) = (1.0f64, 1.0 - (a + b) * x / (a + 1.0));
-    d = if d.abs() < tiny { 1.0 / tiny } else { 1.0 / d };
-    let mut f = d;
-    for m in 1..500 {
-        let m = m as f64;
-        for step in 0..2 {
-            let num = if step == 0 {
-                m * (b - m) * x / ((a + 2.0 * m - 1.0) * (a + 2.0 * m))
-            } else {
-                -(a + m) * (a + b + m) * x / ((a + 2.0 * m) * (a + 2.0 * m + 1.0))
-            };
-            d = 1.0 + num * d;
-            d = if d.abs() < tiny { 1.0 / tiny } else { 1.0 / d };
-            c = 1.0 + num / c;
-            if c.abs() < tiny {
-                c = tiny;
-            }
-            f *= c * d;
-        }
-        if (c * d - 1.0).abs() < 1e-15 {
-            break;
-        }
-    }
-    front * f / a
-}
-
-/// P(|T| > t) for Student's t with `nu` degrees of freedom.
-fn student_two_sided_p(t: f64, nu: f64) -> f64 {
-    incomplete_beta(0.5 * nu, 0.5, nu / (nu + t * t))
-}
-
-/// The |t| whose two-sided tail probability is `p`.
-fn critical_t(p: f64, nu: f64) -> f64 {
-    let (mut lo, mut hi) = (0.0f64, 1e4f64);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if student_two_sided_p(mid, nu) > p { lo = mid } else { hi = mid }
-    }
-    0.5 * (lo + hi)
+    Verdict { ok: report.ok, report: report.text, pixels_differing: 0, worst_z: worst_t, critical_z: t_crit }
 }
 
 #[cfg(test)]
 mod student_tests {
     use super::*;
 
-    /// Against tabulated quantiles: two-sided 5 % at 1, 5, 30 dof (12.706, 2.571, 2.042)
-    /// and 1 % at 10 dof (3.169); and the normal limit. Injected bug it caught: the
-    /// continued fraction's odd step with the sign flipped (t(5 %, 5) came out 2.567).
+    /// The t quantiles the verdict uses, against tabulated ones: two-sided 5 % at 1, 5, 30
+    /// dof (12.706, 2.571, 2.042) and 1 % at 10 dof (3.169); and the normal limit.
+    /// Injected bug it caught: the incomplete beta's continued fraction with the odd
+    /// step's sign flipped (t(5 %, 5) came out 2.567).
     #[test]
     fn t_quantiles_match_the_tables() {
-        for (p, nu, t) in [(0.05, 1.0, 12.706), (0.05, 5.0, 2.571), (0.05, 30.0, 2.042), (0.01, 10.0, 3.169)] {
-            assert!((critical_t(p, nu) - t).abs() < 2e-3, "t({p}, {nu}) = {} not {t}", critical_t(p, nu));
+        let t = |p: f64, nu: f64| critical(p, |t| student_t_two_sided_p(t, nu));
+        for (p, nu, want) in [(0.05, 1.0, 12.706), (0.05, 5.0, 2.571), (0.05, 30.0, 2.042), (0.01, 10.0, 3.169)] {
+            assert!((t(p, nu) - want).abs() < 2e-3, "t({p}, {nu}) = {} not {want}", t(p, nu));
         }
-        assert!((critical_t(1e-3, 1e6) - critical_z(1e-3)).abs() < 1e-3);
+        assert!((t(1e-3, 1e6) - critical(1e-3, normal_two_sided_p)).abs() < 1e-3);
     }
 }

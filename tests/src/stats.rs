@@ -87,6 +87,52 @@ pub fn normal_two_sided_p(z: f64) -> f64 {
     gamma_q(0.5, 0.5 * z * z)
 }
 
+/// The regularised incomplete beta function I_x(a, b), by its continued fraction
+/// (modified Lentz), using the symmetry I_x(a, b) = 1 − I_{1−x}(b, a) where it converges
+/// faster.
+pub fn incomplete_beta(a: f64, b: f64, x: f64) -> f64 {
+    if x <= 0.0 {
+        return 0.0;
+    }
+    if x >= 1.0 {
+        return 1.0;
+    }
+    if x > (a + 1.0) / (a + b + 2.0) {
+        return 1.0 - incomplete_beta(b, a, 1.0 - x);
+    }
+    let front = (ln_gamma(a + b) - ln_gamma(a) - ln_gamma(b) + a * x.ln() + b * (1.0 - x).ln()).exp();
+    let tiny = 1e-300;
+    let (mut c, mut d) = (1.0f64, 1.0 - (a + b) * x / (a + 1.0));
+    d = if d.abs() < tiny { 1.0 / tiny } else { 1.0 / d };
+    let mut f = d;
+    for m in 1..500 {
+        let m = m as f64;
+        for step in 0..2 {
+            let num = if step == 0 {
+                m * (b - m) * x / ((a + 2.0 * m - 1.0) * (a + 2.0 * m))
+            } else {
+                -(a + m) * (a + b + m) * x / ((a + 2.0 * m) * (a + 2.0 * m + 1.0))
+            };
+            d = 1.0 + num * d;
+            d = if d.abs() < tiny { 1.0 / tiny } else { 1.0 / d };
+            c = 1.0 + num / c;
+            if c.abs() < tiny {
+                c = tiny;
+            }
+            f *= c * d;
+        }
+        if (c * d - 1.0).abs() < 1e-15 {
+            break;
+        }
+    }
+    front * f / a
+}
+
+/// P(|T| > t) for Student's t with `nu` degrees of freedom.
+pub fn student_t_two_sided_p(t: f64, nu: f64) -> f64 {
+    incomplete_beta(0.5 * nu, 0.5, nu / (nu + t * t))
+}
+
 /// Unpolarised dielectric Fresnel reflectance in f64 (an oracle independent of the
 /// library's `bsdf::fresnel`): `eta` = η_t/η_i for cos_i ≥ 0, inverted from inside.
 pub fn fresnel_f64(cos_i: f64, eta: f64) -> f64 {
