@@ -42,7 +42,10 @@ pub struct SurfaceHit {
     /// Unit shading normal (interpolated); equal to `ng` where the mesh has none. Always
     /// in the same hemisphere as `ng`.
     pub ns: Vec3,
-    /// Surface parameterisation (barycentrics for triangles).
+    /// Texture coordinates, as Mitsuba defines them: a triangle's interpolated per-vertex
+    /// coordinates or its barycentrics (b₁, b₂) where it has none
+    /// ([`crate::shapes::Triangle::texcoords`]); (φ/2π, θ/π) on a sphere
+    /// ([`crate::shapes::sphere_texcoords`]).
     pub uv: Vec2,
     pub material: MaterialId,
     /// The area light attached to this primitive, if any.

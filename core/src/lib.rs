@@ -34,6 +34,7 @@ pub mod segment;
 pub mod shapes;
 pub mod spectrum;
 pub mod subspace;
+pub mod texture;
 pub mod warp;
 
 pub use math::{Vec2, Vec3};

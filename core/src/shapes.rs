@@ -4,7 +4,7 @@
 use alloc::vec::Vec;
 
 use crate::geometry::{LightId, MaterialId};
-use crate::math::{Bounds3, Vec3};
+use crate::math::{Bounds3, Vec2, Vec3};
 
 /// One triangle of the scene's geometry.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -12,8 +12,34 @@ pub struct Triangle {
     pub p: [Vec3; 3],
     /// Per-vertex shading normals, if the mesh has them.
     pub n: Option<[Vec3; 3]>,
+    /// Per-vertex texture coordinates, if the mesh has them.
+    pub uv: Option<[Vec2; 3]>,
     pub material: MaterialId,
     pub emitter: Option<LightId>,
+}
+
+impl Triangle {
+    /// Texture coordinates at barycentrics (b₁, b₂) (weights of `p[1]` and `p[2]`): the
+    /// interpolated per-vertex coordinates, or (b₁, b₂) themselves where the triangle has
+    /// none (Mitsuba's convention for meshes without texture coordinates).
+    #[inline]
+    pub fn texcoords(&self, b1: f32, b2: f32) -> Vec2 {
+        match &self.uv {
+            Some(uv) => uv[0] * (1.0 - b1 - b2) + uv[1] * b1 + uv[2] * b2,
+            None => Vec2::new(b1, b2),
+        }
+    }
+}
+
+/// Mitsuba's texture coordinates on a sphere at unit direction `local` from its centre:
+/// (φ/2π, θ/π) with φ = atan2(y, x) in [0, 2π) and θ = acos z.
+pub fn sphere_texcoords(local: Vec3) -> Vec2 {
+    let mut phi = libm::atan2f(local.y, local.x);
+    if phi < 0.0 {
+        phi += 2.0 * core::f32::consts::PI;
+    }
+    let theta = libm::acosf(local.z.clamp(-1.0, 1.0));
+    Vec2::new(phi * (0.5 * core::f32::consts::FRAC_1_PI), theta * core::f32::consts::FRAC_1_PI)
 }
 
 /// An analytic sphere (intersected exactly by the host, so its light's solid-angle

@@ -20,7 +20,6 @@ use std::time::Instant;
 use ember_cli::accel::Accel;
 use ember_cli::driver::{self, DriverConfig, Limits};
 use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
-use ember_core::math::Vec2;
 use ember_core::render::{ChunkOutput, Context, EstimatorKind, Film, Phase, Phased, Renderer};
 
 use crate::{EmberStatus, Error, MaterialDesc, Registry, RendererState, Result, SceneData, SceneDesc, Settings};
@@ -210,7 +209,7 @@ impl RayQuery for CallbackTracer<'_> {
         let p = tri.p[0] * b0 + tri.p[1] * hit.b1 + tri.p[2] * hit.b2;
         // Interpolated shading normals where the triangle has them, on ng's side (as the BVH).
         let ns = tri.n.map(|n| n[0] * b0 + n[1] * hit.b1 + n[2] * hit.b2).and_then(|n| n.try_normalize()).map_or(ng, |n| if n.dot(ng) < 0.0 { -n } else { n });
-        Some(SurfaceHit { t: hit.t, p, ng, ns, uv: Vec2::new(hit.b1, hit.b2), material: tri.material, emitter: tri.emitter })
+        Some(SurfaceHit { t: hit.t, p, ng, ns, uv: tri.texcoords(hit.b1, hit.b2), material: tri.material, emitter: tri.emitter })
     }
     fn occluded(&self, ray: &Ray) -> bool {
         (self.cb.occluded)(self.cb.user_data, &c_ray(ray))

@@ -38,7 +38,7 @@ fn scene() -> SceneGeometry {
         let r = 1.5 + 0.2 * (8.0 * theta).sin() * (6.0 * phi).cos() + 0.05 * (23.0 * theta + phi).sin();
         Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()) * r
     };
-    let tri = |p: [Vec3; 3]| Triangle { p, n: None, material: 0, emitter: None };
+    let tri = |p: [Vec3; 3]| Triangle { p, n: None, uv: None, material: 0, emitter: None };
     for i in 0..N {
         for j in 0..N {
             let (a, b, c, d) = (vertex(i, j), vertex(i + 1, j), vertex(i + 1, j + 1), vertex(i, j + 1));

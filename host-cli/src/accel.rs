@@ -166,6 +166,7 @@ fn stretched(ray: &BvhRay) -> BvhRay {
 #[derive(Clone, Copy, Debug)]
 struct TriangleAttributes {
     normals: Option<[Vec3; 3]>,
+    texcoords: Option<[glam::Vec2; 3]>,
     material: MaterialId,
     emitter: Option<LightId>,
     original: u32,
@@ -228,7 +229,7 @@ impl<B: TriangleBvh> AccelWith<B> {
             let attrs = order.iter().map(|&k| {
                 let original = kept[k as usize];
                 let t = &geometry.triangles[original as usize];
-                TriangleAttributes { normals: t.n, material: t.material, emitter: t.emitter, original }
+                TriangleAttributes { normals: t.n, texcoords: t.uv, material: t.material, emitter: t.emitter, original }
             });
             let (tris, attrs) = (tris.collect(), attrs.collect());
             (Some(bvh), tris, attrs)
@@ -281,6 +282,13 @@ impl<B: TriangleBvh> AccelWith<B> {
             t.iter().for_each(|&p| bits(h, p.into()));
             match a.normals {
                 Some(n) => n.iter().for_each(|&v| bits(h, v)),
+                None => h.write_u8(0),
+            }
+            match a.texcoords {
+                Some(uv) => uv.iter().for_each(|v| {
+                    h.write_u32(v.x.to_bits());
+                    h.write_u32(v.y.to_bits());
+                }),
                 None => h.write_u8(0),
             }
             h.write_u32(a.material);
@@ -360,7 +368,7 @@ impl<B: TriangleBvh> AccelWith<B> {
     /// barycentrics `b`.
     fn triangle_hit(&self, slot: usize, t: f32, b: [f32; 3]) -> SurfaceHit {
         let a = &self.attrs[slot];
-        hit::surface_hit(&self.tris[slot], a.normals, a.material, a.emitter, t, b)
+        hit::surface_hit(&self.tris[slot], a.normals, a.texcoords, a.material, a.emitter, t, b)
     }
 }
 

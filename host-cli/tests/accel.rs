@@ -32,7 +32,7 @@ fn scene(seed: u32, triangles: usize, spheres: usize) -> SceneGeometry {
         let size = 0.05 + 0.25 * s.next_f32();
         let p = [c + size * direction(&mut s), c + size * direction(&mut s), c + size * direction(&mut s)];
         let n = (i % 3 == 0).then(|| [direction(&mut s), direction(&mut s), direction(&mut s)]);
-        g.triangles.push(Triangle { p, n, material: i as u32 % 5, emitter: (i % 7 == 0).then_some(i as u32) });
+        g.triangles.push(Triangle { p, n, uv: None, material: i as u32 % 5, emitter: (i % 7 == 0).then_some(i as u32) });
     }
     for i in 0..spheres {
         g.spheres.push(Sphere {
@@ -263,8 +263,8 @@ fn spawned_rays_do_not_rehit_their_surface() {
 #[test]
 fn degenerate_input_is_harmless() {
     let mut g = scene(7, 50, 2);
-    g.triangles.push(Triangle { p: [Vec3::ONE; 3], n: None, material: 0, emitter: None });
-    g.triangles.push(Triangle { p: [Vec3::ZERO, Vec3::X, Vec3::splat(f32::NAN)], n: None, material: 0, emitter: None });
+    g.triangles.push(Triangle { p: [Vec3::ONE; 3], n: None, uv: None, material: 0, emitter: None });
+    g.triangles.push(Triangle { p: [Vec3::ZERO, Vec3::X, Vec3::splat(f32::NAN)], n: None, uv: None, material: 0, emitter: None });
     g.spheres.push(Sphere { center: Vec3::ZERO, radius: 0.0, flip_normals: false, material: 0, emitter: None });
     let accel = AccelWith::<CwBvh>::new(&g);
     assert_eq!((accel.triangle_count(), accel.sphere_count()), (50, 2));
@@ -336,7 +336,7 @@ fn closed_box_does_not_leak_at_edges() {
             };
             for i in 0..K {
                 for j in 0..K {
-                    let t = |p| Triangle { p, n: None, material: 0, emitter: None };
+                    let t = |p| Triangle { p, n: None, uv: None, material: 0, emitter: None };
                     g.triangles.push(t([at(i, j), at(i + 1, j), at(i + 1, j + 1)]));
                     g.triangles.push(t([at(i, j), at(i + 1, j + 1), at(i, j + 1)]));
                 }

@@ -65,6 +65,7 @@ pub fn build_bvh2_without_clock(boxes: &[Aabb]) -> Bvh2 {
 #[derive(Clone, Copy, Debug)]
 struct TriangleAttributes {
     normals: Option<[Vec3; 3]>,
+    texcoords: Option<[glam::Vec2; 3]>,
     material: MaterialId,
     emitter: Option<LightId>,
 }
@@ -108,7 +109,7 @@ impl WasmAccel {
                 .iter()
                 .map(|&k| {
                     let t = &geometry.triangles[kept[k as usize]];
-                    TriangleAttributes { normals: t.n, material: t.material, emitter: t.emitter }
+                    TriangleAttributes { normals: t.n, texcoords: t.uv, material: t.material, emitter: t.emitter }
                 })
                 .collect();
             (Some(bvh), tris, attrs)
@@ -124,7 +125,7 @@ impl WasmAccel {
 
     fn triangle_hit(&self, slot: usize, t: f32, b: [f32; 3]) -> SurfaceHit {
         let a = &self.attrs[slot];
-        hit::surface_hit(&self.tris[slot], a.normals, a.material, a.emitter, t, b)
+        hit::surface_hit(&self.tris[slot], a.normals, a.texcoords, a.material, a.emitter, t, b)
     }
 }
 

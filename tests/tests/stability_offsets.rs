@@ -49,7 +49,7 @@ fn spawned_rays_never_rehit_their_triangle_at_any_scale() {
             if !ng.is_finite() {
                 continue;
             }
-            let tracer = BruteForce::new(SceneGeometry { triangles: vec![Triangle { p, n: None, material: 0, emitter: None }], spheres: vec![] });
+            let tracer = BruteForce::new(SceneGeometry { triangles: vec![Triangle { p, n: None, uv: None, material: 0, emitter: None }], spheres: vec![] });
             // A point on the triangle, in f32 as a tracer would report it.
             let u = rng.next_2d();
             let (b1, b2) = if u.x + u.y > 1.0 { (1.0 - u.x, 1.0 - u.y) } else { (u.x, u.y) };

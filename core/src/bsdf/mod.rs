@@ -9,7 +9,9 @@
 //!
 //! The models and their conventions are Mitsuba 3's (the suite's references are Mitsuba
 //! renders): `diffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`
-//! `roughplastic` and the `twosided` adapter. Microfacet models use Smith's separable masking and
+//! `plastic`, `roughplastic` and the `twosided` adapter. Smooth `plastic` is the one
+//! model with lobes of both kinds: `eval` and `pdf` describe its continuous lobe, and a
+//! sample says whether it drew the Dirac one (see `plastic.rs`). Microfacet models use Smith's separable masking and
 //! sample visible normals (see `microfacet.rs`).
 //!
 //! [`TransportMode`] matters only for refraction: in `Radiance` mode (camera paths,
@@ -30,6 +32,7 @@ mod dielectric;
 mod diffuse;
 mod fresnel;
 mod microfacet;
+mod plastic;
 mod rough_conductor;
 mod rough_dielectric;
 mod rough_plastic;
@@ -41,6 +44,7 @@ use conductor::Conductor;
 use dielectric::Dielectric;
 use diffuse::Diffuse;
 use microfacet::Microfacet;
+use plastic::Plastic;
 use rough_conductor::RoughConductor;
 use rough_dielectric::RoughDielectric;
 pub use rough_plastic::PlasticCoating;
@@ -123,6 +127,18 @@ enum Kind {
     Dielectric(Dielectric),
     RoughDielectric(RoughDielectric),
     RoughPlastic(RoughPlastic),
+    Plastic(Plastic),
+}
+
+/// A material parameter a texture can drive (Mitsuba's parameter names in brackets).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextureSlot {
+    /// The diffuse albedo: `reflectance` of `diffuse`, `diffuse_reflectance` of the plastics.
+    Diffuse,
+    /// `specular_reflectance` of conductors, dielectrics and plastics.
+    SpecularReflectance,
+    /// `specular_transmittance` of dielectrics.
+    SpecularTransmittance,
 }
 
 /// A surface's scattering model (a closed enum) and whether it is mirrored to the back.
@@ -213,6 +229,49 @@ impl Material {
         Self::new(Kind::RoughPlastic(RoughPlastic::new(coating, diffuse, specular_reflectance, nonlinear)))
     }
 
+    /// Smooth plastic (Mitsuba `plastic`): a diffuse base of reflectance `diffuse` under a
+    /// smooth dielectric coating of index `int_ior` in a medium of index `ext_ior`;
+    /// `nonlinear` as Mitsuba's. Its mirror lobe is a Dirac distribution and its diffuse
+    /// lobe continuous (see `plastic.rs`).
+    pub fn plastic(int_ior: f32, ext_ior: f32, diffuse: Rgb, specular_reflectance: Rgb, nonlinear: bool) -> Self {
+        Self::new(Kind::Plastic(Plastic::new(relative_ior(int_ior, ext_ior), diffuse, specular_reflectance, nonlinear)))
+    }
+
+    /// Which texture slots this model has.
+    pub fn has_slot(&self, slot: TextureSlot) -> bool {
+        use TextureSlot as S;
+        match (&self.kind, slot) {
+            (Kind::Diffuse(_) | Kind::Plastic(_) | Kind::RoughPlastic(_), S::Diffuse) => true,
+            (_, S::SpecularReflectance) => !matches!(self.kind, Kind::Diffuse(_)),
+            (Kind::Dielectric(_) | Kind::RoughDielectric(_), S::SpecularTransmittance) => true,
+            _ => false,
+        }
+    }
+
+    /// This material with parameter `slot` set to `value` (a texture's value at a hit);
+    /// unchanged where the model has no such slot ([`Self::has_slot`]). Lobe-selection
+    /// weights stay those the material was built with, as Mitsuba's stay those of the
+    /// texture's mean.
+    pub fn with_texel(&self, slot: TextureSlot, value: Rgb) -> Self {
+        use TextureSlot as S;
+        let mut m = *self;
+        match (&mut m.kind, slot) {
+            (Kind::Diffuse(b), S::Diffuse) => b.reflectance = value,
+            (Kind::Plastic(b), S::Diffuse) => *b = b.with_diffuse(value),
+            (Kind::RoughPlastic(b), S::Diffuse) => *b = b.with_diffuse(value),
+            (Kind::Plastic(b), S::SpecularReflectance) => b.specular_reflectance = value,
+            (Kind::RoughPlastic(b), S::SpecularReflectance) => b.specular_reflectance = value,
+            (Kind::Conductor(b), S::SpecularReflectance) => b.specular_reflectance = value,
+            (Kind::RoughConductor(b), S::SpecularReflectance) => b.specular_reflectance = value,
+            (Kind::Dielectric(b), S::SpecularReflectance) => b.specular_reflectance = value,
+            (Kind::RoughDielectric(b), S::SpecularReflectance) => b.specular_reflectance = value,
+            (Kind::Dielectric(b), S::SpecularTransmittance) => b.specular_transmittance = value,
+            (Kind::RoughDielectric(b), S::SpecularTransmittance) => b.specular_transmittance = value,
+            _ => {}
+        }
+        m
+    }
+
     /// Mitsuba's `twosided`: the back side (wo.z < 0) behaves like the front, mirrored
     /// through the surface plane. No effect on dielectrics, which are two-sided already.
     pub fn two_sided(self) -> Self {
@@ -240,6 +299,7 @@ impl Material {
             Kind::RoughConductor(b) => b.eval(wo, wi),
             Kind::RoughDielectric(b) => b.eval(wo, wi, mode),
             Kind::RoughPlastic(b) => b.eval(wo, wi),
+            Kind::Plastic(b) => b.eval(wo, wi),
             Kind::Conductor(_) | Kind::Dielectric(_) => Rgb::ZERO,
         };
         if f.is_finite() { f } else { Rgb::ZERO }
@@ -254,6 +314,7 @@ impl Material {
             Kind::RoughConductor(b) => b.pdf(wo, wi),
             Kind::RoughDielectric(b) => b.pdf(wo, wi),
             Kind::RoughPlastic(b) => b.pdf(wo, wi),
+            Kind::Plastic(b) => b.pdf(wo, wi),
             Kind::Conductor(_) | Kind::Dielectric(_) => SolidAnglePdf::ZERO,
         };
         // Denormal cosines can overflow the Jacobians (found by fuzzing): no density.
@@ -290,14 +351,22 @@ impl Material {
             Kind::Dielectric(b) => b.sample(wo, u_lobe, mode),
             Kind::RoughDielectric(b) => b.sample(wo, u_lobe, u, mode),
             Kind::RoughPlastic(b) => b.sample(wo, u_lobe, u),
+            Kind::Plastic(b) => b.sample(wo, u_lobe, u),
         }?;
         // No sample rather than a non-finite one.
         (s.f.is_finite() && s.pdf.value().is_finite() && s.pdf_rev.value().is_finite()).then_some(s)
     }
 
-    /// Every lobe is a Dirac distribution (smooth conductor, smooth dielectric).
+    /// Every lobe is a Dirac distribution (smooth conductor, smooth dielectric): nothing
+    /// can connect to it.
     pub fn is_delta(&self) -> bool {
         matches!(self.kind, Kind::Conductor(_) | Kind::Dielectric(_))
+    }
+
+    /// Some lobe is a Dirac distribution, so a sample may have `is_delta` set (the
+    /// smooth conductor and dielectric, and smooth plastic's mirror lobe).
+    pub fn has_delta_lobe(&self) -> bool {
+        matches!(self.kind, Kind::Conductor(_) | Kind::Dielectric(_) | Kind::Plastic(_))
     }
 
     /// The material can transmit light to the other side.
@@ -316,6 +385,7 @@ impl Material {
             Kind::Dielectric(b) => b.albedo_hint(),
             Kind::RoughDielectric(b) => b.albedo_hint(),
             Kind::RoughPlastic(b) => b.albedo_hint(),
+            Kind::Plastic(b) => b.albedo_hint(),
         }
     }
 }

@@ -48,6 +48,9 @@ pub(crate) struct RoughPlastic {
     pub specular_weight: f32,
     /// T at cos θ = max(10⁻⁶, k/(RES − 1)).
     pub transmittance: [f32; RES],
+    /// The coating's internal reflectance R_int, and `nonlinear`: what ρ' needs.
+    pub internal: f32,
+    pub nonlinear: bool,
 }
 
 /// Gauss–Legendre nodes and weights on [−1, 1] (Newton's method on P_n from the
@@ -133,26 +136,38 @@ impl PlasticCoating {
     }
 }
 
+/// ρ' for a base of reflectance `rho` under a coating of internal reflectance `internal`.
+fn effective_diffuse(rho: Rgb, internal: f32, nonlinear: bool) -> Rgb {
+    if nonlinear {
+        Rgb::new(rho.r / (1.0 - rho.r * internal), rho.g / (1.0 - rho.g * internal), rho.b / (1.0 - rho.b * internal))
+    } else {
+        rho * (1.0 / (1.0 - internal))
+    }
+}
+
 impl RoughPlastic {
     /// `coating` over a base of reflectance `diffuse`.
     pub fn new(coating: &PlasticCoating, diffuse: Rgb, specular_reflectance: Rgb, nonlinear: bool) -> Self {
         let internal = coating.internal;
-        let diffuse_eff = if nonlinear {
-            Rgb::new(diffuse.r / (1.0 - diffuse.r * internal), diffuse.g / (1.0 - diffuse.g * internal), diffuse.b / (1.0 - diffuse.b * internal))
-        } else {
-            diffuse * (1.0 / (1.0 - internal))
-        };
         let (d_mean, s_mean) = (diffuse.average(), specular_reflectance.average());
         let specular_weight = if d_mean + s_mean > 0.0 { s_mean / (d_mean + s_mean) } else { 0.5 };
         Self {
             distr: coating.distr,
             eta: coating.eta,
-            diffuse: diffuse_eff,
+            diffuse: effective_diffuse(diffuse, internal, nonlinear),
             base: diffuse,
             specular_reflectance,
             specular_weight,
             transmittance: coating.transmittance,
+            internal,
+            nonlinear,
         }
+    }
+
+    /// The same coating over another base (a texture's value at a hit), keeping the lobe
+    /// weights of the texture's mean as Mitsuba does.
+    pub fn with_diffuse(&self, diffuse: Rgb) -> Self {
+        Self { diffuse: effective_diffuse(diffuse, self.internal, self.nonlinear), base: diffuse, ..*self }
     }
 
     /// T(μ), linear between the tabulated cosines (Mitsuba's `lerp_gather`).

@@ -1,6 +1,8 @@
 //! A shading point built from a ray hit: the frame, the material and the directions in
 //! local coordinates, shared by every estimator.
 
+use alloc::borrow::Cow;
+
 use crate::bsdf::{Material, TransportMode, shading_normal_correction};
 use crate::geometry::{Ray, SurfaceHit, spawn_ray, spawn_ray_to};
 use crate::math::{Frame, Vec3};
@@ -29,9 +31,10 @@ impl SurfacePoint {
     pub fn ng(&self) -> Vec3 {
         self.hit.ng
     }
+    /// The material here, with its textures' values at this point.
     #[inline]
-    pub fn material<'s>(&self, scene: &'s Scene) -> &'s Material {
-        &scene.materials[self.hit.material as usize]
+    pub fn material<'s>(&self, scene: &'s Scene) -> Cow<'s, Material> {
+        scene.material(self.hit.material, self.hit.uv)
     }
     /// BSDF value for leaving toward `wi` (world), times |cos θ_i| at the shading
     /// normal and the adjoint shading-normal correction for importance transport.

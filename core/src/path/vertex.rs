@@ -21,7 +21,7 @@
 
 use crate::bsdf::{TransportMode, shading_normal_correction};
 use crate::geometry::LightId;
-use crate::math::{Frame, Vec3};
+use crate::math::{Frame, Vec2, Vec3};
 use crate::measure::{AreaPdf, SolidAnglePdf, VertexPdf};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -55,6 +55,8 @@ pub struct Vertex {
     /// Unit direction toward the previous vertex of its own sub-path (surfaces only).
     pub wo: Vec3,
     pub material: u32,
+    /// Texture coordinates of a surface vertex (what a textured material is read at).
+    pub uv: Vec2,
     /// The light attached to a surface vertex, if it is an emitter.
     pub emitter: Option<LightId>,
     /// Sub-path throughput up to and including this vertex's arrival.
@@ -100,6 +102,7 @@ impl Vertex {
             frame: Frame::from_normal(Vec3::Z),
             wo: Vec3::ZERO,
             material: 0,
+            uv: Vec2::ZERO,
             emitter: None,
             beta,
             delta: false,
@@ -118,6 +121,7 @@ impl Vertex {
             frame: Frame::from_normal(if n == Vec3::ZERO { Vec3::Z } else { n }),
             wo: Vec3::ZERO,
             material: 0,
+            uv: Vec2::ZERO,
             emitter: Some(id),
             beta,
             delta,
@@ -136,6 +140,7 @@ impl Vertex {
             frame: Frame::from_normal(Vec3::Z),
             wo: Vec3::ZERO,
             material: 0,
+            uv: Vec2::ZERO,
             emitter: None,
             beta,
             delta: false,
@@ -203,7 +208,7 @@ impl Vertex {
             return Rgb::ZERO;
         }
         let wi = self.dir_to(next, mode);
-        let m = &scene.materials[self.material as usize];
+        let m = scene.material(self.material, self.uv);
         m.eval(self.frame.to_local(self.wo), self.frame.to_local(wi), mode) * shading_normal_correction(mode, self.wo, wi, self.ng, self.frame.n)
     }
 
@@ -237,7 +242,7 @@ impl Vertex {
             VertexKind::Camera => scene.camera.pdf_dir(wn),
             _ => {
                 let Some(prev) = prev else { return VertexPdf::ZERO };
-                let m = &scene.materials[self.material as usize];
+                let m = scene.material(self.material, self.uv);
                 if m.is_delta() {
                     // A Dirac lobe: the unit Dirac in solid angle, which every technique able
                     // to produce the path has once per specular vertex (it cancels in their
@@ -253,6 +258,18 @@ impl Vertex {
             }
         };
         self.convert_density(pdf, next, mode)
+    }
+
+    /// [`Self::pdf`] for the bounce this vertex's own walk took (`prev` and `next` its
+    /// neighbours on its sub-path): where that bounce drew a Dirac lobe of a material that
+    /// also has continuous ones (smooth plastic's mirror), the unit Dirac as for a
+    /// specular material, both ways. Connections and merges join a vertex through its
+    /// continuous lobes, so they use [`Self::pdf`].
+    pub fn pdf_along(&self, scene: &Scene, prev: Option<&Vertex>, next: &Vertex, mode: TransportMode) -> VertexPdf {
+        if self.delta && self.kind == VertexKind::Surface && prev.is_some() {
+            return self.convert_density(SolidAnglePdf(1.0), next, mode);
+        }
+        self.pdf(scene, prev, next, mode)
     }
 
     /// Area density at `next` (toward the camera side) of a light path leaving this

@@ -160,9 +160,9 @@ fn random_walk<Q: RayQuery + ?Sized>(
             // Camera paths that escape end on the infinite lights.
             if mode == TransportMode::Radiance && scene.infinite_lights().next().is_some() {
                 let mut v = Vertex::infinite(prev.exit.p + ray.dir, beta, VertexPdf::ZERO);
-                v.pdf_fwd = prev.pdf(scene, n.checked_sub(2).map(|i| &path[i]), &v, mode);
+                v.pdf_fwd = prev.pdf_along(scene, n.checked_sub(2).map(|i| &path[i]), &v, mode);
                 if n >= 2 {
-                    path[n - 2].pdf_rev = prev.pdf(scene, Some(&v), &path[n - 2], mode.flip());
+                    path[n - 2].pdf_rev = prev.pdf_along(scene, Some(&v), &path[n - 2], mode.flip());
                 }
                 let _ = path.push(v);
             }
@@ -196,6 +196,7 @@ fn random_walk<Q: RayQuery + ?Sized>(
             frame,
             wo: -ray.dir,
             material: shading.material,
+            uv: shading.uv,
             emitter: shading.emitter,
             beta,
             delta: false,
@@ -204,10 +205,10 @@ fn random_walk<Q: RayQuery + ?Sized>(
             exit: Exit::at(exit.p, exit.ng, exit.ns),
             kernel_ratio,
         };
-        v.pdf_fwd = prev.pdf(scene, n.checked_sub(2).map(|i| &path[i]), &v, mode);
+        v.pdf_fwd = prev.pdf_along(scene, n.checked_sub(2).map(|i| &path[i]), &v, mode);
         if n >= 2 {
             // Now that the successor is known: density of reaching path[n−2] from prev.
-            path[n - 2].pdf_rev = prev.pdf(scene, Some(&v), &path[n - 2], mode.flip());
+            path[n - 2].pdf_rev = prev.pdf_along(scene, Some(&v), &path[n - 2], mode.flip());
         }
         if path.push(v).is_err() || path.len() >= max_vertices {
             return;
@@ -215,7 +216,7 @@ fn random_walk<Q: RayQuery + ?Sized>(
         rng.set_dimension(first_dim + (n + 1) as u32 * DIMS_PER_BOUNCE);
 
         // Sample the BSDF for the next direction.
-        let material = &scene.materials[shading.material as usize];
+        let material = scene.material(shading.material, shading.uv);
         let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
         let Some(bs) = material.sample(frame.to_local(v.wo), u_lobe, u_dir, mode) else { return };
         if !bs.pdf.is_positive() {

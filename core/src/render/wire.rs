@@ -46,7 +46,7 @@ use crate::scene::Scene;
 use crate::spectrum::Rgb;
 
 /// Bumped whenever a type carried in a part changes its fields.
-pub const WIRE_VERSION: u16 = 1;
+pub const WIRE_VERSION: u16 = 2;
 
 const MAGIC: [u8; 4] = *b"EMBW";
 

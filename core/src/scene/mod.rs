@@ -11,15 +11,17 @@
 pub mod builtin;
 pub mod builtin_glass;
 
+use alloc::borrow::Cow;
 use alloc::vec::Vec;
 
 use crate::alias::AliasTable;
-use crate::bsdf::Material;
+use crate::bsdf::{Material, TextureSlot};
 use crate::camera::PerspectiveCamera;
 use crate::geometry::{LightId, MaterialId};
 use crate::light::Light;
-use crate::math::{Bounds3, Mat4, Vec3};
+use crate::math::{Bounds3, Mat4, Vec2, Vec3};
 pub use crate::shapes::{SceneGeometry, Sphere, Triangle};
+use crate::texture::Texture;
 
 /// A scene with the host's ray queries over it: what every estimator reads, passed as
 /// one value.
@@ -44,6 +46,11 @@ use crate::spectrum::Rgb;
 pub struct Scene {
     pub camera: PerspectiveCamera,
     pub materials: Vec<Material>,
+    /// The textures materials read ([`Scene::material`]).
+    pub textures: Vec<Texture>,
+    /// Per material, the texture driving each [`TextureSlot`] (in the enum's order), if
+    /// any; empty when no material has a texture.
+    pub material_textures: Vec<[Option<u32>; TEXTURE_SLOTS]>,
     pub lights: Vec<Light>,
     /// Light selection proportional to power; `None` when the scene has no light.
     pub light_selection: Option<AliasTable>,
@@ -53,7 +60,38 @@ pub struct Scene {
     pub bounds: Bounds3,
 }
 
+/// How many [`TextureSlot`]s there are.
+pub const TEXTURE_SLOTS: usize = 3;
+const SLOTS: [TextureSlot; TEXTURE_SLOTS] = [TextureSlot::Diffuse, TextureSlot::SpecularReflectance, TextureSlot::SpecularTransmittance];
+
 impl Scene {
+    /// Material `id` at texture coordinates `uv`: the stored material itself, or, where
+    /// textures drive some of its parameters, a copy with their values at `uv`.
+    #[inline]
+    pub fn material(&self, id: MaterialId, uv: Vec2) -> Cow<'_, Material> {
+        let m = &self.materials[id as usize];
+        match self.material_textures.get(id as usize) {
+            Some(slots) if slots.iter().any(Option::is_some) => Cow::Owned(self.textured(m, slots, uv)),
+            _ => Cow::Borrowed(m),
+        }
+    }
+
+    #[cold]
+    fn textured(&self, m: &Material, slots: &[Option<u32>; TEXTURE_SLOTS], uv: Vec2) -> Material {
+        let mut out = *m;
+        for (slot, t) in SLOTS.iter().zip(slots) {
+            if let Some(tex) = t.and_then(|t| self.textures.get(t as usize)) {
+                out = out.with_texel(*slot, tex.eval(uv));
+            }
+        }
+        out
+    }
+
+    /// Does material `id` depend on texture coordinates?
+    pub fn is_textured(&self, id: MaterialId) -> bool {
+        self.material_textures.get(id as usize).is_some_and(|s| s.iter().any(Option::is_some))
+    }
+
     /// Probability of selecting light `id` for next-event estimation or a light path.
     #[inline]
     pub fn light_pmf(&self, id: LightId) -> f32 {
@@ -83,6 +121,9 @@ pub enum SceneError {
     NoCamera,
     /// A shape refers to a material id that was never added.
     UnknownMaterial(MaterialId),
+    /// A texture binding names a texture that was never added, or a parameter the
+    /// material does not have.
+    BadTexture(MaterialId),
     /// A position, radius or radiance is NaN or infinite.
     NonFinite(&'static str),
 }
@@ -92,6 +133,7 @@ impl core::fmt::Display for SceneError {
         match self {
             Self::NoCamera => write!(f, "the scene has no camera"),
             Self::UnknownMaterial(m) => write!(f, "a shape refers to material {m}, which does not exist"),
+            Self::BadTexture(m) => write!(f, "material {m} is bound to a texture that does not exist or to a parameter it does not have"),
             Self::NonFinite(what) => write!(f, "non-finite value in {what}"),
         }
     }
@@ -113,6 +155,8 @@ pub struct BuildWarnings {
 pub struct SceneBuilder {
     camera: Option<PerspectiveCamera>,
     materials: Vec<Material>,
+    textures: Vec<Texture>,
+    material_textures: Vec<[Option<u32>; TEXTURE_SLOTS]>,
     lights: Vec<Light>,
     geometry: SceneGeometry,
     warnings: BuildWarnings,
@@ -131,6 +175,24 @@ impl SceneBuilder {
     pub fn add_material(&mut self, m: Material) -> MaterialId {
         self.materials.push(m);
         (self.materials.len() - 1) as MaterialId
+    }
+
+    /// A texture for materials to read ([`Self::bind_texture`]); returns its id.
+    pub fn add_texture(&mut self, t: Texture) -> u32 {
+        self.textures.push(t);
+        (self.textures.len() - 1) as u32
+    }
+
+    /// Let texture `texture` drive parameter `slot` of material `material`.
+    pub fn bind_texture(&mut self, material: MaterialId, slot: TextureSlot, texture: u32) {
+        let ok = (texture as usize) < self.textures.len() && self.materials.get(material as usize).is_some_and(|m| m.has_slot(slot));
+        if !ok {
+            self.error.get_or_insert(SceneError::BadTexture(material));
+            return;
+        }
+        self.material_textures.resize(self.materials.len(), [None; TEXTURE_SLOTS]);
+        let i = SLOTS.iter().position(|s| *s == slot).unwrap_or(0);
+        self.material_textures[material as usize][i] = Some(texture);
     }
 
     /// A light that is not attached to a shape (point, spot, directional, environment).
@@ -161,6 +223,11 @@ impl SceneBuilder {
     /// Add one triangle; zero-area and non-finite triangles are dropped (counted in the
     /// warnings; non-finite ones are an error). Returns whether it was kept.
     pub fn add_triangle(&mut self, p: [Vec3; 3], n: Option<[Vec3; 3]>, material: MaterialId, emission: Option<AreaEmission>) -> bool {
+        self.add_triangle_uv(p, n, None, material, emission)
+    }
+
+    /// [`Self::add_triangle`] with per-vertex texture coordinates (dropped if not finite).
+    pub fn add_triangle_uv(&mut self, p: [Vec3; 3], n: Option<[Vec3; 3]>, uv: Option<[Vec2; 3]>, material: MaterialId, emission: Option<AreaEmission>) -> bool {
         if !self.check_material(material) {
             return false;
         }
@@ -188,19 +255,34 @@ impl SceneBuilder {
             self.lights.push(Light::triangle(p[0], p[1], p[2], e.radiance, e.two_sided));
             Some((self.lights.len() - 1) as LightId)
         });
-        self.geometry.triangles.push(Triangle { p, n, material, emitter });
+        let uv = uv.filter(|t| t.iter().all(|v| v.is_finite()));
+        self.geometry.triangles.push(Triangle { p, n, uv, material, emitter });
         true
     }
 
     /// Add an indexed triangle mesh with optional per-vertex normals.
     pub fn add_mesh(&mut self, positions: &[Vec3], normals: Option<&[Vec3]>, indices: &[[u32; 3]], material: MaterialId, emission: Option<AreaEmission>) {
+        self.add_mesh_uv(positions, normals, None, indices, material, emission)
+    }
+
+    /// [`Self::add_mesh`] with optional per-vertex texture coordinates.
+    pub fn add_mesh_uv(
+        &mut self,
+        positions: &[Vec3],
+        normals: Option<&[Vec3]>,
+        uvs: Option<&[Vec2]>,
+        indices: &[[u32; 3]],
+        material: MaterialId,
+        emission: Option<AreaEmission>,
+    ) {
         for tri in indices {
             let Some(p) = fetch3(positions, tri) else {
                 self.error.get_or_insert(SceneError::NonFinite("a mesh index (out of range)"));
                 return;
             };
             let n = normals.and_then(|ns| fetch3(ns, tri));
-            self.add_triangle(p, n, material, emission);
+            let uv = uvs.and_then(|t| Some([*t.get(tri[0] as usize)?, *t.get(tri[1] as usize)?, *t.get(tri[2] as usize)?]));
+            self.add_triangle_uv(p, n, uv, material, emission);
         }
     }
 
@@ -209,16 +291,20 @@ impl SceneBuilder {
         let c = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)].map(|(x, y)| to_world.transform_point3(Vec3::new(x, y, 0.0)));
         let quads = [[0u32, 1, 2], [0, 2, 3]];
         let idx = if flip_normals { quads.map(|[a, b, c]| [a, c, b]) } else { quads };
-        self.add_mesh(&c, None, &idx, material, emission);
+        // Mitsuba's rectangle parameterisation: uv = ((x + 1)/2, (y + 1)/2).
+        let uv = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)];
+        self.add_mesh_uv(&c, None, Some(&uv), &idx, material, emission);
     }
 
-    /// Mitsuba's `cube`: [−1, 1]³ with outward normals, then `to_world`.
+    /// Mitsuba's `cube`: [−1, 1]³ with outward normals, then `to_world`; each face maps
+    /// onto [0, 1]² in uv as Mitsuba's does ([`cube_texcoords`]).
     pub fn add_cube(&mut self, to_world: Mat4, flip_normals: bool, material: MaterialId, emission: Option<AreaEmission>) {
-        let mut v = [Vec3::ZERO; 8];
-        for (i, p) in v.iter_mut().enumerate() {
+        let mut local = [Vec3::ZERO; 8];
+        for (i, p) in local.iter_mut().enumerate() {
             let s = |bit: usize| if i & bit != 0 { 1.0 } else { -1.0 };
-            *p = to_world.transform_point3(Vec3::new(s(1), s(2), s(4)));
+            *p = Vec3::new(s(1), s(2), s(4));
         }
+        let v = local.map(|p| to_world.transform_point3(p));
         // Faces as quads with counter-clockwise winding seen from outside.
         const FACES: [[u32; 4]; 6] = [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]];
         let mut idx = [[0u32; 3]; 12];
@@ -236,7 +322,12 @@ impl SceneBuilder {
                 t.swap(1, 2);
             }
         }
-        self.add_mesh(&v, None, &idx, material, emission);
+        for (f, tri) in idx.iter().enumerate() {
+            let face = FACES[f / 2];
+            let normal = (local[face[1] as usize] - local[face[0] as usize]).cross(local[face[2] as usize] - local[face[0] as usize]);
+            let uv = tri.map(|k| cube_texcoords(local[k as usize], normal));
+            self.add_triangle_uv(tri.map(|k| v[k as usize]), None, Some(uv), material, emission);
+        }
     }
 
     /// An analytic sphere, optionally emitting (sampled by solid angle, see `Light::sphere`).
@@ -281,9 +372,39 @@ impl SceneBuilder {
         let power: Vec<f32> = self.lights.iter().map(|l| l.power()).collect();
         let light_selection = AliasTable::new(&power);
         let infinite = (0..self.lights.len() as LightId).filter(|&i| self.lights[i as usize].is_infinite()).collect();
-        let scene = Scene { camera, materials: self.materials, lights: self.lights, light_selection, infinite, bounds };
+        if !self.material_textures.is_empty() {
+            self.material_textures.resize(self.materials.len(), [None; TEXTURE_SLOTS]);
+        }
+        let scene = Scene {
+            camera,
+            materials: self.materials,
+            textures: self.textures,
+            material_textures: self.material_textures,
+            lights: self.lights,
+            light_selection,
+            infinite,
+            bounds,
+        };
         Ok((scene, self.geometry, self.warnings))
     }
+}
+
+/// Mitsuba 3's texture coordinates of cube corner `p` (in [−1, 1]³) on the face with
+/// outward normal along `normal` (`src/shapes/cube.cpp`: every face maps onto [0, 1]²,
+/// by these affine maps of the corner's two in-face coordinates).
+pub fn cube_texcoords(p: Vec3, normal: Vec3) -> Vec2 {
+    let h = |x: f32| 0.5 * (x + 1.0);
+    let a = normal.abs();
+    let (u, v) = if a.x >= a.y && a.x >= a.z {
+        if normal.x > 0.0 { (p.y, -p.z) } else { (p.y, p.z) }
+    } else if a.y >= a.z {
+        if normal.y > 0.0 { (-p.x, -p.z) } else { (p.z, p.x) }
+    } else if normal.z > 0.0 {
+        (p.y, p.x)
+    } else {
+        (-p.y, p.x)
+    };
+    Vec2::new(h(u), h(v))
 }
 
 fn fetch3(v: &[Vec3], idx: &[u32; 3]) -> Option<[Vec3; 3]> {

@@ -73,12 +73,20 @@ impl SurfaceSampler {
                 }
                 None => ng,
             };
-            Some(SurfaceHit { t: 0.0, p, ng, ns, uv: Vec2::new(b1, b2), material: t.material, emitter: t.emitter })
+            Some(SurfaceHit { t: 0.0, p, ng, ns, uv: t.texcoords(b1, b2), material: t.material, emitter: t.emitter })
         } else {
             let s = geometry.spheres.get(i - self.triangles)?;
             let d = sample_uniform_sphere(u);
             let n = if s.flip_normals { -d } else { d };
-            Some(SurfaceHit { t: 0.0, p: s.center + d * s.radius, ng: n, ns: n, uv: Vec2::ZERO, material: s.material, emitter: s.emitter })
+            Some(SurfaceHit {
+                t: 0.0,
+                p: s.center + d * s.radius,
+                ng: n,
+                ns: n,
+                uv: crate::shapes::sphere_texcoords(d),
+                material: s.material,
+                emitter: s.emitter,
+            })
         }
     }
 }

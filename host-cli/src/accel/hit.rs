@@ -33,12 +33,25 @@ pub(crate) fn box_padding(geometry: &SceneGeometry) -> f32 {
 }
 
 /// The full record of a hit at distance `t` with barycentrics `b` on triangle `v`
-/// (vertex normals `normals`, if any, are interpolated and turned to the geometric side).
-pub(crate) fn surface_hit(v: &[Vec3A; 3], normals: Option<[Vec3; 3]>, material: MaterialId, emitter: Option<LightId>, t: f32, b: [f32; 3]) -> SurfaceHit {
+/// (vertex normals `normals`, if any, are interpolated and turned to the geometric side;
+/// texture coordinates as [`Triangle::texcoords`]).
+pub(crate) fn surface_hit(
+    v: &[Vec3A; 3],
+    normals: Option<[Vec3; 3]>,
+    texcoords: Option<[Vec2; 3]>,
+    material: MaterialId,
+    emitter: Option<LightId>,
+    t: f32,
+    b: [f32; 3],
+) -> SurfaceHit {
     let (p0, p1, p2) = (Vec3::from(v[0]), Vec3::from(v[1]), Vec3::from(v[2]));
     // Interpolating the vertices is more accurate than o + t·d far from the origin.
     let p = b[0] * p0 + b[1] * p1 + b[2] * p2;
     let ng = (p1 - p0).cross(p2 - p0).normalize();
     let ns = normals.map(|n| b[0] * n[0] + b[1] * n[1] + b[2] * n[2]).and_then(|n| n.try_normalize()).map_or(ng, |n| if n.dot(ng) < 0.0 { -n } else { n });
-    SurfaceHit { t, p, ng, ns, uv: Vec2::new(b[1], b[2]), material, emitter }
+    let uv = match texcoords {
+        Some(uv) => uv[0] * b[0] + uv[1] * b[1] + uv[2] * b[2],
+        None => Vec2::new(b[1], b[2]),
+    };
+    SurfaceHit { t, p, ng, ns, uv, material, emitter }
 }

@@ -44,6 +44,8 @@ pub(crate) struct Ctx<'a> {
     pub render_frame: DMat4,
     /// Rough plastic coatings built so far, by (GGX?, α, int_ior, ext_ior) bits.
     pub plastic_coatings: HashMap<(bool, u32, u32, u32), PlasticCoating>,
+    /// Textures built so far, by object: their id in the scene and their mean colour.
+    pub textures: HashMap<usize, (u32, Rgb)>,
 }
 
 /// The camera-centred render frame (pbrt-v4's "camera-world" space): a translation by
@@ -82,12 +84,13 @@ pub(crate) fn instantiate(parsed: Parsed, base_dir: &Path, options: &LoadOptions
         used: vec![false; parsed.objs.len()],
         render_frame: camera_centred_frame(&parsed),
         plastic_coatings: HashMap::new(),
+        textures: HashMap::new(),
     };
     let mut sensor: Option<(SensorSpec, Loc)> = None;
     let mut integrator: Option<(Option<i32>, Loc)> = None;
     for &idx in &parsed.top {
         let obj = ctx.obj(idx)?;
-        if !matches!(obj.tag, Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler) {
+        if !matches!(obj.tag, Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler | Tag::Texture) {
             ctx.mark(idx);
         }
         match obj.tag {
@@ -106,7 +109,7 @@ pub(crate) fn instantiate(parsed: Parsed, base_dir: &Path, options: &LoadOptions
                 integrator = Some((ctx.integrator(idx)?, obj.loc));
             }
             // Declarations, instantiated where a `ref` uses them.
-            Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler => {}
+            Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler | Tag::Texture => {}
         }
     }
     for &idx in &parsed.top {

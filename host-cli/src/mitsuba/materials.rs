@@ -1,7 +1,9 @@
 //! BSDF plugins: `diffuse`, `conductor`, `roughconductor`, `dielectric`,
-//! `roughdielectric`, `twosided`, with Mitsuba 3's parameter names and defaults.
+//! `roughdielectric`, `plastic`, `roughplastic`, `twosided`, with Mitsuba 3's parameter
+//! names and defaults. Colour parameters take a nested or referenced `<texture>` of that
+//! name instead of a value (see `textures.rs`).
 
-use ember_core::bsdf::{Material, MicrofacetKind};
+use ember_core::bsdf::{Material, MicrofacetKind, TextureSlot};
 use ember_core::geometry::MaterialId;
 use ember_core::spectrum::Rgb;
 
@@ -13,7 +15,10 @@ use super::{Fail, Res};
 /// `twosided` chains (through `ref`) deeper than this are rejected.
 const MAX_BSDF_DEPTH: u32 = 8;
 
-const BSDF_TYPES: &str = "diffuse, conductor, roughconductor, dielectric, roughdielectric, roughplastic, twosided";
+const BSDF_TYPES: &str = "diffuse, conductor, roughconductor, dielectric, roughdielectric, plastic, roughplastic, twosided";
+
+/// The textures a material's parameters read: (slot, texture id).
+type Bindings = Vec<(TextureSlot, u32)>;
 
 /// Named conductors as Mitsuba 3.9.1's `scalar_rgb` variant resolves them
 /// (`shared/scenes/README.md`): (name, eta, k).
@@ -62,8 +67,12 @@ impl Ctx<'_> {
         if let Some(&m) = self.materials.get(&idx) {
             return Ok(m);
         }
-        let m = self.bsdf(idx, 0)?;
+        let mut bindings = Bindings::new();
+        let m = self.bsdf(idx, 0, &mut bindings)?;
         let id = self.sb.add_material(m);
+        for (slot, texture) in bindings {
+            self.sb.bind_texture(id, slot, texture);
+        }
         self.materials.insert(idx, id);
         Ok(id)
     }
@@ -73,7 +82,36 @@ impl Ctx<'_> {
         *self.default_material.get_or_insert_with(|| self.sb.add_material(Material::diffuse(Rgb::splat(0.5))))
     }
 
-    fn bsdf(&mut self, idx: usize, depth: u32) -> Res<Material> {
+    /// A colour parameter: a `<texture>` child named `name` (its mean is the value, the
+    /// binding goes to `bindings`) or the property (default `default`).
+    fn color_param(&mut self, idx: usize, p: &mut Props, name: &'static str, default: Rgb, slot: TextureSlot, bindings: &mut Bindings) -> Res<Rgb> {
+        let obj = self.obj(idx)?;
+        let Some(child) = obj.children.iter().find(|c| c.name.as_deref() == Some(name)) else {
+            return p.color(name, default);
+        };
+        if p.has(name) {
+            return Err(Fail::at(child.loc, format!("`{name}` is given both as a value (line {}) and as a texture", p.loc_of(name).line)));
+        }
+        let (id, mean) = self.texture(child.obj)?;
+        bindings.push((slot, id));
+        Ok(mean)
+    }
+
+    /// Textures nested in BSDF `idx` must be named for parameters it reads (`names`).
+    fn check_textures(&self, idx: usize, names: &[&str]) -> Res<()> {
+        let obj = self.obj(idx)?;
+        self.check_children(obj, &[Tag::Texture])?;
+        for c in &obj.children {
+            match c.name.as_deref() {
+                Some(n) if names.contains(&n) => {}
+                Some(n) => return Err(Fail::at(c.loc, format!("{} has no textured parameter `{n}` (it takes: {})", obj.label(), names.join(", ")))),
+                None => return Err(Fail::at(c.loc, format!("a <texture> in {} needs a `name`: the parameter it sets ({})", obj.label(), names.join(", ")))),
+            }
+        }
+        Ok(())
+    }
+
+    fn bsdf(&mut self, idx: usize, depth: u32, bindings: &mut Bindings) -> Res<Material> {
         let obj = self.obj(idx)?;
         self.mark(idx);
         if depth > MAX_BSDF_DEPTH {
@@ -82,13 +120,13 @@ impl Ctx<'_> {
         let mut p = Props::new(obj);
         let m = match obj.kind.as_str() {
             "diffuse" => {
-                self.no_children(obj)?;
-                Material::diffuse(p.color("reflectance", Rgb::splat(0.5))?)
+                self.check_textures(idx, &["reflectance"])?;
+                Material::diffuse(self.color_param(idx, &mut p, "reflectance", Rgb::splat(0.5), TextureSlot::Diffuse, bindings)?)
             }
             "conductor" | "roughconductor" => {
-                self.no_children(obj)?;
+                self.check_textures(idx, &["specular_reflectance"])?;
                 let (eta, k) = conductor_ior(&mut p)?;
-                let spec = p.color("specular_reflectance", Rgb::ONE)?;
+                let spec = self.color_param(idx, &mut p, "specular_reflectance", Rgb::ONE, TextureSlot::SpecularReflectance, bindings)?;
                 if obj.kind == "conductor" {
                     Material::conductor(eta, k, spec)
                 } else {
@@ -97,11 +135,11 @@ impl Ctx<'_> {
                 }
             }
             "dielectric" | "roughdielectric" => {
-                self.no_children(obj)?;
+                self.check_textures(idx, &["specular_reflectance", "specular_transmittance"])?;
                 let int_ior = ior(&mut p, "int_ior", 1.5046)?;
                 let ext_ior = ior(&mut p, "ext_ior", 1.000277)?;
-                let refl = p.color("specular_reflectance", Rgb::ONE)?;
-                let trans = p.color("specular_transmittance", Rgb::ONE)?;
+                let refl = self.color_param(idx, &mut p, "specular_reflectance", Rgb::ONE, TextureSlot::SpecularReflectance, bindings)?;
+                let trans = self.color_param(idx, &mut p, "specular_transmittance", Rgb::ONE, TextureSlot::SpecularTransmittance, bindings)?;
                 if obj.kind == "dielectric" {
                     Material::dielectric(int_ior, ext_ior, refl, trans)
                 } else {
@@ -109,22 +147,26 @@ impl Ctx<'_> {
                     Material::rough_dielectric(kind, alpha, int_ior, ext_ior, refl, trans)
                 }
             }
-            "roughplastic" => {
-                self.no_children(obj)?;
+            "plastic" | "roughplastic" => {
+                self.check_textures(idx, &["diffuse_reflectance", "specular_reflectance"])?;
                 // Mitsuba's defaults: polypropylene in air, ρ = 0.5, Beckmann α = 0.1.
                 let int_ior = ior(&mut p, "int_ior", 1.49)?;
                 let ext_ior = ior(&mut p, "ext_ior", 1.000277)?;
                 if int_ior == ext_ior {
                     return Err(Fail::at(p.loc_of("int_ior"), "`int_ior` and `ext_ior` must differ (a coating without an interface)"));
                 }
-                let diffuse = p.color("diffuse_reflectance", Rgb::splat(0.5))?;
-                let specular = p.color("specular_reflectance", Rgb::ONE)?;
+                let diffuse = self.color_param(idx, &mut p, "diffuse_reflectance", Rgb::splat(0.5), TextureSlot::Diffuse, bindings)?;
+                let specular = self.color_param(idx, &mut p, "specular_reflectance", Rgb::ONE, TextureSlot::SpecularReflectance, bindings)?;
                 for (name, c) in [("diffuse_reflectance", diffuse), ("specular_reflectance", specular)] {
                     if !c.is_valid_radiance() {
                         return Err(Fail::at(p.loc_of(name), format!("`{name}` must be non-negative")));
                     }
                 }
                 let nonlinear = p.bool("nonlinear", false)?;
+                if obj.kind == "plastic" {
+                    p.finish()?;
+                    return Ok(Material::plastic(int_ior, ext_ior, diffuse, specular, nonlinear));
+                }
                 let (kind, alpha) = microfacet(&mut p)?;
                 // One coating table per distinct (distribution, α, indices): they cost up to
                 // a second each to build (Beckmann).
@@ -141,7 +183,7 @@ impl Ctx<'_> {
                         return Err(Fail::at(second.loc, "`twosided` with different front and back BSDFs is not supported: give one nested <bsdf>"));
                     }
                 };
-                let m = self.bsdf(inner, depth + 1)?;
+                let m = self.bsdf(inner, depth + 1, bindings)?;
                 if m.has_transmission() {
                     return Err(Fail::at(obj.loc, "`twosided` cannot wrap a BSDF that transmits (dielectric): it is two-sided already"));
                 }

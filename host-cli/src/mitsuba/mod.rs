@@ -40,6 +40,7 @@ mod mesh;
 mod ply;
 mod props;
 mod shapes;
+mod textures;
 mod transform;
 mod xml;
 

@@ -27,6 +27,7 @@ pub(crate) enum Tag {
     RFilter,
     Sampler,
     Integrator,
+    Texture,
 }
 
 impl Tag {
@@ -40,6 +41,7 @@ impl Tag {
             "rfilter" => Self::RFilter,
             "sampler" => Self::Sampler,
             "integrator" => Self::Integrator,
+            "texture" => Self::Texture,
             _ => return None,
         })
     }
@@ -53,11 +55,12 @@ impl Tag {
             Self::RFilter => "rfilter",
             Self::Sampler => "sampler",
             Self::Integrator => "integrator",
+            Self::Texture => "texture",
         }
     }
 }
 
-const OBJECT_TAGS: &str = "bsdf, shape, emitter, sensor, film, rfilter, sampler, integrator";
+const OBJECT_TAGS: &str = "bsdf, shape, emitter, sensor, film, rfilter, sampler, integrator, texture";
 const VALUE_TAGS: &str = "float, integer, boolean, string, rgb, spectrum, point, vector, transform";
 
 /// A typed property value.
@@ -107,6 +110,8 @@ pub(crate) struct Child {
     pub obj: usize,
     /// The nested element or the `ref` element.
     pub loc: Loc,
+    /// Its `name` attribute: the parameter of the parent it sets (a texture's).
+    pub name: Option<String>,
 }
 
 /// A plugin object.
@@ -353,16 +358,16 @@ impl<'a, 'input> Parser<'a, 'input> {
         self.check_attrs(node, &["type", "id", "name"])?;
         let kind = self.required_attr(node, "type")?;
         let id = self.attr(node, "id")?;
-        // `name` (the property name under which the parent receives it) is accepted and
-        // not needed: each plugin takes its nested objects by category.
-        let _ = self.attr(node, "name")?;
+        // `name` is the parameter of the parent it sets: the parent reads it from the
+        // `Child` (textures need it; other plugins take nested objects by category).
         let mut obj = Obj { tag, kind, id: id.clone(), loc, props: Vec::new(), children: Vec::new() };
         for child in node.children() {
             let Some(elem) = self.element(child)? else { continue };
             let name = elem.tag_name().name();
             if let Some(child_tag) = Tag::from_name(name) {
+                let name = self.attr(elem, "name")?;
                 let idx = self.object(elem, child_tag, depth + 1)?;
-                obj.children.push(Child { obj: idx, loc: self.loc(elem) });
+                obj.children.push(Child { obj: idx, loc: self.loc(elem), name });
             } else if name == "ref" {
                 obj.children.push(self.reference(elem)?);
             } else if is_value_tag(name) {
@@ -391,9 +396,9 @@ impl<'a, 'input> Parser<'a, 'input> {
         self.no_children(node)?;
         let loc = self.loc(node);
         let id = self.required_attr(node, "id")?;
-        let _ = self.attr(node, "name")?;
+        let name = self.attr(node, "name")?;
         match self.ids.get(&id) {
-            Some(&(obj, _)) => Ok(Child { obj, loc }),
+            Some(&(obj, _)) => Ok(Child { obj, loc, name }),
             None => Err(Fail::at(
                 self.attr_loc(node, "id"),
                 format!("reference to unknown id \"{id}\" (an object must be declared with this id before it is referenced)"),

@@ -246,7 +246,7 @@ fn merge_at(
     counters: &mut Counters,
 ) -> Rgb {
     let y = &camera[t - 1];
-    let material = &scene.materials[y.material as usize];
+    let material = scene.material(y.material, y.uv);
     let wo = y.frame.to_local(y.wo);
     let sums = CameraSums::new(scene, &inputs.tech, camera, camera_b, t);
     let mut sum = Rgb::ZERO;

@@ -443,7 +443,7 @@ impl Bidirectional<'_> {
         }
         let centre_index = if v.kind == NodeKind::Camera { index } else { v.pred };
         let frame = Frame::from_normal(centre.hit.ns);
-        let material = &self.hood.scene.materials[centre.hit.material as usize];
+        let material = self.hood.scene.material(centre.hit.material, centre.hit.uv);
         let wo_world = wo;
         let wo = frame.to_local(wo);
         let f = |dir: Vec3| material.eval(wo, frame.to_local(dir), TransportMode::Radiance);

@@ -258,7 +258,7 @@ fn walk<Q: RayQuery + ?Sized>(
         }
 
         let draws = ContinuationDraws { more, segments, u_rr, u_lobe, u_dir };
-        let next_ray = continue_path(params, &sp, material, TransportMode::Radiance, 1.0, draws, &mut node, &mut beta);
+        let next_ray = continue_path(params, &sp, &material, TransportMode::Radiance, 1.0, draws, &mut node, &mut beta);
         nodes.push(node);
         let Some(r) = next_ray else { break };
         parent = index;
@@ -433,7 +433,7 @@ fn light_walk<Q: RayQuery + ?Sized>(
         let u_rr = rng.next_f32();
         let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
         let draws = ContinuationDraws { more, segments, u_rr, u_lobe, u_dir };
-        let next_ray = continue_path(params, &sp, material, TransportMode::Importance, reference, draws, &mut node, &mut beta);
+        let next_ray = continue_path(params, &sp, &material, TransportMode::Importance, reference, draws, &mut node, &mut beta);
         out.nodes.push(node);
         out.pred.push(parent);
         out.base.push(if segments == 1 { start.beta0 / start.paths_per_pass.max(1) as f32 } else { Rgb::ZERO });

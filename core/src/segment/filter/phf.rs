@@ -201,7 +201,7 @@ fn gather_pixels<Q: RayQuery + ?Sized>(
             if !material.is_delta() {
                 // The gather adds the light path's segments (at least one).
                 if params.max_depth.allows(segments + 1) {
-                    l += beta * gather(tracer, pass_data, &kernel, &sp, material, params.seed, pixel, pass, &mut counters);
+                    l += beta * gather(tracer, pass_data, &kernel, &sp, &material, params.seed, pixel, pass, &mut counters);
                 }
                 break;
             }

@@ -83,7 +83,7 @@ impl Neighbourhood<'_> {
     #[inline]
     pub(super) fn bsdf_pdf(&self, t: &Node, dir: crate::math::Vec3, mode: TransportMode) -> f64 {
         let frame = crate::math::Frame::from_normal(t.hit.ns);
-        let m = &self.scene.materials[t.hit.material as usize];
+        let m = self.scene.material(t.hit.material, t.hit.uv);
         m.pdf(frame.to_local(t.wo), frame.to_local(dir), mode).0 as f64
     }
 
@@ -152,7 +152,7 @@ impl Neighbourhood<'_> {
             return (emission, direct);
         }
         let frame = crate::math::Frame::from_normal(v.hit.ns);
-        let material = &self.scene.materials[v.hit.material as usize];
+        let material = self.scene.material(v.hit.material, v.hit.uv);
         let wo = frame.to_local(v.wo);
         let f = |dir: crate::math::Vec3| material.eval(wo, frame.to_local(dir), TransportMode::Radiance);
         self.each_neighbour(v, true, |i, u, k| {
@@ -211,7 +211,7 @@ impl Neighbourhood<'_> {
             return (rgb::<T>(base), zero);
         }
         let frame = crate::math::Frame::from_normal(w.hit.ns);
-        let material = &self.scene.materials[w.hit.material as usize];
+        let material = self.scene.material(w.hit.material, w.hit.uv);
         let out = frame.to_local(w.next.dir);
         let cos = T::from_f32(w.hit.ns.dot(w.next.dir).abs()) / T::from_f64(d);
         self.grid.query(w.hit.p, |i| {
