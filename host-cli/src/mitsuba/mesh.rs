@@ -6,7 +6,7 @@ use std::io::BufReader;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 
 /// A mesh in object space.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -14,6 +14,8 @@ pub(crate) struct MeshData {
     pub positions: Vec<Vec3>,
     /// Per-vertex normals, when the file has them for every vertex.
     pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates as stored, when the file has them for every vertex.
+    pub texcoords: Option<Vec<Vec2>>,
     pub triangles: Vec<[u32; 3]>,
     /// What the file contained that the renderer does not use.
     pub notes: Vec<String>,
@@ -36,6 +38,8 @@ pub(crate) fn load_obj(path: &Path) -> Result<MeshData, String> {
     let mut out = MeshData::default();
     let mut normals = Vec::new();
     let mut all_normals = true;
+    let mut texcoords = Vec::new();
+    let mut all_texcoords = true;
     for model in &models {
         let m = &model.mesh;
         let base = u32::try_from(out.positions.len()).map_err(|_| "too many vertices")?;
@@ -49,6 +53,11 @@ pub(crate) fn load_obj(path: &Path) -> Result<MeshData, String> {
         } else {
             all_normals = false;
         }
+        if m.texcoords.len() == 2 * count {
+            texcoords.extend(m.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], c[1])));
+        } else {
+            all_texcoords = false;
+        }
         for t in m.indices.chunks_exact(3) {
             let mut tri = [0u32; 3];
             for (k, &i) in t.iter().enumerate() {
@@ -59,6 +68,11 @@ pub(crate) fn load_obj(path: &Path) -> Result<MeshData, String> {
             }
             out.triangles.push(tri);
         }
+    }
+    if all_texcoords && !texcoords.is_empty() {
+        out.texcoords = Some(texcoords);
+    } else if !texcoords.is_empty() {
+        out.notes.push("only some vertices have texture coordinates: the mesh uses barycentrics instead".into());
     }
     if all_normals && !normals.is_empty() {
         out.normals = Some(normals);

@@ -48,6 +48,8 @@ mod xml;
 mod tests;
 #[cfg(test)]
 mod tests_errors;
+#[cfg(test)]
+mod tests_textures;
 
 use std::fmt;
 use std::path::{Path, PathBuf};

@@ -4,7 +4,7 @@
 //! as fans. Other properties and elements are read past and reported in
 //! [`MeshData::notes`]. Every read is bounds-checked: malformed input is an error.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::mesh::MeshData;
 
@@ -162,6 +162,7 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<MeshData, String> {
     };
     let mut out = MeshData::default();
     let mut normals: Vec<Vec3> = Vec::new();
+    let mut texcoords: Vec<Vec2> = Vec::new();
     let mut polygon = Vec::new();
     let mut faces_seen = false;
     for el in &elements {
@@ -179,7 +180,9 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<MeshData, String> {
                     (None, None, None) => None,
                     _ => return Err("the vertex element has some but not all of nx, ny, nz".into()),
                 };
-                let used = |i: usize| [x, y, z].contains(&i) || n.is_some_and(|n| n.contains(&i));
+                // Mitsuba's names for texture coordinates, in its order of preference.
+                let uv = [("u", "v"), ("texture_u", "texture_v"), ("s", "t"), ("texture_s", "texture_t")].iter().find_map(|&(a, b)| Some([idx(a)?, idx(b)?]));
+                let used = |i: usize| [x, y, z].contains(&i) || n.is_some_and(|n| n.contains(&i)) || uv.is_some_and(|t| t.contains(&i));
                 let unused: Vec<&str> = el.props.iter().enumerate().filter(|(i, _)| !used(*i)).map(|(_, p)| p.name.as_str()).collect();
                 if !unused.is_empty() {
                     out.notes.push(format!("vertex properties not used: {}", unused.join(", ")));
@@ -193,9 +196,15 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<MeshData, String> {
                     if let Some([a, b, c]) = n {
                         normals.push(Vec3::new(vals[a] as f32, vals[b] as f32, vals[c] as f32));
                     }
+                    if let Some([a, b]) = uv {
+                        texcoords.push(Vec2::new(vals[a] as f32, vals[b] as f32));
+                    }
                 }
                 if n.is_some() {
                     out.normals = Some(std::mem::take(&mut normals));
+                }
+                if uv.is_some() {
+                    out.texcoords = Some(std::mem::take(&mut texcoords));
                 }
             }
             "face" => {

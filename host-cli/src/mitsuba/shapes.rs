@@ -13,7 +13,7 @@
 //!   unless `face_normals`; a file without normals gets Mitsuba's angle-weighted vertex
 //!   normals, as Mitsuba computes them.
 
-use glam::{DMat3, DMat4, DVec3, Vec3};
+use glam::{DMat3, DMat4, DVec3, Vec2, Vec3};
 
 use ember_core::geometry::MaterialId;
 use ember_core::scene::AreaEmission;
@@ -36,7 +36,7 @@ enum Geometry<'a> {
     Cube,
     Disk,
     Sphere { center: [f64; 3], radius: f64 },
-    Mesh { filename: &'a str, file_loc: Loc, face_normals: bool },
+    Mesh { filename: &'a str, file_loc: Loc, face_normals: bool, flip_uv: bool },
 }
 
 /// Where a shape's triangles come from, for messages.
@@ -76,7 +76,9 @@ impl Ctx<'_> {
                 let filename =
                     p.string_opt("filename")?.ok_or_else(|| Fail::at(obj.loc, format!("<shape type=\"{}\"> needs a `filename` string", obj.kind)))?;
                 let face_normals = p.bool("face_normals", false)?;
-                Geometry::Mesh { filename, file_loc, face_normals }
+                // Mitsuba flips v (v' = 1 − v) for OBJ files by default, not for PLY.
+                let flip_uv = p.bool("flip_tex_coords", obj.kind == "obj")?;
+                Geometry::Mesh { filename, file_loc, face_normals, flip_uv }
             }
         };
         p.finish()?;
@@ -140,10 +142,14 @@ impl Ctx<'_> {
                 }
                 self.sb.add_sphere(c, r, flip, material, emission);
             }
-            Geometry::Mesh { filename, file_loc, face_normals } => {
+            Geometry::Mesh { filename, file_loc, face_normals, flip_uv } => {
                 let path = self.base_dir.join(filename);
-                let data = if obj.kind == "obj" { mesh::load_obj(&path) } else { std::fs::read(&path).map_err(|e| e.to_string()).and_then(|b| ply::parse(&b)) }
-                    .map_err(|e| Fail::at(file_loc, format!("cannot load the {} mesh \"{}\": {e}", obj.kind, path.display())))?;
+                let mut data =
+                    if obj.kind == "obj" { mesh::load_obj(&path) } else { std::fs::read(&path).map_err(|e| e.to_string()).and_then(|b| ply::parse(&b)) }
+                        .map_err(|e| Fail::at(file_loc, format!("cannot load the {} mesh \"{}\": {e}", obj.kind, path.display())))?;
+                if flip_uv {
+                    data.texcoords.iter_mut().flatten().for_each(|uv| uv.y = 1.0 - uv.y);
+                }
                 self.place_mesh(obj, file_loc, filename, data, &to_world, flip, face_normals, material, emission)?;
             }
         }
@@ -197,10 +203,12 @@ impl Ctx<'_> {
             }
             (false, None) => Some(mesh::vertex_normals(&positions, &data.triangles)),
         };
-        self.add_triangles(obj, &positions, normals.as_deref(), &data.triangles, flip, material, emission)
+        let texcoords = data.texcoords.filter(|t| t.len() == positions.len());
+        self.add_triangles_uv(obj, &positions, normals.as_deref(), texcoords.as_deref(), &data.triangles, flip, material, emission)
     }
 
     /// Add triangles one by one, reporting those the builder drops for zero area.
+    #[allow(clippy::too_many_arguments)]
     fn add_triangles(
         &mut self,
         obj: &Obj,
@@ -211,12 +219,29 @@ impl Ctx<'_> {
         material: MaterialId,
         emission: Option<AreaEmission>,
     ) -> Res<()> {
+        self.add_triangles_uv(obj, positions, normals, None, triangles, flip, material, emission)
+    }
+
+    /// [`Self::add_triangles`] with per-vertex texture coordinates.
+    #[allow(clippy::too_many_arguments)]
+    fn add_triangles_uv(
+        &mut self,
+        obj: &Obj,
+        positions: &[Vec3],
+        normals: Option<&[Vec3]>,
+        texcoords: Option<&[Vec2]>,
+        triangles: &[[u32; 3]],
+        flip: bool,
+        material: MaterialId,
+        emission: Option<AreaEmission>,
+    ) -> Res<()> {
         let mut dropped = 0usize;
         for t in triangles {
             let t = if flip { [t[0], t[2], t[1]] } else { *t };
             let p = fetch(positions, &t).ok_or_else(|| Fail::at(obj.loc, "internal error: mesh index out of range"))?;
             let n = normals.and_then(|ns| fetch(ns, &t)).map(|n| if flip { n.map(|v| -v) } else { n });
-            if !self.sb.add_triangle(p, n, material, emission) {
+            let uv = texcoords.and_then(|uv| Some([*uv.get(t[0] as usize)?, *uv.get(t[1] as usize)?, *uv.get(t[2] as usize)?]));
+            if !self.sb.add_triangle_uv(p, n, uv, material, emission) {
                 dropped += 1;
             }
         }

@@ -49,9 +49,12 @@ fn unknown_plugins_name_the_supported_ones() {
     let c = "  <shape type=\"torus\"/>";
     let e = fail("plugin_shape", c);
     check(&e, 4, col(c, 4, "<shape"), &["unsupported shape type \"torus\"", "obj, ply, rectangle, cube, sphere, disk"]);
-    let c = "<shape type=\"cube\">\n   <bsdf type=\"plastic\"/></shape>";
+    let c = "<shape type=\"cube\">\n   <bsdf type=\"hair\"/></shape>";
     let e = fail("plugin_bsdf", c);
-    check(&e, 5, col(c, 5, "<bsdf"), &["unsupported bsdf type \"plastic\"", "roughdielectric, roughplastic, twosided"]);
+    check(&e, 5, col(c, 5, "<bsdf"), &["unsupported bsdf type \"hair\"", "roughdielectric, plastic, roughplastic, twosided"]);
+    let c = "<shape type=\"cube\"><bsdf type=\"diffuse\">\n   <texture type=\"noise\" name=\"reflectance\"/></bsdf></shape>";
+    let e = fail("plugin_texture", c);
+    check(&e, 5, col(c, 5, "<texture"), &["unsupported texture type \"noise\"", "bitmap, checkerboard"]);
     let c = "<emitter type=\"hdrsky\"/>";
     let e = fail("plugin_emitter", c);
     check(&e, 4, col(c, 4, "<emitter"), &["unsupported emitter type \"hdrsky\"", "point, spot, directional, constant, envmap"]);
@@ -127,7 +130,10 @@ fn broken_references_and_wrong_tags_are_errors() {
     check(&e, 5, col(c, 5, "<rgb"), &["property `radius` of <shape type=\"sphere\"> must be a <float>, not <rgb>"]);
     let c = "<shape type=\"cube\">\n  <texture type=\"bitmap\"/></shape>";
     let e = fail("wrong_element", c);
-    check(&e, 5, col(c, 5, "<texture"), &["unsupported element <texture>", "float, integer"]);
+    check(&e, 5, col(c, 5, "<texture"), &["<shape type=\"cube\"> cannot contain <texture type=\"bitmap\">", "<bsdf>, <emitter>"]);
+    let c = "<shape type=\"cube\">\n  <foo/></shape>";
+    let e = fail("unknown_element", c);
+    check(&e, 5, col(c, 5, "<foo"), &["unsupported element <foo>", "float, integer"]);
     let c = "<include filename=\"x.xml\"/>";
     let e = fail("scene_element", c);
     check(&e, 4, col(c, 4, "<include"), &["unsupported element <include>", "<scene> accepts"]);
