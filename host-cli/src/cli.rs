@@ -178,9 +178,11 @@ pub struct ConvergenceArgs {
 /// Options of `ember suite`.
 #[derive(Args, Debug, Clone, PartialEq)]
 pub struct SuiteArgs {
-    /// Folder holding one folder per scene (scene.xml + reference.exr).
-    #[arg(long, default_value = "../shared/scenes", value_name = "DIR")]
-    pub scenes: PathBuf,
+    /// Folder holding one folder per scene (scene.xml + reference.exr); repeat to take
+    /// scenes from several folders (e.g. `--scenes ../shared/scenes --scenes
+    /// ../shared/scenes-extra`). Scene names must be unique across them.
+    #[arg(long, default_value = "../shared/scenes", value_name = "DIR", action = clap::ArgAction::Append)]
+    pub scenes: Vec<PathBuf>,
     /// Only these scenes (folder names), comma separated; default all.
     #[arg(long, value_delimiter = ',', value_name = "NAMES")]
     pub only: Vec<String>,

@@ -8,7 +8,7 @@
 //! when the budget ends first. Losses are published as they come.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use crate::cli::{EstimatorKind, SuiteArgs};
 use crate::convergence::{self, Checkpoint, ConvergenceSetup, Reference};
@@ -22,17 +22,27 @@ pub struct SceneResult {
     pub points: Vec<Checkpoint>,
 }
 
-/// The scenes to run: sub-folders with a scene.xml, sorted, filtered by `only`.
-pub fn scene_folders(dir: &Path, only: &[String]) -> Result<Vec<PathBuf>, String> {
-    let entries = std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let mut v: Vec<PathBuf> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.join("scene.xml").is_file())
-        .filter(|p| only.is_empty() || p.file_name().is_some_and(|n| only.iter().any(|o| n == o.as_str())))
-        .collect();
-    v.sort();
+/// The scenes to run: sub-folders with a scene.xml of every folder in `dirs`, sorted by
+/// name, filtered by `only`. Two scenes of one name (in different folders) are an error:
+/// names key the tables and plots.
+pub fn scene_folders(dirs: &[PathBuf], only: &[String]) -> Result<Vec<PathBuf>, String> {
+    let mut v: Vec<PathBuf> = Vec::new();
+    for dir in dirs {
+        let entries = std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        v.extend(
+            entries
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.join("scene.xml").is_file())
+                .filter(|p| only.is_empty() || p.file_name().is_some_and(|n| only.iter().any(|o| n == o.as_str()))),
+        );
+    }
+    v.sort_by(|a, b| a.file_name().cmp(&b.file_name()).then_with(|| a.cmp(b)));
+    if let Some(w) = v.windows(2).find(|w| w[0].file_name() == w[1].file_name()) {
+        return Err(format!("two scenes are named {:?}: {} and {}", w[0].file_name().unwrap_or_default(), w[0].display(), w[1].display()));
+    }
     if v.is_empty() {
-        return Err(format!("no scene folders (with scene.xml) under {}", dir.display()));
+        let names: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
+        return Err(format!("no scene folders (with scene.xml) under {}", names.join(", ")));
     }
     Ok(v)
 }
@@ -108,4 +118,32 @@ pub fn report(args: &SuiteArgs, threads: usize, results: &[SceneResult], command
 
 fn final_point(points: &[Checkpoint], e: EstimatorKind) -> Option<(f64, f64, f64)> {
     convergence::averaged(points, e).last().copied()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::scene_folders;
+
+    /// `--scenes` given twice takes the scenes of both folders, sorted by name and filtered
+    /// by `--only`; one name in two folders is refused, naming both.
+    #[test]
+    fn scenes_from_several_folders() {
+        let root = std::env::temp_dir().join(format!("ember-suite-folders-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        for (dir, name) in [("a", "cornell"), ("a", "zeta"), ("b", "alpha"), ("c", "cornell")] {
+            let d = root.join(dir).join(name);
+            std::fs::create_dir_all(&d).unwrap();
+            std::fs::write(d.join("scene.xml"), "").unwrap();
+        }
+        std::fs::create_dir_all(root.join("b").join("no-scene")).unwrap();
+        let names = |v: Vec<std::path::PathBuf>| v.iter().map(|p| p.file_name().unwrap().to_string_lossy().into_owned()).collect::<Vec<_>>();
+        let both = scene_folders(&[root.join("a"), root.join("b")], &[]).unwrap();
+        assert_eq!(names(both), ["alpha", "cornell", "zeta"]);
+        let only = scene_folders(&[root.join("a"), root.join("b")], &["alpha".into()]).unwrap();
+        assert_eq!(names(only), ["alpha"]);
+        let e = scene_folders(&[root.join("a"), root.join("c")], &[]).unwrap_err();
+        assert!(e.contains("two scenes are named") && e.contains("cornell"), "{e}");
+        assert!(scene_folders(&[root.join("b")], &["zeta".into()]).is_err());
+        let _ = std::fs::remove_dir_all(&root);
+    }
 }
