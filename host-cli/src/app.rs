@@ -239,6 +239,11 @@ pub trait Render {
     fn identity(&self) -> Option<crate::distributed::RenderIdentity> {
         None
     }
+    /// The denoiser guides (albedo, normal) per pixel, `samples` rays each
+    /// (`ember_core::render::aov`); `None` where the renderer has no scene to trace.
+    fn guides(&self, _samples: u32, _seed: u64, _threads: usize) -> Option<Guides> {
+        None
+    }
 }
 
 impl Render for estimators::CoreRenderer {
@@ -254,6 +259,36 @@ impl Render for estimators::CoreRenderer {
     fn identity(&self) -> Option<crate::distributed::RenderIdentity> {
         Some(estimators::CoreRenderer::identity(self))
     }
+    fn guides(&self, samples: u32, seed: u64, threads: usize) -> Option<Guides> {
+        Some(guides(&self.prepared, samples, seed, threads))
+    }
+}
+
+/// The denoiser guides of an image: per pixel the albedo and the normal.
+pub type Guides = (Vec<[f32; 3]>, Vec<[f32; 3]>);
+
+/// Rays per pixel of the denoiser guides.
+pub const GUIDE_SAMPLES: u32 = 16;
+
+/// The denoiser guides of `prepared`'s image, rows in parallel on `threads` threads (the
+/// values do not depend on the thread count: each pixel has its own random stream).
+pub fn guides(prepared: &estimators::PreparedScene, samples: u32, seed: u64, threads: usize) -> Guides {
+    use rayon::prelude::*;
+    let camera = &prepared.scene.camera;
+    let (w, h) = (camera.width() as usize, camera.height() as usize);
+    let mut albedo = vec![ember_core::spectrum::Rgb::ZERO; w * h];
+    let mut normal = vec![ember_core::math::Vec3::ZERO; w * h];
+    let mut work = || {
+        albedo.par_chunks_mut(w.max(1)).zip(normal.par_chunks_mut(w.max(1))).enumerate().for_each(|(y, (a, n))| {
+            let start = (y * w) as u32;
+            ember_core::render::aov::render_guides(&prepared.scene, &prepared.accel, seed, samples, start..start + w as u32, a, n);
+        })
+    };
+    match rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).build() {
+        Ok(pool) => pool.install(work),
+        Err(_) => work(),
+    }
+    (albedo.iter().map(|c| [c.r, c.g, c.b]).collect(), normal.iter().map(|v| v.to_array()).collect())
 }
 
 /// What `render` needs from the estimator wiring: the renderer and what to report.
@@ -275,6 +310,9 @@ impl fmt::Debug for Built {
 /// `ember render` with the renderer built by `make` (the estimator wiring, or a test's).
 pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOnce(&RenderArgs) -> Result<Built, String>) -> Result<RenderReport, AppError> {
     // Fail early on what needs no work. A split render's range needs only the options.
+    if !args.aov.is_empty() && args.split != crate::cli::SplitArgs::default() {
+        return Err(AppError::Output("--aov is not written by split renders (their parts hold sums, not images)".into()));
+    }
     let split = match args.spp {
         Some(total) => distributed::requested_range(&args.split, total).map_err(AppError::Output)?,
         // clap requires --spp with the others; --task-count alone must not pass silently.
@@ -367,7 +405,20 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         return Ok(RenderReport { partial: Some((held, spp)), ..base });
     }
     let image = film.to_rgb_f32();
-    image_io::write_exr(&exr, width, height, &image).map_err(AppError::Image)?;
+    if args.aov.is_empty() {
+        image_io::write_exr(&exr, width, height, &image).map_err(AppError::Image)?;
+    } else {
+        let (albedo, normal) =
+            renderer.guides(GUIDE_SAMPLES, args.seed, args.thread_count()).ok_or_else(|| AppError::Output("this renderer cannot write --aov".into()))?;
+        let mut extra: Vec<(&str, &[[f32; 3]])> = Vec::new();
+        for name in &args.aov {
+            match name.as_str() {
+                "albedo" => extra.push(("albedo", &albedo)),
+                _ => extra.push(("normal", &normal)),
+            }
+        }
+        image_io::write_exr_with(&exr, width, height, &image, &extra).map_err(AppError::Image)?;
+    }
     image_io::write_png(&png, width, height, &image, args.exposure).map_err(AppError::Image)?;
     Ok(RenderReport { png: Some(png), ..base })
 }

@@ -368,6 +368,12 @@ pub struct RenderArgs {
     #[arg(long, value_name = "STOPS", default_value_t = 0.0, allow_negative_numbers = true,
           value_parser = parse_exposure)]
     pub exposure: f32,
+
+    /// Denoiser guides written as extra channels of the EXR (`albedo.R`, ..., `normal.B`):
+    /// the first non-specular surface's albedo and world-space shading normal, averaged
+    /// over 16 rays a pixel, as Intel Open Image Denoise takes them. Comma separated.
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = ["albedo", "normal"])]
+    pub aov: Vec<String>,
 }
 
 /// Options of the cache-based estimators (LVCBPT, SPCBPT): parsed into the core's

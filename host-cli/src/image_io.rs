@@ -126,6 +126,33 @@ pub fn write_exr(path: &Path, width: u32, height: u32, pixels: &[[f32; 3]]) -> R
     )
 }
 
+/// [`write_exr`] with extra RGB images as channels `name.R`, `name.G`, `name.B` of the
+/// same layer (the denoiser guides: `albedo`, `normal`), as renderers name AOVs.
+pub fn write_exr_with(path: &Path, width: u32, height: u32, pixels: &[[f32; 3]], extra: &[(&str, &[[f32; 3]])]) -> Result<(), ImageError> {
+    use exr::prelude::*;
+    check_size(path, width, height, pixels)?;
+    for (_, e) in extra {
+        check_size(path, width, height, e)?;
+    }
+    let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
+    let mut push = |prefix: &str, image: &[[f32; 3]]| {
+        for (c, name) in ["R", "G", "B"].iter().enumerate() {
+            channels.push(AnyChannel::new(format!("{prefix}{name}").as_str(), FlatSamples::F32(image.iter().map(|p| p[c]).collect())));
+        }
+    };
+    push("", pixels);
+    for (name, image) in extra {
+        push(&format!("{name}."), image);
+    }
+    let layer = Layer::new((width as usize, height as usize), LayerAttributes::default(), Encoding::default(), AnyChannels::sort(channels.into()));
+    let image = Image::from_layer(layer);
+    write_atomically(
+        path,
+        |temp| image.write().non_parallel().to_file(temp).map_err(|e| ImageError::new(path, ImageErrorKind::Exr(e))),
+        |e| ImageError::new(path, ImageErrorKind::Io(e)),
+    )
+}
+
 /// Read the first layer with R, G and B channels of an EXR file as f32 (alpha, if any,
 /// is dropped; half and uint channels are converted).
 pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {

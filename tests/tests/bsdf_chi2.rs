@@ -317,7 +317,7 @@ fn plastic_mirror_lobe() {
         assert_eq!(s.wi, Vec3::new(-wo.x, -wo.y, wo.z));
         assert_eq!(s.pdf, s.pdf_rev);
         let p = s.pdf.value() as f64;
-        let f = fresnel_f64(wo.z as f64, eta as f64);
+        let f = fresnel_f64(wo.z as f64, eta);
         let w = s.f * s.wi.z / s.pdf.value();
         assert!(((w.g as f64) * p - 0.6 * f).abs() < 1e-5, "θ={deg}: weight {w:?}, P = {p}, F = {f}");
         // The lobe is chosen below P and not above it.

@@ -33,6 +33,7 @@
 
 #![warn(missing_docs)]
 
+pub mod aov;
 mod config;
 mod film;
 mod renderer;
