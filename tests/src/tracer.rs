@@ -37,7 +37,7 @@ impl BruteForce {
                     }
                     None => ng,
                 };
-                best = Some(SurfaceHit { t, p: ray.at(t), ng, ns, uv: Vec2::new(b1, b2), material: tri.material, emitter: tri.emitter });
+                best = Some(SurfaceHit { t, p: ray.at(t), ng, ns, uv: tri.texcoords(b1, b2), material: tri.material, emitter: tri.emitter });
                 if any {
                     return best;
                 }
@@ -47,11 +47,10 @@ impl BruteForce {
             if let Some(t) = intersect_sphere(ray, s.center, s.radius, t_max) {
                 t_max = t;
                 let p = ray.at(t);
-                let mut n = (p - s.center).normalize();
-                if s.flip_normals {
-                    n = -n;
-                }
-                best = Some(SurfaceHit { t, p, ng: n, ns: n, uv: Vec2::ZERO, material: s.material, emitter: s.emitter });
+                let local = (p - s.center).normalize();
+                let n = if s.flip_normals { -local } else { local };
+                let uv = ember_core::shapes::sphere_texcoords(local);
+                best = Some(SurfaceHit { t, p, ng: n, ns: n, uv, material: s.material, emitter: s.emitter });
                 if any {
                     return best;
                 }
