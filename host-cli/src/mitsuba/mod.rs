@@ -24,7 +24,13 @@
 //!   one nested or referenced `bsdf` (default: `diffuse` 0.5, as Mitsuba) and one `area`
 //!   emitter.
 //! - BSDFs: `diffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`,
-//!   `twosided` (one nested BSDF).
+//!   `plastic`, `roughplastic`, `twosided` (one nested BSDF).
+//! - Textures (nested in a BSDF or referenced, named for the colour parameter they set:
+//!   `reflectance`, `diffuse_reflectance`, `specular_reflectance`,
+//!   `specular_transmittance`): `bitmap` (PNG, 8 or 16 bits, sRGB-decoded unless `raw`;
+//!   OpenEXR linear; `filter_type`, `wrap_mode`, `to_uv`) and `checkerboard` (`color0`,
+//!   `color1`, `to_uv`). Meshes carry their texture coordinates (OBJ `vt`, PLY `u`/`v`,
+//!   `flip_tex_coords`).
 //! - Emitters: `area`, `point`, `spot`, `directional`, `constant`.
 //! - `sensor` `perspective` with `hdrfilm` (box `rfilter`) and any `sampler`; any
 //!   `integrator` (only `max_depth` is read).
