@@ -4,12 +4,12 @@
 //! the filter on the film).
 
 use ember_core::camera::{FovAxis, Lens, PerspectiveCamera};
-use ember_core::scene::builtin::look_at;
 use ember_core::filter::Filter;
 use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::math::{Vec2, Vec3};
 use ember_core::render::EstimatorKind;
 use ember_core::rng::{SampleStream, Stream};
+use ember_core::scene::builtin::look_at;
 use ember_core::warp::invert_concentric_disk;
 use ember_tests::chi2::sidak;
 use ember_tests::render::{assert_blocks_agree, push_block_means, render_pass};
@@ -117,7 +117,13 @@ fn filter_offsets_follow_their_density() {
                 let k = 16;
                 let mut s = 0.0;
                 for i in 0..=k {
-                    let w = if i == 0 || i == k { 1.0 } else if i % 2 == 1 { 4.0 } else { 2.0 };
+                    let w = if i == 0 || i == k {
+                        1.0
+                    } else if i % 2 == 1 {
+                        4.0
+                    } else {
+                        2.0
+                    };
                     s += w * f.pdf_offset((a + h * i as f64 / k as f64) as f32) as f64;
                 }
                 s * h / (3.0 * k as f64) * n as f64

@@ -131,7 +131,17 @@ impl Film {
     /// A black film with no passes whose splats are spread by `filter`.
     pub fn with_filter(width: u32, height: u32, filter: Filter) -> Self {
         let n = width as usize * height as usize;
-        Self { width, height, sum: vec![[0; 3]; n], passes: 0, tallies: Tallies::default(), camera: vec![Rgb::ZERO; n], has_camera: false, splats: Vec::new(), filter }
+        Self {
+            width,
+            height,
+            sum: vec![[0; 3]; n],
+            passes: 0,
+            tallies: Tallies::default(),
+            camera: vec![Rgb::ZERO; n],
+            has_camera: false,
+            splats: Vec::new(),
+            filter,
+        }
     }
 
     /// The film of `camera`: its size and its filter.

@@ -312,7 +312,9 @@ impl<'a> Ctx<'a> {
         let film = self.single_child(obj, Tag::Film)?;
         let sampler = self.single_child(obj, Tag::Sampler)?;
         let mut p = Props::new(obj);
-        let fov = p.float_opt("fov")?.ok_or_else(|| Fail::at(obj.loc, format!("the {} sensor needs `fov` (in degrees; `focal_length` is not supported)", obj.kind)))?;
+        let fov = p
+            .float_opt("fov")?
+            .ok_or_else(|| Fail::at(obj.loc, format!("the {} sensor needs `fov` (in degrees; `focal_length` is not supported)", obj.kind)))?;
         if !(fov > 0.0 && fov < 180.0) {
             return Err(Fail::at(p.loc_of("fov"), format!("`fov` must be in (0, 180) degrees, got {fov}")));
         }
