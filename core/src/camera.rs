@@ -19,10 +19,80 @@
 //!   β · f · |cos_surface| · We · cosθ / d² (the pinhole is a delta in position: the
 //!   sample's density is 1, like a point light's, and cosθ/d² is the geometry term's
 //!   camera half, which the caller applies).
+//!
+//! # Thin lens (Mitsuba 3 `thinlens`)
+//! With a lens of radius R focused at distance F, a primary ray starts at the lens point
+//! ℓ = R · concentric_disk(u_lens) on the plane z = 0 of camera space and goes through
+//! the focus point q = F · (s_x, s_y, 1), where (s_x, s_y, 1) is the pinhole's direction
+//! through the film point: every ray through one film point meets at q, so the plane
+//! z = F is sharp. No lens draws no lens sample: [`PerspectiveCamera::lens_u`] takes
+//! nothing from the stream, and the pinhole's images are unchanged bit for bit.
+//!
+//! Importance with a lens (pbrt-v4 `PerspectiveCamera::We` / `SampleWi`): the sensor's
+//! importance is W_e(ℓ, ω) = W_pixel(ω)/A_lens with A_lens = πR² and W_pixel(ω) =
+//! 1/(A_pixel cos⁴θ), θ the angle of the actual ray ω from ℓ. It stays normalised: seen
+//! from ℓ, the focus-plane patch over a film patch dA (at z = 1) subtends
+//! dω = cos θ F² dA/(F/cos θ)² = cos³θ dA, so ∫_pixel W_pixel cosθ dω = 1 for every ℓ and
+//! the mean over the lens is 1. A connection ([`PerspectiveCamera::sample_wi`]) draws ℓ
+//! uniformly by area (density 1/A_lens); the estimate
+//!   W_e(ℓ, ω) · cos θ/d² / (1/A_lens) = W_pixel(ω) cos θ / d²
+//! is the pinhole's [`PerspectiveCamera::arriving_importance`] with ℓ for the pinhole:
+//! the 1/A_lens factors cancel. Its film position is where the ray from `p_ref` through
+//! ℓ meets the focus plane, mapped like a pinhole direction. The directional density of
+//! a ray leaving ℓ when the film point is uniform over the film keeps the pinhole's form:
+//! the focus point is uniform over the focus rectangle (area A_film F²), and
+//! dω = cos θ dA_q/(F/cos θ)², so p(ω) = 1/(A_film cos³θ) ([`PerspectiveCamera::pdf_dir_from`]).
+//! The lens is no scene geometry: no path hits it (no t = 0 strategy), as for the
+//! pinhole, and the camera vertex keeps the pinhole's MIS bookkeeping.
+//!
+//! # Pixel filter
+//! The camera carries the film's [`Filter`]; [`PerspectiveCamera::sample_ray`] draws a
+//! pixel's film point from it and returns the weight of `crate::filter`'s eq. (3).
 
+use crate::filter::Filter;
 use crate::geometry::Ray;
 use crate::math::{Mat3, Mat4, Vec2, Vec3, sqrt, tan};
 use crate::measure::SolidAnglePdf;
+use crate::rng::{SampleStream, Stream};
+use crate::warp::sample_concentric_disk;
+
+/// Mitsuba `thinlens`'s aperture: radius and focus distance, in scene units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lens {
+    /// Radius of the aperture disk (> 0).
+    pub radius: f32,
+    /// Distance from the lens plane to the plane in focus, along the axis (> 0).
+    pub focus_distance: f32,
+}
+
+impl Lens {
+    /// A lens; `None` unless both values are finite and positive.
+    pub fn new(radius: f32, focus_distance: f32) -> Option<Self> {
+        let ok = radius.is_finite() && radius > 0.0 && focus_distance.is_finite() && focus_distance > 0.0;
+        ok.then_some(Self { radius, focus_distance })
+    }
+}
+
+/// A pixel's primary ray, drawn by [`PerspectiveCamera::sample_ray`].
+#[derive(Clone, Copy, Debug)]
+pub struct PrimaryRay {
+    /// From the lens point (the pinhole without a lens), unit direction.
+    pub ray: Ray,
+    /// The film point, continuous pixel coordinates.
+    pub film: Vec2,
+    /// The filter weight h_c(x)/p (`crate::filter` eq. 3): exactly 1 for the box.
+    pub weight: f32,
+}
+
+/// Last key of the lens streams of splatting estimators ([`lens_stream`]), apart from
+/// every other `Stream::Aux` stream.
+const LENS_KEY: u32 = 0x1e45;
+
+/// The stream a light path `path` of pass `pass` draws its lens points from when it
+/// connects to the camera (t = 1) outside a per-vertex stream. Creating it draws nothing.
+pub fn lens_stream(seed: u64, path: u32, pass: u32) -> SampleStream {
+    SampleStream::for_sample(seed, Stream::Aux, path, pass, LENS_KEY)
+}
 
 /// Which image extent Mitsuba's `fov` spans (`fov_axis`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -39,18 +109,22 @@ pub enum FovAxis {
     Diagonal,
 }
 
-/// A connection from a scene point to the pinhole (light tracing, BDPT t = 1).
+/// A connection from a scene point to the lens (light tracing, BDPT t = 1).
 #[derive(Clone, Copy, Debug)]
 pub struct CameraSample {
     /// Continuous pixel coordinates in [0, W) × [0, H).
     pub film: Vec2,
     /// Unit direction from the reference point toward the camera.
     pub wi: Vec3,
-    /// Distance from the reference point to the pinhole.
+    /// Distance from the reference point to `position`.
     pub dist: f32,
+    /// The lens point (the pinhole without a lens): the shadow ray's end and the camera
+    /// vertex.
+    pub position: Vec3,
     /// We(−wi), per pixel (see the module notes); the caller multiplies by cosθ/dist².
     pub importance: f32,
-    /// 1: the pinhole is a delta in position (as for delta lights).
+    /// 1: the pinhole is a delta in position (as for delta lights); with a lens, the lens
+    /// point's area density 1/A_lens has cancelled against W_e's (module notes).
     pub pdf: SolidAnglePdf,
 }
 
@@ -79,6 +153,8 @@ pub struct PerspectiveCamera {
     tan_half: Vec2,
     film_area: f32,
     pixel_area: f32,
+    lens: Option<Lens>,
+    filter: Filter,
 }
 
 impl PerspectiveCamera {
@@ -121,7 +197,94 @@ impl PerspectiveCamera {
             tan_half,
             film_area,
             pixel_area: film_area / (width as f32 * height as f32),
+            lens: None,
+            filter: Filter::Box,
         }
+    }
+
+    /// This camera with a thin lens (`None`: the pinhole).
+    pub fn with_lens(mut self, lens: Option<Lens>) -> Self {
+        self.lens = lens;
+        self
+    }
+
+    /// This camera with pixel filter `filter`.
+    pub fn with_filter(mut self, filter: Filter) -> Self {
+        self.filter = filter;
+        self
+    }
+
+    /// The thin lens, if any.
+    #[inline]
+    pub fn lens(&self) -> Option<Lens> {
+        self.lens
+    }
+
+    /// Whether rays start on a lens (and so need a lens sample).
+    #[inline]
+    pub fn has_lens(&self) -> bool {
+        self.lens.is_some()
+    }
+
+    /// The pixel filter.
+    #[inline]
+    pub fn filter(&self) -> Filter {
+        self.filter
+    }
+
+    /// The lens sample: two numbers from `rng` with a lens, none (and zero) without.
+    #[inline]
+    pub fn lens_u(&self, rng: &mut SampleStream) -> Vec2 {
+        if self.lens.is_some() { rng.next_2d() } else { Vec2::ZERO }
+    }
+
+    /// The lens point of `u_lens` in camera space (z = 0): R · concentric disk; the
+    /// origin without a lens.
+    #[inline]
+    fn lens_point(&self, u_lens: Vec2) -> Vec2 {
+        match self.lens {
+            Some(l) => l.radius * sample_concentric_disk(u_lens),
+            None => Vec2::ZERO,
+        }
+    }
+
+    /// The primary ray of pixel (`x`, `y`): a film point drawn from the filter (one 2-D
+    /// number), a lens point (another, only with a lens), and the filter weight. `None`
+    /// where the film point falls outside the image (weight 0: trace nothing).
+    pub fn sample_ray(&self, x: u32, y: u32, rng: &mut SampleStream) -> Option<PrimaryRay> {
+        let (film, weight) = self.sample_film(x, y, rng.next_2d())?;
+        let u_lens = self.lens_u(rng);
+        Some(PrimaryRay { ray: self.generate_ray_lens(film, u_lens), film, weight })
+    }
+
+    /// The weight of the camera sample that [`Self::sample_ray`] draws for pixel index
+    /// `pixel` (y·W + x) from the pixel's camera stream of pass `pass`, drawn again: for
+    /// estimators that keep no per-pixel throughput. 1 for the box.
+    pub fn camera_sample_weight(&self, seed: u64, pixel: u32, pass: u32) -> f32 {
+        if self.filter.is_box() {
+            return 1.0;
+        }
+        let mut rng = SampleStream::for_sample(seed, Stream::Camera, pixel, pass, 0);
+        self.sample_film(pixel % self.width, pixel / self.width, rng.next_2d()).map_or(0.0, |(_, w)| w)
+    }
+
+    /// Film point and filter weight of pixel (`x`, `y`) from `u` (module notes).
+    fn sample_film(&self, x: u32, y: u32, u: Vec2) -> Option<(Vec2, f32)> {
+        Some(match self.filter {
+            // The historical arithmetic: pixel corner + u, weight 1.
+            Filter::Box => (Vec2::new(x as f32, y as f32) + u, 1.0),
+            f => {
+                let c = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                let d = Vec2::new(f.sample_offset(u.x), f.sample_offset(u.y));
+                let film = c + d;
+                let (w, h) = (self.width as f32, self.height as f32);
+                if !(film.x >= 0.0 && film.y >= 0.0 && film.x < w && film.y < h) {
+                    return None;
+                }
+                let k = f.border_factor(c.x, w) * f.border_factor(c.y, h);
+                (film, k * f.sample_ratio(d.x) * f.sample_ratio(d.y))
+            }
+        })
     }
 
     #[inline]
@@ -132,7 +295,7 @@ impl PerspectiveCamera {
     pub fn height(&self) -> u32 {
         self.height
     }
-    /// The pinhole.
+    /// The pinhole, or the centre of the lens.
     #[inline]
     pub fn position(&self) -> Vec3 {
         self.position
@@ -150,18 +313,39 @@ impl PerspectiveCamera {
     }
 
     /// Primary ray through continuous pixel coordinates `film` ((0, 0) = top-left corner
-    /// of the image, (W, H) = bottom-right), from the pinhole, unit direction.
+    /// of the image, (W, H) = bottom-right), from the pinhole or the lens centre, unit
+    /// direction.
     pub fn generate_ray(&self, film: Vec2) -> Ray {
-        let s = film / Vec2::new(self.width as f32, self.height as f32);
-        let local = Vec3::new((1.0 - 2.0 * s.x) * self.tan_half.x, (1.0 - 2.0 * s.y) * self.tan_half.y, 1.0);
-        let dir = self.to_world.transform_vector3(local).normalize_or(self.forward);
+        let dir = self.to_world.transform_vector3(self.film_to_local(film)).normalize_or(self.forward);
         Ray::new(self.position, dir, f32::INFINITY)
+    }
+
+    /// Primary ray through `film` from the lens point of `u_lens` toward the film point's
+    /// focus point (module notes); [`Self::generate_ray`] without a lens.
+    pub fn generate_ray_lens(&self, film: Vec2, u_lens: Vec2) -> Ray {
+        let Some(lens) = self.lens else { return self.generate_ray(film) };
+        let l = self.lens_point(u_lens);
+        let focus = self.film_to_local(film) * lens.focus_distance;
+        let local = focus - Vec3::new(l.x, l.y, 0.0);
+        let dir = self.to_world.transform_vector3(local).normalize_or(self.forward);
+        Ray::new(self.to_world.transform_point3(Vec3::new(l.x, l.y, 0.0)), dir, f32::INFINITY)
+    }
+
+    /// The pinhole direction (camera space, z = 1) through film point `film`.
+    #[inline]
+    fn film_to_local(&self, film: Vec2) -> Vec3 {
+        let s = film / Vec2::new(self.width as f32, self.height as f32);
+        Vec3::new((1.0 - 2.0 * s.x) * self.tan_half.x, (1.0 - 2.0 * s.y) * self.tan_half.y, 1.0)
     }
 
     /// Where a world direction leaving the pinhole lands on the film (pixel coordinates),
     /// or `None` if it misses [0, W) × [0, H). Inverse of [`Self::generate_ray`].
     pub fn film_position(&self, dir: Vec3) -> Option<Vec2> {
-        let local = self.to_local * dir;
+        self.local_film_position(self.to_local * dir)
+    }
+
+    /// [`Self::film_position`] of a camera-space direction from the pinhole.
+    fn local_film_position(&self, local: Vec3) -> Option<Vec2> {
         if local.z <= 0.0 {
             return None;
         }
@@ -183,33 +367,87 @@ impl PerspectiveCamera {
         Some(local.z / len)
     }
 
-    /// Importance per pixel, We(ω) = 1/(A_pixel cos⁴θ) inside the frustum, 0 outside.
+    /// Importance per pixel, We(ω) = 1/(A_pixel cos⁴θ) inside the frustum, 0 outside
+    /// (a direction from the pinhole or the lens centre).
     pub fn importance(&self, dir: Vec3) -> f32 {
         match self.cos_on_film(dir) {
-            Some(c) => {
-                let c2 = c * c;
-                let we = 1.0 / (self.pixel_area * c2 * c2);
-                if we.is_finite() { we } else { 0.0 }
-            }
+            Some(c) => self.we_of_cos(c),
             None => 0.0,
         }
+    }
+
+    /// 1/(A_pixel cos⁴θ), 0 where not finite.
+    #[inline]
+    fn we_of_cos(&self, c: f32) -> f32 {
+        let c2 = c * c;
+        let we = 1.0 / (self.pixel_area * c2 * c2);
+        if we.is_finite() { we } else { 0.0 }
+    }
+
+    /// 1/(A_film cos³θ), 0 where not finite.
+    #[inline]
+    fn pdf_of_cos(&self, c: f32) -> SolidAnglePdf {
+        let pdf = 1.0 / (self.film_area * c * c * c);
+        SolidAnglePdf(if pdf.is_finite() { pdf } else { 0.0 })
     }
 
     /// Density of [`Self::generate_ray`]'s direction for film positions uniform over the
     /// whole film: 1/(A_film cos³θ) inside the frustum, 0 outside.
     pub fn pdf_dir(&self, dir: Vec3) -> SolidAnglePdf {
         match self.cos_on_film(dir) {
-            Some(c) => {
-                let pdf = 1.0 / (self.film_area * c * c * c);
-                SolidAnglePdf(if pdf.is_finite() { pdf } else { 0.0 })
-            }
+            Some(c) => self.pdf_of_cos(c),
             None => SolidAnglePdf::ZERO,
         }
     }
 
-    /// Connect scene point `p_ref` to the pinhole: `None` if it is at the pinhole or
-    /// outside the frustum.
-    pub fn sample_wi(&self, p_ref: Vec3) -> Option<CameraSample> {
+    /// Density of the direction `dir` of a primary ray leaving `origin` (a lens point),
+    /// film positions uniform over the whole film: 1/(A_film cos³θ) where the ray's focus
+    /// point lands on the film (module notes); [`Self::pdf_dir`] without a lens.
+    pub fn pdf_dir_from(&self, origin: Vec3, dir: Vec3) -> SolidAnglePdf {
+        if self.lens.is_none() {
+            return self.pdf_dir(dir);
+        }
+        let l = self.to_local * (origin - self.position);
+        let d = self.to_local * dir;
+        match self.lens_film_position(Vec2::new(l.x, l.y), d) {
+            Some(_) => self.pdf_of_cos(d.z / d.length()),
+            None => SolidAnglePdf::ZERO,
+        }
+    }
+
+    /// Film position of a ray leaving camera-space lens point `l` (z = 0) along
+    /// camera-space direction `d`: its focus point's, as a pinhole direction.
+    fn lens_film_position(&self, l: Vec2, d: Vec3) -> Option<Vec2> {
+        let lens = self.lens?;
+        if !(d.z > 0.0) {
+            return None;
+        }
+        let q = Vec3::new(l.x, l.y, 0.0) + d * (lens.focus_distance / d.z);
+        self.local_film_position(q)
+    }
+
+    /// Connect scene point `p_ref` to the camera: to the pinhole, or to the lens point of
+    /// `u_lens` (uniform by area; `u_lens` is ignored without a lens, see
+    /// [`Self::lens_u`]). `None` if it is at that point or its ray misses the film.
+    pub fn sample_wi(&self, p_ref: Vec3, u_lens: Vec2) -> Option<CameraSample> {
+        if self.lens.is_none() {
+            return self.connect_pinhole(p_ref);
+        }
+        let l = self.lens_point(u_lens);
+        self.connect_lens(Vec2::new(l.x, l.y), p_ref)
+    }
+
+    /// [`Self::sample_wi`] to a given lens point `lens_point` (world space, on the lens:
+    /// e.g. a camera path's first vertex); the pinhole without a lens.
+    pub fn connect_from(&self, lens_point: Vec3, p_ref: Vec3) -> Option<CameraSample> {
+        if self.lens.is_none() {
+            return self.connect_pinhole(p_ref);
+        }
+        let l = self.to_local * (lens_point - self.position);
+        self.connect_lens(Vec2::new(l.x, l.y), p_ref)
+    }
+
+    fn connect_pinhole(&self, p_ref: Vec3) -> Option<CameraSample> {
         let d = self.position - p_ref;
         let dist2 = d.length_squared();
         if dist2 <= 0.0 || !dist2.is_finite() {
@@ -222,6 +460,25 @@ impl PerspectiveCamera {
         if importance <= 0.0 {
             return None;
         }
-        Some(CameraSample { film, wi, dist, importance, pdf: SolidAnglePdf(1.0) })
+        Some(CameraSample { film, wi, dist, position: self.position, importance, pdf: SolidAnglePdf(1.0) })
+    }
+
+    /// Connect `p_ref` to camera-space lens point `l`.
+    fn connect_lens(&self, l: Vec2, p_ref: Vec3) -> Option<CameraSample> {
+        let position = self.to_world.transform_point3(Vec3::new(l.x, l.y, 0.0));
+        let d = position - p_ref;
+        let dist2 = d.length_squared();
+        if dist2 <= 0.0 || !dist2.is_finite() {
+            return None;
+        }
+        let dist = sqrt(dist2);
+        let wi = d / dist;
+        let local = self.to_local * -wi;
+        let film = self.lens_film_position(l, local)?;
+        let importance = self.we_of_cos(local.z / local.length());
+        if importance <= 0.0 {
+            return None;
+        }
+        Some(CameraSample { film, wi, dist, position, importance, pdf: SolidAnglePdf(1.0) })
     }
 }

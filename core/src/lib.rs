@@ -18,6 +18,7 @@ extern crate alloc;
 pub mod alias;
 pub mod bsdf;
 pub mod camera;
+pub mod filter;
 pub mod fnv;
 pub mod geometry;
 pub mod integrator;

@@ -497,7 +497,7 @@ pub unsafe extern "C" fn ember_renderer_create(
         let (config, params) = settings.config()?;
         let r = Renderer::new(&data.scene, params, config).map_err(|e| Error::new(EmberStatus::InvalidConfig, e.to_string()))?;
         let camera = &data.scene.camera;
-        let film = Film::new(camera.width(), camera.height());
+        let film = Film::for_camera(camera);
         let threads = if settings.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { settings.threads as usize };
         let state = RendererState { scene: data, renderer: r, film, threads, callbacks, ready: false };
         let shared = Arc::new(Shared { state: RwLock::new(state), phase: RwLock::new(None) });

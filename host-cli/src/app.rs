@@ -229,6 +229,10 @@ pub struct RenderReport {
 pub trait Render {
     /// The image size.
     fn size(&self) -> (u32, u32);
+    /// The camera's pixel filter, which the film spreads splats with (box by default).
+    fn filter(&self) -> ember_core::filter::Filter {
+        ember_core::filter::Filter::Box
+    }
     /// Render passes into `film` until `limits` say stop.
     fn render(&mut self, film: &mut Film, limits: Limits, config: DriverConfig, program_start: Instant) -> Result<RenderSummary, DriverError>;
     /// Lines about the renderer's memory, printed after rendering.
@@ -249,6 +253,9 @@ pub trait Render {
 impl Render for estimators::CoreRenderer {
     fn size(&self) -> (u32, u32) {
         (self.width(), self.height())
+    }
+    fn filter(&self) -> ember_core::filter::Filter {
+        self.camera_filter()
     }
     fn render(&mut self, film: &mut Film, limits: Limits, config: DriverConfig, program_start: Instant) -> Result<RenderSummary, DriverError> {
         estimators::CoreRenderer::render(self, film, limits, config, program_start)
@@ -339,7 +346,7 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     };
 
     // Render passes until the spp or time limit.
-    let mut film = Film::new(width, height);
+    let mut film = Film::with_filter(width, height, renderer.filter());
     let deadline = args.time.map(|t| start + Duration::from_secs_f64(t));
     // --spp, else unlimited under --time, else the scene file's sample count, else the default.
     let spp = match (args.spp, args.time, built.file_spp) {

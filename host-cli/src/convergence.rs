@@ -179,7 +179,8 @@ pub fn measure(
             if (w as usize, h as usize) != (rw, rh) {
                 return Err(format!("the scene renders {w}x{h} but the reference is {rw}x{rh}"));
             }
-            runs.push(Run { estimator, renderer, film: Film::new(w, h), spent: start.elapsed() });
+            let film = Film::with_filter(w, h, renderer.camera_filter());
+            runs.push(Run { estimator, renderer, film, spent: start.elapsed() });
         }
         for target in checkpoints(setup.budget_seconds) {
             for run in &mut runs {

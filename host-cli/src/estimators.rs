@@ -179,6 +179,11 @@ impl CoreRenderer {
         self.prepared.scene.camera.height()
     }
 
+    /// The camera's pixel filter (the film's).
+    pub fn camera_filter(&self) -> ember_core::filter::Filter {
+        self.prepared.scene.camera.filter()
+    }
+
     /// What the estimator holds per pass, for the closing report.
     pub fn memory_report(&self) -> Vec<String> {
         let mib = |b: usize| b as f64 / 1_048_576.0;

@@ -89,7 +89,7 @@ impl Session {
         // As the CLI: the power heuristic where an estimator has a choice.
         let params = RenderParams { max_depth: MaxDepth(max_depth), seed, heuristic: Heuristic::Power, ..RenderParams::default() };
         let renderer = Renderer::new(&scene, params, kind.default_config()).map_err(|e| (Failure::Setup, format!("{kind}: {e}")))?;
-        let film = if role == Role::Page { Film::new(width, height) } else { Film::new(0, 0) };
+        let film = if role == Role::Page { Film::for_camera(&scene.camera) } else { Film::new(0, 0) };
         Ok(Self {
             scene,
             accel,

@@ -35,7 +35,7 @@ impl<'a, Q: RayQuery + ?Sized> Passes<'a, Q> {
     /// with the film's discarded samples added to the estimator's.
     pub fn pass_image(&mut self, pass: u32) -> (Vec<[f64; 3]>, Counters) {
         let camera = &self.ctx.scene.camera;
-        let mut film = Film::new(camera.width(), camera.height());
+        let mut film = Film::for_camera(camera);
         let (mut counters, _) = serial_pass(&mut self.renderer, &self.ctx, &mut film, &mut self.buffers, pass);
         counters.discarded += film.discarded();
         (film.sums().to_vec(), counters)

@@ -4,7 +4,7 @@
 
 use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
 use ember_core::shapes::SceneGeometry;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 /// Linear-scan ray queries.
 #[derive(Debug, Clone)]

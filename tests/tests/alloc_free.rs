@@ -81,7 +81,7 @@ fn per_sample_functions_do_not_allocate() {
                     sink += e.pdf_dir.0;
                 }
             }
-            if let Some(c) = scene.camera.sample_wi(Vec3::new(0.0, 1.0, 0.0)) {
+            if let Some(c) = scene.camera.sample_wi(Vec3::new(0.0, 1.0, 0.0), Vec2::ZERO) {
                 sink += c.importance;
             }
             sink += scene.camera.generate_ray(Vec2::new(3.5, 4.5)).dir.x;

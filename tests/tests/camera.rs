@@ -30,7 +30,7 @@ fn image_is_neither_mirrored_nor_flipped() {
     let (w, h) = (64, 48);
     // Looking down −z with +y up in a right-handed world, world −x is on the viewer's left.
     let cam = PerspectiveCamera::new(look_at(Vec3::ZERO, -Vec3::Z, Vec3::Y), 60.0, FovAxis::X, w, h);
-    let film = |p: Vec3| cam.sample_wi(p).expect("in view").film;
+    let film = |p: Vec3| cam.sample_wi(p, Vec2::ZERO).expect("in view").film;
     assert!(film(Vec3::new(-1.0, 0.0, -5.0)).x < w as f32 / 2.0, "world −x must land in the left half");
     assert!(film(Vec3::new(1.0, 0.0, -5.0)).x > w as f32 / 2.0);
     assert!(film(Vec3::new(0.0, 1.0, -5.0)).y < h as f32 / 2.0, "up must land in the top half");
@@ -40,9 +40,9 @@ fn image_is_neither_mirrored_nor_flipped() {
     let cam = PerspectiveCamera::new(m, 60.0, FovAxis::X, w, h);
     let (x, y) = (m.x_axis.truncate(), m.y_axis.truncate());
     let ahead = cam.position() + 5.0 * cam.forward();
-    let f = cam.sample_wi(ahead + x).unwrap().film;
+    let f = cam.sample_wi(ahead + x, Vec2::ZERO).unwrap().film;
     assert!(f.x < w as f32 / 2.0 && (f.y - h as f32 / 2.0).abs() < 0.01, "{f}");
-    let f = cam.sample_wi(ahead + y).unwrap().film;
+    let f = cam.sample_wi(ahead + y, Vec2::ZERO).unwrap().film;
     assert!(f.y < h as f32 / 2.0 && (f.x - w as f32 / 2.0).abs() < 0.01, "{f}");
     // The top-left corner of the film looks toward camera (+x, +y).
     let d = cam.generate_ray(Vec2::ZERO).dir;
@@ -181,7 +181,7 @@ fn sample_wi_connects_to_the_pinhole() {
         let mut r = rng(k);
         let p = cam.position() + Vec3::new(r.next_f32() - 0.5, r.next_f32() - 0.5, r.next_f32() - 0.5) * 20.0;
         let dir = (p - cam.position()).normalize();
-        match cam.sample_wi(p) {
+        match cam.sample_wi(p, Vec2::ZERO) {
             Some(s) => {
                 hits += 1;
                 assert!((s.wi + dir).length() < 1e-5);
@@ -197,8 +197,8 @@ fn sample_wi_connects_to_the_pinhole() {
     }
     assert!(hits > 1000, "{hits}");
     // Behind the camera, and at the pinhole: nothing.
-    assert!(cam.sample_wi(cam.position() - cam.forward()).is_none());
-    assert!(cam.sample_wi(cam.position()).is_none());
+    assert!(cam.sample_wi(cam.position() - cam.forward(), Vec2::ZERO).is_none());
+    assert!(cam.sample_wi(cam.position(), Vec2::ZERO).is_none());
     assert_eq!(cam.importance(-cam.forward()), 0.0);
     assert_eq!(cam.pdf_dir(-cam.forward()).0, 0.0);
     assert_eq!((cam.width(), cam.height()), (w, h));
@@ -212,7 +212,7 @@ fn degenerate_camera_is_finite() {
         let ray = cam.generate_ray(Vec2::new(0.5, 0.5));
         assert!(ray.dir.is_finite() && ray.origin.is_finite());
         assert!(cam.importance(ray.dir).is_finite() && cam.pdf_dir(ray.dir).0.is_finite());
-        if let Some(s) = cam.sample_wi(cam.position() + ray.dir) {
+        if let Some(s) = cam.sample_wi(cam.position() + ray.dir, Vec2::ZERO) {
             assert!(s.importance.is_finite() && s.film.is_finite());
         }
     }

@@ -154,7 +154,7 @@ fn empty_light_paths_are_skipped() {
         cache.gamma_tables = tables;
         cache.gamma_norm = norms;
         let paths = cache.paths.len() as u32;
-        spcbpt::splat_light_paths(&scene, &tracer, &params, &model, &cache, paths as f64 / 64.0, 0..paths, &mut |_| {});
+        spcbpt::splat_light_paths(&scene, &tracer, &params, &model, &cache, paths as f64 / 64.0, 0, 0..paths, &mut |_| {});
         let mut out = vec![Rgb::ZERO; 64];
         let c = spcbpt::render_pixels(&scene, &tracer, &params, &model, &cache, paths, 0, 0..64, &mut out);
         assert_eq!(c.discarded, 0);

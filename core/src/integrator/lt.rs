@@ -70,7 +70,8 @@ const SKY_KEY: u32 = 0x5c00;
 fn visible_sky<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, rng: &mut SampleStream, counters: &mut Counters, splat: &mut dyn FnMut(Splat)) {
     let (w, h) = (scene.camera.width() as f32, scene.camera.height() as f32);
     let film = rng.next_2d() * Vec2::new(w, h);
-    let ray = scene.camera.generate_ray(film);
+    let u_lens = scene.camera.lens_u(rng);
+    let ray = scene.camera.generate_ray_lens(film, u_lens);
     counters.rays += 1;
     if tracer.intersect(&ray).is_some() {
         return;
@@ -112,13 +113,14 @@ fn trace_one<Q: RayQuery + ?Sized>(
 
     // Connect the light vertex itself to the camera (a directly visible emitter).
     if params.max_depth.allows(1) && !light.is_infinite() {
-        if let Some(cs) = scene.camera.sample_wi(es.p) {
+        let u_lens = scene.camera.lens_u(sky_rng);
+        if let Some(cs) = scene.camera.sample_wi(es.p, u_lens) {
             let le = light.radiance(es.p, es.n, cs.wi);
             let cos_light = if es.n == Vec3::ZERO { 1.0 } else { es.n.dot(cs.wi).abs() };
             let value = le * (cos_light * scene.camera.arriving_importance(&cs) / pdf_pos);
             if !value.is_black() {
                 counters.rays += 1;
-                if !tracer.occluded(&spawn_ray_to(es.p, es.n, scene.camera.position(), Vec3::ZERO)) {
+                if !tracer.occluded(&spawn_ray_to(es.p, es.n, cs.position, Vec3::ZERO)) {
                     splat(Splat { film: cs.film, value: counters.sanitize(value) });
                 }
             }
@@ -155,12 +157,14 @@ fn trace_one<Q: RayQuery + ?Sized>(
 
         // Connect this vertex to the camera: segments + 1 segments in all.
         if !material.is_delta() && params.max_depth.allows(segments + 1) {
-            if let Some(cs) = scene.camera.sample_wi(hit.p) {
+            // The lens point from the auxiliary stream, so the walk's dimensions stay.
+            let u_lens = scene.camera.lens_u(sky_rng);
+            if let Some(cs) = scene.camera.sample_wi(hit.p, u_lens) {
                 let f = sp.f_cos(scene, cs.wi, TransportMode::Importance);
                 let value = beta * f * scene.camera.arriving_importance(&cs);
                 if !value.is_black() {
                     counters.rays += 1;
-                    if !tracer.occluded(&sp.spawn_to(scene.camera.position(), Vec3::ZERO)) {
+                    if !tracer.occluded(&sp.spawn_to(cs.position, Vec3::ZERO)) {
                         splat(Splat { film: cs.film, value: counters.sanitize(value) });
                     }
                 }

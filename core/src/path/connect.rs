@@ -12,13 +12,14 @@ use crate::measure::VertexPdf;
 use crate::scene::Context;
 use crate::spectrum::Rgb;
 
-/// The random numbers of a resampled light point (strategy s = 1): which light, and where
-/// on it. Other strategies ignore them.
+/// The random numbers of a resampled endpoint: for strategy s = 1 which light and where
+/// on it; for t = 1 `u_point` picks the lens point (ignored without a lens). Other
+/// strategies ignore them.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LightPointSample {
     /// Chooses the light.
     pub u_light: f32,
-    /// Chooses the point on it.
+    /// Chooses the point on it (s = 1), or on the lens (t = 1).
     pub u_point: Vec2,
 }
 
@@ -88,9 +89,10 @@ pub fn connect<Q: RayQuery + ?Sized>(
         if !qs.is_connectible(scene) || qs.kind != VertexKind::Surface {
             return None;
         }
-        let cs = scene.camera.sample_wi(qs.p)?;
+        // The lens point from u_point (nothing drawn without a lens).
+        let cs = scene.camera.sample_wi(qs.p, u_point)?;
         // Importance arriving at qs per unit projected area: W_e |cos θ_c| / d².
-        let cam = Vertex::camera(scene.camera.position(), Rgb::splat(scene.camera.arriving_importance(&cs)));
+        let cam = Vertex::camera(cs.position, Rgb::splat(scene.camera.arriving_importance(&cs)));
         let v = qs.beta * qs.f(scene, &cam, TransportMode::Importance) * cam.beta * cs.wi.dot(qs.frame.n).abs();
         if v.is_black() {
             return None;

@@ -21,7 +21,6 @@ pub mod walk;
 
 use crate::geometry::RayQuery;
 use crate::integrator::{Counters, RenderParams};
-use crate::math::Vec2;
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::segment::{CAMERA_KERNEL_KEY, Junctions, Kernel};
@@ -29,7 +28,7 @@ use crate::segment::{CAMERA_KERNEL_KEY, Junctions, Kernel};
 pub use connect::{Connection, LightPointSample, Weighted, connect, connect_light_source};
 pub use store::{CacheEntry, LightPaths, cacheable_entries, is_cacheable, trace_light_subpath};
 pub use vertex::{Vertex, VertexKind};
-pub use walk::{SubPath, camera_subpath, camera_subpath_with_kernel, light_subpath, light_subpath_with_kernel};
+pub use walk::{SubPath, camera_subpath, camera_subpath_from, camera_subpath_with_kernel, light_subpath, light_subpath_with_kernel};
 
 /// Capacity of a sub-path (vertices); unbounded depth truncates here (counted).
 pub const MAX_VERTICES: usize = 34;
@@ -71,7 +70,7 @@ pub fn pixel_camera_subpath_with_kernel<Q: RayQuery + ?Sized>(
 ) -> SubPath {
     let width = scene.camera.width().max(1);
     let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
-    let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
+    let primary = scene.camera.sample_ray(pixel % width, pixel / width, &mut rng);
     let mut junctions = Junctions::for_path(kernel, params.seed, pixel, pass, CAMERA_KERNEL_KEY);
-    camera_subpath_with_kernel(scene, tracer, params, film, max_camera, &mut rng, junctions.as_mut(), counters)
+    camera_subpath_from(scene, tracer, params, primary, max_camera, &mut rng, junctions.as_mut(), counters)
 }

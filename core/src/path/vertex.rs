@@ -239,7 +239,7 @@ impl Vertex {
         }
         let wn = self.dir_to(next, mode);
         let pdf = match self.kind {
-            VertexKind::Camera => scene.camera.pdf_dir(wn),
+            VertexKind::Camera => scene.camera.pdf_dir_from(self.p, wn),
             _ => {
                 let Some(prev) = prev else { return VertexPdf::ZERO };
                 let m = scene.material(self.material, self.uv);

@@ -5,6 +5,7 @@ use heapless::Vec as FixedVec;
 use super::MAX_VERTICES;
 use super::vertex::{Exit, Vertex, VertexKind, infinite_light_density};
 use crate::bsdf::{TransportMode, shading_normal_correction};
+use crate::camera::PrimaryRay;
 use crate::geometry::{Ray, RayQuery, spawn_ray};
 use crate::integrator::{Counters, RenderParams, light_roulette_reference, survives_roulette};
 use crate::math::{Frame, Vec2, Vec3};
@@ -46,13 +47,40 @@ pub fn camera_subpath_with_kernel<Q: RayQuery + ?Sized>(
     junctions: Option<&mut Junctions>,
     counters: &mut Counters,
 ) -> SubPath {
+    if max_vertices == 0 {
+        return SubPath::new();
+    }
+    let u_lens = scene.camera.lens_u(rng);
+    let primary = PrimaryRay { ray: scene.camera.generate_ray_lens(film, u_lens), film, weight: 1.0 };
+    camera_subpath_from(scene, tracer, params, Some(primary), max_vertices, rng, junctions, counters)
+}
+
+/// Camera sub-path from a drawn primary ray, its throughput starting at the filter
+/// weight; `None` (a film point outside the image) leaves only the camera vertex, so the
+/// t = 1 strategies, which replace it, still run.
+#[allow(clippy::too_many_arguments)]
+pub fn camera_subpath_from<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    primary: Option<PrimaryRay>,
+    max_vertices: usize,
+    rng: &mut SampleStream,
+    junctions: Option<&mut Junctions>,
+    counters: &mut Counters,
+) -> SubPath {
     let mut path = SubPath::new();
     if max_vertices == 0 {
         return path;
     }
-    let ray = scene.camera.generate_ray(film);
-    let _ = path.push(Vertex::camera(ray.origin, Rgb::ONE));
-    random_walk(scene, tracer, params, ray, Rgb::ONE, max_vertices, TransportMode::Radiance, rng, junctions, counters, &mut path);
+    let Some(primary) = primary else {
+        let _ = path.push(Vertex::camera(scene.camera.position(), Rgb::ZERO));
+        return path;
+    };
+    let ray = primary.ray;
+    let beta = Rgb::splat(primary.weight);
+    let _ = path.push(Vertex::camera(ray.origin, beta));
+    random_walk(scene, tracer, params, ray, beta, max_vertices, TransportMode::Radiance, rng, junctions, counters, &mut path);
     path
 }
 

@@ -24,6 +24,16 @@
 //! top stays at the top and is tallied in [`Film::saturated`]. Radiance from 10⁻⁸ to 10⁸
 //! times the built-in box's renders linearly (`tests/tests/stability_extremes.rs`).
 //!
+//! # The pixel filter
+//! Camera samples arrive already weighted by the camera's filter (`crate::filter`, filter
+//! importance sampling), so the film adds each to its own pixel whatever the filter.
+//! A splat at x is spread over the pixels c within the filter's radius with the weights
+//! h_c(x) of `crate::filter` (eq. 1–2); each weighted addition is rounded on its own, so
+//! the sums stay order independent. The box film ([`Film::new`]) adds a splat to the
+//! pixel containing it with weight 1, as it always did. Merged films are not checked for
+//! equal filters: committed sums are already filtered, and a film read back by
+//! [`Film::from_exact`] (a box film) only merges.
+//!
 //! A sample with a NaN, infinite or negative channel is never added: it counts as zero
 //! (the pass still counts) and is tallied in [`Film::discarded`], so an estimator bug shows
 //! up as a number instead of a black or white pixel.
@@ -32,6 +42,8 @@ use alloc::vec;
 use alloc::vec::Vec;
 use core::ops::Range;
 
+use crate::camera::PerspectiveCamera;
+use crate::filter::Filter;
 use crate::integrator::Splat;
 use crate::math;
 use crate::spectrum::Rgb;
@@ -55,6 +67,8 @@ pub struct Film {
     has_camera: bool,
     /// The pass's splats, in staging order.
     splats: Vec<Splat>,
+    /// How splats are spread over pixels.
+    filter: Filter,
 }
 
 /// What a film threw away or clamped, summed over its passes (and over merged films).
@@ -108,10 +122,36 @@ impl core::fmt::Display for FilmError {
 }
 
 impl Film {
-    /// A black film with no passes. Allocates the sums and the staging buffer once.
+    /// A black box-filtered film with no passes. Allocates the sums and the staging
+    /// buffer once.
     pub fn new(width: u32, height: u32) -> Self {
+        Self::with_filter(width, height, Filter::Box)
+    }
+
+    /// A black film with no passes whose splats are spread by `filter`.
+    pub fn with_filter(width: u32, height: u32, filter: Filter) -> Self {
         let n = width as usize * height as usize;
-        Self { width, height, sum: vec![[0; 3]; n], passes: 0, tallies: Tallies::default(), camera: vec![Rgb::ZERO; n], has_camera: false, splats: Vec::new() }
+        Self {
+            width,
+            height,
+            sum: vec![[0; 3]; n],
+            passes: 0,
+            tallies: Tallies::default(),
+            camera: vec![Rgb::ZERO; n],
+            has_camera: false,
+            splats: Vec::new(),
+            filter,
+        }
+    }
+
+    /// The film of `camera`: its size and its filter.
+    pub fn for_camera(camera: &PerspectiveCamera) -> Self {
+        Self::with_filter(camera.width(), camera.height(), camera.filter())
+    }
+
+    /// The filter splats are spread by.
+    pub fn filter(&self) -> Filter {
+        self.filter
     }
 
     /// A film holding `passes` passes whose exact sums are `sums` (as [`Film::exact_sums`]
@@ -269,8 +309,26 @@ impl Film {
                 self.tallies.splats_outside += 1;
                 continue;
             }
-            let i = y as usize * self.width as usize + x as usize;
-            self.tallies.saturated += add(&mut self.sum[i], s.value, scale);
+            if self.filter.is_box() {
+                let i = y as usize * self.width as usize + x as usize;
+                self.tallies.saturated += add(&mut self.sum[i], s.value, scale);
+                continue;
+            }
+            // Spread over the pixels within the filter's radius, h_c(x) each.
+            let f = self.filter;
+            for py in f.splat_range(s.film.y, self.height) {
+                let wy = f.splat_weight(s.film.y, py, self.height);
+                if wy <= 0.0 {
+                    continue;
+                }
+                for px in f.splat_range(s.film.x, self.width) {
+                    let w = wy * f.splat_weight(s.film.x, px, self.width);
+                    if w > 0.0 {
+                        let i = py as usize * self.width as usize + px as usize;
+                        self.tallies.saturated += add(&mut self.sum[i], s.value, scale * w as f64);
+                    }
+                }
+            }
         }
     }
 

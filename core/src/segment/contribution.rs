@@ -37,9 +37,10 @@ pub fn contribution<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, kernel: Ker
     let first = path.first()?;
     let last = path.last()?;
     // W_ρ(s₁) G(s₁): the importance arriving at y₁ per unit projected area, times cos at y₁.
-    let cs = scene.camera.sample_wi(first.y.p)?;
+    // x₁ is the pinhole, or the lens point the path starts from.
+    let cs = scene.camera.connect_from(first.x.p, first.y.p)?;
     let mut g = scene.camera.arriving_importance(&cs) * first.y.ng.dot(cs.wi).abs();
-    if tracer.occluded(&spawn_ray_to(first.y.p, first.y.ng, scene.camera.position(), crate::math::Vec3::ZERO)) {
+    if tracer.occluded(&spawn_ray_to(first.y.p, first.y.ng, cs.position, crate::math::Vec3::ZERO)) {
         return Some((cs.film, Rgb::ZERO));
     }
     let mut value = Rgb::splat(1.0);

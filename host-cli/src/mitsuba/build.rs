@@ -9,7 +9,8 @@ use std::path::Path;
 use glam::{DMat4, DVec3};
 
 use ember_core::bsdf::PlasticCoating;
-use ember_core::camera::{FovAxis, PerspectiveCamera};
+use ember_core::camera::{FovAxis, Lens, PerspectiveCamera};
+use ember_core::filter::Filter;
 use ember_core::geometry::MaterialId;
 use ember_core::light::{EnvMapError, Light};
 use ember_core::scene::{AreaEmission, SceneBuilder};
@@ -71,6 +72,8 @@ struct SensorSpec {
     width: u32,
     height: u32,
     spp: Option<u32>,
+    lens: Option<Lens>,
+    filter: Filter,
 }
 
 pub(crate) fn instantiate(parsed: Parsed, base_dir: &Path, options: &LoadOptions) -> Res<LoadedScene> {
@@ -129,7 +132,7 @@ pub(crate) fn instantiate(parsed: Parsed, base_dir: &Path, options: &LoadOptions
             spec.width, spec.height
         )));
     }
-    let camera = PerspectiveCamera::new(spec.to_world.as_mat4(), spec.fov, spec.fov_axis, width, height);
+    let camera = PerspectiveCamera::new(spec.to_world.as_mat4(), spec.fov, spec.fov_axis, width, height).with_lens(spec.lens).with_filter(spec.filter);
     ctx.sb.set_camera(camera);
     let world_origin = -ctx.render_frame.w_axis.truncate();
     Ok(LoadedScene { builder: ctx.sb, max_depth: integrator.and_then(|(d, _)| d), spp: spec.spp, width, height, warnings: ctx.warnings, world_origin })
@@ -305,14 +308,16 @@ impl<'a> Ctx<'a> {
 
     fn sensor(&mut self, idx: usize) -> Res<SensorSpec> {
         let obj = self.obj(idx)?;
-        if obj.kind != "perspective" {
-            return Err(Fail::at(obj.loc, format!("unsupported sensor type \"{}\" (supported: perspective)", obj.kind)));
+        if obj.kind != "perspective" && obj.kind != "thinlens" {
+            return Err(Fail::at(obj.loc, format!("unsupported sensor type \"{}\" (supported: perspective, thinlens)", obj.kind)));
         }
         self.check_children(obj, &[Tag::Film, Tag::Sampler])?;
         let film = self.single_child(obj, Tag::Film)?;
         let sampler = self.single_child(obj, Tag::Sampler)?;
         let mut p = Props::new(obj);
-        let fov = p.float_opt("fov")?.ok_or_else(|| Fail::at(obj.loc, "the perspective sensor needs `fov` (in degrees; `focal_length` is not supported)"))?;
+        let fov = p
+            .float_opt("fov")?
+            .ok_or_else(|| Fail::at(obj.loc, format!("the {} sensor needs `fov` (in degrees; `focal_length` is not supported)", obj.kind)))?;
         if !(fov > 0.0 && fov < 180.0) {
             return Err(Fail::at(p.loc_of("fov"), format!("`fov` must be in (0, 180) degrees, got {fov}")));
         }
@@ -336,25 +341,45 @@ impl<'a> Ctx<'a> {
                 ));
             }
         }
+        let lens = if obj.kind == "thinlens" { self.lens(&mut p, obj.loc)? } else { None };
         p.finish()?;
-        let (width, height) = match film {
+        let (width, height, filter) = match film {
             Some(f) => self.film(f)?,
             None => {
                 self.warnings.push(format!(
-                    "line {}: the sensor has no <film>: using Mitsuba's default size {}×{} with a box filter (Mitsuba's default filter is gaussian)",
+                    "line {}: the sensor has no <film>: using Mitsuba's default size {}×{} and gaussian filter",
                     obj.loc.line, DEFAULT_FILM.0, DEFAULT_FILM.1
                 ));
-                DEFAULT_FILM
+                (DEFAULT_FILM.0, DEFAULT_FILM.1, Filter::MITSUBA_DEFAULT)
             }
         };
         let spp = match sampler {
             Some(s) => self.sampler(s)?,
             None => None,
         };
-        Ok(SensorSpec { to_world, fov: fov as f32, fov_axis, width, height, spp })
+        Ok(SensorSpec { to_world, fov: fov as f32, fov_axis, width, height, spp, lens, filter })
     }
 
-    fn film(&mut self, idx: usize) -> Res<(u32, u32)> {
+    /// `thinlens`'s `aperture_radius` (required, as in Mitsuba) and `focus_distance`
+    /// (Mitsuba's default: `far_clip`, 10⁴). A zero aperture is the pinhole (Mitsuba
+    /// substitutes its float epsilon, with a warning).
+    fn lens(&mut self, p: &mut Props, loc: Loc) -> Res<Option<Lens>> {
+        let radius = p.float_opt("aperture_radius")?.ok_or_else(|| Fail::at(loc, "the thinlens sensor needs `aperture_radius`"))?;
+        if !(radius >= 0.0 && radius.is_finite()) {
+            return Err(Fail::at(p.loc_of("aperture_radius"), format!("`aperture_radius` must be finite and non-negative, got {radius}")));
+        }
+        let focus = p.float_opt("focus_distance")?.unwrap_or(1e4);
+        if !(focus > 0.0 && focus.is_finite()) {
+            return Err(Fail::at(p.loc_of("focus_distance"), format!("`focus_distance` must be finite and positive, got {focus}")));
+        }
+        if radius == 0.0 {
+            self.warnings.push(format!("line {}: thinlens with a zero `aperture_radius`: rendered as a pinhole", loc.line));
+            return Ok(None);
+        }
+        Lens::new(radius as f32, focus as f32).map(Some).ok_or_else(|| Fail::at(p.loc_of("aperture_radius"), "the lens does not fit in single precision"))
+    }
+
+    fn film(&mut self, idx: usize) -> Res<(u32, u32, Filter)> {
         let obj = self.obj(idx)?;
         self.mark(idx);
         if obj.kind != "hdrfilm" {
@@ -377,21 +402,35 @@ impl<'a> Ctx<'a> {
             self.warnings.push(format!("line {}: film pixel_format \"{f}\" is not used: ember writes RGB", obj.loc.line));
         }
         p.finish()?;
-        match self.single_child(obj, Tag::RFilter)? {
-            Some(r) => {
-                let rf = self.obj(r)?;
-                self.mark(r);
-                if rf.kind != "box" {
-                    return Err(Fail::at(rf.loc, format!("unsupported rfilter type \"{}\" (supported: box)", rf.kind)));
-                }
-                self.no_children(rf)?;
-                Props::new(rf).finish()?;
-            }
-            None => {
-                self.warnings.push(format!("line {}: the film has no <rfilter>: Mitsuba would use a gaussian filter; ember uses a box filter", obj.loc.line))
-            }
-        }
-        Ok((width, height))
+        // No <rfilter>: Mitsuba's default, the gaussian (`src/render/film.cpp`).
+        let filter = match self.single_child(obj, Tag::RFilter)? {
+            Some(r) => self.rfilter(r)?,
+            None => Filter::MITSUBA_DEFAULT,
+        };
+        Ok((width, height, filter))
+    }
+
+    /// `box`, `tent` (`radius`, default 1) or `gaussian` (`stddev`, default 0.5).
+    fn rfilter(&mut self, idx: usize) -> Res<Filter> {
+        let rf = self.obj(idx)?;
+        self.mark(idx);
+        self.no_children(rf)?;
+        let mut p = Props::new(rf);
+        let (name, default) = match rf.kind.as_str() {
+            "box" => ("", 0.0),
+            "tent" => ("radius", 1.0),
+            "gaussian" => ("stddev", 0.5),
+            other => return Err(Fail::at(rf.loc, format!("unsupported rfilter type \"{other}\" (supported: box, tent, gaussian)"))),
+        };
+        let filter = if name.is_empty() {
+            Filter::Box
+        } else {
+            let v = p.float_opt(name)?.unwrap_or(default);
+            let f = if rf.kind == "tent" { Filter::tent(v as f32) } else { Filter::gaussian(v as f32) };
+            f.ok_or_else(|| Fail::at(p.loc_of(name), format!("{} `{name}` must be finite and positive, got {v}", rf.kind)))?
+        };
+        p.finish()?;
+        Ok(filter)
     }
 
     fn sampler(&mut self, idx: usize) -> Res<Option<u32>> {

@@ -12,7 +12,7 @@
 //! is an unknown element, plugin type or attribute, a malformed number, a broken `ref`, a
 //! missing mesh file or a non-finite mesh vertex. Every error names the file, the line
 //! and column, and what is supported there. Things Mitsuba would do that ember does not
-//! model (a non-`independent` sampler, a film without a box `rfilter`, an integrator type
+//! model (a non-`independent` sampler, an integrator type
 //! other than `path`, ...) are accepted with a warning in [`LoadedScene::warnings`];
 //! nothing in a file is ignored silently.
 //!
@@ -32,8 +32,10 @@
 //!   `color1`, `to_uv`). Meshes carry their texture coordinates (OBJ `vt`, PLY `u`/`v`,
 //!   `flip_tex_coords`).
 //! - Emitters: `area`, `point`, `spot`, `directional`, `constant`.
-//! - `sensor` `perspective` with `hdrfilm` (box `rfilter`) and any `sampler`; any
-//!   `integrator` (only `max_depth` is read).
+//! - `sensor` `perspective` and `thinlens` (`aperture_radius`, `focus_distance`) with
+//!   `hdrfilm` and any `sampler`; `rfilter` `box`, `tent` (`radius`), `gaussian`
+//!   (`stddev`; also a film without `rfilter`, as in Mitsuba); any `integrator` (only
+//!   `max_depth` is read).
 //! - Values: `float`, `integer`, `boolean`, `string`, `rgb`, `spectrum` (one value),
 //!   `point`, `vector`, `transform` (`translate`, `rotate`, `scale`, `matrix`, `lookat`).
 

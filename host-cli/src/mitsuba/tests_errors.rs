@@ -58,11 +58,43 @@ fn unknown_plugins_name_the_supported_ones() {
     let c = "<emitter type=\"hdrsky\"/>";
     let e = fail("plugin_emitter", c);
     check(&e, 4, col(c, 4, "<emitter"), &["unsupported emitter type \"hdrsky\"", "point, spot, directional, constant, envmap"]);
-    // A gaussian reconstruction filter is rejected.
+    // A lanczos reconstruction filter is rejected (box, tent and gaussian are read).
     let dir = temp_dir("plugin_rfilter2");
     let path = dir.join("scene.xml");
-    std::fs::write(&path, "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" value=\"30\"/>\n<film type=\"hdrfilm\">\n  <rfilter type=\"gaussian\"/></film></sensor></scene>").unwrap();
-    check(&load_scene(&path, &LoadOptions::default()).unwrap_err(), 4, 3, &["unsupported rfilter type \"gaussian\"", "box"]);
+    std::fs::write(&path, "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" value=\"30\"/>\n<film type=\"hdrfilm\">\n  <rfilter type=\"lanczos\"/></film></sensor></scene>").unwrap();
+    check(&load_scene(&path, &LoadOptions::default()).unwrap_err(), 4, 3, &["unsupported rfilter type \"lanczos\"", "box, tent, gaussian"]);
+    // Bad filter and lens values name their line.
+    let bad = [
+        (
+            "rfilter_neg",
+            "<rfilter type=\"gaussian\">\n  <float name=\"stddev\" value=\"-0.5\"/></rfilter>",
+            "perspective",
+            "",
+            4,
+            "gaussian `stddev` must be finite and positive",
+        ),
+        ("rfilter_nan", "<rfilter type=\"tent\">\n  <float name=\"radius\" value=\"nan\"/></rfilter>", "perspective", "", 4, "number \"nan\" is not finite"),
+        ("lens_neg", "", "thinlens", "\n  <float name=\"aperture_radius\" value=\"-1\"/>", 3, "`aperture_radius` must be finite and non-negative"),
+        (
+            "lens_focus",
+            "",
+            "thinlens",
+            "<float name=\"aperture_radius\" value=\"0.1\"/>\n  <float name=\"focus_distance\" value=\"0\"/>",
+            3,
+            "`focus_distance` must be finite and positive",
+        ),
+    ];
+    for (name, rfilter, sensor, lens, line, msg) in bad {
+        let dir = temp_dir(name);
+        let path = dir.join("scene.xml");
+        let xml = format!(
+            "<scene version=\"3.0.0\">\n<sensor type=\"{sensor}\"><float name=\"fov\" value=\"30\"/>{lens}\n<film type=\"hdrfilm\">{rfilter}</film></sensor></scene>"
+        );
+        std::fs::write(&path, xml).unwrap();
+        let e = load_scene(&path, &LoadOptions::default()).unwrap_err();
+        let text = e.to_string();
+        assert!(text.contains(msg) && text.contains(&format!("scene.xml:{line}:")), "{name}: {text}");
+    }
 }
 
 #[test]

@@ -93,11 +93,13 @@ pub fn trace_light_paths<Q: RayQuery + ?Sized>(
         let light = trace_light_subpath(scene, tracer, params, Stream::Light, index, pass, &mut counters);
         out.push(&light);
         // (1, 1) is covered by (0, 2), as in BDPT.
+        let mut lens = crate::camera::lens_stream(params.seed, index, pass);
         for s in 2..=light.len() {
             if !params.max_depth.allows(s as u32) {
                 break;
             }
-            if let Some(c) = strategy(&ctx, &light[..s], &[], s, 1, LightPointSample::default(), counts, &mut counters) {
+            let u = LightPointSample { u_light: 0.0, u_point: scene.camera.lens_u(&mut lens) };
+            if let Some(c) = strategy(&ctx, &light[..s], &[], s, 1, u, counts, &mut counters) {
                 if let Some(film) = c.film {
                     splat(Splat { film, value: counters.sanitize(c.value) });
                 }

@@ -540,6 +540,7 @@ pub fn splat_light_paths<Q: RayQuery + ?Sized>(
     model: &Model,
     cache: &PassCache,
     light_tracing: f64,
+    pass: u32,
     paths: Range<u32>,
     splat: &mut dyn FnMut(Splat),
 ) -> Counters {
@@ -549,11 +550,13 @@ pub fn splat_light_paths<Q: RayQuery + ?Sized>(
         let light = cache.paths.path(i as usize);
         let start = cache.paths.starts[i as usize] as usize;
         let memo = cache.memo.get(start..start + light.len()).unwrap_or(&[]);
+        let mut lens = crate::camera::lens_stream(params.seed, i, pass);
         for s in 2..=light.len() {
             if !params.max_depth.allows(s as u32) {
                 break;
             }
-            let c = strategies.evaluate_labelled(&light[..s], &[], None, memo.get(..s).unwrap_or(&[]), s, 1, LightPointSample::default(), &mut counters);
+            let u = LightPointSample { u_light: 0.0, u_point: scene.camera.lens_u(&mut lens) };
+            let c = strategies.evaluate_labelled(&light[..s], &[], None, memo.get(..s).unwrap_or(&[]), s, 1, u, &mut counters);
             if let Some(Weighted { value, film: Some(film), .. }) = c {
                 splat(Splat { film, value: counters.sanitize(value) });
             }

@@ -228,7 +228,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
                     }
                     6 => {
                         let splats = &mut out.splats;
-                        out.counters = splat_light_paths(scene, tracer, params, model, &self.cache, self.light_tracing(), items, &mut |s| splats.push(s));
+                        out.counters = splat_light_paths(scene, tracer, params, model, &self.cache, self.light_tracing(), pass, items, &mut |s| splats.push(s));
                     }
                     _ => {
                         out.counters = render_pixels(scene, tracer, params, model, &self.cache, self.light_paths, pass, items, out.pixel_buffer());

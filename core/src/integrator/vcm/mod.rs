@@ -111,11 +111,13 @@ pub fn trace_light_paths<Q: RayQuery + ?Sized>(
         if !(tech.light_tracing > 0.0) {
             continue;
         }
+        let mut lens = crate::camera::lens_stream(params.seed, index, pass);
         for s in 2..=light.len() {
             if !params.max_depth.allows(s as u32) {
                 break;
             }
-            let Some(c) = connect(&ctx, &light[..s], &[], s, 1, LightPointSample::default(), &mut counters) else { continue };
+            let u = LightPointSample { u_light: 0.0, u_point: scene.camera.lens_u(&mut lens) };
+            let Some(c) = connect(&ctx, &light[..s], &[], s, 1, u, &mut counters) else { continue };
             let w = connection_weight(scene, tech, &light, b, &[], &[], c.sampled.as_ref(), s, 1);
             if let Some(film) = c.film {
                 splat(Splat { film, value: counters.sanitize(c.value * w) });

@@ -165,8 +165,12 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
         }
         if self.cursor.advance() {
             self.pixel_values.clear();
-            for (&first, &sky) in self.pass.links.iter().zip(&self.pass.values) {
-                self.pixel_values.push(if first == NONE { sky } else { self.pass.value(first) });
+            let (camera, pass) = (&ctx.scene.camera, phase.pass.unwrap_or(0));
+            for (pixel, (&first, &sky)) in self.pass.links.iter().zip(&self.pass.values).enumerate() {
+                let l = if first == NONE { sky } else { self.pass.value(first) };
+                // The filter weight of the pixel's camera sample (1 for the box).
+                let w = if camera.filter().is_box() { 1.0 } else { camera.camera_sample_weight(self.params.seed, pixel as u32, pass) };
+                self.pixel_values.push(l * w);
             }
             film.set_camera_samples(0..self.pixels, &self.pixel_values);
             film.end_pass(1.0);

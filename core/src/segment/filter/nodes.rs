@@ -165,10 +165,13 @@ pub fn trace_camera_nodes<Q: RayQuery + ?Sized>(
     let width = scene.camera.width().max(1);
     for pixel in pixels {
         let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
-        let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
-        let ray = scene.camera.generate_ray(film);
-        let (node, escaped) =
-            if max_segments >= 1 { walk(scene, tracer, params, max_segments, ray, &mut rng, nodes, &mut counters) } else { (NONE, Rgb::ZERO) };
+        // The filter weight is applied when the pixel's value is final
+        // (`PerspectiveCamera::camera_sample_weight`); outside the image, nothing.
+        let primary = scene.camera.sample_ray(pixel % width, pixel / width, &mut rng);
+        let (node, escaped) = match primary {
+            Some(p) if max_segments >= 1 => walk(scene, tracer, params, max_segments, p.ray, &mut rng, nodes, &mut counters),
+            _ => (NONE, Rgb::ZERO),
+        };
         first.push(node);
         sky.push(escaped);
     }

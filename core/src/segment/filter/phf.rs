@@ -36,7 +36,6 @@ use super::pass::FilterPass;
 use crate::bsdf::TransportMode;
 use crate::geometry::RayQuery;
 use crate::integrator::{Counters, RenderParams, SurfacePoint};
-use crate::math::Vec2;
 use crate::merge::{Footprint, progressive_radius};
 use crate::render::{ChunkOutput, Context, Cursor, Film, FilterConfig, Phase, Phased, Stage};
 use crate::rng::{SampleStream, Stream};
@@ -182,9 +181,13 @@ fn gather_pixels<Q: RayQuery + ?Sized>(
     let kernel = Kernel::Disk { radius: pass_data.r };
     for (slot, pixel) in out.iter_mut().zip(pixels) {
         let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
-        let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
-        let mut ray = scene.camera.generate_ray(film);
-        let mut beta = Rgb::ONE;
+        let Some(primary) = scene.camera.sample_ray(pixel % width, pixel / width, &mut rng) else {
+            *slot = Rgb::ZERO;
+            continue;
+        };
+        let mut ray = primary.ray;
+        // The path's throughput starts at the filter weight.
+        let mut beta = Rgb::splat(primary.weight);
         let mut l = Rgb::ZERO;
         let mut segments = 1u32;
         while params.max_depth.allows(segments) && segments <= MAX_CAMERA_BOUNCES {
