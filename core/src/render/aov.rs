@@ -8,13 +8,14 @@
 //! texture coordinates ([`crate::bsdf::Material::albedo_hint`], clamped to [0, 1]) and the
 //! world-space shading normal facing the ray. A ray that escapes, or stays on Dirac
 //! surfaces, gives zero for both: OIDN reads zero albedo as "no texture detail to keep".
-//! Each pixel averages `samples` rays jittered over the pixel (and the lens); random numbers
+//! Each pixel averages `samples` camera rays drawn as the estimators draw them (through the
+//! reconstruction filter, weighted, and the lens); random numbers
 //! come from their own stream per pixel, so the guides do not depend on the thread count
 //! or on the estimator.
 
 use crate::bsdf::TransportMode;
 use crate::geometry::{RayQuery, spawn_ray};
-use crate::math::{Frame, Vec2, Vec3};
+use crate::math::{Frame, Vec3};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -60,16 +61,19 @@ pub fn render_guides<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, seed: u64,
     let width = scene.camera.width().max(1);
     let n = samples.max(1);
     for ((pixel, a), nrm) in pixels.zip(albedo.iter_mut()).zip(normal.iter_mut()) {
-        let (mut sum_a, mut sum_n) = (Rgb::ZERO, Vec3::ZERO);
+        let (mut sum_a, mut sum_n, mut sum_w) = (Rgb::ZERO, Vec3::ZERO, 0.0f32);
         for s in 0..n {
             let mut rng = SampleStream::for_sample(seed, Stream::Camera, pixel, GUIDE_PASS + s, 0);
-            let film = Vec2::new((pixel % width) as f32, (pixel / width) as f32) + rng.next_2d();
-            let ray = scene.camera.generate_ray(film);
-            let g = first_surface(scene, tracer, ray, &mut rng);
-            sum_a += g.albedo;
-            sum_n += g.normal;
+            // The camera's own sampling: the reconstruction filter and the lens.
+            let Some(primary) = scene.camera.sample_ray(pixel % width, pixel / width, &mut rng) else { continue };
+            let g = first_surface(scene, tracer, primary.ray, &mut rng);
+            sum_a += g.albedo * primary.weight;
+            sum_n += g.normal * primary.weight;
+            sum_w += primary.weight;
         }
-        *a = sum_a * (1.0 / n as f32);
-        *nrm = sum_n / n as f32;
+        // The filter-weighted mean (the weights average 1 but vary a little per sample).
+        let inv = if sum_w > 0.0 { 1.0 / sum_w } else { 0.0 };
+        *a = sum_a * inv;
+        *nrm = sum_n * inv;
     }
 }
