@@ -14,9 +14,12 @@
 //!    a z-test from the spread of its passes; the estimators with a kernel (photon and
 //!    path filtering, merging) may also be off by their kernel's bias, up to 3 %.
 //!
-//! Injected bugs seen to fail it (each reverted): the PNG's sRGB decoding removed
-//! (texels read linear: test 2, see the note); the envmap's sin θ Jacobian removed from
-//! its density (see the note).
+//! Measured on the correct code: worst |z| 3.70 of 576 (block (3, 5), blue, ratio 0.992);
+//! image means of all 14 estimators within 0.5–1.1 % of Mitsuba's (|z| ≤ 1.95, kernel
+//! allowance aside). Injected bugs seen to fail test 2 (each reverted): the PNG's sRGB
+//! decoding removed (texels read linear): block (1, 3), red, z = 55; the envmap's sin θ
+//! Jacobian removed from its solid-angle density (`EnvMap::solid_angle`): same block,
+//! z = 7.2. 26 s in release on 2 cores for both tests.
 
 use std::path::PathBuf;
 use std::time::Instant;
