@@ -5,8 +5,9 @@
 //!   1e-6 absolute: at grazing angles f32 recomputes cos θ only to ~1e-8), a
 //!   finite non-negative `pdf_rev` equal to `pdf_rev(wo, wi)`, and a finite η > 0;
 //! - `eval`, `pdf` and `pdf_rev` at an arbitrary second direction are finite and ≥ 0;
-//! Materials: diffuse, conductor, rough conductor, dielectric, rough dielectric and rough
-//! plastic (over four prebuilt coatings), each optionally two-sided.
+//! Materials: diffuse, conductor, rough conductor, dielectric, rough dielectric, smooth
+//! plastic (any index) and rough plastic (over four prebuilt coatings), each optionally
+//! two-sided, and any of them with a texel value set in one of its texture slots.
 //! - a diffuse surface seen from the front always samples, and at least 30 % of all
 //!   inputs not grazing within 1e-3 produce a sample (so the target cannot pass by
 //!   rejecting everything).
@@ -14,7 +15,7 @@
 
 use std::sync::OnceLock;
 
-use ember_core::bsdf::{Material, MicrofacetKind, PlasticCoating, TransportMode};
+use ember_core::bsdf::{Material, MicrofacetKind, PlasticCoating, TextureSlot, TransportMode};
 use ember_core::spectrum::Rgb;
 use ember_fuzz::{Bytes, ShareFloor, close, finite_nonneg3};
 use libfuzzer_sys::fuzz_target;
@@ -58,17 +59,25 @@ fn material(b: &mut Bytes) -> (Material, bool) {
         0 => b.finite().abs(),
         _ => b.log_uniform(1e-5, 1.0),
     };
-    let kind = b.u8() % 6;
+    let kind = b.u8() % 7;
     let m = match kind {
         0 => Material::diffuse(colour(b)),
         1 => Material::conductor(Rgb::splat(ior(b)), Rgb::splat(b.log_uniform(1e-3, 10.0)), colour(b)),
         2 => Material::rough_conductor(distr, alpha, Rgb::new(ior(b), ior(b), ior(b)), Rgb::splat(b.log_uniform(1e-3, 10.0)), colour(b)),
         3 => Material::dielectric(ior(b), ior(b), colour(b), colour(b)),
         4 => Material::rough_dielectric(distr, alpha, ior(b), ior(b), colour(b), colour(b)),
+        5 => Material::plastic(ior(b), ior(b), colour(b), colour(b), b.u8() & 1 == 1),
         _ => {
             let c = &coatings()[b.u8() as usize % coatings().len()];
             Material::rough_plastic_coated(c, colour(b), colour(b), b.u8() & 1 == 1)
         }
+    };
+    // A texture's value at a hit replaces a parameter (the way `Scene::material` reads it).
+    let m = match b.u8() % 4 {
+        0 => m.with_texel(TextureSlot::Diffuse, colour(b)),
+        1 => m.with_texel(TextureSlot::SpecularReflectance, colour(b)),
+        2 => m.with_texel(TextureSlot::SpecularTransmittance, colour(b)),
+        _ => m,
     };
     (if b.u8() & 1 == 1 { m.two_sided() } else { m }, kind == 0)
 }
