@@ -25,9 +25,8 @@ use ember_cli::driver::{DriverConfig, Limits};
 use ember_cli::estimators::{CoreRenderer, PreparedScene};
 use ember_cli::mitsuba::{LoadOptions, load_scene_from_str};
 use ember_core::render::{EstimatorKind, Film};
-use ember_tests::chi2::sidak;
-use ember_tests::reference::read_exr;
-use ember_tests::stats::{MeanVar, normal_two_sided_p};
+use ember_tests::reference::{Reference, push_film_blocks};
+use ember_tests::stats::MeanVar;
 
 const W: usize = 48;
 const H: usize = 36;
@@ -61,61 +60,17 @@ fn render(r: &mut CoreRenderer, first: u32, passes: u32) -> Film {
 
 #[test]
 fn path_tracer_matches_mitsuba_under_an_environment_map() {
-    let reference = read_exr(&data().join("reference.exr")).expect("reference");
-    let half_a = read_exr(&data().join("reference-half-a.exr")).expect("half a");
-    let half_b = read_exr(&data().join("reference-half-b.exr")).expect("half b");
-    assert_eq!((reference.width, reference.height), (W, H));
-    let (nbx, nby) = (W / B, H / B);
-    let mut stats = vec![[MeanVar::default(); 3]; nbx * nby];
+    let reference = Reference::load(&data(), 8192.0).expect("reference");
+    assert_eq!((reference.image.width, reference.image.height), (W, H));
     const PASSES: u32 = 64;
+    let mut stats = vec![[MeanVar::default(); 3]; (W / B) * (H / B)];
     let mut r = renderer();
     for k in 0..16 {
-        let film = render(&mut r, k * PASSES, PASSES);
-        let sums = film.sums();
-        for by in 0..nby {
-            for bx in 0..nbx {
-                let mut m = [0.0f64; 3];
-                for y in by * B..(by + 1) * B {
-                    for x in bx * B..(bx + 1) * B {
-                        for c in 0..3 {
-                            m[c] += sums[y * W + x][c] / PASSES as f64 / (B * B) as f64;
-                        }
-                    }
-                }
-                for c in 0..3 {
-                    stats[by * nbx + bx][c].push(m[c]);
-                }
-            }
-        }
+        push_film_blocks(&mut stats, &render(&mut r, k * PASSES, PASSES).sums(), W, PASSES, B);
     }
-    let alpha = sidak(0.01, nbx * nby * 3);
-    let mut worst = 0.0f64;
-    for by in 0..nby {
-        for bx in 0..nbx {
-            let r = reference.block_mean(bx, by, B, B);
-            let (a, b) = (half_a.block_mean(bx, by, B, B), half_b.block_mean(bx, by, B, B));
-            for c in 0..3 {
-                let ours = &stats[by * nbx + bx][c];
-                // Two halves give a poor estimate of the reference's error (one block
-                // read 1.3·10⁻⁵ where ours was 3.5·10⁻⁴ at equal samples); Mitsuba's path
-                // tracer is no less noisy than ours, so take at least ours scaled by the
-                // sample counts (8192 spp against 16 × 64).
-                let ref_se = (0.5 * (a[c] - b[c]).abs()).max(ours.std_error() * (1024.0f64 / 8192.0).sqrt());
-                // Blocks of bare sky are nearly noise-free on both sides; Mitsuba's
-                // value there is 3·10⁻⁵ off the texel's (0.179994 for 0.18: its f32
-                // interpolation arithmetic), so 10⁻⁴ relative is the floor.
-                let se = (ours.std_error().powi(2) + ref_se * ref_se + (1e-4 * r[c]).powi(2)).sqrt();
-                let z = (ours.mean() - r[c]) / se;
-                worst = worst.max(z.abs());
-                assert!(
-                    normal_two_sided_p(z) > alpha,
-                    "block ({bx}, {by}) channel {c}: ours {} ± {}, Mitsuba {} ± {ref_se} (z = {z:.2})",
-                    ours.mean(),
-                    ours.std_error(),
-                    r[c]
-                );
-            }
-        }
-    }
-    println!("{} blocks × 3 channels, worst |z| = {worst:.2}", nbx * nby);
+    // Blocks of bare sky are nearly noise-free on both sides; Mitsuba's value there is
+    // 3·10⁻⁵ off the texel's (0.179994 for 0.18: its f32 interpolation arithmetic), so
+    // 10⁻⁴ relative is the floor.
+    let w = reference.assert_blocks_match(&stats, B, (16 * PASSES) as f64, 1e-4);
+    println!("{} blocks × 3 channels, worst |z| = {:.2}", stats.len(), w.z);
 }

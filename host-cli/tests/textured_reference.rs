@@ -29,7 +29,7 @@ use ember_cli::estimators::{CoreRenderer, PreparedScene};
 use ember_cli::mitsuba::{LoadOptions, load_scene};
 use ember_core::render::{EstimatorKind, Film};
 use ember_tests::chi2::sidak;
-use ember_tests::reference::read_exr;
+use ember_tests::reference::{Reference, push_film_blocks, read_exr};
 use ember_tests::stats::{MeanVar, normal_two_sided_p};
 
 const W: usize = 320;
@@ -63,60 +63,15 @@ fn render(r: &mut CoreRenderer, first: u32, passes: u32) -> Film {
 
 #[test]
 fn path_tracer_matches_mitsuba_on_textured() {
-    let reference = read_exr(&dir().join("reference.exr")).expect("reference");
-    let half_a = read_exr(&dir().join("reference-half-a.exr")).expect("half a");
-    let half_b = read_exr(&dir().join("reference-half-b.exr")).expect("half b");
-    assert_eq!((reference.width, reference.height), (W, H));
-    let (nbx, nby) = (W / B, H / B);
-    let mut stats = vec![[MeanVar::default(); 3]; nbx * nby];
+    let reference = Reference::load(&dir(), 12_928.0).expect("reference");
+    assert_eq!((reference.image.width, reference.image.height), (W, H));
+    let mut stats = vec![[MeanVar::default(); 3]; (W / B) * (H / B)];
     let mut r = renderer(EstimatorKind::Pt, None);
     for k in 0..16 {
-        let film = render(&mut r, k * PASSES, PASSES);
-        let sums = film.sums();
-        for by in 0..nby {
-            for bx in 0..nbx {
-                let mut m = [0.0f64; 3];
-                for y in by * B..(by + 1) * B {
-                    for x in bx * B..(bx + 1) * B {
-                        for c in 0..3 {
-                            m[c] += sums[y * W + x][c] / PASSES as f64 / (B * B) as f64;
-                        }
-                    }
-                }
-                for c in 0..3 {
-                    stats[by * nbx + bx][c].push(m[c]);
-                }
-            }
-        }
+        push_film_blocks(&mut stats, &render(&mut r, k * PASSES, PASSES).sums(), W, PASSES, B);
     }
-    let alpha = sidak(0.01, nbx * nby * 3);
-    let mut worst = (0.0f64, 0usize, 0usize, 0usize, 0.0f64);
-    for by in 0..nby {
-        for bx in 0..nbx {
-            let r = reference.block_mean(bx, by, B, B);
-            let (a, b) = (half_a.block_mean(bx, by, B, B), half_b.block_mean(bx, by, B, B));
-            for c in 0..3 {
-                let ours = &stats[by * nbx + bx][c];
-                // Two halves estimate the reference's error poorly; it is no less noisy than
-                // ours per sample, so at least ours scaled by the sample counts (12 928 spp
-                // against 16 × PASSES).
-                let ref_se = (0.5 * (a[c] - b[c]).abs()).max(ours.std_error() * ((16 * PASSES) as f64 / 12_928.0).sqrt());
-                let se = (ours.std_error().powi(2) + ref_se * ref_se).sqrt();
-                let z = (ours.mean() - r[c]) / se;
-                if z.abs() > worst.0 {
-                    worst = (z.abs(), bx, by, c, ours.mean() / r[c]);
-                }
-                assert!(
-                    normal_two_sided_p(z) > alpha,
-                    "block ({bx}, {by}) channel {c}: ours {} ± {}, Mitsuba {} ± {ref_se} (z = {z:.2})",
-                    ours.mean(),
-                    ours.std_error(),
-                    r[c]
-                );
-            }
-        }
-    }
-    println!("{} blocks × 3 channels, worst |z| = {:.2} at block ({}, {}) channel {} (ratio {:.4})", nbx * nby, worst.0, worst.1, worst.2, worst.3, worst.4);
+    let w = reference.assert_blocks_match(&stats, B, (16 * PASSES) as f64, 0.0);
+    println!("{} blocks × 3 channels, worst |z| = {:.2} at block {:?} channel {} (ratio {:.4})", stats.len(), w.z, w.block, w.channel, w.ratio);
 }
 
 /// Estimators whose kernel biases them (merging, photon and path filtering).

@@ -57,8 +57,9 @@ pub(crate) fn diffuse_fresnel_reflectance(eta: f32) -> f32 {
     }
 }
 
-/// ρ' for a base of reflectance `rho` (module notes).
-fn effective_diffuse(rho: Rgb, fdr_int: f32, nonlinear: bool) -> Rgb {
+/// ρ' for a base of reflectance `rho` under a coating that reflects `fdr_int` of the
+/// base's light back down (module notes; rough plastic's R_int too).
+pub(super) fn effective_diffuse(rho: Rgb, fdr_int: f32, nonlinear: bool) -> Rgb {
     if nonlinear {
         Rgb::new(rho.r / (1.0 - rho.r * fdr_int), rho.g / (1.0 - rho.g * fdr_int), rho.b / (1.0 - rho.b * fdr_int))
     } else {

@@ -23,6 +23,7 @@
 use alloc::vec::Vec;
 
 use super::microfacet::{Microfacet, reflection_half};
+use super::plastic::effective_diffuse;
 use super::{BsdfSample, fresnel};
 use crate::math::{Vec2, Vec3, reflect, sqrt};
 use crate::measure::SolidAnglePdf;
@@ -133,15 +134,6 @@ impl PlasticCoating {
             internal += f64::from(coating_average(&distr, wi, 1.0 / eta, false, &inside) * mu);
         }
         Self { distr, eta, transmittance, internal: (2.0 * internal / RES as f64) as f32 }
-    }
-}
-
-/// ρ' for a base of reflectance `rho` under a coating of internal reflectance `internal`.
-fn effective_diffuse(rho: Rgb, internal: f32, nonlinear: bool) -> Rgb {
-    if nonlinear {
-        Rgb::new(rho.r / (1.0 - rho.r * internal), rho.g / (1.0 - rho.g * internal), rho.b / (1.0 - rho.b * internal))
-    } else {
-        rho * (1.0 / (1.0 - internal))
     }
 }
 
