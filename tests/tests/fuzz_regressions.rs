@@ -94,3 +94,20 @@ fn point_and_spot_lights_seen_from_almost_their_position_sample_nothing_or_unit_
         }
     }
 }
+
+/// Smooth plastic at an extreme index (η = 10³, two-sided, `nonlinear`) evaluated a
+/// negative value: Mitsuba's fitted internal diffuse reflectance is 64 there, so
+/// ρ/(1 − ρ F_dr) < 0 (fixed: F_dr kept below 1). Seen failing with the clamp removed
+/// (f = −4.0·10⁻¹⁴ at the fuzzer's grazing pair).
+#[test]
+fn smooth_plastic_at_an_extreme_index_is_non_negative() {
+    for nonlinear in [false, true] {
+        let m = Material::plastic(1e3, 1.0, Rgb::new(0.5, 0.5, 0.0), Rgb::new(0.0, 1.0, 0.5), nonlinear).two_sided();
+        let wo = Vec3::new(0.000_345_266_98, -1.042_677_3e-10, -0.999_999_94);
+        let wi = Vec3::new(0.000_345_266_95, 1.653_809_8e-7, -0.999_999_94);
+        for (a, b) in [(wo, wi), (Vec3::Z, Vec3::new(0.6, 0.0, 0.8))] {
+            let f = m.eval(a, b, TransportMode::Radiance);
+            assert!(f.is_finite() && f.r >= 0.0 && f.g >= 0.0 && f.b >= 0.0, "nonlinear {nonlinear}: {f:?}");
+        }
+    }
+}

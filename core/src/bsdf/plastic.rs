@@ -60,6 +60,9 @@ pub(crate) fn diffuse_fresnel_reflectance(eta: f32) -> f32 {
 /// ρ' for a base of reflectance `rho` under a coating that reflects `fdr_int` of the
 /// base's light back down (module notes; rough plastic's R_int too).
 pub(super) fn effective_diffuse(rho: Rgb, fdr_int: f32, nonlinear: bool) -> Rgb {
+    // ρ ≤ 1 and F_dr < 1 keep every denominator positive; a texel above 1 (an EXR) with
+    // `nonlinear` could still cross zero: no base then rather than a negative one.
+    let rho = if nonlinear { Rgb::new(rho.r.min(1.0), rho.g.min(1.0), rho.b.min(1.0)) } else { rho };
     if nonlinear {
         Rgb::new(rho.r / (1.0 - rho.r * fdr_int), rho.g / (1.0 - rho.g * fdr_int), rho.b / (1.0 - rho.b * fdr_int))
     } else {
@@ -69,7 +72,10 @@ pub(super) fn effective_diffuse(rho: Rgb, fdr_int: f32, nonlinear: bool) -> Rgb 
 
 impl Plastic {
     pub fn new(eta: f32, diffuse: Rgb, specular_reflectance: Rgb, nonlinear: bool) -> Self {
-        let fdr_int = diffuse_fresnel_reflectance(1.0 / eta);
+        // The fits hold for ordinary indices; far outside them (η = 10³: the Egan–Hilgeman
+        // fit gave F_dr = 64, and a negative base, found by fuzzing) F_dr is a reflectance
+        // all the same, kept below 1 so that ρ' stays finite and non-negative.
+        let fdr_int = diffuse_fresnel_reflectance(1.0 / eta).clamp(0.0, 1.0 - 1e-6);
         let (d_mean, s_mean) = (diffuse.average(), specular_reflectance.average());
         let specular_weight = if d_mean + s_mean > 0.0 { s_mean / (d_mean + s_mean) } else { 0.5 };
         Self { eta, diffuse: effective_diffuse(diffuse, fdr_int, nonlinear), base: diffuse, specular_reflectance, specular_weight, fdr_int, nonlinear }
