@@ -75,6 +75,34 @@ fn texture_coordinates_follow_mitsuba() {
     assert_eq!(t.texcoords(0.0, 1.0), t.uv.unwrap()[2]);
 }
 
+/// CRC-32 (IEEE, reflected), as PNG chunks carry it.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = !0u32;
+    for &b in bytes {
+        c ^= b as u32;
+        for _ in 0..8 {
+            c = if c & 1 != 0 { 0xedb8_8320 ^ (c >> 1) } else { c >> 1 };
+        }
+    }
+    !c
+}
+
+/// A PNG of `w` × `h` 8-bit RGB texels whose IDAT holds an empty zlib stream: a valid
+/// header for any size, without the data.
+fn huge_png_header(w: u32, h: u32) -> Vec<u8> {
+    let mut out = b"\x89PNG\r\n\x1a\n".to_vec();
+    let mut chunk = |kind: &[u8], data: &[u8]| {
+        out.extend_from_slice(&(data.len() as u32).to_be_bytes());
+        let body = [kind, data].concat();
+        out.extend_from_slice(&body);
+        out.extend_from_slice(&crc32(&body).to_be_bytes());
+    };
+    chunk(b"IHDR", &[&w.to_be_bytes()[..], &h.to_be_bytes(), &[8, 2, 0, 0, 0]].concat());
+    chunk(b"IDAT", &[0x78, 0x9c, 0x03, 0x00, 0x00, 0x00, 0x00, 0x01]);
+    chunk(b"IEND", &[]);
+    out
+}
+
 /// Bad texture input: each error names the file (or the parameter) and the problem.
 #[test]
 fn texture_errors_name_the_file() {
@@ -82,12 +110,16 @@ fn texture_errors_name_the_file() {
     std::fs::write(dir.join("bad.png"), b"\x89PNG\r\n\x1a\n garbage").unwrap();
     std::fs::write(dir.join("t.jpg"), b"\xff\xd8\xff").unwrap();
     write_png(&dir.join("ok.png"), [1, 2, 3], [4, 5, 6]);
+    // A PNG declaring 20 000 × 20 000 texels with a token of data: refused from its header,
+    // before anything that size is allocated.
+    std::fs::write(dir.join("huge.png"), huge_png_header(20_000, 20_000)).unwrap();
     let tex = |inner: &str| format!(r#"<shape type="rectangle"><bsdf type="diffuse">{inner}</bsdf></shape>"#);
     let cases = [
         (tex(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="missing.png"/></texture>"#), vec!["missing.png", "cannot open"]),
         (tex(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="bad.png"/></texture>"#), vec!["bad.png", "PNG"]),
         (tex(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="t.jpg"/></texture>"#), vec!["t.jpg", "unsupported image format"]),
         (tex(r#"<texture type="bitmap" name="reflectance"/>"#), vec!["needs a `filename`"]),
+        (tex(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="huge.png"/></texture>"#), vec!["huge.png", "20000x20000"]),
         (
             tex(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="ok.png"/><string name="wrap_mode" value="tile"/></texture>"#),
             vec!["wrap_mode \"tile\""],

@@ -12,8 +12,11 @@ use super::build::Ctx;
 use super::props::Props;
 use super::{Fail, Res};
 
-/// The largest bitmap side read, as for images elsewhere in the reader.
+/// The largest bitmap side read.
 const MAX_SIDE: u32 = 1 << 15;
+/// The most texels a PNG may declare: 64 Mpixel (768 MiB as linear f32 RGB), the EXR
+/// reader's limit, so a header cannot make the loader allocate without bound.
+const MAX_TEXELS: u64 = 1 << 26;
 
 impl Ctx<'_> {
     /// The texture of object `idx`: its id in the scene and its mean colour, built once
@@ -103,8 +106,8 @@ fn read_png(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Rgb>), String> {
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(|e| format!("not a readable PNG: {e}"))?;
     let (width, height) = (reader.info().width, reader.info().height);
-    if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
-        return Err(format!("{width}x{height} pixels (1 to {MAX_SIDE} a side are supported)"));
+    if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE || width as u64 * height as u64 > MAX_TEXELS {
+        return Err(format!("{width}x{height} pixels (1 to {MAX_SIDE} a side and at most {MAX_TEXELS} in all are supported)"));
     }
     let size = reader.output_buffer_size().ok_or("the image is too large")?;
     let mut buf = vec![0u8; size];
