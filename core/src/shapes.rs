@@ -24,10 +24,17 @@ impl Triangle {
     /// none (Mitsuba's convention for meshes without texture coordinates).
     #[inline]
     pub fn texcoords(&self, b1: f32, b2: f32) -> Vec2 {
-        match &self.uv {
-            Some(uv) => uv[0] * (1.0 - b1 - b2) + uv[1] * b1 + uv[2] * b2,
-            None => Vec2::new(b1, b2),
-        }
+        texcoords_at(self.uv, [1.0 - b1 - b2, b1, b2])
+    }
+}
+
+/// [`Triangle::texcoords`] from a triangle's per-vertex coordinates `uv` (if any) and all
+/// three barycentrics `b` (hosts whose intersection test yields b₀ itself).
+#[inline]
+pub fn texcoords_at(uv: Option<[Vec2; 3]>, b: [f32; 3]) -> Vec2 {
+    match uv {
+        Some(uv) => uv[0] * b[0] + uv[1] * b[1] + uv[2] * b[2],
+        None => Vec2::new(b[1], b[2]),
     }
 }
 

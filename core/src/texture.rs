@@ -198,7 +198,12 @@ impl Texture {
 
 /// Mitsuba's sRGB transfer function, decoded: an 8-bit texel's stored value to linear.
 pub fn srgb_to_linear(v: u8) -> f32 {
-    let c = v as f32 / 255.0;
+    srgb_decode(v as f32 / 255.0)
+}
+
+/// The sRGB transfer function, decoded, for an encoded value `c` in [0, 1] (16-bit
+/// texels, and [`srgb_to_linear`]).
+pub fn srgb_decode(c: f32) -> f32 {
     if c <= 0.04045 { c / 12.92 } else { libm::powf((c + 0.055) / 1.055, 2.4) }
 }
 

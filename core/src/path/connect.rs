@@ -5,10 +5,12 @@
 
 use super::vertex::{Vertex, VertexKind};
 use crate::bsdf::TransportMode;
+use crate::camera::PerspectiveCamera;
 use crate::geometry::{Ray, RayQuery, spawn_ray_to};
 use crate::integrator::Counters;
 use crate::math::{Vec2, Vec3};
 use crate::measure::VertexPdf;
+use crate::rng::SampleStream;
 use crate::scene::Context;
 use crate::spectrum::Rgb;
 
@@ -21,6 +23,14 @@ pub struct LightPointSample {
     pub u_light: f32,
     /// Chooses the point on it (s = 1), or on the lens (t = 1).
     pub u_point: Vec2,
+}
+
+impl LightPointSample {
+    /// The numbers of a t = 1 strategy: the lens point from `rng`, which gives nothing up
+    /// without a lens ([`PerspectiveCamera::lens_u`]).
+    pub fn lens(camera: &PerspectiveCamera, rng: &mut SampleStream) -> Self {
+        Self { u_light: 0.0, u_point: camera.lens_u(rng) }
+    }
 }
 
 /// A strategy's full path, connected but not weighted.

@@ -4,7 +4,7 @@
 //! same numbers on both hosts.
 
 use ember_core::geometry::{LightId, MaterialId, SurfaceHit};
-use ember_core::shapes::{SceneGeometry, Triangle};
+use ember_core::shapes::{SceneGeometry, Triangle, texcoords_at};
 use glam::{Vec2, Vec3, Vec3A};
 
 /// A triangle the structures keep: finite vertices and a non-zero area.
@@ -49,9 +49,5 @@ pub(crate) fn surface_hit(
     let p = b[0] * p0 + b[1] * p1 + b[2] * p2;
     let ng = (p1 - p0).cross(p2 - p0).normalize();
     let ns = normals.map(|n| b[0] * n[0] + b[1] * n[1] + b[2] * n[2]).and_then(|n| n.try_normalize()).map_or(ng, |n| if n.dot(ng) < 0.0 { -n } else { n });
-    let uv = match texcoords {
-        Some(uv) => uv[0] * b[0] + uv[1] * b[1] + uv[2] * b[2],
-        None => Vec2::new(b[1], b[2]),
-    };
-    SurfaceHit { t, p, ng, ns, uv, material, emitter }
+    SurfaceHit { t, p, ng, ns, uv: texcoords_at(texcoords, b), material, emitter }
 }

@@ -61,7 +61,7 @@ fn f32_prev(x: f32) -> f32 {
 }
 
 /// Hit point, outward-or-inward unit normal and Mitsuba's (φ/2π, θ/π) parameterisation
-/// for a hit at `t`. The point is re-projected onto the sphere's surface (pbrt-v4
+/// (`ember_core::shapes::sphere_texcoords`) for a hit at `t`. The point is re-projected onto the sphere's surface (pbrt-v4
 /// §6.8.5) so that its error is a few ulps whatever the ray's length.
 #[inline]
 pub(crate) fn surface(s: &Sphere, origin: Vec3, dir: Vec3, t: f32) -> (Vec3, Vec3, glam::Vec2) {
@@ -74,13 +74,7 @@ pub(crate) fn surface(s: &Sphere, origin: Vec3, dir: Vec3, t: f32) -> (Vec3, Vec
     let p = (c + local * r).as_vec3();
     let n = local.as_vec3().normalize_or(Vec3::Z);
     let ng = if s.flip_normals { -n } else { n };
-    let mut phi = local.y.atan2(local.x);
-    if phi < 0.0 {
-        phi += 2.0 * core::f64::consts::PI;
-    }
-    let theta = local.z.clamp(-1.0, 1.0).acos();
-    let uv = glam::Vec2::new((phi / (2.0 * core::f64::consts::PI)) as f32, (theta / core::f64::consts::PI) as f32);
-    (p, ng, uv)
+    (p, ng, ember_core::shapes::sphere_texcoords(n))
 }
 
 #[cfg(test)]

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use ember_core::spectrum::Rgb;
-use ember_core::texture::{Bitmap, Texture, UvTransform, WrapMode, srgb_to_linear};
+use ember_core::texture::{Bitmap, Texture, UvTransform, WrapMode, srgb_decode, srgb_to_linear};
 use glam::DMat4;
 
 use super::build::Ctx;
@@ -126,7 +126,7 @@ fn read_png(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Rgb>), String> {
         other => return Err(format!("unsupported bit depth {other:?}")),
     };
     let data = &buf[..frame.buffer_size()];
-    let decode = |v: f32| if raw { v } else { srgb_curve(v) };
+    let decode = |v: f32| if raw { v } else { srgb_decode(v) };
     // 8-bit values through the exact table of the core, 16-bit ones through the curve.
     let lut: Vec<f32> = (0..=255u8).map(|v| if raw { v as f32 / 255.0 } else { srgb_to_linear(v) }).collect();
     let sample =
@@ -141,9 +141,4 @@ fn read_png(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Rgb>), String> {
         }
     }
     Ok((width, height, texels))
-}
-
-/// The sRGB transfer function, decoded, for values in [0, 1].
-fn srgb_curve(c: f32) -> f32 {
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
 }

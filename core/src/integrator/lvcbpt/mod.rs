@@ -98,7 +98,7 @@ pub fn trace_light_paths<Q: RayQuery + ?Sized>(
             if !params.max_depth.allows(s as u32) {
                 break;
             }
-            let u = LightPointSample { u_light: 0.0, u_point: scene.camera.lens_u(&mut lens) };
+            let u = LightPointSample::lens(&scene.camera, &mut lens);
             if let Some(c) = strategy(&ctx, &light[..s], &[], s, 1, u, counts, &mut counters) {
                 if let Some(film) = c.film {
                     splat(Splat { film, value: counters.sanitize(c.value) });

@@ -555,7 +555,7 @@ pub fn splat_light_paths<Q: RayQuery + ?Sized>(
             if !params.max_depth.allows(s as u32) {
                 break;
             }
-            let u = LightPointSample { u_light: 0.0, u_point: scene.camera.lens_u(&mut lens) };
+            let u = LightPointSample::lens(&scene.camera, &mut lens);
             let c = strategies.evaluate_labelled(&light[..s], &[], None, memo.get(..s).unwrap_or(&[]), s, 1, u, &mut counters);
             if let Some(Weighted { value, film: Some(film), .. }) = c {
                 splat(Splat { film, value: counters.sanitize(value) });

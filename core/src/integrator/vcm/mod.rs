@@ -116,7 +116,7 @@ pub fn trace_light_paths<Q: RayQuery + ?Sized>(
             if !params.max_depth.allows(s as u32) {
                 break;
             }
-            let u = LightPointSample { u_light: 0.0, u_point: scene.camera.lens_u(&mut lens) };
+            let u = LightPointSample::lens(&scene.camera, &mut lens);
             let Some(c) = connect(&ctx, &light[..s], &[], s, 1, u, &mut counters) else { continue };
             let w = connection_weight(scene, tech, &light, b, &[], &[], c.sampled.as_ref(), s, 1);
             if let Some(film) = c.film {

@@ -34,7 +34,7 @@ use alloc::vec::Vec;
 
 use super::bidir::Bidirectional;
 use super::mvf::CHUNK;
-use super::nodes::{NONE, trace_camera_nodes, trace_light_nodes};
+use super::nodes::{trace_camera_nodes, trace_light_nodes};
 use super::pass::FilterPass;
 use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;
@@ -164,16 +164,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
             id => self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0))),
         }
         if self.cursor.advance() {
-            self.pixel_values.clear();
-            let (camera, pass) = (&ctx.scene.camera, phase.pass.unwrap_or(0));
-            for (pixel, (&first, &sky)) in self.pass.links.iter().zip(&self.pass.values).enumerate() {
-                let l = if first == NONE { sky } else { self.pass.value(first) };
-                // The filter weight of the pixel's camera sample (1 for the box).
-                let w = if camera.filter().is_box() { 1.0 } else { camera.camera_sample_weight(self.params.seed, pixel as u32, pass) };
-                self.pixel_values.push(l * w);
-            }
-            film.set_camera_samples(0..self.pixels, &self.pixel_values);
-            film.end_pass(1.0);
+            self.pass.commit_pixels(&ctx.scene.camera, self.params.seed, phase.pass.unwrap_or(0), &mut self.pixel_values, film);
         }
     }
 }

@@ -7,8 +7,9 @@ use alloc::vec::Vec;
 use super::graph::{FilterGraph, Rgb3};
 use super::nodes::{NONE, Node};
 use super::weights::{Denominators, Neighbourhood};
+use crate::camera::PerspectiveCamera;
 use crate::merge::HashGrid;
-use crate::render::ChunkOutput;
+use crate::render::{ChunkOutput, Film};
 use crate::scene::Scene;
 use crate::segment::Kernel;
 use crate::spectrum::Rgb;
@@ -210,6 +211,20 @@ impl FilterPass {
     /// Map step of a sweep over nodes `range`.
     pub fn map_sweep(&self, range: core::ops::Range<usize>, chunk: &mut FilterChunk) {
         self.graph.sweep(Some(&self.radiance), range, &mut chunk.radiance);
+    }
+
+    /// End a camera-side pass (MVF, BPF): each pixel's value, its first node's L or the
+    /// sky its camera ray escaped to, times the filter weight of its camera sample
+    /// (`PerspectiveCamera::camera_sample_weight`, 1 for the box), committed to `film`.
+    /// `buffer` is the estimator's, kept across passes.
+    pub fn commit_pixels(&self, camera: &PerspectiveCamera, seed: u64, pass: u32, buffer: &mut Vec<Rgb>, film: &mut Film) {
+        buffer.clear();
+        for (pixel, (&first, &sky)) in self.links.iter().zip(&self.values).enumerate() {
+            let l = if first == NONE { sky } else { self.value(first) };
+            buffer.push(l * camera.camera_sample_weight(seed, pixel as u32, pass));
+        }
+        film.set_camera_samples(0..buffer.len() as u32, buffer);
+        film.end_pass(1.0);
     }
 
     /// L (A) of node `i`, or zero for [`NONE`].
