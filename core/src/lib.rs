@@ -28,6 +28,7 @@ pub mod measure;
 pub mod merge;
 pub mod mmis;
 pub mod path;
+pub mod plan;
 pub mod render;
 pub mod rng;
 pub mod scene;

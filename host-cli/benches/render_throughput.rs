@@ -71,7 +71,8 @@ fn args(extra: &[&str]) -> RenderArgs {
 /// The built-in scene and estimator as `ember render` (no scene file) builds them.
 fn default_renderer(a: &RenderArgs) -> CoreRenderer {
     let prepared = prepare_builtin(a).expect("built-in scene");
-    CoreRenderer::new(prepared, a.estimator, a.max_depth_or(-1), a.seed).expect("renderer")
+    let ember_cli::cli::EstimatorChoice::Fixed(kind) = a.estimator else { unreachable!("the benchmark names its estimator") };
+    CoreRenderer::new(prepared, kind, a.max_depth_or(-1), a.seed).expect("renderer")
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

@@ -55,7 +55,7 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
             if let Err(e) = crate::interrupt::install() {
                 eprintln!("warning: {e}");
             }
-            let report = render(args, start, true, crate::estimators::make_built)?;
+            let report = render(args, start, true, |a| crate::estimators::make_built_at(a, start))?;
             println!("{report}");
             if report.summary.interrupted {
                 let s = if report.summary.passes == 1 { "" } else { "es" };
@@ -86,6 +86,21 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
             let bytes = crate::trained::encode(&r.renderer, &r.identity(), r.width(), r.height()).map_err(AppError::Estimator)?;
             image_io::write_atomically(out, |temp| std::fs::write(temp, &bytes), |e| e).map_err(|e| AppError::Output(format!("{}: {e}", out.display())))?;
             println!("trained    {} for {} in {:.2} s; wrote {} ({} bytes)", r.kind().name(), r.prepared.name, r.setup_seconds, out.display(), bytes.len());
+            Ok(())
+        }
+        Command::Plan(args) => {
+            let r = args.render_args();
+            let prepared = estimators::prepare(&r).map_err(AppError::Estimator)?;
+            for w in &prepared.warnings {
+                eprintln!("warning: {w}");
+            }
+            let max_depth = r.max_depth.or(prepared.max_depth).unwrap_or(-1);
+            let plans = crate::plan::plans_for_all(&prepared, max_depth, args.seed, r.thread_count(), args.pilot_samples).map_err(AppError::Estimator)?;
+            if args.json {
+                print!("{}", crate::plan::json_all(&prepared, &plans));
+            } else {
+                print!("{}", crate::plan::describe_all(&prepared, &plans));
+            }
             Ok(())
         }
         Command::Merge(args) => {
@@ -239,6 +254,10 @@ pub trait Render {
     fn memory_report(&self) -> Vec<String> {
         Vec::new()
     }
+    /// The estimator that renders, where it is one of the core's (`auto` names its choice).
+    fn estimator_name(&self) -> Option<&'static str> {
+        None
+    }
     /// What a partial image records about the render (`None`: cannot be split).
     fn identity(&self) -> Option<crate::distributed::RenderIdentity> {
         None
@@ -251,6 +270,9 @@ pub trait Render {
 }
 
 impl Render for estimators::CoreRenderer {
+    fn estimator_name(&self) -> Option<&'static str> {
+        Some(self.kind().name())
+    }
     fn size(&self) -> (u32, u32) {
         (self.width(), self.height())
     }
@@ -336,6 +358,10 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         return Err(AppError::Output(format!("output directory '{}' does not exist", dir.display())));
     }
 
+    if args.estimator == crate::cli::EstimatorChoice::Auto && (split.is_some() || args.model.is_some()) {
+        // The race depends on timing: tasks of one split render could choose differently.
+        return Err(AppError::Estimator("--estimator auto chooses by a timed race: name the estimator for split renders and --model".into()));
+    }
     // Build the scene, the ray queries and the estimator.
     let built = make(args).map_err(AppError::Estimator)?;
     let mut renderer = built.renderer;
@@ -366,7 +392,12 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         if let Some((r, _)) = split {
             until = format!("passes {r} of {until}");
         }
-        eprintln!("render: {} with {}, {width}x{height}, {until}, {} threads", built.scene, args.estimator.name(), config.threads);
+        eprintln!(
+            "render: {} with {}, {width}x{height}, {until}, {} threads",
+            built.scene,
+            renderer.estimator_name().unwrap_or(args.estimator.name()),
+            config.threads
+        );
     }
     let summary = renderer.render(&mut film, limits, config, start).map_err(AppError::Driver)?;
     if summary.interrupted && summary.passes == 0 {
@@ -383,7 +414,7 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     // interrupts may stop it early), else the EXR and the PNG.
     let base = RenderReport {
         scene: built.scene,
-        estimator: args.estimator.name(),
+        estimator: renderer.estimator_name().unwrap_or(args.estimator.name()),
         width,
         height,
         max_depth: built.max_depth,

@@ -36,10 +36,64 @@ pub enum Command {
     /// Run an estimator's preprocessing once and save its result (SPCBPT's κ trees, Q and
     /// Γ) for `render --model`: the tasks of a split render then skip it.
     Train(TrainArgs),
+    /// Print the scene plan: what each estimator's techniques need, whether the scene has
+    /// it, what a pilot of camera and light paths measured, and what a render leaves out
+    /// (docs/plan.md).
+    Plan(PlanArgs),
     /// Merge the partial images of a split render (`render --passes` or `--task-index`)
     /// into the final image: checks that the parts belong together and cover every pass
     /// once; the result equals a single-process render bit for bit (docs/distributed.md).
     Merge(MergeArgs),
+}
+
+/// Options of `ember plan`.
+#[derive(Args, Debug, Clone, PartialEq)]
+pub struct PlanArgs {
+    /// Mitsuba 3 XML scene file. Omit it to plan the built-in Cornell box.
+    #[arg(value_name = "SCENE")]
+    pub scene: Option<PathBuf>,
+    /// Plan a built-in scene instead of a file (`cornell-box` or `glass-spheres`).
+    #[arg(long, value_name = "NAME", conflicts_with = "scene", value_parser = ["cornell-box", "glass-spheres"])]
+    pub builtin: Option<String>,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Camera and light path pairs the pilot traces.
+    #[arg(long, value_name = "N", default_value_t = ember_core::plan::pilot::DEFAULT_SAMPLES, value_parser = clap::value_parser!(u32).range(1..=10_000_000))]
+    pub pilot_samples: u32,
+    /// Pilot threads [default: all cores].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub threads: Option<u32>,
+    /// Random seed of the pilot.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u64,
+    /// Image width (as for `render`).
+    #[arg(long, value_name = "PIXELS", value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub width: Option<u32>,
+    /// Image height (as for `render`).
+    #[arg(long, value_name = "PIXELS", value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub height: Option<u32>,
+    /// Longest path, in segments (as for `render`).
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = clap::value_parser!(i32).range(-1..))]
+    pub max_depth: Option<i32>,
+    #[command(flatten)]
+    pub defines: Defines,
+}
+
+impl PlanArgs {
+    /// The `render` options these stand for.
+    pub fn render_args(&self) -> RenderArgs {
+        let Command::Render(mut r) = Cli::parse_from(["ember", "render"]).command else { unreachable!("`render` parses to Render") };
+        r.scene = self.scene.clone();
+        r.builtin = self.builtin.clone();
+        r.threads = self.threads;
+        r.seed = self.seed;
+        r.width = self.width;
+        r.height = self.height;
+        r.max_depth = self.max_depth;
+        r.defines = self.defines.clone();
+        r
+    }
 }
 
 /// Options of `ember train`: those of `render` that decide the preprocessing.
@@ -84,7 +138,9 @@ impl TrainArgs {
         let Command::Render(mut r) = Cli::parse_from(["ember", "render"]).command else { unreachable!("`render` parses to Render") };
         r.scene = self.scene.clone();
         r.builtin = self.builtin.clone();
-        r.estimator = self.estimator;
+        r.estimator = EstimatorChoice::Fixed(self.estimator);
+        // The model is SPCBPT's: the plan must not swap it for another estimator.
+        r.no_plan = true;
         r.cache = self.cache.clone();
         r.threads = self.threads;
         r.seed = self.seed;
@@ -280,6 +336,44 @@ fn estimator_parser() -> impl clap::builder::TypedValueParser<Value = EstimatorK
         .map(|name| EstimatorKind::from_name(&name).expect("clap accepts only the listed names"))
 }
 
+/// `--estimator` of `ember render`: one of the core's estimators, or `auto`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EstimatorChoice {
+    /// The estimator named.
+    Fixed(EstimatorKind),
+    /// Chosen per scene by the plan and a pilot race ([`crate::auto`]).
+    Auto,
+}
+
+impl EstimatorChoice {
+    /// The name as typed.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Fixed(k) => k.name(),
+            Self::Auto => "auto",
+        }
+    }
+}
+
+impl std::fmt::Display for EstimatorChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Parses an estimator name or `auto`.
+fn estimator_choice_parser() -> impl clap::builder::TypedValueParser<Value = EstimatorChoice> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    let mut values: Vec<PossibleValue> = EstimatorKind::ALL.iter().map(|e| PossibleValue::new(e.name()).help(e.summary())).collect();
+    values.push(PossibleValue::new("auto").help(
+        "chosen per scene: the scene plan and a pilot race of pt, lt, bdpt, ppm and bpm at a quarter of the resolution, counted in --time (docs/plan.md)",
+    ));
+    PossibleValuesParser::new(values).map(|name| match EstimatorKind::from_name(&name) {
+        Some(k) => EstimatorChoice::Fixed(k),
+        None => EstimatorChoice::Auto,
+    })
+}
+
 /// Options of `ember render`.
 #[derive(Args, Debug, Clone, PartialEq)]
 pub struct RenderArgs {
@@ -293,8 +387,14 @@ pub struct RenderArgs {
     pub builtin: Option<String>,
 
     /// Light-transport algorithm.
-    #[arg(short, long, value_parser = estimator_parser(), default_value_t = EstimatorKind::Pt)]
-    pub estimator: EstimatorKind,
+    #[arg(short, long, value_parser = estimator_choice_parser(), default_value_t = EstimatorChoice::Fixed(EstimatorKind::Pt))]
+    pub estimator: EstimatorChoice,
+
+    /// Render every technique of the estimator as asked: the scene plan leaves nothing
+    /// out (by default it leaves out what the scene cannot use, e.g. VCM's merging where
+    /// no specular–diffuse–specular chain exists; `ember plan` shows what and why).
+    #[arg(long)]
+    pub no_plan: bool,
 
     #[command(flatten)]
     pub cache: CacheArgs,
@@ -668,7 +768,7 @@ mod tests {
     fn defaults() {
         let a = parse(&[]).unwrap();
         assert_eq!(a.scene, None);
-        assert_eq!(a.estimator, EstimatorKind::Pt);
+        assert_eq!(a.estimator, EstimatorChoice::Fixed(EstimatorKind::Pt));
         assert_eq!((a.spp, a.time, a.threads, a.seed), (None, None, None, 0));
         assert_eq!(a.spp_limit(), DEFAULT_SPP);
         assert_eq!(a.resolution_or(DEFAULT_RESOLUTION), (512, 512));
@@ -705,7 +805,7 @@ mod tests {
         ])
         .unwrap();
         assert_eq!(a.scene, Some(PathBuf::from("scene.xml")));
-        assert_eq!(a.estimator, EstimatorKind::Bdpt);
+        assert_eq!(a.estimator, EstimatorChoice::Fixed(EstimatorKind::Bdpt));
         assert_eq!((a.spp, a.time, a.threads, a.seed), (Some(64), Some(2.5), Some(3), 42));
         assert_eq!(a.spp_limit(), 64);
         assert_eq!(a.thread_count(), 3);
@@ -714,7 +814,7 @@ mod tests {
         assert_eq!(a.exposure, -1.5);
         assert_eq!(a.output_paths().unwrap().1, PathBuf::from("img/x.png"));
         let b = parse(&["-e", "lt", "--max-depth", "3", "--time", "1"]).unwrap();
-        assert_eq!((b.estimator, b.max_depth, b.spp_limit()), (EstimatorKind::Lt, Some(3), u32::MAX));
+        assert_eq!((b.estimator, b.max_depth, b.spp_limit()), (EstimatorChoice::Fixed(EstimatorKind::Lt), Some(3), u32::MAX));
     }
 
     /// Regression: --width alone kept the film's height (a 320x240 film at --width 64 was

@@ -10,7 +10,7 @@ use std::path::Path;
 
 use crate::accel::Accel;
 use crate::app::{Built, builtin_resolution};
-use crate::cli::{CacheArgs, RenderArgs};
+use crate::cli::{CacheArgs, EstimatorChoice, RenderArgs};
 use crate::driver::{self, DriverConfig, DriverError, Limits, PhaseTimes, RenderSummary};
 use crate::mitsuba;
 
@@ -267,7 +267,13 @@ impl CoreRenderer {
 
 /// The renderer a `render` command asks for, with what its report needs.
 pub fn make_built(args: &RenderArgs) -> Result<Built, String> {
-    let r = make_core_renderer(args)?;
+    make_built_at(args, Instant::now())
+}
+
+/// [`make_built`] for a program that started at `start` (`--estimator auto` counts its
+/// pilot race in the `--time` budget that runs from there).
+pub fn make_built_at(args: &RenderArgs, start: Instant) -> Result<Built, String> {
+    let r = make_core_renderer_at(args, start)?;
     Ok(Built { scene: r.prepared.name.clone(), max_depth: r.renderer.params().max_depth.0, file_spp: r.prepared.spp, renderer: Box::new(r) })
 }
 
@@ -311,12 +317,42 @@ pub fn check_memory(prepared: &PreparedScene, config: &EstimatorConfig, limit: O
 
 /// The renderer a `render` command asks for, its setup run and reported on stderr.
 pub fn make_core_renderer(args: &RenderArgs) -> Result<CoreRenderer, String> {
+    make_core_renderer_at(args, Instant::now())
+}
+
+/// [`make_core_renderer`] for a program that started at `start`.
+pub fn make_core_renderer_at(args: &RenderArgs, start: Instant) -> Result<CoreRenderer, String> {
     let prepared = prepare(args)?;
     for w in &prepared.warnings {
         eprintln!("warning: {w}");
     }
     let max_depth = args.max_depth.or(prepared.max_depth).unwrap_or(-1);
-    let config = args.cache.config_for(args.estimator);
+    let kind = match args.estimator {
+        EstimatorChoice::Fixed(kind) => kind,
+        EstimatorChoice::Auto => {
+            let load = |w: u32, h: u32| {
+                let mut low = args.clone();
+                (low.width, low.height) = (Some(w), Some(h));
+                prepare(&low)
+            };
+            let choice = crate::auto::choose(args, &prepared, max_depth, start, &load)?;
+            for line in choice.describe() {
+                eprintln!("{line}");
+            }
+            choice.kind
+        }
+    };
+    let asked = args.cache.config_for(kind);
+    // A loaded model is SPCBPT's own state: the plan must not swap the estimator.
+    let config = if args.no_plan || args.model.is_some() {
+        asked
+    } else {
+        let plan = crate::plan::plan_for(&prepared, asked, max_depth, args.seed, args.thread_count(), ember_core::plan::pilot::DEFAULT_SAMPLES, false)?;
+        for line in plan.describe() {
+            eprintln!("plan       {line}");
+        }
+        plan.planned
+    };
     check_memory(&prepared, &config, args.memory_limit)?;
     let r = CoreRenderer::with_model(prepared, config, max_depth, args.seed, args.thread_count(), args.model.as_deref())?;
     if let Renderer::Lvcbpt(l) = &r.renderer {

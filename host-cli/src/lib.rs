@@ -6,6 +6,7 @@
 
 pub mod accel;
 pub mod app;
+pub mod auto;
 pub mod cli;
 pub mod convergence;
 pub mod distributed;
@@ -16,6 +17,7 @@ pub mod interrupt;
 pub mod memory;
 pub mod metrics;
 pub mod mitsuba;
+pub mod plan;
 pub mod plot;
 pub mod suite;
 pub mod trained;

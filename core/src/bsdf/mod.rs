@@ -369,6 +369,18 @@ impl Material {
         matches!(self.kind, Kind::Conductor(_) | Kind::Dielectric(_) | Kind::Plastic(_))
     }
 
+    /// The smallest microfacet roughness α of a rough model (its distribution's own α);
+    /// `None` for diffuse and the smooth models. The scene plan tells glossy from rough
+    /// surfaces with it.
+    pub fn roughness(&self) -> Option<f32> {
+        match &self.kind {
+            Kind::RoughConductor(b) => Some(b.distr.alpha),
+            Kind::RoughDielectric(b) => Some(b.distr.alpha),
+            Kind::RoughPlastic(b) => Some(b.distr.alpha),
+            _ => None,
+        }
+    }
+
     /// The material can transmit light to the other side.
     pub fn has_transmission(&self) -> bool {
         matches!(self.kind, Kind::Dielectric(_) | Kind::RoughDielectric(_))

@@ -34,7 +34,7 @@ mod point;
 mod sphere;
 mod triangle;
 
-use crate::math::{Vec2, Vec3};
+use crate::math::{Bounds3, Vec2, Vec3};
 use crate::measure::{AreaPdf, SolidAnglePdf};
 use crate::spectrum::Rgb;
 
@@ -283,6 +283,16 @@ impl Light {
             Kind::EnvMap(l) => l.power(),
         };
         if power == f32::INFINITY { f32::MAX } else { power }
+    }
+
+    /// The box around a light with a surface (triangle, sphere); `None` for lights
+    /// without one (the scene plan measures emitter extents with it).
+    pub fn surface_bounds(&self) -> Option<Bounds3> {
+        match &self.kind {
+            Kind::Triangle(l) => Some(l.bounds()),
+            Kind::Sphere(l) => Some(l.bounds()),
+            _ => None,
+        }
     }
 
     /// Point, spot and directional lights: no ray can hit them.

@@ -15,7 +15,7 @@
 //! normal.
 
 use super::{EmissionSample, LightSample, finite_or_zero};
-use crate::math::{Frame, INV_4PI, PI, TWO_PI, Vec2, Vec3, safe_sqrt, sin_cos, sqrt};
+use crate::math::{Bounds3, Frame, INV_4PI, PI, TWO_PI, Vec2, Vec3, safe_sqrt, sin_cos, sqrt};
 use crate::measure::{AreaPdf, SolidAnglePdf};
 use crate::spectrum::Rgb;
 use crate::warp;
@@ -198,6 +198,11 @@ impl SphereLight {
     }
 
     /// Φ = π · 4πr² · L.
+    pub(super) fn bounds(&self) -> Bounds3 {
+        let r = Vec3::splat(self.radius.max(0.0));
+        Bounds3 { min: self.center - r, max: self.center + r }
+    }
+
     pub(super) fn power(&self) -> f32 {
         PI * 4.0 * PI * self.radius * self.radius * self.radiance.average()
     }

@@ -7,7 +7,7 @@
 //! [·½] (pbrt-v4 `DiffuseAreaLight::SampleLe`).
 
 use super::{EmissionSample, LightSample, finite_or_zero};
-use crate::math::{Frame, PI, Vec2, Vec3, sqrt};
+use crate::math::{Bounds3, Frame, PI, Vec2, Vec3, sqrt};
 use crate::measure::{AreaPdf, SolidAnglePdf};
 use crate::spectrum::Rgb;
 use crate::warp;
@@ -122,6 +122,10 @@ impl TriangleLight {
     }
 
     /// Φ = π A L (twice that when two-sided).
+    pub(super) fn bounds(&self) -> Bounds3 {
+        Bounds3::EMPTY.union_point(self.p0).union_point(self.p1).union_point(self.p2)
+    }
+
     pub(super) fn power(&self) -> f32 {
         let sides = if self.two_sided { 2.0 } else { 1.0 };
         sides * PI * self.area * self.radiance.average()

@@ -259,8 +259,10 @@ impl EstimatorConfig {
                 let node = core::mem::size_of::<crate::segment::filter::Node>() as u64 + 16 + 24 + FILTER_NEIGHBOURS * 16;
                 (pixels as u64 * VERTICES_PER_PATH * node, "the filtering rows of a pass", "--radius-footprints or --max-segments")
             }
-            Self::Merging(_, c) => {
-                let photon = core::mem::size_of::<crate::integrator::vcm::Photon>() as u64 + 4 * 3 + 12 + 8;
+            Self::Merging(mode, c) => {
+                // Photons, their grid and records exist only where merging does.
+                let merges = *mode != MergeMode::Vcm || c.merging;
+                let photon = if merges { core::mem::size_of::<crate::integrator::vcm::Photon>() as u64 + 4 * 3 + 12 + 8 } else { 0 };
                 (c.light_paths_for(pixels) as u64 * VERTICES_PER_PATH * (vertex + 8 + photon), "the light paths and photons of a pass", "--light-paths")
             }
         };

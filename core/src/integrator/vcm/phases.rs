@@ -101,7 +101,8 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
     fn next_phase(&self) -> Option<Phase> {
         Some(match self.cursor.stage()? {
             Stage::Setup(_) => {
-                let items = if self.config.radius.needs_footprint() { self.pixels } else { 0 };
+                let merges = self.mode != MergeMode::Vcm || self.config.merging;
+                let items = if merges && self.config.radius.needs_footprint() { self.pixels } else { 0 };
                 Phase { name: "footprint", id: 0, pass: None, items, chunk: CHUNK, samples: false }
             }
             Stage::Pass(pass, 0) => Phase { name: "light paths", id: 1, pass: Some(pass), items: self.light_paths, chunk: CHUNK, samples: true },
@@ -151,14 +152,18 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
                     }
                     film.push_splats(&out.splats);
                 }
-                crate::path::cacheable_entries(ctx.scene, &self.paths, &mut self.photons);
-                let paths = &self.paths;
                 let pass = pass.unwrap_or(0);
-                self.grid.build(self.photons.iter().map(|e| photon_position(paths, e)), self.radius(pass));
                 let tech = self.techniques(pass);
                 self.records.clear();
-                for &i in self.grid.order() {
-                    self.records.push(Photon::new(ctx.scene, &tech, &self.paths, &self.prefix, &self.photons[i as usize]));
+                // Without merging (VCM with it left out) no photon, grid or record is
+                // built: their memory is never allocated.
+                if tech.merge > 0.0 {
+                    crate::path::cacheable_entries(ctx.scene, &self.paths, &mut self.photons);
+                    let paths = &self.paths;
+                    self.grid.build(self.photons.iter().map(|e| photon_position(paths, e)), self.radius(pass));
+                    for &i in self.grid.order() {
+                        self.records.push(Photon::new(ctx.scene, &tech, &self.paths, &self.prefix, &self.photons[i as usize]));
+                    }
                 }
             }
             _ => {

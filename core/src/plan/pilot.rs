@@ -1,0 +1,131 @@
+//! The plan's pilot: a few thousand camera and light sub-paths, measuring what the
+//! scene description cannot say.
+//!
+//! Sample `i` of `n` takes one camera sub-path through pixel ⌊i·P/n⌋ (P pixels, so the
+//! samples spread over the image) and one light sub-path, both from the render's seed
+//! on a pass index no render uses ([`PILOT_PASS`]). It counts:
+//!
+//! - camera rays that reach an emitter before any non-Dirac vertex (emitters seen
+//!   directly or through glass and mirrors);
+//! - connections: every non-Dirac camera vertex is joined to one light vertex chosen
+//!   uniformly from the cacheable vertices of the sample's light path (LVCBPT's
+//!   uniform choice), and a connection whose shadow ray is blocked is occluded;
+//! - light samples: next-event estimation at every non-Dirac camera vertex, occluded
+//!   or not.
+//!
+//! A connection or light sample with zero throughput before visibility traces no ray
+//! and is not counted. The function is over an index range, so hosts chunk it like any
+//! phase; sums of chunks in any order are equal (integer counts).
+
+use core::ops::{AddAssign, Range};
+
+use crate::geometry::RayQuery;
+use crate::integrator::{Counters, RenderParams};
+use crate::path::{self, LightPointSample, is_cacheable, trace_light_subpath, vertex_budgets};
+use crate::rng::{SampleStream, Stream};
+use crate::scene::Context;
+
+/// The pass index the pilot's random streams use (no render reaches it).
+pub const PILOT_PASS: u32 = u32::MAX - 7;
+/// Pilot samples by default.
+pub const DEFAULT_SAMPLES: u32 = 4096;
+
+/// What the pilot counted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PilotStats {
+    /// Camera and light sub-path pairs.
+    pub samples: u64,
+    /// Camera rays that reached an emitter before a non-Dirac vertex.
+    pub emitter_seen: u64,
+    /// Connections tried (a shadow ray traced).
+    pub connections: u64,
+    /// Of them, occluded.
+    pub occluded: u64,
+    /// Light samples tried (a shadow ray traced).
+    pub light_samples: u64,
+    /// Of them, occluded.
+    pub light_samples_occluded: u64,
+    /// Rays traced.
+    pub rays: u64,
+}
+
+impl PilotStats {
+    /// Share of connections occluded (0 without any).
+    pub fn occluded_share(&self) -> f64 {
+        if self.connections == 0 { 0.0 } else { self.occluded as f64 / self.connections as f64 }
+    }
+    /// Share of light samples occluded (0 without any).
+    pub fn light_sample_occluded_share(&self) -> f64 {
+        if self.light_samples == 0 { 0.0 } else { self.light_samples_occluded as f64 / self.light_samples as f64 }
+    }
+    /// Share of camera rays that saw an emitter directly.
+    pub fn emitter_seen_share(&self) -> f64 {
+        if self.samples == 0 { 0.0 } else { self.emitter_seen as f64 / self.samples as f64 }
+    }
+}
+
+impl AddAssign for PilotStats {
+    fn add_assign(&mut self, o: Self) {
+        self.samples += o.samples;
+        self.emitter_seen += o.emitter_seen;
+        self.connections += o.connections;
+        self.occluded += o.occluded;
+        self.light_samples += o.light_samples;
+        self.light_samples_occluded += o.light_samples_occluded;
+        self.rays += o.rays;
+    }
+}
+
+/// Run pilot samples `samples` of `total` (see the module notes).
+pub fn map<Q: RayQuery + ?Sized>(ctx: &Context<'_, Q>, params: &RenderParams, samples: Range<u32>, total: u32) -> PilotStats {
+    let scene = ctx.scene;
+    let camera = &scene.camera;
+    let pixels = (camera.width() as u64 * camera.height() as u64).max(1);
+    let (max_camera, _) = vertex_budgets(params);
+    let mut stats = PilotStats::default();
+    let mut counters = Counters::default();
+    for i in samples {
+        let pixel = ((i as u64 * pixels) / total.max(1) as u64).min(pixels - 1) as u32;
+        let cam = path::pixel_camera_subpath(scene, ctx.tracer, params, pixel, PILOT_PASS, max_camera, &mut counters);
+        let light = trace_light_subpath(scene, ctx.tracer, params, Stream::Light, i, PILOT_PASS, &mut counters);
+        stats.samples += 1;
+        for v in cam.iter().skip(1) {
+            if v.is_light() {
+                stats.emitter_seen += 1;
+                break;
+            }
+            if v.is_connectible(scene) {
+                break;
+            }
+        }
+        let cacheable: heapless::Vec<usize, { path::MAX_VERTICES }> = (1..light.len()).filter(|&k| is_cacheable(scene, &light[k])).collect();
+        let mut rng = SampleStream::for_sample(params.seed, Stream::Aux, i, 0, PILOT_PASS);
+        for t in 2..=cam.len() {
+            let u = LightPointSample { u_light: rng.next_f32(), u_point: rng.next_2d() };
+            let pick = rng.next_f32();
+            if !cam[t - 1].is_connectible(scene) || cam[t - 1].kind != path::VertexKind::Surface {
+                continue;
+            }
+            // Next-event estimation (s = 1).
+            let before = counters.rays;
+            let hit = path::connect(ctx, &light, &cam, 1, t, u, &mut counters).is_some();
+            if counters.rays > before {
+                stats.light_samples += 1;
+                stats.light_samples_occluded += u64::from(!hit);
+            }
+            // One uniformly chosen cached light vertex (s ≥ 2).
+            if cacheable.is_empty() {
+                continue;
+            }
+            let k = cacheable[((pick * cacheable.len() as f32) as usize).min(cacheable.len() - 1)];
+            let before = counters.rays;
+            let hit = path::connect(ctx, &light[..=k], &cam, k + 1, t, LightPointSample::default(), &mut counters).is_some();
+            if counters.rays > before {
+                stats.connections += 1;
+                stats.occluded += u64::from(!hit);
+            }
+        }
+    }
+    stats.rays = counters.rays;
+    stats
+}

@@ -1,0 +1,268 @@
+//! `--estimator auto`: the estimator chosen per scene by a pilot race, its time counted
+//! in the render's budget.
+//!
+//! Every candidate ([`CANDIDATES`]) renders the scene at a quarter of the resolution per
+//! axis (so a pass costs about 1/16 of a full one) for an equal slice of the budget, in
+//! [`BATCHES`] batches. From the batches' images the race estimates, per candidate:
+//!
+//! - the variance of one pass per pixel, σ²(p) = Σ_b n_b (X_b − X̄)² / (B − 1), from the
+//!   batch means X_b of n_b passes each (an unbiased estimate for independent passes);
+//! - a bias: the candidates' per-pixel median image is the reference r; over blocks of
+//!   8×8 pixels, what the squared difference of a candidate's block mean to the
+//!   reference's exceeds its own variance counts as squared bias. This is what exposes
+//!   a path tracer that never finds a light seen through a mirror: its variance is
+//!   small because its image is black;
+//! - the time of a pass at full resolution: the pilot's pass time times the pixel
+//!   ratio, and the setup's likewise.
+//!
+//! The predicted relMSE (the suite's metric, (x − r)²/(r² + 0.01)) after the remaining
+//! time T is mean_p σ²(p)/(r² + 0.01) · t_pass / (T − t_setup) + bias², and the
+//! candidate with the smallest one renders. Without `--time` the race assumes
+//! [`NOMINAL_SECONDS`] of rendering.
+//!
+//! The merging candidates keep the full render's radius in world units (a radius in
+//! pixel footprints is divided by the downscale), so the pilot measures the bias of
+//! the kernel the render will use; with one light path per pilot pixel a kernel holds
+//! 1/16 of the render's photons, so their variance is divided by the pixel ratio.
+//!
+//! Known limit (docs/plan.md): a few batches see no rare fireflies, so variance is
+//! underestimated where they dominate.
+
+use std::time::{Duration, Instant};
+
+use ember_core::merge::RadiusRule;
+use ember_core::render::{EstimatorConfig, EstimatorKind, Film};
+
+use crate::cli::RenderArgs;
+use crate::driver::{DriverConfig, Limits};
+use crate::estimators::{CoreRenderer, PreparedScene};
+
+/// The estimators the race runs: between them the best at equal time on every suite
+/// scene (docs/results.md, docs/results-merging.md).
+pub const CANDIDATES: [EstimatorKind; 5] = [EstimatorKind::Pt, EstimatorKind::Lt, EstimatorKind::Bdpt, EstimatorKind::Ppm, EstimatorKind::Bpm];
+/// Batches per candidate.
+pub const BATCHES: usize = 4;
+/// The share of the budget each candidate's pilot takes.
+pub const SHARE: f64 = 0.02;
+/// The rendering time the race assumes without `--time`.
+pub const NOMINAL_SECONDS: f64 = 10.0;
+/// The pilot's resolution divisor per axis.
+const DOWNSCALE: u32 = 4;
+/// Bias blocks, in pilot pixels per side.
+const BLOCK: u32 = 8;
+
+/// One candidate's race result.
+#[derive(Clone, Debug)]
+pub struct Entry {
+    /// The estimator.
+    pub kind: EstimatorKind,
+    /// Passes in the pilot.
+    pub passes: u32,
+    /// Seconds per pass at full resolution (estimated).
+    pub pass_seconds: f64,
+    /// Setup seconds at full resolution (estimated).
+    pub setup_seconds: f64,
+    /// Mean over pixels of σ²/(r² + 0.01) for one pass.
+    pub variance: f64,
+    /// Squared relative bias against the median image.
+    pub bias: f64,
+    /// Predicted relMSE after the remaining time.
+    pub predicted: f64,
+}
+
+/// What the race decided, and its account.
+#[derive(Clone, Debug)]
+pub struct Choice {
+    /// The estimator that renders.
+    pub kind: EstimatorKind,
+    /// Every candidate's numbers.
+    pub entries: Vec<Entry>,
+    /// Seconds the race took.
+    pub seconds: f64,
+    /// The pilot's resolution.
+    pub size: (u32, u32),
+}
+
+impl Choice {
+    /// The race in words, one line per candidate and one for the choice.
+    pub fn describe(&self) -> Vec<String> {
+        let mut lines = vec![format!("auto       pilot race at {}x{} in {:.2} s:", self.size.0, self.size.1, self.seconds)];
+        for e in &self.entries {
+            lines.push(format!(
+                "auto         {:<5} {:>4} passes, {:.3e} s/pass at full size, setup {:.2} s, variance {:.3e}, bias² {:.3e} -> relMSE {:.3e}",
+                e.kind.name(),
+                e.passes,
+                e.pass_seconds,
+                e.setup_seconds,
+                e.variance,
+                e.bias,
+                e.predicted
+            ));
+        }
+        lines.push(format!("auto       renders with {}", self.kind.name()));
+        lines
+    }
+}
+
+/// The pilot's resolution for a film of `w`×`h`: a quarter per axis, at least 16 pixels
+/// (or the film's own size where it is smaller).
+pub fn pilot_size(w: u32, h: u32) -> (u32, u32) {
+    let scale = |n: u32| (n / DOWNSCALE).max(16.min(n)).max(1);
+    (scale(w), scale(h))
+}
+
+/// Run the race for a render of `full` (already prepared) with `args`; `load` prepares
+/// the same scene at a given resolution; the budget runs from `start`.
+pub fn choose(
+    args: &RenderArgs,
+    full: &PreparedScene,
+    max_depth: i32,
+    start: Instant,
+    load: &dyn Fn(u32, u32) -> Result<PreparedScene, String>,
+) -> Result<Choice, String> {
+    let race_start = Instant::now();
+    let budget = args.time.unwrap_or(NOMINAL_SECONDS + start.elapsed().as_secs_f64());
+    let slice = (SHARE * budget).max(0.02);
+    let (fw, fh) = (full.scene.camera.width(), full.scene.camera.height());
+    let (w, h) = pilot_size(fw, fh);
+    let ratio = (fw as f64 * fh as f64) / (w as f64 * h as f64);
+    let threads = args.thread_count();
+    let mut prepared = Some(load(w, h)?);
+    let mut images: Vec<Vec<[f32; 3]>> = Vec::new();
+    let mut runs = Vec::new();
+    for kind in CANDIDATES {
+        let scene = prepared.take().ok_or("the pilot scene was lost")?;
+        let config = pilot_config(args.cache.config_for(kind));
+        let mut r = CoreRenderer::with_config(scene, config, max_depth, args.seed ^ 0x5eed_a070, threads)?;
+        let mut film = Film::with_filter(w, h, r.camera_filter());
+        let mut batches: Vec<(u32, Vec<[f32; 3]>)> = Vec::new();
+        let mut render_seconds = 0.0;
+        let (mut held, mut prev) = (0u32, vec![[0.0f32; 3]; (w * h) as usize]);
+        for b in 0..BATCHES {
+            let deadline = Instant::now() + Duration::from_secs_f64(slice / BATCHES as f64);
+            let limits = Limits { spp: u32::MAX, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass: 0 };
+            let summary =
+                r.render(&mut film, limits, DriverConfig { progress: false, ..DriverConfig::with_threads(threads) }, start).map_err(|e| e.to_string())?;
+            render_seconds += summary.render_seconds;
+            // The batch's own mean from the running means before and after it.
+            let cum = film.to_rgb_f32();
+            let n = film.passes() - held;
+            let batch: Vec<[f32; 3]> = cum
+                .iter()
+                .zip(&prev)
+                .map(|(c, p)| core::array::from_fn(|k| ((c[k] as f64 * film.passes() as f64 - p[k] as f64 * held as f64) / n.max(1) as f64) as f32))
+                .collect();
+            batches.push((n, batch));
+            held = film.passes();
+            prev = cum;
+            if summary.interrupted {
+                break;
+            }
+            // A candidate whose first batch overran its whole slice has passes too slow
+            // for this budget: one more batch gives its variance, no more.
+            if b >= 1 && render_seconds > 2.0 * slice {
+                break;
+            }
+        }
+        images.push(prev);
+        runs.push((kind, batches, render_seconds, film.passes(), r.setup_seconds));
+        prepared = Some(r.prepared);
+    }
+    // The reference: per pixel and channel, the median of the candidates' images.
+    let pixels = (w * h) as usize;
+    let mut reference = vec![[0.0f32; 3]; pixels];
+    for (p, rp) in reference.iter_mut().enumerate() {
+        for (k, rk) in rp.iter_mut().enumerate() {
+            let mut v: Vec<f32> = images.iter().map(|im| im[p][k]).collect();
+            v.sort_by(f32::total_cmp);
+            *rk = v[v.len() / 2];
+        }
+    }
+    let remaining = (budget - start.elapsed().as_secs_f64()).max(0.05 * budget);
+    let mut entries = Vec::new();
+    for (kind, batches, seconds, passes, setup) in runs {
+        let mean = images[entries.len()].clone();
+        let variance_px: Vec<[f64; 3]> = (0..pixels)
+            .map(|p| {
+                core::array::from_fn(|k| {
+                    if batches.len() < 2 {
+                        return f64::INFINITY;
+                    }
+                    let s: f64 = batches.iter().map(|(n, im)| *n as f64 * (im[p][k] as f64 - mean[p][k] as f64).powi(2)).sum();
+                    s / (batches.len() - 1) as f64
+                })
+            })
+            .collect();
+        let rel = |p: usize, k: usize| (reference[p][k] as f64).powi(2) + 0.01;
+        // Merging's pilot keeps the full render's world radius with 1/ratio of its
+        // photons (one light path per pilot pixel): a full pass has `ratio` times the
+        // photons in each kernel, so its variance is 1/ratio of the pilot's.
+        let scale = if matches!(kind, EstimatorKind::Ppm | EstimatorKind::Bpm) { 1.0 / ratio } else { 1.0 };
+        let variance = scale * (0..pixels).map(|p| (0..3).map(|k| variance_px[p][k] / rel(p, k)).sum::<f64>()).sum::<f64>() / (3 * pixels.max(1)) as f64;
+        let bias = block_bias(w, h, &mean, &reference, &variance_px, passes.max(1));
+        let pass_seconds = seconds / passes.max(1) as f64 * ratio;
+        let setup_seconds = setup * ratio;
+        let left = (remaining - setup_seconds).max(pass_seconds).max(1e-3);
+        let predicted = variance * pass_seconds / left + bias;
+        entries.push(Entry {
+            kind,
+            passes,
+            pass_seconds,
+            setup_seconds,
+            variance,
+            bias,
+            predicted: if predicted.is_nan() { f64::INFINITY } else { predicted },
+        });
+    }
+    let best = entries.iter().min_by(|a, b| a.predicted.total_cmp(&b.predicted)).map_or(EstimatorKind::Pt, |e| e.kind);
+    Ok(Choice { kind: best, entries, seconds: race_start.elapsed().as_secs_f64(), size: (w, h) })
+}
+
+/// A candidate's configuration for the pilot: merging keeps the full render's world
+/// radius, so a radius in pixel footprints (4× wider in the pilot) is divided by the
+/// downscale; everything else as asked.
+fn pilot_config(config: EstimatorConfig) -> EstimatorConfig {
+    match config {
+        EstimatorConfig::Merging(mode, mut c) => {
+            if let RadiusRule::Footprints(f) = c.radius {
+                c.radius = RadiusRule::Footprints(f / DOWNSCALE as f32);
+            }
+            EstimatorConfig::Merging(mode, c)
+        }
+        other => other,
+    }
+}
+
+/// Squared relative bias of `mean` against `reference` over blocks of [`BLOCK`]² pixels:
+/// per block and channel max(0, (m̄ − r̄)² − Var(m̄)) / (r̄² + 0.01), averaged, where
+/// Var(m̄) is the block's mean per-pass variance over its pixel count and `passes`.
+fn block_bias(w: u32, h: u32, mean: &[[f32; 3]], reference: &[[f32; 3]], variance: &[[f64; 3]], passes: u32) -> f64 {
+    let (bw, bh) = (w.div_ceil(BLOCK), h.div_ceil(BLOCK));
+    let mut total = 0.0;
+    let mut count = 0usize;
+    for by in 0..bh {
+        for bx in 0..bw {
+            for k in 0..3 {
+                let (mut m, mut r, mut v, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+                for y in by * BLOCK..((by + 1) * BLOCK).min(h) {
+                    for x in bx * BLOCK..((bx + 1) * BLOCK).min(w) {
+                        let p = (y * w + x) as usize;
+                        m += mean[p][k] as f64;
+                        r += reference[p][k] as f64;
+                        v += variance[p][k];
+                        n += 1;
+                    }
+                }
+                let n = n.max(1) as f64;
+                let (m, r) = (m / n, r / n);
+                let var_mean = v / (n * n) / passes as f64;
+                let excess = (m - r).powi(2) - var_mean;
+                if excess.is_finite() && excess > 0.0 {
+                    total += excess / (r * r + 0.01);
+                }
+                count += 1;
+            }
+        }
+    }
+    total / count.max(1) as f64
+}
