@@ -108,6 +108,10 @@ pub struct TrainArgs {
     /// The estimator whose preprocessing is saved (only spcbpt has one worth saving).
     #[arg(short, long, value_parser = estimator_parser(), default_value_t = EstimatorKind::Spcbpt)]
     pub estimator: EstimatorKind,
+    /// Train every technique as asked (as `render --no-plan`); renders that load the
+    /// model must then pass --no-plan too, since the model records its configuration.
+    #[arg(long)]
+    pub no_plan: bool,
     #[command(flatten)]
     pub cache: CacheArgs,
     /// Threads [default: all cores].
@@ -139,8 +143,7 @@ impl TrainArgs {
         r.scene = self.scene.clone();
         r.builtin = self.builtin.clone();
         r.estimator = EstimatorChoice::Fixed(self.estimator);
-        // The model is SPCBPT's: the plan must not swap it for another estimator.
-        r.no_plan = true;
+        r.no_plan = self.no_plan;
         r.cache = self.cache.clone();
         r.threads = self.threads;
         r.seed = self.seed;

@@ -156,7 +156,10 @@ impl CoreRenderer {
             let camera = &r.prepared.scene.camera;
             let loaded = crate::trained::load(path, &r.identity(), camera.width(), camera.height(), &r.prepared.scene)?;
             let Renderer::Spcbpt(s) = &mut r.renderer else {
-                return Err(format!("--model: {} has no trained state to load (only spcbpt)", config.kind()));
+                return Err(format!(
+                    "--model: {} has no trained state to load (only spcbpt; where the scene plan renders another estimator, --no-plan keeps spcbpt)",
+                    config.kind()
+                ));
             };
             s.use_model(loaded).map_err(|e| format!("--model {}: {e}", path.display()))?;
         }
@@ -343,8 +346,9 @@ pub fn make_core_renderer_at(args: &RenderArgs, start: Instant) -> Result<CoreRe
         }
     };
     let asked = args.cache.config_for(kind);
-    // A loaded model is SPCBPT's own state: the plan must not swap the estimator.
-    let config = if args.no_plan || args.model.is_some() {
+    // The plan is a pure function of the scene, the options and the seed, so `ember
+    // train` and the renders that load its model plan alike.
+    let config = if args.no_plan {
         asked
     } else {
         let plan = crate::plan::plan_for(&prepared, asked, max_depth, args.seed, args.thread_count(), ember_core::plan::pilot::DEFAULT_SAMPLES, false)?;

@@ -36,7 +36,10 @@ fn fields(id: &RenderIdentity, width: u32, height: u32) -> Vec<(&'static str, St
 /// The bytes of a model file for `renderer` (its setup run) and the render it belongs to.
 pub fn encode(renderer: &Renderer, id: &RenderIdentity, width: u32, height: u32) -> Result<Vec<u8>, String> {
     let Renderer::Spcbpt(s) = renderer else {
-        return Err(format!("{} has no trained state to save: only spcbpt trains a model", id.estimator));
+        return Err(format!(
+            "{} has no trained state to save: only spcbpt trains a model (where the scene plan renders another estimator, --no-plan keeps spcbpt)",
+            id.estimator
+        ));
     };
     let model = s.model.as_ref().ok_or("the preprocessing has not run")?;
     let mut out = format!("{HEADER}\n");
