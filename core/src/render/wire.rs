@@ -304,6 +304,28 @@ mod tests {
         refuses_unknown_materials(&scene, &mut got);
     }
 
+    /// The variant numbers do not move with the core's features (docs/features.md):
+    /// `Count` is variant 3 in every build, and a build without `path` refuses the
+    /// number of `LightPaths`, whose payload it cannot hold, instead of misreading it.
+    #[test]
+    fn variant_numbers_do_not_depend_on_features() {
+        let phase = Phase { name: "probe", id: 0, pass: None, items: 1, chunk: 1, samples: false };
+        let mut out = ChunkOutput::default();
+        out.reset(0..1);
+        out.data = PhaseData::Count(5);
+        let mut bytes = Vec::new();
+        out.encode(&phase, Part::State, &mut bytes);
+        let n = bytes.len();
+        assert_eq!(bytes[n - 2..], [3, 5], "Count(5): variant 3, then 5");
+        #[cfg(not(feature = "path"))]
+        {
+            let (scene, _, _) = builtin::cornell_box(4, 4).build().expect("builds");
+            bytes[n - 2] = 1;
+            let mut got = ChunkOutput::default();
+            assert_eq!(got.decode(&phase, 0, Part::State, &bytes, &scene), Err(WireError::Malformed));
+        }
+    }
+
     #[cfg(feature = "path")]
     fn refuses_unknown_materials(scene: &Scene, got: &mut ChunkOutput) {
         // A light vertex naming a material the scene lacks.
