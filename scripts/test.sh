@@ -15,9 +15,14 @@ step "formatting (rustfmt.toml) and lints (clippy, warnings denied)"
 cargo fmt --check
 cargo clippy --workspace --all-targets -- -D warnings
 
-step "core builds with no std at all"
+step "core builds with no std at all, with every feature and with each alone (docs/features.md)"
 cargo build --release -p ember-core --target thumbv7em-none-eabihf
 cargo build --release -p ember-core --target x86_64-unknown-none
+for features in "" bdpt lvcbpt spcbpt merging segments filtering mmis path hash-grid subspace wire; do
+  echo "ember-core, no default features${features:+, feature $features}"
+  cargo check -q -p ember-core --target x86_64-unknown-none --no-default-features ${features:+--features "$features"}
+done
+cargo build --release -p ember-core --target thumbv7em-none-eabihf --no-default-features
 
 step "workspace tests (optimised)"
 cargo test --release --workspace

@@ -12,6 +12,9 @@
 // Documentation is enforced where hosts and engines program against the core: the render
 // protocol (`render`, `#![warn(missing_docs)]` there, denied by the test command's
 // clippy). Elsewhere public fields and small math helpers document themselves by name.
+//
+// Cargo features (docs/features.md) leave estimator families and the structures only they
+// use out of a build; the default compiles everything. PT and LT are always here.
 
 extern crate alloc;
 
@@ -26,7 +29,9 @@ pub mod light;
 pub mod math;
 pub mod measure;
 pub mod merge;
+#[cfg(feature = "mmis")]
 pub mod mmis;
+#[cfg(feature = "path")]
 pub mod path;
 pub mod plan;
 pub mod render;
@@ -35,6 +40,7 @@ pub mod scene;
 pub mod segment;
 pub mod shapes;
 pub mod spectrum;
+#[cfg(feature = "subspace")]
 pub mod subspace;
 pub mod texture;
 pub mod warp;

@@ -133,6 +133,15 @@ pub extern "C" fn ember_estimator_count() -> u32 {
     EstimatorKind::ALL.len() as u32
 }
 
+/// 1 if estimator `i` of the core's list is compiled into this module, else 0 (the
+/// module's cargo features choose the core's estimator families, docs/features.md; the
+/// list and its indices are the same in every build).
+#[allow(unsafe_code)]
+#[unsafe(no_mangle)]
+pub extern "C" fn ember_estimator_compiled(i: u32) -> u32 {
+    EstimatorKind::from_index(i).is_some_and(EstimatorKind::is_compiled) as u32
+}
+
 /// Put text `what` (a `TEXT_*` subject) of item `i` in the text buffer; its length in
 /// bytes (UTF-8), or −1 for an unknown subject or index. `ember_text_ptr` gives its
 /// address.

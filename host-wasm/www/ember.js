@@ -49,10 +49,12 @@ export class Instance {
   scenes() {
     return Array.from({ length: this.x.ember_scene_count() }, (_, i) => this.text(TEXT.scene, i));
   }
-  // The core's estimator list, in its order (the index is what setup takes).
+  // The core's estimator list, in its order (the index is what setup takes); `compiled`
+  // is false for one the module was built without (its cargo features).
   estimators() {
     return Array.from({ length: this.x.ember_estimator_count() }, (_, i) => ({
       name: this.text(TEXT.estimator, i), summary: this.text(TEXT.summary, i), config: this.text(TEXT.config, i),
+      compiled: this.x.ember_estimator_compiled(i) === 1,
     }));
   }
   // seed: BigInt (u64); role: ROLE_PAGE (holds the film) or ROLE_WORKER.

@@ -77,8 +77,13 @@ function fillForm() {
   scenes = core.scenes();
   estimators = core.estimators();
   $('scene').replaceChildren(...scenes.map((name, i) => new Option(name, i)));
-  $('estimator').replaceChildren(...estimators.map((e, i) => new Option(e.name, i)));
-  $('estimator').value = String(estimators.findIndex((e) => e.name === 'bdpt'));
+  $('estimator').replaceChildren(...estimators.map((e, i) => {
+    const option = new Option(e.compiled ? e.name : `${e.name} (not in this module)`, i);
+    option.disabled = !e.compiled;
+    return option;
+  }));
+  const bdpt = estimators.findIndex((e) => e.name === 'bdpt' && e.compiled);
+  $('estimator').value = String(bdpt >= 0 ? bdpt : estimators.findIndex((e) => e.name === 'pt'));
   for (const key of ['scene', 'width', 'height', 'passes', 'seed', 'workers']) {
     if (params.has(key)) $(key).value = params.get(key);
   }
@@ -118,6 +123,7 @@ function readForm() {
     workers: take(parseInteger('workers', $('workers').value, 0, 64)),
   };
   if (!(form.estimator >= 0 && form.estimator < estimators.length)) problems.push(`estimator ${$('estimator').value}: not in the core's list`);
+  else if (!estimators[form.estimator].compiled) problems.push(`estimator ${estimators[form.estimator].name}: not compiled into this module`);
   if (form.workers === 0) form.workers = cores;
   return { form, problems };
 }

@@ -8,16 +8,23 @@
 //! - [`lvcbpt`], [`spcbpt`]: connections to cached light vertices.
 //! - [`vcm`]: vertex merging: PPM, BPM and VCM/UPS.
 //!
+//! PT and LT are always compiled; the others each behind their cargo feature (`bdpt`,
+//! `lvcbpt`, `spcbpt`, `merging`; docs/features.md).
+//!
 //! Depth follows Mitsuba's `max_depth`: the largest number of path segments (edges)
 //! from the camera to the emitter; 1 = emitters seen directly, 2 = direct lighting,
 //! −1 = unbounded. Unbounded paths end by Russian roulette from the fifth segment on.
 
+#[cfg(feature = "bdpt")]
 pub mod bdpt;
 pub mod lt;
+#[cfg(feature = "lvcbpt")]
 pub mod lvcbpt;
 pub mod pt;
+#[cfg(feature = "spcbpt")]
 pub mod spcbpt;
 mod surface;
+#[cfg(feature = "merging")]
 pub mod vcm;
 
 pub use surface::SurfacePoint;

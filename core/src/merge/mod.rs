@@ -11,11 +11,16 @@
 //! - the kernel itself is the uniform disk: a light vertex within distance r of a camera
 //!   vertex is merged with weight 1/(π r² N_L), N_L the light paths of the pass.
 //!
+//! The grid is compiled with the cargo feature `hash-grid` (implied by `merging` and
+//! `filtering`); the radius rules always, since every configuration names one.
+//!
 //! The pass index in the schedule is the global pass number, so a render split into pass
 //! ranges on several machines gets the same radius in every pass.
 
+#[cfg(feature = "hash-grid")]
 pub mod grid;
 pub mod radius;
 
+#[cfg(feature = "hash-grid")]
 pub use grid::HashGrid;
 pub use radius::{Footprint, RadiusRule, progressive_radius};

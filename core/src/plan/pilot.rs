@@ -17,12 +17,19 @@
 //! and is not counted. The function is over an index range, so hosts chunk it like any
 //! phase; sums of chunks in any order are equal (integer counts).
 
-use core::ops::{AddAssign, Range};
+use core::ops::AddAssign;
+#[cfg(feature = "path")]
+use core::ops::Range;
 
+#[cfg(feature = "path")]
 use crate::geometry::RayQuery;
+#[cfg(feature = "path")]
 use crate::integrator::{Counters, RenderParams};
+#[cfg(feature = "path")]
 use crate::path::{self, LightPointSample, is_cacheable, trace_light_subpath, vertex_budgets};
+#[cfg(feature = "path")]
 use crate::rng::{SampleStream, Stream};
+#[cfg(feature = "path")]
 use crate::scene::Context;
 
 /// The pass index the pilot's random streams use (no render reaches it).
@@ -76,7 +83,9 @@ impl AddAssign for PilotStats {
     }
 }
 
-/// Run pilot samples `samples` of `total` (see the module notes).
+/// Run pilot samples `samples` of `total` (see the module notes). Needs the `path`
+/// feature (any bidirectional family); without it the plan decides from the facts alone.
+#[cfg(feature = "path")]
 pub fn map<Q: RayQuery + ?Sized>(ctx: &Context<'_, Q>, params: &RenderParams, samples: Range<u32>, total: u32) -> PilotStats {
     let scene = ctx.scene;
     let camera = &scene.camera;

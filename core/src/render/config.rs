@@ -5,7 +5,6 @@
 
 use core::fmt;
 
-pub use crate::integrator::vcm::MergeMode;
 use crate::merge::RadiusRule;
 
 /// The light-transport estimators, in the order hosts list them.
@@ -152,10 +151,53 @@ impl EstimatorKind {
     }
 }
 
+impl EstimatorKind {
+    /// The cargo feature of `ember-core` that compiles this estimator, or `None` for PT
+    /// and LT, which every build holds (docs/features.md). The list itself, its order and
+    /// its indices are the same in every build.
+    pub fn cargo_feature(self) -> Option<&'static str> {
+        match self {
+            Self::Pt | Self::Lt => None,
+            Self::Bdpt => Some("bdpt"),
+            Self::Lvcbpt => Some("lvcbpt"),
+            Self::Spcbpt => Some("spcbpt"),
+            Self::Ppm | Self::Bpm | Self::Vcm => Some("merging"),
+            Self::Spt | Self::Slt | Self::Sbdpt => Some("segments"),
+            Self::Mvf | Self::Phf | Self::Bpf => Some("filtering"),
+        }
+    }
+
+    /// Is this estimator's code in this build? [`super::Renderer::new`] refuses one that is
+    /// not ([`super::RendererError::NotCompiled`]).
+    pub fn is_compiled(self) -> bool {
+        match self {
+            Self::Pt | Self::Lt => true,
+            Self::Bdpt => cfg!(feature = "bdpt"),
+            Self::Lvcbpt => cfg!(feature = "lvcbpt"),
+            Self::Spcbpt => cfg!(feature = "spcbpt"),
+            Self::Ppm | Self::Bpm | Self::Vcm => cfg!(feature = "merging"),
+            Self::Spt | Self::Slt | Self::Sbdpt => cfg!(feature = "segments"),
+            Self::Mvf | Self::Phf | Self::Bpf => cfg!(feature = "filtering"),
+        }
+    }
+}
+
 impl fmt::Display for EstimatorKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
     }
+}
+
+/// Which vertex-merging estimator ([`EstimatorConfig::Merging`]; also
+/// `integrator::vcm::MergeMode`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MergeMode {
+    /// Progressive photon mapping: merge at the first non-Dirac camera vertex, no MIS.
+    Ppm,
+    /// Bidirectional photon mapping: merge at every camera vertex, balance heuristic.
+    Bpm,
+    /// Vertex connection and merging.
+    Vcm,
 }
 
 /// An estimator and its settings.
@@ -230,18 +272,25 @@ pub struct MemoryEstimate {
 /// Bytes per pixel of the film: the exact u128 sums and the staged f32 camera sample.
 pub const FILM_BYTES_PER_PIXEL: u64 = 48 + 12;
 /// Assumed vertices per light path for the estimate.
+#[cfg(any(feature = "lvcbpt", feature = "spcbpt", feature = "filtering", feature = "merging"))]
 const VERTICES_PER_PATH: u64 = 8;
 /// Assumed kernel neighbours per node of path filtering for the estimate.
+#[cfg(feature = "filtering")]
 const FILTER_NEIGHBOURS: u64 = 64;
 
 impl EstimatorConfig {
-    /// The [`MemoryEstimate`] for a film of `pixels` pixels.
+    /// The [`MemoryEstimate`] for a film of `pixels` pixels. An estimator this build
+    /// leaves out ([`EstimatorKind::is_compiled`]) is estimated at its film alone: the
+    /// sizes of its structures are not known here, and it cannot be constructed.
     pub fn memory_estimate(&self, pixels: u32) -> MemoryEstimate {
         let film = pixels as u64 * FILM_BYTES_PER_PIXEL;
+        #[cfg(any(feature = "lvcbpt", feature = "spcbpt", feature = "merging"))]
         let vertex = core::mem::size_of::<crate::path::Vertex>() as u64;
         let (part, largest, lower) = match self {
             Self::Pt | Self::Lt | Self::Bdpt | Self::Segment(..) => (0, "the film", "--width/--height"),
+            #[cfg(feature = "lvcbpt")]
             Self::Lvcbpt(c) => (c.light_paths_for(pixels) as u64 * VERTICES_PER_PATH * (vertex + 8), "the light paths of a pass", "--light-paths"),
+            #[cfg(feature = "spcbpt")]
             Self::Spcbpt(c) => {
                 let paths = c.light_paths_for(pixels) as u64 * VERTICES_PER_PATH * (vertex + 32);
                 let dataset = c.dataset_for(pixels) as u64 * 2 * VERTICES_PER_PATH * 48;
@@ -253,18 +302,22 @@ impl EstimatorConfig {
                     (paths + dataset + gamma, "the light paths of a pass", "--light-paths")
                 }
             }
+            #[cfg(feature = "filtering")]
             Self::Filter(..) => {
                 // Per node: itself, its denominators, two radiance vectors and its row,
                 // assuming 64 kernel neighbours, the neighbour budget (a pair is a u32 and three f32).
                 let node = core::mem::size_of::<crate::segment::filter::Node>() as u64 + 16 + 24 + FILTER_NEIGHBOURS * 16;
                 (pixels as u64 * VERTICES_PER_PATH * node, "the filtering rows of a pass", "--radius-footprints or --max-segments")
             }
+            #[cfg(feature = "merging")]
             Self::Merging(mode, c) => {
                 // Photons, their grid and records exist only where merging does.
                 let merges = *mode != MergeMode::Vcm || c.merging;
                 let photon = if merges { core::mem::size_of::<crate::integrator::vcm::Photon>() as u64 + 4 * 3 + 12 + 8 } else { 0 };
                 (c.light_paths_for(pixels) as u64 * VERTICES_PER_PATH * (vertex + 8 + photon), "the light paths and photons of a pass", "--light-paths")
             }
+            #[cfg(not(all(feature = "lvcbpt", feature = "spcbpt", feature = "filtering", feature = "merging")))]
+            _ => (0, "the film", "--width/--height"),
         };
         let (largest, lower) = if part >= film { (largest, lower) } else { ("the film", "--width/--height") };
         MemoryEstimate { bytes: film + part, largest, lower }
@@ -565,6 +618,18 @@ mod tests {
         assert_eq!(EstimatorKind::from_index(2), Some(EstimatorKind::Bdpt));
     }
 
+    /// The default build holds every estimator: a feature left out of `default` (or a
+    /// family added without a feature arm) fails here.
+    #[cfg(all(feature = "bdpt", feature = "lvcbpt", feature = "spcbpt", feature = "merging", feature = "segments", feature = "filtering"))]
+    #[test]
+    fn every_estimator_is_compiled_with_every_family() {
+        for e in EstimatorKind::ALL {
+            assert!(e.is_compiled(), "{e}");
+        }
+        let families: alloc::collections::BTreeSet<_> = EstimatorKind::ALL.into_iter().filter_map(EstimatorKind::cargo_feature).collect();
+        assert_eq!(families.into_iter().collect::<alloc::vec::Vec<_>>(), ["bdpt", "filtering", "lvcbpt", "merging", "segments", "spcbpt"]);
+    }
+
     #[test]
     fn invalid_values_name_their_field() {
         assert!(SpcbptConfig::DEFAULT.validate().is_ok());
@@ -597,9 +662,12 @@ mod tests {
 
     #[test]
     fn memory_estimates_grow_with_what_they_name() {
-        let small = EstimatorKind::Vcm.default_config().memory_estimate(64 * 64);
-        let large = EstimatorKind::Vcm.default_config().memory_estimate(4096 * 4096);
-        assert!(large.bytes > 1000 * small.bytes && large.lower == "--light-paths");
+        #[cfg(feature = "merging")]
+        {
+            let small = EstimatorKind::Vcm.default_config().memory_estimate(64 * 64);
+            let large = EstimatorKind::Vcm.default_config().memory_estimate(4096 * 4096);
+            assert!(large.bytes > 1000 * small.bytes && large.lower == "--light-paths");
+        }
         let film = EstimatorKind::Pt.default_config().memory_estimate(u32::MAX);
         assert_eq!((film.bytes, film.lower), (u32::MAX as u64 * FILM_BYTES_PER_PIXEL, "--width/--height"));
     }

@@ -47,18 +47,65 @@ pub use config::{
     LvcbptConfig, MAX_DATASET, MAX_FILTER_SEGMENTS, MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig, SegmentAlgorithm, SegmentConfig, SpcbptConfig,
 };
 pub use film::{Film, FilmError, QUANTUM_BITS, Tallies};
-pub use renderer::Renderer;
+pub use renderer::{Renderer, RendererError};
 
 use alloc::vec::Vec;
 use core::ops::Range;
 
 use crate::alias::AliasTable;
 use crate::geometry::RayQuery;
-use crate::integrator::spcbpt::PrefixMemo;
 use crate::integrator::{Counters, Splat};
-use crate::path::LightPaths;
 use crate::spectrum::Rgb;
-use crate::subspace::{SubpathFeature, TrainingSet};
+use payload::{FilterChunk, LightPaths, PrefixMemo, SubpathFeature, TrainingSet};
+
+/// The types [`PhaseData`] carries: the estimators' own where their cargo feature is on,
+/// else [`Absent`]. Every build has the same variants in the same order, so the wire
+/// format's variant numbers (`render::wire`) do not depend on the features: a variant
+/// whose payload is absent cannot be made, and its bytes are refused, never misread.
+pub mod payload {
+    #[cfg(not(all(feature = "path", feature = "spcbpt", feature = "subspace", feature = "filtering")))]
+    use super::Absent;
+
+    #[cfg(feature = "path")]
+    pub use crate::path::LightPaths;
+    /// Light sub-paths (feature `path`).
+    #[cfg(not(feature = "path"))]
+    pub type LightPaths = Absent;
+
+    #[cfg(feature = "spcbpt")]
+    pub use crate::integrator::spcbpt::PrefixMemo;
+    /// SPCBPT's per-vertex memos (feature `spcbpt`).
+    #[cfg(not(feature = "spcbpt"))]
+    pub type PrefixMemo = Absent;
+
+    #[cfg(feature = "subspace")]
+    pub use crate::subspace::{SubpathFeature, TrainingSet};
+    /// SPCBPT's classification features (feature `subspace`).
+    #[cfg(not(feature = "subspace"))]
+    pub type SubpathFeature = Absent;
+    /// SPCBPT's training records (feature `subspace`).
+    #[cfg(not(feature = "subspace"))]
+    pub type TrainingSet = Absent;
+
+    #[cfg(feature = "filtering")]
+    pub use crate::segment::filter::FilterChunk;
+    /// Path filtering's chunk buffers (feature `filtering`).
+    #[cfg(not(feature = "filtering"))]
+    pub type FilterChunk = Absent;
+}
+
+/// The payload of a [`PhaseData`] variant whose estimators this build leaves out: a type
+/// with no values, so the variant cannot be made (see [`payload`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
+pub enum Absent {}
+
+impl Absent {
+    /// What [`ChunkOutput::reset`] calls on every payload; never runs.
+    pub fn clear(&mut self) {
+        match *self {}
+    }
+}
 
 /// One phase: a map over `0..items` in chunks of `chunk`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -131,7 +178,7 @@ pub enum PhaseData {
     /// Training records (SPCBPT's dataset).
     Training(TrainingSet),
     /// Multi-vertex filtering's per-chunk buffers (nodes, denominators, rows, radiance).
-    Filter(alloc::boxed::Box<crate::segment::filter::FilterChunk>),
+    Filter(alloc::boxed::Box<FilterChunk>),
     /// Stage-1 tables and norms for a range of eye subspaces (SPCBPT).
     GammaTables {
         /// Γ(· | e) restricted to the pass's non-empty subspaces, per eye subspace.
@@ -192,7 +239,8 @@ impl ChunkOutput {
     }
 
     /// The filtering buffers of this chunk (switching the data to them if needed).
-    pub fn filter_chunk(&mut self) -> &mut crate::segment::filter::FilterChunk {
+    #[cfg(feature = "filtering")]
+    pub fn filter_chunk(&mut self) -> &mut FilterChunk {
         if !matches!(self.data, PhaseData::Filter(_)) {
             self.data = PhaseData::Filter(alloc::boxed::Box::default());
         }
@@ -217,6 +265,7 @@ impl ChunkOutput {
     }
 
     /// The light-path store of this chunk (switching the data to it if needed).
+    #[cfg(feature = "path")]
     pub fn light_paths(&mut self) -> (&mut LightPaths, &mut Vec<PrefixMemo>) {
         if !matches!(self.data, PhaseData::LightPaths { .. }) {
             self.data = PhaseData::LightPaths { paths: LightPaths::new(), memo: Vec::new() };
@@ -229,6 +278,7 @@ impl ChunkOutput {
 
     /// The light paths and per-vertex sums of this chunk (switching the data to them if
     /// needed).
+    #[cfg(feature = "path")]
     pub fn paths_with_sums(&mut self) -> (&mut LightPaths, &mut Vec<f64>) {
         if !matches!(self.data, PhaseData::PathsWithSums { .. }) {
             self.data = PhaseData::PathsWithSums { paths: LightPaths::new(), sums: Vec::new() };
@@ -240,6 +290,7 @@ impl ChunkOutput {
     }
 
     /// The feature buffers of this chunk (switching the data to them if needed).
+    #[cfg(feature = "subspace")]
     pub fn features(&mut self) -> (&mut Vec<SubpathFeature>, &mut Vec<f32>, &mut Vec<f64>, &mut Vec<u32>) {
         if !matches!(self.data, PhaseData::Features { .. }) {
             self.data = PhaseData::Features { features: Vec::new(), weights: Vec::new(), blocks: Vec::new(), block_samples: Vec::new() };
@@ -266,6 +317,7 @@ impl ChunkOutput {
     }
 
     /// The training set of this chunk (switching the data to it if needed).
+    #[cfg(feature = "subspace")]
     pub fn training(&mut self) -> &mut TrainingSet {
         if !matches!(self.data, PhaseData::Training(_)) {
             self.data = PhaseData::Training(TrainingSet::new());

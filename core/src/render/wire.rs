@@ -41,6 +41,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{ChunkOutput, Phase, PhaseData};
 use crate::integrator::{Counters, Splat};
+#[cfg(feature = "path")]
 use crate::path::{LightPaths, VertexKind};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -215,7 +216,11 @@ fn from_all<'a, T: Deserialize<'a>>(bytes: &'a [u8]) -> Result<T, WireError> {
 }
 
 fn validate(data: &PhaseData, scene: &Scene) -> Result<(), WireError> {
+    // Without the `path` feature the light-path variants have no values (`super::Absent`).
+    #[cfg(not(feature = "path"))]
+    let _ = scene;
     match data {
+        #[cfg(feature = "path")]
         PhaseData::LightPaths { paths, memo } => {
             validate_paths(paths, scene)?;
             if !memo.is_empty() && memo.len() != paths.vertices.len() {
@@ -223,6 +228,7 @@ fn validate(data: &PhaseData, scene: &Scene) -> Result<(), WireError> {
             }
             Ok(())
         }
+        #[cfg(feature = "path")]
         PhaseData::PathsWithSums { paths, sums } => {
             validate_paths(paths, scene)?;
             if sums.len() != paths.vertices.len() {
@@ -235,6 +241,7 @@ fn validate(data: &PhaseData, scene: &Scene) -> Result<(), WireError> {
 }
 
 /// Path starts ascending within the vertices; materials and lights of the scene.
+#[cfg(feature = "path")]
 fn validate_paths(paths: &LightPaths, scene: &Scene) -> Result<(), WireError> {
     let n = paths.vertices.len() as u64;
     let mut last = 0u64;
@@ -293,6 +300,34 @@ mod tests {
         let mut old = film.clone();
         old[4] ^= 1; // the version's varint
         assert_eq!(got.decode(&phase, 0, Part::Film, &old, &scene), Err(WireError::Header));
+        #[cfg(feature = "path")]
+        refuses_unknown_materials(&scene, &mut got);
+    }
+
+    /// The variant numbers do not move with the core's features (docs/features.md):
+    /// `Count` is variant 3 in every build, and a build without `path` refuses the
+    /// number of `LightPaths`, whose payload it cannot hold, instead of misreading it.
+    #[test]
+    fn variant_numbers_do_not_depend_on_features() {
+        let phase = Phase { name: "probe", id: 0, pass: None, items: 1, chunk: 1, samples: false };
+        let mut out = ChunkOutput::default();
+        out.reset(0..1);
+        out.data = PhaseData::Count(5);
+        let mut bytes = Vec::new();
+        out.encode(&phase, Part::State, &mut bytes);
+        let n = bytes.len();
+        assert_eq!(bytes[n - 2..], [3, 5], "Count(5): variant 3, then 5");
+        #[cfg(not(feature = "path"))]
+        {
+            let (scene, _, _) = builtin::cornell_box(4, 4).build().expect("builds");
+            bytes[n - 2] = 1;
+            let mut got = ChunkOutput::default();
+            assert_eq!(got.decode(&phase, 0, Part::State, &bytes, &scene), Err(WireError::Malformed));
+        }
+    }
+
+    #[cfg(feature = "path")]
+    fn refuses_unknown_materials(scene: &Scene, got: &mut ChunkOutput) {
         // A light vertex naming a material the scene lacks.
         let light = Phase { name: "light paths", id: 0, pass: Some(0), items: 1, chunk: 1, samples: true };
         let mut paths = ChunkOutput::default();
@@ -304,6 +339,6 @@ mod tests {
         store.push(&[v]);
         let mut state = Vec::new();
         paths.encode(&light, Part::State, &mut state);
-        assert!(matches!(got.decode(&light, 0, Part::State, &state, &scene), Err(WireError::Invalid(_))));
+        assert!(matches!(got.decode(&light, 0, Part::State, &state, scene), Err(WireError::Invalid(_))));
     }
 }

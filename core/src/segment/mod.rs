@@ -58,22 +58,38 @@
 //!   estimator (eq. 16), and in segment PT the light-sampled last segment combined by
 //!   eq. (17).
 //!
+//! The kernels and [`throughput_cos`] are always compiled: PT, LT and BDPT walk with an
+//! optional kernel, and with none they are the vertex estimators. The segment estimators,
+//! samplers and [`contribution`] need the cargo feature `segments`, the filters
+//! (`filter`) `filtering` (docs/features.md).
+//!
 //! docs/segments.md has the derivations and what each test proves.
 
 mod kernel;
+#[cfg(feature = "segments")]
 mod phases;
+#[cfg(feature = "segments")]
 mod surfaces;
 
+#[cfg(feature = "segments")]
 pub mod contribution;
+#[cfg(feature = "filtering")]
 pub mod filter;
+#[cfg(feature = "segments")]
 pub mod sampler;
+#[cfg(feature = "segments")]
 pub mod sbdpt;
+#[cfg(feature = "segments")]
 pub mod slt;
+#[cfg(feature = "segments")]
 pub mod spt;
 
+#[cfg(feature = "segments")]
 pub use contribution::{contribution, geometry_term};
 pub use kernel::{CAMERA_KERNEL_KEY, Junctions, Kernel, KernelSample, LIGHT_KERNEL_KEY};
+#[cfg(feature = "segments")]
 pub use phases::Segments;
+#[cfg(feature = "segments")]
 pub use surfaces::SurfaceSampler;
 
 use crate::bsdf::{TransportMode, shading_normal_correction};

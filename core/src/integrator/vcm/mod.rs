@@ -47,16 +47,9 @@ use crate::rng::{SampleStream, Stream};
 use crate::scene::{Context, Scene};
 use crate::spectrum::Rgb;
 
-/// Which vertex-merging estimator.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum MergeMode {
-    /// Progressive photon mapping: merge at the first non-Dirac camera vertex, no MIS.
-    Ppm,
-    /// Bidirectional photon mapping: merge at every camera vertex, balance heuristic.
-    Bpm,
-    /// Vertex connection and merging.
-    Vcm,
-}
+/// Which vertex-merging estimator: part of the configuration, so defined with it (the
+/// configurations compile without the `merging` feature).
+pub use crate::render::MergeMode;
 
 /// Photons on surfaces turned more than about 37° from the camera vertex's are not
 /// merged: within a ball of radius r they lie on another surface (the other wall of a
