@@ -20,18 +20,20 @@
 //! candidate with the smallest one renders. Without `--time` the race assumes
 //! [`NOMINAL_SECONDS`] of rendering.
 //!
-//! The merging candidates keep the full render's radius in world units (a radius in
-//! pixel footprints is divided by the downscale), so the pilot measures the bias of
-//! the kernel the render will use; with one light path per pilot pixel a kernel holds
-//! 1/16 of the render's photons, so their variance is divided by the pixel ratio.
+//! The merging candidates keep their radius in pixel footprints and one light path per
+//! pixel, so a pilot kernel holds as many photons as a full one: the per-pass variance
+//! and the cost of a merge carry over, and the pass time scales with the pixels. (A
+//! radius kept in world units would hold 1/16 of the photons, and a full pass would
+//! then cost 16 × more per merge than the pixel ratio says: measured, BPM's pass time
+//! was underestimated 6× that way on enclosed.) The kernel is 4× wider in world units
+//! than the render's, so the pilot overstates merging's bias.
 //!
 //! Known limit (docs/plan.md): a few batches see no rare fireflies, so variance is
 //! underestimated where they dominate.
 
 use std::time::{Duration, Instant};
 
-use ember_core::merge::RadiusRule;
-use ember_core::render::{EstimatorConfig, EstimatorKind, Film};
+use ember_core::render::{EstimatorKind, Film};
 
 use crate::cli::RenderArgs;
 use crate::driver::{DriverConfig, Limits};
@@ -132,7 +134,7 @@ pub fn choose(
     let mut runs = Vec::new();
     for kind in CANDIDATES {
         let scene = prepared.take().ok_or("the pilot scene was lost")?;
-        let config = pilot_config(args.cache.config_for(kind));
+        let config = args.cache.config_for(kind);
         let mut r = CoreRenderer::with_config(scene, config, max_depth, args.seed ^ 0x5eed_a070, threads)?;
         let mut film = Film::with_filter(w, h, r.camera_filter());
         let mut batches: Vec<(u32, Vec<[f32; 3]>)> = Vec::new();
@@ -194,11 +196,7 @@ pub fn choose(
             })
             .collect();
         let rel = |p: usize, k: usize| (reference[p][k] as f64).powi(2) + 0.01;
-        // Merging's pilot keeps the full render's world radius with 1/ratio of its
-        // photons (one light path per pilot pixel): a full pass has `ratio` times the
-        // photons in each kernel, so its variance is 1/ratio of the pilot's.
-        let scale = if matches!(kind, EstimatorKind::Ppm | EstimatorKind::Bpm) { 1.0 / ratio } else { 1.0 };
-        let variance = scale * (0..pixels).map(|p| (0..3).map(|k| variance_px[p][k] / rel(p, k)).sum::<f64>()).sum::<f64>() / (3 * pixels.max(1)) as f64;
+        let variance = (0..pixels).map(|p| (0..3).map(|k| variance_px[p][k] / rel(p, k)).sum::<f64>()).sum::<f64>() / (3 * pixels.max(1)) as f64;
         let bias = block_bias(w, h, &mean, &reference, &variance_px, passes.max(1));
         let pass_seconds = seconds / passes.max(1) as f64 * ratio;
         let setup_seconds = setup * ratio;
@@ -216,21 +214,6 @@ pub fn choose(
     }
     let best = entries.iter().min_by(|a, b| a.predicted.total_cmp(&b.predicted)).map_or(EstimatorKind::Pt, |e| e.kind);
     Ok(Choice { kind: best, entries, seconds: race_start.elapsed().as_secs_f64(), size: (w, h) })
-}
-
-/// A candidate's configuration for the pilot: merging keeps the full render's world
-/// radius, so a radius in pixel footprints (4× wider in the pilot) is divided by the
-/// downscale; everything else as asked.
-fn pilot_config(config: EstimatorConfig) -> EstimatorConfig {
-    match config {
-        EstimatorConfig::Merging(mode, mut c) => {
-            if let RadiusRule::Footprints(f) = c.radius {
-                c.radius = RadiusRule::Footprints(f / DOWNSCALE as f32);
-            }
-            EstimatorConfig::Merging(mode, c)
-        }
-        other => other,
-    }
 }
 
 /// Squared relative bias of `mean` against `reference` over blocks of [`BLOCK`]² pixels:
