@@ -19,7 +19,9 @@ SCENES=${SCENES:-../shared/scenes}
 OUT=${OUT:-target/bench-auto}
 mkdir -p "$OUT"
 cargo build --release -q -p ember-cli
-EMBER=target/release/ember
+# A copy, so that a build during the run cannot change the binary under it.
+cp target/release/ember "$OUT/ember"
+EMBER=$OUT/ember
 CSV="$OUT/auto.csv"
 echo "scene,estimator,seed,relmse,mape,passes,chosen" > "$CSV"
 for dir in "$SCENES"/*/; do

@@ -13,7 +13,9 @@
 //!   a path tracer that never finds a light seen through a mirror: its variance is
 //!   small because its image is black;
 //! - the time of a pass at full resolution: the pilot's pass time times the pixel
-//!   ratio, and the setup's likewise.
+//!   ratio, but for a fixed part of a pass (dispatch, staging, commit) that does not
+//!   scale, found by timing PT's pass at both sizes (up to three passes of PT on the
+//!   render's own scene first); the setup's time times the ratio.
 //!
 //! The predicted relMSE (the suite's metric, (x − r)²/(r² + 0.01)) after the remaining
 //! time T is mean_p σ²(p)/(r² + 0.01) · t_pass / (T − t_setup) + bias², and the
@@ -33,7 +35,7 @@
 
 use std::time::{Duration, Instant};
 
-use ember_core::render::{EstimatorKind, Film};
+use ember_core::render::{EstimatorConfig, EstimatorKind, Film};
 
 use crate::cli::RenderArgs;
 use crate::driver::{DriverConfig, Limits};
@@ -83,12 +85,20 @@ pub struct Choice {
     pub seconds: f64,
     /// The pilot's resolution.
     pub size: (u32, u32),
+    /// Seconds of a pass that do not scale with its pixels (from PT at both sizes).
+    pub overhead: f64,
 }
 
 impl Choice {
     /// The race in words, one line per candidate and one for the choice.
     pub fn describe(&self) -> Vec<String> {
-        let mut lines = vec![format!("auto       pilot race at {}x{} in {:.2} s:", self.size.0, self.size.1, self.seconds)];
+        let mut lines = vec![format!(
+            "auto       pilot race at {}x{} in {:.2} s (fixed cost of a pass {:.1} ms):",
+            self.size.0,
+            self.size.1,
+            self.seconds,
+            1e3 * self.overhead
+        )];
         for e in &self.entries {
             lines.push(format!(
                 "auto         {:<5} {:>4} passes, {:.3e} s/pass at full size, setup {:.2} s, variance {:.3e}, bias² {:.3e} -> relMSE {:.3e}",
@@ -117,11 +127,11 @@ pub fn pilot_size(w: u32, h: u32) -> (u32, u32) {
 /// the same scene at a given resolution; the budget runs from `start`.
 pub fn choose(
     args: &RenderArgs,
-    full: &PreparedScene,
+    full: PreparedScene,
     max_depth: i32,
     start: Instant,
     load: &dyn Fn(u32, u32) -> Result<PreparedScene, String>,
-) -> Result<Choice, String> {
+) -> Result<(Choice, PreparedScene), String> {
     let race_start = Instant::now();
     let budget = args.time.unwrap_or(NOMINAL_SECONDS + start.elapsed().as_secs_f64());
     let slice = (SHARE * budget).max(0.02);
@@ -129,6 +139,15 @@ pub fn choose(
     let (w, h) = pilot_size(fw, fh);
     let ratio = (fw as f64 * fh as f64) / (w as f64 * h as f64);
     let threads = args.thread_count();
+    // A pass has a fixed cost (dispatch, staging, commit) besides its pixels', which the
+    // pixel ratio would scale too: PT's pass time at full size, measured on the render's
+    // own scene for up to three passes, gives it (o below).
+    let mut pt = CoreRenderer::with_config(full, args.cache.config_for(EstimatorKind::Pt), max_depth, args.seed ^ 0x5eed_a071, threads)?;
+    let mut film = Film::with_filter(fw, fh, pt.camera_filter());
+    let limits = Limits { spp: 3, deadline: Some(Instant::now() + Duration::from_secs_f64(slice)), interrupt: Some(crate::interrupt::flag()), first_pass: 0 };
+    let summary = pt.render(&mut film, limits, DriverConfig { progress: false, ..DriverConfig::with_threads(threads) }, start).map_err(|e| e.to_string())?;
+    let pt_full = summary.render_seconds / summary.passes.max(1) as f64;
+    let full = pt.prepared;
     let mut prepared = Some(load(w, h)?);
     let mut images: Vec<Vec<[f32; 3]>> = Vec::new();
     let mut runs = Vec::new();
@@ -180,7 +199,24 @@ pub fn choose(
             *rk = v[v.len() / 2];
         }
     }
+    // Each candidate's variance of its mean image per pixel, and the median over the
+    // candidates: the reference's variance, roughly (a median of similar estimates has
+    // about the variance of one).
+    let mean_variances: Vec<Vec<[f64; 3]>> =
+        runs.iter().map(|(_, batches, _, passes, _)| mean_variance(batches, &images_mean(batches), pixels, *passes)).collect();
+    let reference_variance: Vec<[f64; 3]> = (0..pixels)
+        .map(|p| {
+            core::array::from_fn(|k| {
+                let mut v: Vec<f64> = mean_variances.iter().map(|m| m[p][k]).collect();
+                v.sort_by(f64::total_cmp);
+                v[v.len() / 2]
+            })
+        })
+        .collect();
     let remaining = (budget - start.elapsed().as_secs_f64()).max(0.05 * budget);
+    // t_low = o + b, t_full = o + ratio·b for PT: the fixed part o of a pass.
+    let pt_low = runs.iter().find(|r| r.0 == EstimatorKind::Pt).map_or(0.0, |r| r.2 / r.3.max(1) as f64);
+    let overhead = if ratio > 1.0 { ((pt_low * ratio - pt_full) / (ratio - 1.0)).clamp(0.0, pt_low) } else { 0.0 };
     let mut entries = Vec::new();
     for (kind, batches, seconds, passes, setup) in runs {
         let mean = images[entries.len()].clone();
@@ -197,11 +233,19 @@ pub fn choose(
             .collect();
         let rel = |p: usize, k: usize| (reference[p][k] as f64).powi(2) + 0.01;
         let variance = (0..pixels).map(|p| (0..3).map(|k| variance_px[p][k] / rel(p, k)).sum::<f64>()).sum::<f64>() / (3 * pixels.max(1)) as f64;
-        let bias = block_bias(w, h, &mean, &reference, &variance_px, passes.max(1));
-        let pass_seconds = seconds / passes.max(1) as f64 * ratio;
+        let bias = block_bias(w, h, &mean, &reference, &variance_px, passes.max(1), &reference_variance);
+        let low = seconds / passes.max(1) as f64;
+        let pass_seconds = if kind == EstimatorKind::Pt { pt_full } else { (low - overhead).max(0.0) * ratio + overhead };
         let setup_seconds = setup * ratio;
         let left = (remaining - setup_seconds).max(pass_seconds).max(1e-3);
-        let predicted = variance * pass_seconds / left + bias;
+        // A merging radius shrinks as r_i ∝ (i + 1)^((α − 1)/2), so a pass's variance
+        // (∝ 1/r²) grows as (i + 1)^(1 − α): the render's passes, up to N = left / t_pass,
+        // average (N / n_pilot)^(1 − α) times the pilot's first n_pilot.
+        let growth = match args.cache.config_for(kind) {
+            EstimatorConfig::Merging(_, c) => ((left / pass_seconds) / passes.max(1) as f64).max(1.0).powf(1.0 - c.alpha as f64),
+            _ => 1.0,
+        };
+        let predicted = variance * growth * pass_seconds / left + bias;
         entries.push(Entry {
             kind,
             passes,
@@ -213,32 +257,57 @@ pub fn choose(
         });
     }
     let best = entries.iter().min_by(|a, b| a.predicted.total_cmp(&b.predicted)).map_or(EstimatorKind::Pt, |e| e.kind);
-    Ok(Choice { kind: best, entries, seconds: race_start.elapsed().as_secs_f64(), size: (w, h) })
+    Ok((Choice { kind: best, entries, seconds: race_start.elapsed().as_secs_f64(), size: (w, h), overhead }, full))
+}
+
+/// The pass-weighted mean of batch images.
+fn images_mean(batches: &[(u32, Vec<[f32; 3]>)]) -> Vec<[f32; 3]> {
+    let n: u32 = batches.iter().map(|b| b.0).sum();
+    let len = batches.first().map_or(0, |b| b.1.len());
+    (0..len).map(|p| core::array::from_fn(|k| (batches.iter().map(|(m, im)| *m as f64 * im[p][k] as f64).sum::<f64>() / n.max(1) as f64) as f32)).collect()
+}
+
+/// Per pixel and channel, the variance of the mean image of `passes` passes: the per-pass
+/// variance from the batches over the pass count (infinite with one batch).
+fn mean_variance(batches: &[(u32, Vec<[f32; 3]>)], mean: &[[f32; 3]], pixels: usize, passes: u32) -> Vec<[f64; 3]> {
+    (0..pixels)
+        .map(|p| {
+            core::array::from_fn(|k| {
+                if batches.len() < 2 {
+                    return f64::INFINITY;
+                }
+                let s: f64 = batches.iter().map(|(n, im)| *n as f64 * (im[p][k] as f64 - mean[p][k] as f64).powi(2)).sum();
+                s / (batches.len() - 1) as f64 / passes.max(1) as f64
+            })
+        })
+        .collect()
 }
 
 /// Squared relative bias of `mean` against `reference` over blocks of [`BLOCK`]² pixels:
-/// per block and channel max(0, (m̄ − r̄)² − Var(m̄)) / (r̄² + 0.01), averaged, where
-/// Var(m̄) is the block's mean per-pass variance over its pixel count and `passes`.
-fn block_bias(w: u32, h: u32, mean: &[[f32; 3]], reference: &[[f32; 3]], variance: &[[f64; 3]], passes: u32) -> f64 {
+/// per block and channel max(0, (m̄ − r̄)² − Var(m̄) − Var(r̄)) / (r̄² + 0.01), averaged,
+/// where Var(m̄) is the block's mean per-pass variance over its pixel count and
+/// `passes`, and Var(r̄) the same of the reference's per-pixel variances.
+fn block_bias(w: u32, h: u32, mean: &[[f32; 3]], reference: &[[f32; 3]], variance: &[[f64; 3]], passes: u32, reference_variance: &[[f64; 3]]) -> f64 {
     let (bw, bh) = (w.div_ceil(BLOCK), h.div_ceil(BLOCK));
     let mut total = 0.0;
     let mut count = 0usize;
     for by in 0..bh {
         for bx in 0..bw {
             for k in 0..3 {
-                let (mut m, mut r, mut v, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+                let (mut m, mut r, mut v, mut vr, mut n) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0usize);
                 for y in by * BLOCK..((by + 1) * BLOCK).min(h) {
                     for x in bx * BLOCK..((bx + 1) * BLOCK).min(w) {
                         let p = (y * w + x) as usize;
                         m += mean[p][k] as f64;
                         r += reference[p][k] as f64;
                         v += variance[p][k];
+                        vr += reference_variance[p][k];
                         n += 1;
                     }
                 }
                 let n = n.max(1) as f64;
                 let (m, r) = (m / n, r / n);
-                let var_mean = v / (n * n) / passes as f64;
+                let var_mean = v / (n * n) / passes as f64 + vr / (n * n);
                 let excess = (m - r).powi(2) - var_mean;
                 if excess.is_finite() && excess > 0.0 {
                     total += excess / (r * r + 0.01);

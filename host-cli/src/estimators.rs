@@ -325,7 +325,7 @@ pub fn make_core_renderer(args: &RenderArgs) -> Result<CoreRenderer, String> {
 
 /// [`make_core_renderer`] for a program that started at `start`.
 pub fn make_core_renderer_at(args: &RenderArgs, start: Instant) -> Result<CoreRenderer, String> {
-    let prepared = prepare(args)?;
+    let mut prepared = prepare(args)?;
     for w in &prepared.warnings {
         eprintln!("warning: {w}");
     }
@@ -338,7 +338,8 @@ pub fn make_core_renderer_at(args: &RenderArgs, start: Instant) -> Result<CoreRe
                 (low.width, low.height) = (Some(w), Some(h));
                 prepare(&low)
             };
-            let choice = crate::auto::choose(args, &prepared, max_depth, start, &load)?;
+            let (choice, back) = crate::auto::choose(args, prepared, max_depth, start, &load)?;
+            prepared = back;
             for line in choice.describe() {
                 eprintln!("{line}");
             }
