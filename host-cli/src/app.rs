@@ -89,13 +89,13 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
             Ok(())
         }
         Command::Plan(args) => {
-            let r = args.render_args();
+            let r = args.selection.render_args();
             let prepared = estimators::prepare(&r).map_err(AppError::Estimator)?;
             for w in &prepared.warnings {
                 eprintln!("warning: {w}");
             }
             let max_depth = r.max_depth.or(prepared.max_depth).unwrap_or(-1);
-            let plans = crate::plan::plans_for_all(&prepared, max_depth, args.seed, r.thread_count(), args.pilot_samples).map_err(AppError::Estimator)?;
+            let plans = crate::plan::plans_for_all(&prepared, max_depth, r.seed, r.thread_count(), args.pilot_samples).map_err(AppError::Estimator)?;
             if args.json {
                 print!("{}", crate::plan::json_all(&prepared, &plans));
             } else {

@@ -199,15 +199,14 @@ pub fn choose(
             *rk = v[v.len() / 2];
         }
     }
-    // Each candidate's variance of its mean image per pixel, and the median over the
-    // candidates: the reference's variance, roughly (a median of similar estimates has
-    // about the variance of one).
-    let mean_variances: Vec<Vec<[f64; 3]>> =
-        runs.iter().map(|(_, batches, _, passes, _)| mean_variance(batches, &images_mean(batches), pixels, *passes)).collect();
+    // Each candidate's per-pass variance per pixel and channel; the median over the
+    // candidates of the variance of their mean images stands for the reference's (a
+    // median of similar estimates has about the variance of one).
+    let pass_variances: Vec<Vec<[f64; 3]>> = runs.iter().zip(&images).map(|(run, mean)| pass_variance(&run.1, mean)).collect();
     let reference_variance: Vec<[f64; 3]> = (0..pixels)
         .map(|p| {
             core::array::from_fn(|k| {
-                let mut v: Vec<f64> = mean_variances.iter().map(|m| m[p][k]).collect();
+                let mut v: Vec<f64> = pass_variances.iter().zip(&runs).map(|(pv, run)| pv[p][k] / run.3.max(1) as f64).collect();
                 v.sort_by(f64::total_cmp);
                 v[v.len() / 2]
             })
@@ -218,22 +217,11 @@ pub fn choose(
     let pt_low = runs.iter().find(|r| r.0 == EstimatorKind::Pt).map_or(0.0, |r| r.2 / r.3.max(1) as f64);
     let overhead = if ratio > 1.0 { ((pt_low * ratio - pt_full) / (ratio - 1.0)).clamp(0.0, pt_low) } else { 0.0 };
     let mut entries = Vec::new();
-    for (kind, batches, seconds, passes, setup) in runs {
-        let mean = images[entries.len()].clone();
-        let variance_px: Vec<[f64; 3]> = (0..pixels)
-            .map(|p| {
-                core::array::from_fn(|k| {
-                    if batches.len() < 2 {
-                        return f64::INFINITY;
-                    }
-                    let s: f64 = batches.iter().map(|(n, im)| *n as f64 * (im[p][k] as f64 - mean[p][k] as f64).powi(2)).sum();
-                    s / (batches.len() - 1) as f64
-                })
-            })
-            .collect();
+    for ((kind, _, seconds, passes, setup), variance_px) in runs.into_iter().zip(pass_variances) {
+        let mean = &images[entries.len()];
         let rel = |p: usize, k: usize| (reference[p][k] as f64).powi(2) + 0.01;
         let variance = (0..pixels).map(|p| (0..3).map(|k| variance_px[p][k] / rel(p, k)).sum::<f64>()).sum::<f64>() / (3 * pixels.max(1)) as f64;
-        let bias = block_bias(w, h, &mean, &reference, &variance_px, passes.max(1), &reference_variance);
+        let bias = block_bias(w, h, mean, &reference, &variance_px, passes.max(1), &reference_variance);
         let low = seconds / passes.max(1) as f64;
         let pass_seconds = if kind == EstimatorKind::Pt { pt_full } else { (low - overhead).max(0.0) * ratio + overhead };
         let setup_seconds = setup * ratio;
@@ -260,24 +248,17 @@ pub fn choose(
     Ok((Choice { kind: best, entries, seconds: race_start.elapsed().as_secs_f64(), size: (w, h), overhead }, full))
 }
 
-/// The pass-weighted mean of batch images.
-fn images_mean(batches: &[(u32, Vec<[f32; 3]>)]) -> Vec<[f32; 3]> {
-    let n: u32 = batches.iter().map(|b| b.0).sum();
-    let len = batches.first().map_or(0, |b| b.1.len());
-    (0..len).map(|p| core::array::from_fn(|k| (batches.iter().map(|(m, im)| *m as f64 * im[p][k] as f64).sum::<f64>() / n.max(1) as f64) as f32)).collect()
-}
-
-/// Per pixel and channel, the variance of the mean image of `passes` passes: the per-pass
-/// variance from the batches over the pass count (infinite with one batch).
-fn mean_variance(batches: &[(u32, Vec<[f32; 3]>)], mean: &[[f32; 3]], pixels: usize, passes: u32) -> Vec<[f64; 3]> {
-    (0..pixels)
+/// Per pixel and channel, the variance of one pass, Σ_b n_b (X_b − X̄)² / (B − 1), from
+/// the batch means X_b of n_b passes and the mean image X̄ (infinite with one batch).
+fn pass_variance(batches: &[(u32, Vec<[f32; 3]>)], mean: &[[f32; 3]]) -> Vec<[f64; 3]> {
+    (0..mean.len())
         .map(|p| {
             core::array::from_fn(|k| {
                 if batches.len() < 2 {
                     return f64::INFINITY;
                 }
                 let s: f64 = batches.iter().map(|(n, im)| *n as f64 * (im[p][k] as f64 - mean[p][k] as f64).powi(2)).sum();
-                s / (batches.len() - 1) as f64 / passes.max(1) as f64
+                s / (batches.len() - 1) as f64
             })
         })
         .collect()

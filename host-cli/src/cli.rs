@@ -46,25 +46,20 @@ pub enum Command {
     Merge(MergeArgs),
 }
 
-/// Options of `ember plan`.
+/// The scene and the settings that decide a render's plan or preprocessing, shared by
+/// `plan` and `train` (the renders that use their result must match them).
 #[derive(Args, Debug, Clone, PartialEq)]
-pub struct PlanArgs {
-    /// Mitsuba 3 XML scene file. Omit it to plan the built-in Cornell box.
+pub struct SceneSelection {
+    /// Mitsuba 3 XML scene file. Omit it for the built-in Cornell box.
     #[arg(value_name = "SCENE")]
     pub scene: Option<PathBuf>,
-    /// Plan a built-in scene instead of a file (`cornell-box` or `glass-spheres`).
+    /// A built-in scene instead of a file (as for `render`).
     #[arg(long, value_name = "NAME", conflicts_with = "scene", value_parser = ["cornell-box", "glass-spheres"])]
     pub builtin: Option<String>,
-    /// Print JSON instead of text.
-    #[arg(long)]
-    pub json: bool,
-    /// Camera and light path pairs the pilot traces.
-    #[arg(long, value_name = "N", default_value_t = ember_core::plan::pilot::DEFAULT_SAMPLES, value_parser = clap::value_parser!(u32).range(1..=10_000_000))]
-    pub pilot_samples: u32,
-    /// Pilot threads [default: all cores].
+    /// Threads [default: all cores].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub threads: Option<u32>,
-    /// Random seed of the pilot.
+    /// Random seed (as for `render`).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
     /// Image width (as for `render`).
@@ -80,8 +75,8 @@ pub struct PlanArgs {
     pub defines: Defines,
 }
 
-impl PlanArgs {
-    /// The `render` options these stand for.
+impl SceneSelection {
+    /// The `render` options these stand for (render-only options at their defaults).
     pub fn render_args(&self) -> RenderArgs {
         let Command::Render(mut r) = Cli::parse_from(["ember", "render"]).command else { unreachable!("`render` parses to Render") };
         r.scene = self.scene.clone();
@@ -96,15 +91,24 @@ impl PlanArgs {
     }
 }
 
+/// Options of `ember plan`.
+#[derive(Args, Debug, Clone, PartialEq)]
+pub struct PlanArgs {
+    #[command(flatten)]
+    pub selection: SceneSelection,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Camera and light path pairs the pilot traces.
+    #[arg(long, value_name = "N", default_value_t = ember_core::plan::pilot::DEFAULT_SAMPLES, value_parser = clap::value_parser!(u32).range(1..=10_000_000))]
+    pub pilot_samples: u32,
+}
+
 /// Options of `ember train`: those of `render` that decide the preprocessing.
 #[derive(Args, Debug, Clone, PartialEq)]
 pub struct TrainArgs {
-    /// Mitsuba 3 XML scene file. Omit it to train on the built-in Cornell box.
-    #[arg(value_name = "SCENE")]
-    pub scene: Option<PathBuf>,
-    /// A built-in scene instead of a file (as for `render`).
-    #[arg(long, value_name = "NAME", conflicts_with = "scene", value_parser = ["cornell-box", "glass-spheres"])]
-    pub builtin: Option<String>,
+    #[command(flatten)]
+    pub selection: SceneSelection,
     /// The estimator whose preprocessing is saved (only spcbpt has one worth saving).
     #[arg(short, long, value_parser = estimator_parser(), default_value_t = EstimatorKind::Spcbpt)]
     pub estimator: EstimatorKind,
@@ -114,23 +118,6 @@ pub struct TrainArgs {
     pub no_plan: bool,
     #[command(flatten)]
     pub cache: CacheArgs,
-    /// Threads [default: all cores].
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
-    pub threads: Option<u32>,
-    /// Random seed: the renders that load the model must use the same.
-    #[arg(long, value_name = "N", default_value_t = 0)]
-    pub seed: u64,
-    /// Image width (as for `render`; the renders must match).
-    #[arg(long, value_name = "PIXELS", value_parser = clap::value_parser!(u32).range(1..=65536))]
-    pub width: Option<u32>,
-    /// Image height (as for `render`; the renders must match).
-    #[arg(long, value_name = "PIXELS", value_parser = clap::value_parser!(u32).range(1..=65536))]
-    pub height: Option<u32>,
-    /// Longest path (as for `render`; the renders must match).
-    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = clap::value_parser!(i32).range(-1..))]
-    pub max_depth: Option<i32>,
-    #[command(flatten)]
-    pub defines: Defines,
     /// The model file to write.
     #[arg(short, long, value_name = "FILE", default_value = "model.bin")]
     pub output: PathBuf,
@@ -139,18 +126,10 @@ pub struct TrainArgs {
 impl TrainArgs {
     /// The `render` options these stand for (render-only options at their defaults).
     pub fn render_args(&self) -> RenderArgs {
-        let Command::Render(mut r) = Cli::parse_from(["ember", "render"]).command else { unreachable!("`render` parses to Render") };
-        r.scene = self.scene.clone();
-        r.builtin = self.builtin.clone();
+        let mut r = self.selection.render_args();
         r.estimator = EstimatorChoice::Fixed(self.estimator);
         r.no_plan = self.no_plan;
         r.cache = self.cache.clone();
-        r.threads = self.threads;
-        r.seed = self.seed;
-        r.width = self.width;
-        r.height = self.height;
-        r.max_depth = self.max_depth;
-        r.defines = self.defines.clone();
         r
     }
 }

@@ -17,17 +17,19 @@ pub fn run_pilot(prepared: &PreparedScene, max_depth: i32, seed: u64, samples: u
     let ctx = Context { scene: &prepared.scene, tracer: &prepared.accel };
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).thread_name(|i| format!("ember-pilot-{i}")).build().map_err(|e| e.to_string())?;
     let chunks = samples.div_ceil(PILOT_CHUNK);
-    Ok(pool.install(|| {
+    let parts: Vec<PilotStats> = pool.install(|| {
         (0..chunks)
             .into_par_iter()
             .map(|c| {
                 let range = c * PILOT_CHUNK..((c + 1) * PILOT_CHUNK).min(samples);
                 pilot::map(&ctx, &params, range, samples)
             })
-            .reduce(PilotStats::default, |mut a, b| {
-                a += b;
-                a
-            })
+            .collect()
+    });
+    // Summed in chunk order: the energies (floating point) do not depend on the threads.
+    Ok(parts.into_iter().fold(PilotStats::default(), |mut a, b| {
+        a += b;
+        a
     }))
 }
 
@@ -117,8 +119,17 @@ pub fn json_all(prepared: &PreparedScene, plans: &[Plan]) -> String {
         o.push_str(&format!("  \"max_depth\": {},\n  \"specular_chains\": {},\n", f.max_depth.0, f.specular_chains));
         match &first.pilot {
             Some(p) => o.push_str(&format!(
-                "  \"pilot\": {{\"samples\": {}, \"emitter_seen\": {}, \"connections\": {}, \"occluded\": {}, \"light_samples\": {}, \"light_samples_occluded\": {}, \"rays\": {}}},\n",
-                p.samples, p.emitter_seen, p.connections, p.occluded, p.light_samples, p.light_samples_occluded, p.rays
+                "  \"pilot\": {{\"samples\": {}, \"emitter_seen\": {}, \"connections\": {}, \"occluded\": {}, \"light_samples\": {}, \"light_samples_occluded\": {}, \"rays\": {}, \"energy_by_technique\": {{{}}}, \"energy_by_length\": {:?}, \"shadow_rays_by_technique\": {{{}}}}},\n",
+                p.samples,
+                p.emitter_seen,
+                p.connections,
+                p.occluded,
+                p.light_samples,
+                p.light_samples_occluded,
+                p.rays,
+                pilot::TECHNIQUES.iter().zip(p.technique_shares()).map(|(n, v)| format!("{}: {v}", json_str(n))).collect::<Vec<_>>().join(", "),
+                p.length_shares(),
+                pilot::TECHNIQUES.iter().zip(p.shadow_rays).map(|(n, v)| format!("{}: {v}", json_str(n))).collect::<Vec<_>>().join(", ")
             )),
             None => o.push_str("  \"pilot\": null,\n"),
         }

@@ -333,6 +333,22 @@ impl Plan {
                 p.light_samples
             );
             lines.push(s);
+            if p.energy.iter().sum::<f64>() > 0.0 {
+                let mut s = String::from("energy by technique:");
+                for (name, share) in pilot::TECHNIQUES.iter().zip(p.technique_shares()) {
+                    let _ = write!(s, " {name} {:.1} %,", 100.0 * share);
+                }
+                s.pop();
+                let _ = write!(s, "; shadow rays {:?}", p.shadow_rays);
+                lines.push(s);
+                let mut s = String::from("energy by path length (segments):");
+                for (k, share) in p.length_shares().iter().enumerate() {
+                    let plus = if k + 1 == pilot::LENGTHS { "+" } else { "" };
+                    let _ = write!(s, " {}{plus} {:.1} %,", k + 1, 100.0 * share);
+                }
+                s.pop();
+                lines.push(s);
+            }
         }
         lines
     }

@@ -11,11 +11,19 @@
 //!   uniformly from the cacheable vertices of the sample's light path (LVCBPT's
 //!   uniform choice), and a connection whose shadow ray is blocked is occluded;
 //! - light samples: next-event estimation at every non-Dirac camera vertex, occluded
-//!   or not.
+//!   or not;
+//! - energy by technique and by path length: the sample is also a BDPT sample (every
+//!   (s, t) strategy of the two sub-paths, balance-heuristic weights), and each
+//!   weighted contribution's luminance goes to its technique (emission s = 0, light
+//!   sample s = 1, light tracing t = 1, connection s, t ≥ 2) and to its length in
+//!   segments. Per sample these estimate the image mean: a camera-side value as it is,
+//!   a t = 1 splat over the W·H light paths a BDPT pass has. The shadow rays of each
+//!   technique are counted too: the cost the core can see without a clock.
 //!
 //! A connection or light sample with zero throughput before visibility traces no ray
 //! and is not counted. The function is over an index range, so hosts chunk it like any
-//! phase; sums of chunks in any order are equal (integer counts).
+//! phase; the counts of chunks sum the same in any order, the energies when summed in
+//! chunk order.
 
 use core::ops::AddAssign;
 #[cfg(feature = "path")]
@@ -37,8 +45,13 @@ pub const PILOT_PASS: u32 = u32::MAX - 7;
 /// Pilot samples by default.
 pub const DEFAULT_SAMPLES: u32 = 4096;
 
+/// The techniques the energy is split by.
+pub const TECHNIQUES: [&str; 4] = ["emission", "light samples", "light tracing", "connections"];
+/// Path lengths the energy is split by: 1, 2, …, the last bucket holding all longer ones.
+pub const LENGTHS: usize = 8;
+
 /// What the pilot counted.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PilotStats {
     /// Camera and light sub-path pairs.
     pub samples: u64,
@@ -54,6 +67,13 @@ pub struct PilotStats {
     pub light_samples_occluded: u64,
     /// Rays traced.
     pub rays: u64,
+    /// Σ luminance of the weighted BDPT contributions per technique ([`TECHNIQUES`]),
+    /// as image-mean estimates.
+    pub energy: [f64; 4],
+    /// The same per path length in segments (1 … [`LENGTHS`], the last: longer).
+    pub energy_by_length: [f64; LENGTHS],
+    /// Shadow rays per technique.
+    pub shadow_rays: [u64; 4],
 }
 
 impl PilotStats {
@@ -64,6 +84,16 @@ impl PilotStats {
     /// Share of light samples occluded (0 without any).
     pub fn light_sample_occluded_share(&self) -> f64 {
         if self.light_samples == 0 { 0.0 } else { self.light_samples_occluded as f64 / self.light_samples as f64 }
+    }
+    /// The shares of the energy per technique (zeros without energy).
+    pub fn technique_shares(&self) -> [f64; 4] {
+        let total: f64 = self.energy.iter().sum();
+        self.energy.map(|e| if total > 0.0 { e / total } else { 0.0 })
+    }
+    /// The shares of the energy per path length.
+    pub fn length_shares(&self) -> [f64; LENGTHS] {
+        let total: f64 = self.energy_by_length.iter().sum();
+        self.energy_by_length.map(|e| if total > 0.0 { e / total } else { 0.0 })
     }
     /// Share of camera rays that saw an emitter directly.
     pub fn emitter_seen_share(&self) -> f64 {
@@ -80,6 +110,13 @@ impl AddAssign for PilotStats {
         self.light_samples += o.light_samples;
         self.light_samples_occluded += o.light_samples_occluded;
         self.rays += o.rays;
+        for k in 0..4 {
+            self.energy[k] += o.energy[k];
+            self.shadow_rays[k] += o.shadow_rays[k];
+        }
+        for k in 0..LENGTHS {
+            self.energy_by_length[k] += o.energy_by_length[k];
+        }
     }
 }
 
@@ -107,6 +144,7 @@ pub fn map<Q: RayQuery + ?Sized>(ctx: &Context<'_, Q>, params: &RenderParams, sa
                 break;
             }
         }
+        bdpt_energy(ctx, params, &light, &cam, i, pixels, &mut stats, &mut counters);
         let cacheable: heapless::Vec<usize, { path::MAX_VERTICES }> = (1..light.len()).filter(|&k| is_cacheable(scene, &light[k])).collect();
         let mut rng = SampleStream::for_sample(params.seed, Stream::Aux, i, 0, PILOT_PASS);
         for t in 2..=cam.len() {
@@ -137,4 +175,49 @@ pub fn map<Q: RayQuery + ?Sized>(ctx: &Context<'_, Q>, params: &RenderParams, sa
     }
     stats.rays = counters.rays;
     stats
+}
+
+/// Sample `i`'s BDPT strategies, weighted, into `stats`' energies (module notes).
+#[cfg(feature = "path")]
+#[allow(clippy::too_many_arguments)]
+fn bdpt_energy<Q: RayQuery + ?Sized>(
+    ctx: &Context<'_, Q>,
+    params: &RenderParams,
+    light: &[path::Vertex],
+    cam: &[path::Vertex],
+    i: u32,
+    pixels: u64,
+    stats: &mut PilotStats,
+    counters: &mut Counters,
+) {
+    let mut rng = SampleStream::for_sample(params.seed, Stream::Aux, i, 1, PILOT_PASS);
+    for t in 1..=cam.len() {
+        for s in 0..=light.len() {
+            let segments = s + t - 1;
+            if (s == 1 && t == 1) || segments < 1 || !params.max_depth.allows(segments as u32) {
+                continue;
+            }
+            let technique = match (s, t) {
+                (0, _) => 0,
+                (1, _) => 1,
+                (_, 1) => 2,
+                _ => 3,
+            };
+            let u = LightPointSample { u_light: rng.next_f32(), u_point: rng.next_2d() };
+            let before = counters.rays;
+            let c = path::connect(ctx, light, cam, s, t, u, counters);
+            stats.shadow_rays[technique] += counters.rays - before;
+            let Some(c) = c else { continue };
+            let weight = path::mis::mis_weight(ctx.scene, light, cam, c.sampled.as_ref(), s, t);
+            let mut e = c.weighted(weight).value.luminance() as f64;
+            if !e.is_finite() || e < 0.0 {
+                continue;
+            }
+            if c.film.is_some() {
+                e /= pixels as f64;
+            }
+            stats.energy[technique] += e;
+            stats.energy_by_length[(segments - 1).min(LENGTHS - 1)] += e;
+        }
+    }
 }
