@@ -211,7 +211,11 @@ impl CoreRenderer {
                 )]
             }
             Renderer::Merging(m) if m.techniques(0).merge == 0.0 => {
-                vec![format!("{:<10} memory per pass: light paths {:.1} MiB; merging left out (no photons or grid)", self.renderer.kind().name(), mib(m.size_bytes()))]
+                vec![format!(
+                    "{:<10} memory per pass: light paths {:.1} MiB; merging left out (no photons or grid)",
+                    self.renderer.kind().name(),
+                    mib(m.size_bytes())
+                )]
             }
             Renderer::Merging(m) => {
                 let paths = m.paths.size_bytes() + m.prefix.capacity() * 8;
