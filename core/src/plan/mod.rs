@@ -35,7 +35,8 @@
 //! - **Γ training** (all of SPCBPT's preprocessing): where the pilot finds fewer than
 //!   [`RARELY_OCCLUDED`] of connections occluded, a learned choice of light vertex
 //!   can hardly beat the uniform one, and the plan renders LVCBPT (the same
-//!   connections, chosen uniformly), which converges to the same image.
+//!   connections, chosen uniformly; where the build has it), which converges to the
+//!   same image.
 //!
 //! The plan only removes; the estimator that runs is still unbiased (or consistent)
 //! on its own. `ember plan` prints it, `ember render` prints it in its report.
@@ -238,7 +239,8 @@ impl Plan {
             EstimatorConfig::Spcbpt(c) => {
                 let rarely = pilot.filter(|p| p.connections > 0).map(|p| p.occluded_share());
                 match rarely {
-                    Some(share) if share < RARELY_OCCLUDED => {
+                    // LVCBPT must be in the build (a core without the `lvcbpt` feature keeps SPCBPT).
+                    Some(share) if share < RARELY_OCCLUDED && crate::render::EstimatorKind::Lvcbpt.is_compiled() => {
                         let lv = EstimatorConfig::Lvcbpt(crate::render::LvcbptConfig {
                             light_paths: c.light_paths,
                             connections: c.connections,
