@@ -69,7 +69,9 @@ JSON="["
 for c in "${CASES[@]}"; do
   set -- $c
   for seed in "${NATIVE_SEEDS[@]}"; do
-    "$EMBER" render --builtin "$1" -e "$2" --spp $PASSES --seed $seed --width $SIZE --height $SIZE --threads 2 \
+    # --no-plan: the page renders each estimator whole (it does not plan), so the native
+    # side must too (planned VCM leaves merging out, a different biased estimator).
+    "$EMBER" render --builtin "$1" -e "$2" --spp $PASSES --seed $seed --width $SIZE --height $SIZE --threads 2 --no-plan \
       -o "$ART/$1-$2-native-$seed.exr" >/dev/null 2>&1
   done
   Q="scene=$(scene_index "$1")&estimator=$2&width=$SIZE&height=$SIZE&passes=$PASSES&seed=$BROWSER_SEED&workers=2"
@@ -102,7 +104,7 @@ if [ "$MODE" = bench ] || [ "${BENCH:-}" = 1 ]; then
   for e in "${ESTIMATORS[@]}"; do
     for round in 1 2; do
       printf '%s round %s native 1 thread: ' "$e" "$round"
-      "$EMBER" render --builtin cornell-box -e "$e" --spp $BP --seed 1 --width $B --height $B --threads 1 \
+      "$EMBER" render --builtin cornell-box -e "$e" --spp $BP --seed 1 --width $B --height $B --threads 1 --no-plan \
         -o "$ART/bench-native.exr" 2>&1 | grep -E "^samples" || echo
       for w in 1 2; do
         Q="scene=0&estimator=$e&width=$B&height=$B&passes=$BP&seed=1&workers=$w"
