@@ -74,6 +74,21 @@ pub struct Entry {
     pub predicted: f64,
 }
 
+/// One candidate's pilot: what the race reads from it.
+struct Run {
+    kind: EstimatorKind,
+    config: EstimatorConfig,
+    /// The mean image of all its passes.
+    image: Vec<[f32; 3]>,
+    /// Per pixel and channel, the variance of one pass ([`pass_variance`]).
+    variance: Vec<[f64; 3]>,
+    /// Seconds in its passes, and their count.
+    seconds: f64,
+    passes: u32,
+    /// Seconds its setup took.
+    setup: f64,
+}
+
 /// What the race decided, and its account.
 #[derive(Clone, Debug)]
 pub struct Choice {
@@ -149,8 +164,7 @@ pub fn choose(
     let pt_full = summary.render_seconds / summary.passes.max(1) as f64;
     let full = pt.prepared;
     let mut prepared = Some(load(w, h)?);
-    let mut images: Vec<Vec<[f32; 3]>> = Vec::new();
-    let mut runs = Vec::new();
+    let mut runs: Vec<Run> = Vec::new();
     for kind in CANDIDATES {
         let scene = prepared.take().ok_or("the pilot scene was lost")?;
         let config = args.cache.config_for(kind);
@@ -185,8 +199,8 @@ pub fn choose(
                 break;
             }
         }
-        images.push(prev);
-        runs.push((kind, batches, render_seconds, film.passes(), r.setup_seconds));
+        let variance = pass_variance(&batches, &prev);
+        runs.push(Run { kind, config, image: prev, variance, seconds: render_seconds, passes: film.passes(), setup: r.setup_seconds });
         prepared = Some(r.prepared);
     }
     // The reference: per pixel and channel, the median of the candidates' images.
@@ -194,7 +208,7 @@ pub fn choose(
     let mut reference = vec![[0.0f32; 3]; pixels];
     for (p, rp) in reference.iter_mut().enumerate() {
         for (k, rk) in rp.iter_mut().enumerate() {
-            let mut v: Vec<f32> = images.iter().map(|im| im[p][k]).collect();
+            let mut v: Vec<f32> = runs.iter().map(|r| r.image[p][k]).collect();
             v.sort_by(f32::total_cmp);
             *rk = v[v.len() / 2];
         }
@@ -202,11 +216,10 @@ pub fn choose(
     // Each candidate's per-pass variance per pixel and channel; the median over the
     // candidates of the variance of their mean images stands for the reference's (a
     // median of similar estimates has about the variance of one).
-    let pass_variances: Vec<Vec<[f64; 3]>> = runs.iter().zip(&images).map(|(run, mean)| pass_variance(&run.1, mean)).collect();
     let reference_variance: Vec<[f64; 3]> = (0..pixels)
         .map(|p| {
             core::array::from_fn(|k| {
-                let mut v: Vec<f64> = pass_variances.iter().zip(&runs).map(|(pv, run)| pv[p][k] / run.3.max(1) as f64).collect();
+                let mut v: Vec<f64> = runs.iter().map(|r| r.variance[p][k] / r.passes.max(1) as f64).collect();
                 v.sort_by(f64::total_cmp);
                 v[v.len() / 2]
             })
@@ -214,14 +227,13 @@ pub fn choose(
         .collect();
     let remaining = (budget - start.elapsed().as_secs_f64()).max(0.05 * budget);
     // t_low = o + b, t_full = o + ratio·b for PT: the fixed part o of a pass.
-    let pt_low = runs.iter().find(|r| r.0 == EstimatorKind::Pt).map_or(0.0, |r| r.2 / r.3.max(1) as f64);
+    let pt_low = runs.iter().find(|r| r.kind == EstimatorKind::Pt).map_or(0.0, |r| r.seconds / r.passes.max(1) as f64);
     let overhead = if ratio > 1.0 { ((pt_low * ratio - pt_full) / (ratio - 1.0)).clamp(0.0, pt_low) } else { 0.0 };
     let mut entries = Vec::new();
-    for ((kind, _, seconds, passes, setup), variance_px) in runs.into_iter().zip(pass_variances) {
-        let mean = &images[entries.len()];
+    for Run { kind, config, image: mean, variance: variance_px, seconds, passes, setup } in runs {
         let rel = |p: usize, k: usize| (reference[p][k] as f64).powi(2) + 0.01;
         let variance = (0..pixels).map(|p| (0..3).map(|k| variance_px[p][k] / rel(p, k)).sum::<f64>()).sum::<f64>() / (3 * pixels.max(1)) as f64;
-        let bias = block_bias(w, h, mean, &reference, &variance_px, passes.max(1), &reference_variance);
+        let bias = block_bias(w, h, &mean, &reference, &variance_px, passes.max(1), &reference_variance);
         let low = seconds / passes.max(1) as f64;
         let pass_seconds = if kind == EstimatorKind::Pt { pt_full } else { (low - overhead).max(0.0) * ratio + overhead };
         let setup_seconds = setup * ratio;
@@ -229,7 +241,7 @@ pub fn choose(
         // A merging radius shrinks as r_i ∝ (i + 1)^((α − 1)/2), so a pass's variance
         // (∝ 1/r²) grows as (i + 1)^(1 − α): the render's passes, up to N = left / t_pass,
         // average (N / n_pilot)^(1 − α) times the pilot's first n_pilot.
-        let growth = match args.cache.config_for(kind) {
+        let growth = match config {
             EstimatorConfig::Merging(_, c) => ((left / pass_seconds) / passes.max(1) as f64).max(1.0).powf(1.0 - c.alpha as f64),
             _ => 1.0,
         };

@@ -135,7 +135,7 @@ where
     Ok(times)
 }
 
-fn thread_pool(threads: usize, name: &'static str) -> Result<rayon::ThreadPool, DriverError> {
+pub(crate) fn thread_pool(threads: usize, name: &'static str) -> Result<rayon::ThreadPool, DriverError> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads.max(1))
         .thread_name(move |i| format!("{name}-{i}"))

@@ -210,7 +210,7 @@ impl CoreRenderer {
                     cache.retained.capacity
                 )]
             }
-            Renderer::Merging(m) if m.techniques(0).merge == 0.0 => {
+            Renderer::Merging(m) if !m.config.merges(m.mode) => {
                 vec![format!(
                     "{:<10} memory per pass: light paths {:.1} MiB; merging left out (no photons or grid)",
                     self.renderer.kind().name(),
@@ -359,7 +359,7 @@ pub fn make_core_renderer_at(args: &RenderArgs, start: Instant) -> Result<CoreRe
     let config = if args.no_plan {
         asked
     } else {
-        let plan = crate::plan::plan_for(&prepared, asked, max_depth, args.seed, args.thread_count(), ember_core::plan::pilot::DEFAULT_SAMPLES, false)?;
+        let plan = crate::plan::plan_for(&prepared, asked, max_depth, args.seed, args.thread_count(), ember_core::plan::pilot::DEFAULT_SAMPLES)?;
         for line in plan.describe() {
             eprintln!("plan       {line}");
         }

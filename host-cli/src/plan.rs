@@ -15,7 +15,7 @@ const PILOT_CHUNK: u32 = 256;
 pub fn run_pilot(prepared: &PreparedScene, max_depth: i32, seed: u64, samples: u32, threads: usize) -> Result<PilotStats, String> {
     let params = RenderParams { max_depth: MaxDepth(max_depth), seed, heuristic: Heuristic::Power, ..RenderParams::default() };
     let ctx = Context { scene: &prepared.scene, tracer: &prepared.accel };
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).thread_name(|i| format!("ember-pilot-{i}")).build().map_err(|e| e.to_string())?;
+    let pool = crate::driver::thread_pool(threads, "ember-pilot").map_err(|e| e.to_string())?;
     let chunks = samples.div_ceil(PILOT_CHUNK);
     let parts: Vec<PilotStats> = pool.install(|| {
         (0..chunks)
@@ -38,22 +38,18 @@ pub fn needs_pilot(config: &EstimatorConfig) -> bool {
     matches!(config, EstimatorConfig::Spcbpt(_))
 }
 
-/// The plan for `config` on `prepared` at depth `max_depth`, with a pilot of `samples`
-/// where the decisions need one (or always, with `force_pilot`).
-pub fn plan_for(
-    prepared: &PreparedScene,
-    config: EstimatorConfig,
-    max_depth: i32,
-    seed: u64,
-    threads: usize,
-    samples: u32,
-    force_pilot: bool,
-) -> Result<Plan, String> {
-    let facts = SceneFacts::new(&prepared.scene, MaxDepth(max_depth));
-    let pilot = if force_pilot || needs_pilot(&config) { Some(run_pilot(prepared, max_depth, seed, samples, threads)?) } else { None };
+/// The film's pixel count, which sizes the plan's memory estimates.
+fn film_pixels(prepared: &PreparedScene) -> u32 {
     let camera = &prepared.scene.camera;
-    let pixels = (camera.width() as u64 * camera.height() as u64).min(u32::MAX as u64) as u32;
-    Ok(Plan::decide(facts, pilot, config, pixels))
+    (camera.width() as u64 * camera.height() as u64).min(u32::MAX as u64) as u32
+}
+
+/// The plan for `config` on `prepared` at depth `max_depth`, with a pilot of `samples`
+/// where the decisions need one.
+pub fn plan_for(prepared: &PreparedScene, config: EstimatorConfig, max_depth: i32, seed: u64, threads: usize, samples: u32) -> Result<Plan, String> {
+    let facts = SceneFacts::new(&prepared.scene, MaxDepth(max_depth));
+    let pilot = if needs_pilot(&config) { Some(run_pilot(prepared, max_depth, seed, samples, threads)?) } else { None };
+    Ok(Plan::decide(facts, pilot, config, film_pixels(prepared)))
 }
 
 /// `ember plan`'s report in words: the facts and the pilot once, then per estimator its
@@ -164,7 +160,6 @@ pub fn json_all(prepared: &PreparedScene, plans: &[Plan]) -> String {
 pub fn plans_for_all(prepared: &PreparedScene, max_depth: i32, seed: u64, threads: usize, samples: u32) -> Result<Vec<Plan>, String> {
     let facts = SceneFacts::new(&prepared.scene, MaxDepth(max_depth));
     let pilot = run_pilot(prepared, max_depth, seed, samples, threads)?;
-    let camera = &prepared.scene.camera;
-    let pixels = (camera.width() as u64 * camera.height() as u64).min(u32::MAX as u64) as u32;
+    let pixels = film_pixels(prepared);
     Ok(EstimatorKind::ALL.iter().map(|k| Plan::decide(facts, Some(pilot), k.default_config(), pixels)).collect())
 }

@@ -128,7 +128,7 @@ fn planned_renders_agree_with_full_renders_on_every_suite_scene() {
         };
         let blocks_n = (W.div_ceil(BLOCK) * prepared.scene.camera.height().div_ceil(BLOCK)) as usize;
         for asked in [vcm(), spcbpt()] {
-            let plan = ember_cli::plan::plan_for(&prepared, asked, depth, SEED, 2, ember_core::plan::pilot::DEFAULT_SAMPLES, false).expect("plan");
+            let plan = ember_cli::plan::plan_for(&prepared, asked, depth, SEED, 2, ember_core::plan::pilot::DEFAULT_SAMPLES).expect("plan");
             println!("{scene} {}: {:?}", asked.kind().name(), plan.decision_lines());
             if plan.planned == asked {
                 assert!(plan.decisions.iter().all(|d| d.kept), "{scene}: a technique left out, yet the configuration is unchanged");

@@ -312,8 +312,7 @@ impl EstimatorConfig {
             #[cfg(feature = "merging")]
             Self::Merging(mode, c) => {
                 // Photons, their grid and records exist only where merging does.
-                let merges = *mode != MergeMode::Vcm || c.merging;
-                let photon = if merges { core::mem::size_of::<crate::integrator::vcm::Photon>() as u64 + 4 * 3 + 12 + 8 } else { 0 };
+                let photon = if c.merges(*mode) { core::mem::size_of::<crate::integrator::vcm::Photon>() as u64 + 4 * 3 + 12 + 8 } else { 0 };
                 (c.light_paths_for(pixels) as u64 * VERTICES_PER_PATH * (vertex + 8 + photon), "the light paths and photons of a pass", "--light-paths")
             }
             #[cfg(not(all(feature = "lvcbpt", feature = "spcbpt", feature = "filtering", feature = "merging")))]
@@ -422,6 +421,12 @@ impl MergingConfig {
     /// N_L for a film of `pixels` pixels.
     pub fn light_paths_for(&self, pixels: u32) -> u32 {
         self.light_paths.unwrap_or(pixels.clamp(1, MAX_LIGHT_PATHS))
+    }
+
+    /// Does estimator `mode` merge with these settings? PPM and BPM always do; VCM unless
+    /// `merging` is off (then no photon, grid or merge count exists).
+    pub fn merges(&self, mode: MergeMode) -> bool {
+        mode != MergeMode::Vcm || self.merging
     }
 
     /// Check every field against its range.

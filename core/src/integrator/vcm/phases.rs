@@ -76,7 +76,7 @@ impl Vcm {
         let r = self.radius(pass) as f64;
         let eta = self.light_paths as f64 * core::f64::consts::PI * r * r;
         let connect = self.mode == MergeMode::Vcm && self.config.connections;
-        let merge = self.mode != MergeMode::Vcm || self.config.merging;
+        let merge = self.config.merges(self.mode);
         let c = if connect { 1.0 } else { 0.0 };
         Techniques {
             emission: 1.0,
@@ -101,8 +101,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
     fn next_phase(&self) -> Option<Phase> {
         Some(match self.cursor.stage()? {
             Stage::Setup(_) => {
-                let merges = self.mode != MergeMode::Vcm || self.config.merging;
-                let items = if merges && self.config.radius.needs_footprint() { self.pixels } else { 0 };
+                let items = if self.config.merges(self.mode) && self.config.radius.needs_footprint() { self.pixels } else { 0 };
                 Phase { name: "footprint", id: 0, pass: None, items, chunk: CHUNK, samples: false }
             }
             Stage::Pass(pass, 0) => Phase { name: "light paths", id: 1, pass: Some(pass), items: self.light_paths, chunk: CHUNK, samples: true },
