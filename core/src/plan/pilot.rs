@@ -10,8 +10,8 @@
 //! - connections: every non-Dirac camera vertex is joined to one light vertex chosen
 //!   uniformly from the cacheable vertices of the sample's light path (LVCBPT's
 //!   uniform choice), and a connection whose shadow ray is blocked is occluded;
-//! - light samples: next-event estimation at every non-Dirac camera vertex, occluded
-//!   or not;
+//! - light samples: next-event estimation at every non-Dirac camera vertex (the s = 1
+//!   strategies of the BDPT sample below), occluded or not;
 //! - energy by technique and by path length: the sample is also a BDPT sample (every
 //!   (s, t) strategy of the two sub-paths, balance-heuristic weights), and each
 //!   weighted contribution's luminance goes to its technique (emission s = 0, light
@@ -148,22 +148,11 @@ pub fn map<Q: RayQuery + ?Sized>(ctx: &Context<'_, Q>, params: &RenderParams, sa
         let cacheable: heapless::Vec<usize, { path::MAX_VERTICES }> = (1..light.len()).filter(|&k| is_cacheable(scene, &light[k])).collect();
         let mut rng = SampleStream::for_sample(params.seed, Stream::Aux, i, 0, PILOT_PASS);
         for t in 2..=cam.len() {
-            let u = LightPointSample { u_light: rng.next_f32(), u_point: rng.next_2d() };
             let pick = rng.next_f32();
-            if !cam[t - 1].is_connectible(scene) || cam[t - 1].kind != path::VertexKind::Surface {
+            if cacheable.is_empty() || !cam[t - 1].is_connectible(scene) || cam[t - 1].kind != path::VertexKind::Surface {
                 continue;
-            }
-            // Next-event estimation (s = 1).
-            let before = counters.rays;
-            let hit = path::connect(ctx, &light, &cam, 1, t, u, &mut counters).is_some();
-            if counters.rays > before {
-                stats.light_samples += 1;
-                stats.light_samples_occluded += u64::from(!hit);
             }
             // One uniformly chosen cached light vertex (s ≥ 2).
-            if cacheable.is_empty() {
-                continue;
-            }
             let k = cacheable[((pick * cacheable.len() as f32) as usize).min(cacheable.len() - 1)];
             let before = counters.rays;
             let hit = path::connect(ctx, &light[..=k], &cam, k + 1, t, LightPointSample::default(), &mut counters).is_some();
@@ -177,7 +166,7 @@ pub fn map<Q: RayQuery + ?Sized>(ctx: &Context<'_, Q>, params: &RenderParams, sa
     stats
 }
 
-/// Sample `i`'s BDPT strategies, weighted, into `stats`' energies (module notes).
+/// Sample `i`'s BDPT strategies, weighted, into `stats`' energies, with its light samples' occlusion (module notes).
 #[cfg(feature = "path")]
 #[allow(clippy::too_many_arguments)]
 fn bdpt_energy<Q: RayQuery + ?Sized>(
@@ -206,7 +195,14 @@ fn bdpt_energy<Q: RayQuery + ?Sized>(
             let u = LightPointSample { u_light: rng.next_f32(), u_point: rng.next_2d() };
             let before = counters.rays;
             let c = path::connect(ctx, light, cam, s, t, u, counters);
-            stats.shadow_rays[technique] += counters.rays - before;
+            let traced = counters.rays - before;
+            stats.shadow_rays[technique] += traced;
+            // The light samples' occlusion is read off next-event estimation here, where
+            // the strategy traces its ray anyway.
+            if s == 1 && traced > 0 {
+                stats.light_samples += 1;
+                stats.light_samples_occluded += u64::from(c.is_none());
+            }
             let Some(c) = c else { continue };
             let weight = path::mis::mis_weight(ctx.scene, light, cam, c.sampled.as_ref(), s, t);
             let mut e = c.weighted(weight).value.luminance() as f64;
