@@ -1,4 +1,4 @@
-//! BVH2 against CWBVH (obvhs) through the CLI's `RayQuery` implementation, on camera
+//! BVH2 and CWBVH (obvhs) against our BVH4 (`accel/wide.rs`) through the CLI's `RayQuery` implementation, on camera
 //! rays and on incoherent rays, closest hit and occlusion, one thread.
 //!
 //! Scene: a sphere tessellated into 256 × 256 quads (131 072 triangles), radially
@@ -11,12 +11,12 @@
 //! - random occlusion: segments between two uniform points in the box (connections).
 //!
 //! Run: `cargo bench -p ember-cli --bench bvh`. Prints Mrays/s per set (best of 7,
-//! the two structures alternating) and the CWBVH / BVH2 ratio.
+//! the three structures taking turns) and the CWBVH / BVH2 and BVH4 / CWBVH ratios.
 
 use std::hint::black_box;
 use std::time::Instant;
 
-use ember_cli::accel::{AccelWith, TriangleBvh};
+use ember_cli::accel::{AccelWith, TriangleBvh, Wide};
 use ember_core::geometry::{Ray, RayQuery, spawn_ray_to};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::shapes::{SceneGeometry, Triangle};
@@ -143,23 +143,24 @@ fn main() {
     let sets = ray_sets();
     let bvh2 = build::<Bvh2>(&g);
     let cwbvh = build::<CwBvh>(&g);
+    let bvh4 = build::<Wide>(&g);
     // Shadow rays from the camera hits toward the light.
     let shadow: Vec<Ray> = sets.camera.iter().filter_map(|r| cwbvh.intersect(r)).map(|h| spawn_ray_to(h.p, h.ng, LIGHT, Vec3::ZERO)).collect();
     // Alternate the two structures and keep each one's best of REPS (robust to other
     // processes sharing the machine).
-    let mut best = [[(0.0f64, 0usize); 4]; 2];
+    let mut best = [[(0.0f64, 0usize); 4]; 3];
     for _ in 0..REPS {
-        for (k, r) in [run(&bvh2, &sets, &shadow), run(&cwbvh, &sets, &shadow)].into_iter().enumerate() {
+        for (k, r) in [run(&bvh2, &sets, &shadow), run(&cwbvh, &sets, &shadow), run(&bvh4, &sets, &shadow)].into_iter().enumerate() {
             for (b, m) in best[k].iter_mut().zip(r) {
                 *b = (b.0.max(m.0), m.1);
             }
         }
     }
-    println!("{:<30} {:>7} {:>7} {:>13}", "Mrays/s, 1 thread, best of 7", "BVH2", "CWBVH", "CWBVH / BVH2");
+    println!("{:<30} {:>7} {:>7} {:>7} {:>13} {:>13}", "Mrays/s, 1 thread, best of 7", "BVH2", "CWBVH", "BVH4", "CWBVH / BVH2", "BVH4 / CWBVH");
     let names = ["camera, closest hit", "camera, occlusion (NEE)", "random, closest hit", "random, occlusion (segments)"];
     for (k, name) in names.iter().enumerate() {
-        let (a, b) = (best[0][k], best[1][k]);
-        assert_eq!(a.1, b.1, "{name}: the hierarchies disagree on the hit count");
-        println!("{:<30} {:>7.2} {:>7.2} {:>13.2}", name, a.0, b.0, b.0 / a.0);
+        let (a, b, c) = (best[0][k], best[1][k], best[2][k]);
+        assert!(a.1 == b.1 && b.1 == c.1, "{name}: the hierarchies disagree on the hit count");
+        println!("{:<30} {:>7.2} {:>7.2} {:>7.2} {:>13.2} {:>13.2}", name, a.0, b.0, c.0, b.0 / a.0, c.0 / b.0);
     }
 }

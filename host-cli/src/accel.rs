@@ -2,40 +2,40 @@
 //! spheres beside it.
 //!
 //! # Triangles
-//! One obvhs hierarchy (PLOC build with reinsertion, `BvhBuildParams::medium_build`) over
-//! every triangle. After the build the triangles are reordered by the hierarchy's
-//! `primitive_indices`, so a leaf's primitive range indexes the vertex array directly.
+//! One hierarchy over every triangle: by default our four-wide BVH ([`Wide`], module
+//! `wide`: obvhs's PLOC build collapsed to four children per node and four triangles per
+//! leaf, traversed with 4-lane SIMD). After the build the triangles are reordered by the
+//! hierarchy's leaf order, so a hit's leaf slot indexes the vertex array directly.
 //! Hot data (three `Vec3A` vertices, 48 bytes) and cold data (normals, material,
 //! emitter, original index) live in separate arrays, so traversal touches only the
-//! former. Triangles are intersected with the watertight test (module `triangle`).
+//! former. Triangles are intersected with the watertight test (module `triangle`; the
+//! BVH4 runs the same arithmetic four lanes at a time, bit-identical per lane).
 //! Degenerate triangles (zero area or non-finite vertices) cannot be hit and are dropped.
 //! The hierarchy is built over leaf boxes grown by a few ulps of the scene's scale, as
 //! obvhs's slab test is not conservative (see `hit::box_padding`: without it, rays aimed at
 //! the edge where two walls meet escaped a closed box).
 //!
 //! # Which hierarchy: measured
-//! `cargo bench -p ember-cli --bench bvh` (host-cli/benches/bvh.rs) builds both over a
-//! procedural scene of 131 084 triangles (a displaced sphere tessellated into 256 × 256
-//! quads, inside a closed box, seen from inside the box) and traces 512² rays per set,
-//! one thread, through this very `RayQuery` implementation (watertight test included),
-//! alternating the two structures and keeping each one's best of 7:
+//! `cargo bench -p ember-cli --bench bvh` (host-cli/benches/bvh.rs) builds obvhs's BVH2
+//! and CWBVH and our BVH4 over a procedural scene of 131 084 triangles (a displaced
+//! sphere tessellated into 256 × 256 quads, inside a closed box, seen from inside the
+//! box) and traces 512² rays per set, one thread, through this very `RayQuery`
+//! implementation (watertight test included), the structures taking turns and each
+//! keeping its best of 7:
 //!
-//! | Mrays/s, 1 thread                     | BVH2 | CWBVH | CWBVH / BVH2 |
-//! |---------------------------------------|------|-------|--------------|
-//! | camera rays, closest hit              | 2.02 | 1.74  | 0.86         |
-//! | camera hits → light, occlusion        | 1.36 | 2.14  | 1.57         |
-//! | random origin and direction, closest  | 1.98 | 2.34  | 1.18         |
-//! | random segments, occlusion            | 1.33 | 1.95  | 1.46         |
+//! | Mrays/s, 1 thread                     | BVH2 | CWBVH | BVH4 | BVH4 / CWBVH |
+//! |---------------------------------------|------|-------|------|--------------|
+//! | camera rays, closest hit              | 2.39 | 2.04  | 3.37 | 1.65         |
+//! | camera hits → light, occlusion        | 1.94 | 2.73  | 3.21 | 1.18         |
+//! | random origin and direction, closest  | 2.05 | 2.64  | 2.92 | 1.10         |
+//! | random segments, occlusion            | 1.63 | 2.29  | 2.69 | 1.18         |
 //!
-//! Build: 0.15 s (BVH2) and 0.14 s (CWBVH). Measured on a 2-core x86-64 VM (Xeon,
-//! AVX-512, 2 GHz) shared with other builds: absolute rates moved by up to 2× from run
-//! to run, the ratios much less (over five runs: camera closest 0.82–1.08, camera
-//! occlusion 1.33–1.95, random closest 1.18–1.77, random occlusion 1.42–1.58). BVH2
-//! wins only on coherent closest-hit camera rays, by ~15 %; CWBVH wins every
-//! incoherent and every occlusion query, by 1.2–1.6×. The estimators trace one camera
-//! ray per path but one closest-hit bounce ray and at least one shadow or connection
-//! ray per vertex (all incoherent), so [`Accel`] uses **CWBVH**. [`AccelWith`] keeps
-//! the BVH2 variant for the benchmark and the tests.
+//! Builds: 0.10–0.11 s each. Measured on a 2-core x86-64 VM (Xeon, AVX-512, 2 GHz) shared
+//! with other work: absolute rates move by up to 2× from run to run, the ratios much
+//! less. On the 36-triangle Cornell box the difference is larger: callgrind counts about
+//! 1 240 instructions per closest-hit query inside obvhs's CWBVH and 750 inside the BVH4
+//! (docs/performance.md). [`AccelWith`] keeps the obvhs variants for the benchmark and
+//! the tests.
 //!
 //! # Spheres
 //! Analytic spheres are intersected exactly, in f64 (module `sphere`). Scenes hold a handful
@@ -56,6 +56,7 @@
 mod hit;
 mod sphere;
 mod triangle;
+mod wide;
 
 use std::time::Duration;
 
@@ -69,14 +70,15 @@ use obvhs::ray::{Ray as BvhRay, RayHit};
 use ember_core::geometry::{LightId, MaterialId, Ray, RayQuery, SurfaceHit};
 use ember_core::shapes::{SceneGeometry, Sphere};
 
-use triangle::WatertightRay;
+pub use triangle::WatertightRay;
+pub use wide::Wide;
 
 /// Up to this many spheres are tested in a list; more get a BVH2 of their own.
 pub const SPHERE_LIST_MAX: usize = 8;
 
-/// The ray-query structure the CLI renders with (CWBVH over triangles; see the module
+/// The ray-query structure the CLI renders with (our BVH4 over triangles; see the module
 /// documentation for the measurement behind the choice).
-pub type Accel = AccelWith<CwBvh>;
+pub type Accel = AccelWith<Wide>;
 
 /// Which primitive of the [`SceneGeometry`] a hit landed on (indices into its
 /// `triangles` / `spheres`).
@@ -86,55 +88,106 @@ pub enum PrimitiveRef {
     Sphere(u32),
 }
 
-/// A triangle hierarchy from obvhs: how it is built and traversed.
+/// A triangle hierarchy: how it is built and traversed. Triangles are passed in leaf
+/// order (`primitive_indices`); hits name a leaf slot.
 pub trait TriangleBvh: Send + Sync + Sized {
-    /// Name for reports ("BVH2", "CWBVH").
+    /// Name for reports ("BVH2", "CWBVH", "BVH4").
     const NAME: &'static str;
-    /// Build over the primitives' bounding boxes (non-empty).
-    fn build(boxes: &[Aabb]) -> Self;
+    /// Build over the triangles and their (padded) bounding boxes (non-empty).
+    fn build(tris: &[[Vec3A; 3]], boxes: &[Aabb]) -> Self;
     /// Leaf slot → index into the build input.
     fn primitive_indices(&self) -> &[u32];
-    /// Closest hit; `f(ray, slot)` returns the hit distance or ∞. True if anything hit.
-    fn closest(&self, ray: BvhRay, hit: &mut RayHit, f: impl FnMut(&BvhRay, usize) -> f32) -> bool;
-    /// True if nothing hit; stops at the first hit.
-    fn missed(&self, ray: BvhRay, f: impl FnMut(&BvhRay, usize) -> f32) -> bool;
+    /// Closest hit in (0, ray.tmax): leaf slot, distance and barycentrics.
+    fn closest(&self, tris: &[[Vec3A; 3]], ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])>;
+    /// True if anything lies in (0, ray.tmax); stops at the first hit.
+    fn occluded(&self, tris: &[[Vec3A; 3]], ray: &BvhRay, wt: &WatertightRay) -> bool;
+}
+
+/// obvhs's hierarchies call back per triangle: the scalar watertight test.
+fn closest_by_callback(
+    traverse: impl FnOnce(&mut RayHit, &mut dyn FnMut(&BvhRay, usize) -> f32) -> bool,
+    tris: &[[Vec3A; 3]],
+    wt: &WatertightRay,
+) -> Option<(usize, f32, [f32; 3])> {
+    let mut hit = RayHit::none();
+    // obvhs accepts a distance iff it is below the current t_max, exactly when `hit`
+    // returns Some: the last barycentrics seen belong to the closest hit.
+    let mut bary = [0.0; 3];
+    let found = traverse(&mut hit, &mut |r, i| {
+        let v = &tris[i];
+        wt.hit(v[0], v[1], v[2], r.tmax).map_or(f32::INFINITY, |(t, b)| {
+            bary = b;
+            t
+        })
+    });
+    found.then_some((hit.primitive_id as usize, hit.t, bary))
+}
+
+fn any_hit_callback(tris: &[[Vec3A; 3]], wt: &WatertightRay) -> impl FnMut(&BvhRay, usize) -> f32 {
+    move |r, i| {
+        let v = &tris[i];
+        wt.hit(v[0], v[1], v[2], r.tmax).map_or(f32::INFINITY, |(t, _)| t)
+    }
 }
 
 impl TriangleBvh for Bvh2 {
     const NAME: &'static str = "BVH2";
-    fn build(boxes: &[Aabb]) -> Self {
+    fn build(_: &[[Vec3A; 3]], boxes: &[Aabb]) -> Self {
         obvhs::bvh2::builder::build_bvh2(boxes, BvhBuildParams::medium_build(), &mut Duration::default())
     }
     fn primitive_indices(&self) -> &[u32] {
         &self.primitive_indices
     }
-    #[inline]
-    fn closest(&self, ray: BvhRay, hit: &mut RayHit, f: impl FnMut(&BvhRay, usize) -> f32) -> bool {
-        self.ray_traverse(ray, hit, f)
+    fn closest(&self, tris: &[[Vec3A; 3]], ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])> {
+        closest_by_callback(|hit, f| self.ray_traverse(*ray, hit, f), tris, wt)
     }
-    #[inline]
-    fn missed(&self, ray: BvhRay, f: impl FnMut(&BvhRay, usize) -> f32) -> bool {
-        self.ray_traverse_miss(ray, f)
+    fn occluded(&self, tris: &[[Vec3A; 3]], ray: &BvhRay, wt: &WatertightRay) -> bool {
+        !self.ray_traverse_miss(*ray, any_hit_callback(tris, wt))
     }
 }
 
 impl TriangleBvh for CwBvh {
     const NAME: &'static str = "CWBVH";
-    fn build(boxes: &[Aabb]) -> Self {
+    fn build(_: &[[Vec3A; 3]], boxes: &[Aabb]) -> Self {
         obvhs::cwbvh::builder::build_cwbvh(boxes, BvhBuildParams::medium_build(), &mut Duration::default())
     }
     fn primitive_indices(&self) -> &[u32] {
         &self.primitive_indices
     }
-    #[inline]
-    fn closest(&self, ray: BvhRay, hit: &mut RayHit, mut f: impl FnMut(&BvhRay, usize) -> f32) -> bool {
-        let found = self.ray_traverse(stretched(&ray), hit, |r, i| f(&BvhRay { tmax: r.tmax * INV_T_STRETCH, ..ray }, i) * T_STRETCH);
-        hit.t *= INV_T_STRETCH;
-        found
+    fn closest(&self, tris: &[[Vec3A; 3]], ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])> {
+        let ray = *ray;
+        closest_by_callback(
+            |hit, f| {
+                let found = self.ray_traverse(stretched(&ray), hit, |r, i| f(&BvhRay { tmax: r.tmax * INV_T_STRETCH, ..ray }, i) * T_STRETCH);
+                hit.t *= INV_T_STRETCH;
+                found
+            },
+            tris,
+            wt,
+        )
+    }
+    fn occluded(&self, tris: &[[Vec3A; 3]], ray: &BvhRay, wt: &WatertightRay) -> bool {
+        let ray = *ray;
+        let mut f = any_hit_callback(tris, wt);
+        !self.ray_traverse_miss(stretched(&ray), |r, i| f(&BvhRay { tmax: r.tmax * INV_T_STRETCH, ..ray }, i) * T_STRETCH)
+    }
+}
+
+impl TriangleBvh for Wide {
+    const NAME: &'static str = "BVH4";
+    fn build(tris: &[[Vec3A; 3]], boxes: &[Aabb]) -> Self {
+        Wide::build(tris, boxes)
+    }
+    fn primitive_indices(&self) -> &[u32] {
+        self.order()
     }
     #[inline]
-    fn missed(&self, ray: BvhRay, mut f: impl FnMut(&BvhRay, usize) -> f32) -> bool {
-        self.ray_traverse_miss(stretched(&ray), |r, i| f(&BvhRay { tmax: r.tmax * INV_T_STRETCH, ..ray }, i) * T_STRETCH)
+    fn closest(&self, _: &[[Vec3A; 3]], ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])> {
+        Wide::closest(self, ray, wt)
+    }
+    #[inline]
+    fn occluded(&self, _: &[[Vec3A; 3]], ray: &BvhRay, wt: &WatertightRay) -> bool {
+        Wide::occluded(self, ray, wt)
     }
 }
 
@@ -222,7 +275,7 @@ impl<B: TriangleBvh> AccelWith<B> {
         let (bvh, tris, attrs) = if input.is_empty() {
             (None, Vec::new(), Vec::new())
         } else {
-            let bvh = B::build(&boxes);
+            let bvh = B::build(&input, &boxes);
             // Reorder by leaf slot once, dropping the indirection from traversal.
             let order = bvh.primitive_indices();
             let tris = order.iter().map(|&k| input[k as usize]);
@@ -313,18 +366,8 @@ impl<B: TriangleBvh> AccelWith<B> {
         let mut best: Option<(f32, Candidate)> = None;
         if let Some(bvh) = &self.bvh {
             let wt = WatertightRay::new(q.bvh_ray.origin, q.bvh_ray.direction);
-            let mut hit = RayHit::none();
-            // obvhs accepts a distance iff it is below the current t_max, exactly when
-            // `hit` returns Some: the last barycentrics seen belong to the closest hit.
-            let mut bary = [0.0; 3];
-            if bvh.closest(q.bvh_ray, &mut hit, |r, i| {
-                let v = &self.tris[i];
-                wt.hit(v[0], v[1], v[2], r.tmax).map_or(f32::INFINITY, |(t, b)| {
-                    bary = b;
-                    t
-                })
-            }) {
-                best = Some((hit.t, Candidate::Triangle(hit.primitive_id as usize, bary)));
+            if let Some((slot, t, bary)) = bvh.closest(&self.tris, &q.bvh_ray, &wt) {
+                best = Some((t, Candidate::Triangle(slot, bary)));
             }
         }
         // Then the spheres, closer than the triangle hit.
@@ -387,12 +430,17 @@ impl Query {
     #[inline]
     fn new(ray: &Ray) -> Option<Self> {
         let ok = finite(ray.origin) && finite(ray.dir) && ray.dir != Vec3::ZERO && ray.t_max > 0.0;
-        ok.then(|| Self { bvh_ray: BvhRay::new(ray.origin.into(), safe_direction(ray.dir).into(), 0.0, ray.t_max) })
+        ok.then(|| {
+            let d = Vec3A::from(safe_direction(ray.dir));
+            // The exact inverse: obvhs's `BvhRay::new` clamps components below f32::EPSILON,
+            // which shortens the slabs of near-axis rays; here none is below 1e-30.
+            Self { bvh_ray: BvhRay { origin: ray.origin.into(), direction: d, inv_direction: Vec3A::ONE / d, tmin: 0.0, tmax: ray.t_max } }
+        })
     }
 }
 
-/// The direction with every exactly-zero component replaced by ±1e-30 (its sign kept),
-/// as Embree's `rcp_safe` does. obvhs's traversal divides by the direction: with a zero
+/// The direction with every component of magnitude below 1e-30 (zero included) replaced
+/// by ±1e-30 (its sign kept), as Embree's `rcp_safe` does, so its inverse is finite. obvhs's traversal divides by the direction: with a zero
 /// component the node tests of the compressed-wide BVH missed triangles the ray crosses.
 /// Seen on the segment kernel's projection rays, which run along surface normals: on the
 /// built-in Cornell box's short block, whose front face's normal has y = 0 exactly, every
@@ -400,7 +448,7 @@ impl Query {
 /// against a unit vector, is far below f32 resolution.
 #[inline]
 fn safe_direction(d: Vec3) -> Vec3 {
-    let fix = |c: f32| if c == 0.0 { 1e-30f32.copysign(c) } else { c };
+    let fix = |c: f32| if c.abs() < 1e-30 { 1e-30f32.copysign(c) } else { c };
     Vec3::new(fix(d.x), fix(d.y), fix(d.z))
 }
 
@@ -423,9 +471,6 @@ impl<B: TriangleBvh> RayQuery for AccelWith<B> {
         // Then the triangles, stopping at the first hit.
         let Some(bvh) = &self.bvh else { return false };
         let wt = WatertightRay::new(q.bvh_ray.origin, q.bvh_ray.direction);
-        !bvh.missed(q.bvh_ray, |r, i| {
-            let v = &self.tris[i];
-            wt.hit(v[0], v[1], v[2], r.tmax).map_or(f32::INFINITY, |(t, _)| t)
-        })
+        bvh.occluded(&self.tris, &q.bvh_ray, &wt)
     }
 }

@@ -2,7 +2,7 @@
 //! and spheres, closest hit and occlusion, with both hierarchies and both sphere paths
 //! (list and BVH); and rays spawned from hits never re-hit their own surface.
 
-use ember_cli::accel::{AccelWith, PrimitiveRef, SPHERE_LIST_MAX, TriangleBvh};
+use ember_cli::accel::{AccelWith, PrimitiveRef, SPHERE_LIST_MAX, TriangleBvh, Wide};
 use ember_core::geometry::{Ray, RayQuery, spawn_ray};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::shapes::{SceneGeometry, Sphere, Triangle};
@@ -195,6 +195,16 @@ fn cwbvh_with_sphere_list_agrees_with_brute_force() {
 }
 
 #[test]
+fn bvh4_with_sphere_list_agrees_with_brute_force() {
+    check_against_brute_force::<Wide>(&scene(1, 600, 3), 20_000, 0.2);
+}
+
+#[test]
+fn bvh4_with_sphere_bvh_agrees_with_brute_force() {
+    check_against_brute_force::<Wide>(&scene(2, 300, 40), 20_000, 0.2);
+}
+
+#[test]
 fn bvh2_with_sphere_list_agrees_with_brute_force() {
     check_against_brute_force::<Bvh2>(&scene(1, 600, 3), 20_000, 0.2);
 }
@@ -213,9 +223,11 @@ fn bvh2_with_sphere_bvh_agrees_with_brute_force() {
 
 #[test]
 fn spheres_only_and_triangles_only_scenes() {
-    check_against_brute_force::<CwBvh>(&scene(3, 0, 12), 5_000, 0.04);
-    check_against_brute_force::<CwBvh>(&scene(4, 400, 0), 5_000, 0.2);
-    let empty = AccelWith::<CwBvh>::new(&SceneGeometry::default());
+    check_against_brute_force::<Wide>(&scene(3, 0, 12), 5_000, 0.04);
+    check_against_brute_force::<Wide>(&scene(4, 400, 0), 5_000, 0.2);
+    // Fewer triangles than one leaf packet: the root holds a single leaf.
+    check_against_brute_force::<Wide>(&scene(4, 3, 0), 2_000, 0.0);
+    let empty = AccelWith::<Wide>::new(&SceneGeometry::default());
     let ray = Ray::new(Vec3::ZERO, Vec3::X, f32::INFINITY);
     assert!(empty.intersect(&ray).is_none() && !empty.occluded(&ray));
 }
@@ -226,7 +238,7 @@ fn spheres_only_and_triangles_only_scenes() {
 #[test]
 fn spawned_rays_do_not_rehit_their_surface() {
     let g = scene(5, 600, 6);
-    let accel = AccelWith::<CwBvh>::new(&g);
+    let accel = AccelWith::<Wide>::new(&g);
     let mut s = SampleStream::for_sample(6, Stream::Aux, 0, 0, 0);
     let mut spawned = 0;
     for _ in 0..20_000 {
@@ -266,7 +278,7 @@ fn degenerate_input_is_harmless() {
     g.triangles.push(Triangle { p: [Vec3::ONE; 3], n: None, uv: None, material: 0, emitter: None });
     g.triangles.push(Triangle { p: [Vec3::ZERO, Vec3::X, Vec3::splat(f32::NAN)], n: None, uv: None, material: 0, emitter: None });
     g.spheres.push(Sphere { center: Vec3::ZERO, radius: 0.0, flip_normals: false, material: 0, emitter: None });
-    let accel = AccelWith::<CwBvh>::new(&g);
+    let accel = AccelWith::<Wide>::new(&g);
     assert_eq!((accel.triangle_count(), accel.sphere_count()), (50, 2));
     for ray in [
         Ray::new(Vec3::ZERO, Vec3::ZERO, f32::INFINITY),
@@ -289,7 +301,7 @@ fn degenerate_input_is_harmless() {
 #[test]
 fn cornell_box_camera_rays_agree_with_brute_force() {
     let (scene, geometry, _) = ember_core::scene::builtin::cornell_box(128, 128).build().expect("built-in scene");
-    let accel = AccelWith::<CwBvh>::new(&geometry);
+    let accel = AccelWith::<Wide>::new(&geometry);
     let mut s = SampleStream::for_sample(8, Stream::Aux, 0, 0, 0);
     let mut misses = 0;
     for y in 0..128 {
@@ -345,8 +357,9 @@ fn closed_box_does_not_leak_at_edges() {
     }
     let bvh2 = AccelWith::<Bvh2>::new(&g);
     let cwbvh = AccelWith::<CwBvh>::new(&g);
+    let bvh4 = AccelWith::<Wide>::new(&g);
     let mut s = SampleStream::for_sample(9, Stream::Aux, 0, 0, 0);
-    let mut escaped = [0, 0];
+    let mut escaped = [0, 0, 0];
     for i in 0..120_000u32 {
         // A point on one of the 12 edges: two coordinates at ±H, the third free.
         let edge = i % 12;
@@ -359,8 +372,9 @@ fn closed_box_does_not_leak_at_edges() {
         let ray = Ray::new(origin, Vec3::from(target) - origin, f32::INFINITY);
         escaped[0] += bvh2.intersect(&ray).is_none() as u32;
         escaped[1] += cwbvh.intersect(&ray).is_none() as u32;
+        escaped[2] += bvh4.intersect(&ray).is_none() as u32;
     }
-    assert_eq!(escaped, [0, 0], "rays escaped the closed box (BVH2, CWBVH)");
+    assert_eq!(escaped, [0, 0, 0], "rays escaped the closed box (BVH2, CWBVH, BVH4)");
 }
 
 /// The renderer shares one structure between its threads.

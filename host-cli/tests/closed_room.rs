@@ -23,7 +23,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use ember_cli::accel::AccelWith;
+use ember_cli::accel::{AccelWith, Wide};
 use ember_cli::driver::{DriverConfig, Limits};
 use ember_cli::estimators::{CoreRenderer, PreparedScene};
 use ember_cli::mitsuba::{LoadOptions, load_scene_from_str};
@@ -88,8 +88,9 @@ fn rays_leaving_concave_corners_do_not_escape() {
     let brute = escapes(&BruteForce::new(geometry.clone()), bounds, rays);
     let cwbvh = escapes(&AccelWith::<CwBvh>::new(&geometry), bounds, rays);
     let bvh2 = escapes(&AccelWith::<Bvh2>::new(&geometry), bounds, rays);
-    println!("escapes of {rays} bounce rays: brute force {brute}, CWBVH {cwbvh}, BVH2 {bvh2}");
-    assert!(cwbvh <= brute + 1 && bvh2 <= brute + 1, "escapes: brute force {brute}, CWBVH {cwbvh}, BVH2 {bvh2}");
+    let bvh4 = escapes(&AccelWith::<Wide>::new(&geometry), bounds, rays);
+    println!("escapes of {rays} bounce rays: brute force {brute}, CWBVH {cwbvh}, BVH2 {bvh2}, BVH4 {bvh4}");
+    assert!(cwbvh <= brute + 1 && bvh2 <= brute + 1 && bvh4 <= brute + 1, "escapes: brute force {brute}, CWBVH {cwbvh}, BVH2 {bvh2}, BVH4 {bvh4}");
 }
 
 fn render(estimator: EstimatorKind, passes: u32) -> Film {

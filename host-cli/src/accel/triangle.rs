@@ -39,7 +39,7 @@ impl Permutation {
 
 /// The per-ray part of the watertight test, computed once per query.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct WatertightRay {
+pub struct WatertightRay {
     /// The origin, permuted.
     origin: Vec3A,
     permutation: Permutation,
@@ -69,6 +69,17 @@ impl WatertightRay {
         let d = permutation.apply(dir);
         let sz = 1.0 / d.z;
         Self { origin: permutation.apply(origin), permutation, sx: -d.x * sz, sy: -d.y * sz, sz }
+    }
+
+    /// The input axes feeding the permuted x, y and z, the permuted origin and the shear
+    /// (sx, sy, sz): what a packet of triangles needs to run this test lane by lane.
+    pub(crate) fn parts(&self) -> ([usize; 3], [f32; 3], [f32; 3]) {
+        let axis = match self.permutation {
+            Permutation::Yzx => [1, 2, 0],
+            Permutation::Zxy => [2, 0, 1],
+            Permutation::Xyz => [0, 1, 2],
+        };
+        (axis, self.origin.to_array(), [self.sx, self.sy, self.sz])
     }
 
     /// Distance to the triangle (p0, p1, p2) if it lies in (0, t_max), with barycentrics

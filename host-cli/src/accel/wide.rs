@@ -1,0 +1,507 @@
+//! A four-wide BVH traversed with 4-lane SIMD (glam's `Vec4`: SSE on x86-64, NEON on
+//! AArch64), with triangles tested four at a time.
+//!
+//! # Why our own
+//! obvhs's CWBVH spent about 1 240 instructions per closest-hit query and 1 300 per
+//! occlusion query on the 36-triangle Cornell box (callgrind; docs/performance.md): its
+//! compressed 8-wide nodes are a GPU layout whose decoding dominates on small scenes,
+//! and each triangle went through a callback one at a time. Here a node holds its four
+//! children's boxes as six 4-lane rows (one slab test for all four), and a leaf holds up
+//! to four triangles as nine 4-lane rows (one watertight test for all four).
+//!
+//! # Build
+//! obvhs builds the binary hierarchy (PLOC with reinsertion, `medium_build`, one
+//! triangle per leaf); it is then collapsed top-down: a subtree of at most
+//! [`PACKET`] triangles becomes one leaf packet, and a node adopts the children of its
+//! largest (by surface area) inner child until it has four children or none of them can
+//! be opened further. Empty child slots hold an inverted box, which no ray hits.
+//!
+//! # Exactness
+//! The lane arithmetic is the scalar watertight test's (`triangle.rs`), operation for
+//! operation, with no fused multiply-adds, so a lane's answer is bit-identical to the
+//! scalar test on that triangle. A packet where any live lane has an edge function of
+//! exactly zero goes through the scalar test, which redoes those in f64. The slab test
+//! runs on the padded leaf boxes (see `hit::box_padding`) and also widens each box's
+//! far distance by 1 + 2γ₃ as pbrt-v4 does, so a ray through the rim of a flat box is
+//! not lost to rounding. Boxes are tested from t = 0: no absolute near cut (obvhs's
+//! CWBVH has one at 10⁻⁴, see `accel.rs`).
+//!
+//! # Traversal
+//! Closest hit: the children a ray enters are visited nearest first; the others wait on
+//! a stack with their entry distance and are dropped when popped beyond the closest hit
+//! so far. Occlusion stops at the first hit and does not sort. The stack lives in a
+//! fixed array; a hierarchy deep enough to overflow it spills to the heap.
+
+use glam::{Vec3A, Vec4};
+use obvhs::BvhBuildParams;
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::Bvh2;
+use obvhs::ray::Ray as BvhRay;
+
+use super::triangle::WatertightRay;
+
+/// Triangles per leaf packet (the SIMD width).
+pub const PACKET: usize = 4;
+
+/// Child reference: an inner node's index, or `LEAF | packet index`, or [`EMPTY`].
+const LEAF: u32 = 1 << 31;
+const EMPTY: u32 = u32::MAX;
+
+/// 1 + 2γ₃ (pbrt-v4's widening of a slab test's far distance), γₙ = nε / (1 − nε).
+const WIDEN: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+
+/// Four children's boxes: rows min x, min y, min z, max x, max y, max z, one lane each.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+struct Node {
+    bounds: [[f32; 4]; 6],
+    child: [u32; 4],
+}
+
+/// Up to four triangles: `v[vertex][axis]` holds that coordinate of each lane's
+/// triangle. Dead lanes hold NaN, which fails every test below (NaN compares
+/// unequal to zero and is neither positive nor negative, so only the final `t > 0`
+/// check drops it).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+struct Packet {
+    v: [[[f32; 4]; 3]; 3],
+    /// Leaf slot of lane 0; lane `l` is slot `first + l`.
+    first: u32,
+    /// Live lanes (1 to 4), the low ones.
+    count: u32,
+}
+
+impl Packet {
+    /// The triangle in lane `l`.
+    fn triangle(&self, l: usize) -> [Vec3A; 3] {
+        core::array::from_fn(|k| Vec3A::new(self.v[k][0][l], self.v[k][1][l], self.v[k][2][l]))
+    }
+}
+
+/// The four-wide hierarchy with its triangles packed in leaf order.
+#[derive(Clone, Debug)]
+pub struct Wide {
+    nodes: Vec<Node>,
+    packets: Vec<Packet>,
+    /// Leaf slot → index into the build input.
+    order: Vec<u32>,
+    /// The most entries a traversal can hold on its stack: three per level below the
+    /// root (a node pushes all its entered children but the one it visits next).
+    stack_need: usize,
+}
+
+/// The per-ray values of the slab test.
+struct SlabRay {
+    origin: [Vec4; 3],
+    inv: [Vec4; 3],
+    /// Row of `Node::bounds` holding each axis's near plane, and its far plane.
+    near: [usize; 3],
+    far: [usize; 3],
+}
+
+impl SlabRay {
+    fn new(ray: &BvhRay) -> Self {
+        let (o, inv) = (ray.origin, ray.inv_direction);
+        let near: [usize; 3] = core::array::from_fn(|a| if inv[a] >= 0.0 { a } else { a + 3 });
+        Self {
+            origin: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
+            inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
+            near,
+            far: near.map(|r| if r < 3 { r + 3 } else { r - 3 }),
+        }
+    }
+
+    /// Entry distances and which of the four boxes the ray enters within (0, t_max).
+    #[inline(always)]
+    fn test(&self, node: &Node, t_max: f32) -> (Vec4, u32) {
+        let b = &node.bounds;
+        let slab = |a: usize, row: usize| (Vec4::from(b[row]) - self.origin[a]) * self.inv[a];
+        let near = slab(0, self.near[0]).max(slab(1, self.near[1])).max(slab(2, self.near[2])).max(Vec4::ZERO);
+        let far = slab(0, self.far[0]).min(slab(1, self.far[1])).min(slab(2, self.far[2])) * WIDEN;
+        let far = far.min(Vec4::splat(t_max));
+        (near, near.cmple(far).bitmask())
+    }
+}
+
+/// The per-ray values of the watertight test, splatted.
+struct PacketRay<'a> {
+    scalar: &'a WatertightRay,
+    /// Input axis feeding the permuted x, y and z.
+    axis: [usize; 3],
+    origin: [Vec4; 3],
+    shear: [Vec4; 3],
+}
+
+impl<'a> PacketRay<'a> {
+    fn new(wt: &'a WatertightRay) -> Self {
+        let (axis, origin, shear) = wt.parts();
+        Self { scalar: wt, axis, origin: origin.map(Vec4::splat), shear: shear.map(Vec4::splat) }
+    }
+
+    /// Per lane: distance (∞ where missed) and the three edge functions and 1/det, for
+    /// the triangles of `p` hit in (0, t_max). The lanes hit, as a bitmask.
+    #[inline(always)]
+    fn test(&self, p: &Packet, t_max: f32) -> Option<LaneHits> {
+        let [kx, ky, kz] = self.axis;
+        let [sx, sy, sz] = self.shear;
+        let vertex = |k: usize| {
+            let v = &p.v[k];
+            let (x, y, z) = (Vec4::from(v[kx]) - self.origin[0], Vec4::from(v[ky]) - self.origin[1], Vec4::from(v[kz]) - self.origin[2]);
+            (x + sx * z, y + sy * z, z)
+        };
+        let (ax, ay, az) = vertex(0);
+        let (bx, by, bz) = vertex(1);
+        let (cx, cy, cz) = vertex(2);
+        let e0 = bx * cy - by * cx;
+        let e1 = cx * ay - cy * ax;
+        let e2 = ax * by - ay * bx;
+        let zero = Vec4::ZERO;
+        if (e0.cmpeq(zero) | e1.cmpeq(zero) | e2.cmpeq(zero)).any() {
+            return self.scalar_fallback(p, t_max);
+        }
+        let negative = e0.cmplt(zero) | e1.cmplt(zero) | e2.cmplt(zero);
+        let positive = e0.cmpgt(zero) | e1.cmpgt(zero) | e2.cmpgt(zero);
+        let det = e0 + e1 + e2;
+        let mut ok = !(negative & positive) & det.cmpne(zero);
+        let t_scaled = e0 * (az * sz) + e1 * (bz * sz) + e2 * (cz * sz);
+        let bound = Vec4::splat(t_max) * det;
+        let below = det.cmplt(zero) & (t_scaled.cmpge(zero) | t_scaled.cmplt(bound));
+        let above = det.cmpgt(zero) & (t_scaled.cmple(zero) | t_scaled.cmpgt(bound));
+        ok &= !(below | above);
+        if !ok.any() {
+            return None;
+        }
+        let inv_det = Vec4::ONE / det;
+        let t = t_scaled * inv_det;
+        // NaN fails both comparisons.
+        ok &= t.cmpgt(zero) & t.cmplt(Vec4::splat(t_max));
+        let mask = ok.bitmask();
+        (mask != 0).then(|| LaneHits { t: Vec4::select(ok, t, Vec4::INFINITY), e: [e0, e1, e2], inv_det, mask })
+    }
+
+    /// The scalar test lane by lane (an edge function rounded to zero: redone in f64).
+    #[cold]
+    fn scalar_fallback(&self, p: &Packet, t_max: f32) -> Option<LaneHits> {
+        let (mut t, mut e, mut inv_det, mut mask) = ([f32::INFINITY; 4], [[0.0f32; 4]; 3], [1.0f32; 4], 0u32);
+        for l in 0..p.count as usize {
+            let [a, b, c] = p.triangle(l);
+            if let Some((tl, bary)) = self.scalar.hit(a, b, c, t_max) {
+                t[l] = tl;
+                // Barycentrics as edge functions over a unit determinant.
+                (0..3).for_each(|k| e[k][l] = bary[k]);
+                inv_det[l] = 1.0;
+                mask |= 1 << l;
+            }
+        }
+        (mask != 0).then(|| LaneHits { t: Vec4::from(t), e: e.map(Vec4::from), inv_det: Vec4::from(inv_det), mask })
+    }
+}
+
+/// What [`PacketRay::test`] found in one packet.
+struct LaneHits {
+    t: Vec4,
+    e: [Vec4; 3],
+    inv_det: Vec4,
+    mask: u32,
+}
+
+impl LaneHits {
+    /// The nearest lane (the lowest on a tie), its distance and barycentrics.
+    fn nearest(&self) -> (usize, f32, [f32; 3]) {
+        let t = self.t.to_array();
+        let mut best = self.mask.trailing_zeros() as usize;
+        for l in best + 1..PACKET {
+            if self.mask & (1 << l) != 0 && t[l] < t[best] {
+                best = l;
+            }
+        }
+        let inv = self.inv_det.to_array()[best];
+        (best, t[best], self.e.map(|e| e.to_array()[best] * inv))
+    }
+}
+
+/// A traversal stack of at most `N` entries (item, entry distance). Sized from the
+/// hierarchy (`Wide::stack_need`), so pushes never check for room; a small one costs
+/// only a few stores to clear per query.
+struct Stack<const N: usize> {
+    items: [(u32, f32); N],
+    len: usize,
+}
+
+impl<const N: usize> Stack<N> {
+    #[inline(always)]
+    fn new() -> Self {
+        Self { items: [(0, 0.0); N], len: 0 }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, item: u32, t: f32) {
+        self.items[self.len] = (item, t);
+        self.len += 1;
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<(u32, f32)> {
+        (self.len > 0).then(|| {
+            self.len -= 1;
+            self.items[self.len]
+        })
+    }
+}
+
+/// A stack for hierarchies deeper than any fixed size here (a pathological build).
+struct HeapStack(Vec<(u32, f32)>);
+
+/// What the traversals need of a stack.
+trait TraversalStack {
+    fn push(&mut self, item: u32, t: f32);
+    fn pop(&mut self) -> Option<(u32, f32)>;
+}
+
+impl<const N: usize> TraversalStack for Stack<N> {
+    #[inline(always)]
+    fn push(&mut self, item: u32, t: f32) {
+        Stack::push(self, item, t)
+    }
+    #[inline(always)]
+    fn pop(&mut self) -> Option<(u32, f32)> {
+        Stack::pop(self)
+    }
+}
+
+impl TraversalStack for HeapStack {
+    fn push(&mut self, item: u32, t: f32) {
+        self.0.push((item, t))
+    }
+    fn pop(&mut self) -> Option<(u32, f32)> {
+        self.0.pop()
+    }
+}
+
+impl Wide {
+    /// Build over triangles `tris` with (padded) boxes `boxes`, both non-empty and of
+    /// equal length.
+    pub fn build(tris: &[[Vec3A; 3]], boxes: &[Aabb]) -> Self {
+        let params = BvhBuildParams { max_prims_per_leaf: 1, ..BvhBuildParams::medium_build() };
+        let bvh2 = obvhs::bvh2::builder::build_bvh2(boxes, params, &mut core::time::Duration::default());
+        Collapse::new(&bvh2, tris).run()
+    }
+
+    /// Leaf slot → index into the build input.
+    pub fn order(&self) -> &[u32] {
+        &self.order
+    }
+
+    /// Closest hit in (0, ray.tmax): leaf slot, distance and barycentrics.
+    pub fn closest(&self, ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])> {
+        match self.stack_need {
+            0..=16 => self.closest_with(ray, wt, Stack::<16>::new()),
+            17..=64 => self.closest_with(ray, wt, Stack::<64>::new()),
+            _ => self.closest_with(ray, wt, HeapStack(Vec::with_capacity(self.stack_need))),
+        }
+    }
+
+    /// True if anything lies in (0, ray.tmax); stops at the first hit.
+    pub fn occluded(&self, ray: &BvhRay, wt: &WatertightRay) -> bool {
+        match self.stack_need {
+            0..=16 => self.occluded_with(ray, wt, Stack::<16>::new()),
+            17..=64 => self.occluded_with(ray, wt, Stack::<64>::new()),
+            _ => self.occluded_with(ray, wt, HeapStack(Vec::with_capacity(self.stack_need))),
+        }
+    }
+
+    #[inline(always)]
+    fn closest_with(&self, ray: &BvhRay, wt: &WatertightRay, mut stack: impl TraversalStack) -> Option<(usize, f32, [f32; 3])> {
+        let (slab, tri) = (SlabRay::new(ray), PacketRay::new(wt));
+        let mut t_max = ray.tmax;
+        let mut best = None;
+        let mut item = 0u32;
+        loop {
+            if item & LEAF == 0 {
+                let node = &self.nodes[item as usize];
+                let (near, mut mask) = slab.test(node, t_max);
+                if mask != 0 {
+                    // Visit the nearest child next; the others wait, farthest deepest.
+                    let near = near.to_array();
+                    let mut order = [(0u32, 0.0f32); 4];
+                    let mut n = 0;
+                    while mask != 0 {
+                        let c = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        let entry = (node.child[c], near[c]);
+                        // Insertion by descending entry distance.
+                        let mut k = n;
+                        while k > 0 && order[k - 1].1 < entry.1 {
+                            order[k] = order[k - 1];
+                            k -= 1;
+                        }
+                        order[k] = entry;
+                        n += 1;
+                    }
+                    order[..n - 1].iter().for_each(|&(c, t)| stack.push(c, t));
+                    item = order[n - 1].0;
+                    continue;
+                }
+            } else {
+                let p = &self.packets[(item & !LEAF) as usize];
+                if let Some(hits) = tri.test(p, t_max) {
+                    let (lane, t, bary) = hits.nearest();
+                    t_max = t;
+                    best = Some((p.first as usize + lane, t, bary));
+                }
+            }
+            loop {
+                let Some((next, entry)) = stack.pop() else { return best };
+                if entry <= t_max {
+                    item = next;
+                    break;
+                }
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn occluded_with(&self, ray: &BvhRay, wt: &WatertightRay, mut stack: impl TraversalStack) -> bool {
+        let (slab, tri) = (SlabRay::new(ray), PacketRay::new(wt));
+        let mut item = 0u32;
+        loop {
+            if item & LEAF == 0 {
+                let node = &self.nodes[item as usize];
+                let (_, mut mask) = slab.test(node, ray.tmax);
+                while mask != 0 {
+                    let c = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    stack.push(node.child[c], 0.0);
+                }
+            } else if tri.test(&self.packets[(item & !LEAF) as usize], ray.tmax).is_some() {
+                return true;
+            }
+            match stack.pop() {
+                Some((next, _)) => item = next,
+                None => return false,
+            }
+        }
+    }
+}
+
+/// The top-down collapse of a binary hierarchy into [`Wide`].
+struct Collapse<'a> {
+    bvh2: &'a Bvh2,
+    tris: &'a [[Vec3A; 3]],
+    /// Triangles under each binary node.
+    counts: Vec<u32>,
+    out: Wide,
+}
+
+impl<'a> Collapse<'a> {
+    fn new(bvh2: &'a Bvh2, tris: &'a [[Vec3A; 3]]) -> Self {
+        let nodes = &bvh2.nodes;
+        // Children before parents: reverse of a pre-order walk.
+        let mut preorder = Vec::with_capacity(nodes.len());
+        let mut todo = vec![0u32];
+        while let Some(n) = todo.pop() {
+            preorder.push(n);
+            let node = &nodes[n as usize];
+            if !node.is_leaf() {
+                todo.extend([node.first_index, node.first_index + 1]);
+            }
+        }
+        let mut counts = vec![0u32; nodes.len()];
+        for &n in preorder.iter().rev() {
+            let node = &nodes[n as usize];
+            counts[n as usize] = if node.is_leaf() { node.prim_count } else { counts[node.first_index as usize] + counts[node.first_index as usize + 1] };
+        }
+        let capacity = tris.len();
+        Self {
+            bvh2,
+            tris,
+            counts,
+            out: Wide { nodes: Vec::new(), packets: Vec::with_capacity(capacity / 2 + 1), order: Vec::with_capacity(capacity), stack_need: 0 },
+        }
+    }
+
+    fn run(mut self) -> Wide {
+        // (binary node, wide node it becomes); the root always becomes a wide node.
+        let root_children = if self.counts[0] as usize <= PACKET { vec![0] } else { self.open(0) };
+        // (children, wide node, its depth below the root)
+        let mut todo = vec![(root_children, 0usize, 0usize)];
+        self.out.nodes.push(Self::empty_node());
+        while let Some((children, slot, depth)) = todo.pop() {
+            self.out.stack_need = self.out.stack_need.max(3 * (depth + 1));
+            for (lane, &c) in children.iter().enumerate() {
+                let aabb = self.bvh2.nodes[c as usize].aabb;
+                let node = &mut self.out.nodes[slot];
+                for a in 0..3 {
+                    node.bounds[a][lane] = aabb.min[a];
+                    node.bounds[a + 3][lane] = aabb.max[a];
+                }
+                if self.counts[c as usize] as usize <= PACKET {
+                    let packet = self.packet(c);
+                    self.out.nodes[slot].child[lane] = LEAF | packet;
+                } else {
+                    let index = self.out.nodes.len();
+                    self.out.nodes.push(Self::empty_node());
+                    self.out.nodes[slot].child[lane] = index as u32;
+                    let grandchildren = self.open(c);
+                    todo.push((grandchildren, index, depth + 1));
+                }
+            }
+        }
+        self.out
+    }
+
+    fn empty_node() -> Node {
+        let (lo, hi) = ([f32::INFINITY; 4], [f32::NEG_INFINITY; 4]);
+        Node { bounds: [lo, lo, lo, hi, hi, hi], child: [EMPTY; 4] }
+    }
+
+    /// Up to four descendants of inner binary node `n` that together hold its triangles:
+    /// its two children, then repeatedly the largest one that holds more than a packet
+    /// replaced by its two children.
+    fn open(&self, n: u32) -> Vec<u32> {
+        let nodes = &self.bvh2.nodes;
+        let first = nodes[n as usize].first_index;
+        let mut children = vec![first, first + 1];
+        while children.len() < 4 {
+            let widest = children
+                .iter()
+                .enumerate()
+                .filter(|&(_, &c)| self.counts[c as usize] as usize > PACKET)
+                .max_by(|a, b| nodes[*a.1 as usize].aabb.half_area().total_cmp(&nodes[*b.1 as usize].aabb.half_area()));
+            let Some((i, &c)) = widest else { break };
+            let f = nodes[c as usize].first_index;
+            children[i] = f;
+            children.push(f + 1);
+        }
+        children
+    }
+
+    /// Pack the (at most four) triangles under binary node `n`; returns the packet index.
+    fn packet(&mut self, n: u32) -> u32 {
+        let nodes = &self.bvh2.nodes;
+        let first = self.out.order.len() as u32;
+        let mut todo = vec![n];
+        while let Some(m) = todo.pop() {
+            let node = &nodes[m as usize];
+            if node.is_leaf() {
+                let range = node.first_index as usize..(node.first_index + node.prim_count) as usize;
+                self.out.order.extend_from_slice(&self.bvh2.primitive_indices[range]);
+            } else {
+                todo.extend([node.first_index + 1, node.first_index]);
+            }
+        }
+        let count = self.out.order.len() as u32 - first;
+        let mut v = [[[f32::NAN; 4]; 3]; 3];
+        for (lane, &input) in self.out.order[first as usize..].iter().enumerate() {
+            let t = &self.tris[input as usize];
+            for (k, p) in t.iter().enumerate() {
+                for a in 0..3 {
+                    v[k][a][lane] = p[a];
+                }
+            }
+        }
+        self.out.packets.push(Packet { v, first, count });
+        self.out.packets.len() as u32 - 1
+    }
+}
