@@ -388,7 +388,11 @@ impl<B: TriangleBvh> AccelWith<B> {
     }
 
     /// Closest sphere hit in (0, t_max): distance and index into `self.spheres`.
+    #[inline]
     fn closest_sphere(&self, ray: &Ray, q: &Query, t_max: f32) -> Option<(f32, usize)> {
+        if self.spheres.is_empty() {
+            return None;
+        }
         if let Some(bvh) = &self.sphere_bvh {
             let mut hit = RayHit::none();
             let mut r = q.bvh_ray;
@@ -429,27 +433,28 @@ struct Query {
 impl Query {
     #[inline]
     fn new(ray: &Ray) -> Option<Self> {
-        let ok = finite(ray.origin) && finite(ray.dir) && ray.dir != Vec3::ZERO && ray.t_max > 0.0;
+        let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
+        let ok = o.is_finite() && d.is_finite() && d != Vec3A::ZERO && ray.t_max > 0.0;
         ok.then(|| {
-            let d = Vec3A::from(safe_direction(ray.dir));
+            let d = safe_direction(d);
             // The exact inverse: obvhs's `BvhRay::new` clamps components below f32::EPSILON,
             // which shortens the slabs of near-axis rays; here none is below 1e-30.
-            Self { bvh_ray: BvhRay { origin: ray.origin.into(), direction: d, inv_direction: Vec3A::ONE / d, tmin: 0.0, tmax: ray.t_max } }
+            Self { bvh_ray: BvhRay { origin: o, direction: d, inv_direction: Vec3A::ONE / d, tmin: 0.0, tmax: ray.t_max } }
         })
     }
 }
 
 /// The direction with every component of magnitude below 1e-30 (zero included) replaced
-/// by ±1e-30 (its sign kept), as Embree's `rcp_safe` does, so its inverse is finite. obvhs's traversal divides by the direction: with a zero
-/// component the node tests of the compressed-wide BVH missed triangles the ray crosses.
-/// Seen on the segment kernel's projection rays, which run along surface normals: on the
-/// built-in Cornell box's short block, whose front face's normal has y = 0 exactly, every
-/// one missed (photon filtering's gather read 0 there). The change of direction, 1e-30
-/// against a unit vector, is far below f32 resolution.
+/// by ±1e-30 (its sign kept), as Embree's `rcp_safe` does, so its inverse is finite.
+/// obvhs's traversal divides by the direction: with a zero component the node tests of
+/// the compressed-wide BVH missed triangles the ray crosses. Seen on the segment kernel's
+/// projection rays, which run along surface normals: on the built-in Cornell box's short
+/// block, whose front face's normal has y = 0 exactly, every one missed (photon
+/// filtering's gather read 0 there). The change of direction, 1e-30 against a unit
+/// vector, is far below f32 resolution; larger components keep their bits.
 #[inline]
-fn safe_direction(d: Vec3) -> Vec3 {
-    let fix = |c: f32| if c.abs() < 1e-30 { 1e-30f32.copysign(c) } else { c };
-    Vec3::new(fix(d.x), fix(d.y), fix(d.z))
+fn safe_direction(d: Vec3A) -> Vec3A {
+    d.abs().max(Vec3A::splat(1e-30)).copysign(d)
 }
 
 impl<B: TriangleBvh> RayQuery for AccelWith<B> {

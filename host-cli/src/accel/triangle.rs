@@ -73,13 +73,14 @@ impl WatertightRay {
 
     /// The input axes feeding the permuted x, y and z, the permuted origin and the shear
     /// (sx, sy, sz): what a packet of triangles needs to run this test lane by lane.
+    #[inline(always)]
     pub(crate) fn parts(&self) -> ([usize; 3], [f32; 3], [f32; 3]) {
         let axis = match self.permutation {
             Permutation::Yzx => [1, 2, 0],
             Permutation::Zxy => [2, 0, 1],
             Permutation::Xyz => [0, 1, 2],
         };
-        (axis, self.origin.to_array(), [self.sx, self.sy, self.sz])
+        (axis, self.origin.into(), [self.sx, self.sy, self.sz])
     }
 
     /// Distance to the triangle (p0, p1, p2) if it lies in (0, t_max), with barycentrics

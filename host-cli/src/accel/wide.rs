@@ -95,31 +95,30 @@ pub struct Wide {
 struct SlabRay {
     origin: [Vec4; 3],
     inv: [Vec4; 3],
-    /// Row of `Node::bounds` holding each axis's near plane, and its far plane.
-    near: [usize; 3],
-    far: [usize; 3],
 }
 
 impl SlabRay {
+    #[inline(always)]
     fn new(ray: &BvhRay) -> Self {
         let (o, inv) = (ray.origin, ray.inv_direction);
-        let near: [usize; 3] = core::array::from_fn(|a| if inv[a] >= 0.0 { a } else { a + 3 });
-        Self {
-            origin: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
-            inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
-            near,
-            far: near.map(|r| if r < 3 { r + 3 } else { r - 3 }),
-        }
+        Self { origin: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)], inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)] }
     }
 
-    /// Entry distances and which of the four boxes the ray enters within (0, t_max).
+    /// Entry distances and which of the four boxes the ray enters within [0, t_max].
+    /// Each axis's two plane distances are ordered by min and max, whichever the sign of
+    /// the direction. An empty slot's box is the point at +∞ (every distance ±∞, the
+    /// far one never above the near one) and `t_max` is capped at `f32::MAX`, so an
+    /// empty slot is never entered.
     #[inline(always)]
     fn test(&self, node: &Node, t_max: f32) -> (Vec4, u32) {
         let b = &node.bounds;
-        let slab = |a: usize, row: usize| (Vec4::from(b[row]) - self.origin[a]) * self.inv[a];
-        let near = slab(0, self.near[0]).max(slab(1, self.near[1])).max(slab(2, self.near[2])).max(Vec4::ZERO);
-        let far = slab(0, self.far[0]).min(slab(1, self.far[1])).min(slab(2, self.far[2])) * WIDEN;
-        let far = far.min(Vec4::splat(t_max));
+        let slab = |a: usize| {
+            let (t0, t1) = ((Vec4::from(b[a]) - self.origin[a]) * self.inv[a], (Vec4::from(b[a + 3]) - self.origin[a]) * self.inv[a]);
+            (t0.min(t1), t0.max(t1))
+        };
+        let ((n0, f0), (n1, f1), (n2, f2)) = (slab(0), slab(1), slab(2));
+        let near = n0.max(n1).max(n2).max(Vec4::ZERO);
+        let far = (f0.min(f1).min(f2) * WIDEN).min(Vec4::splat(t_max.min(f32::MAX)));
         (near, near.cmple(far).bitmask())
     }
 }
@@ -134,6 +133,7 @@ struct PacketRay<'a> {
 }
 
 impl<'a> PacketRay<'a> {
+    #[inline(always)]
     fn new(wt: &'a WatertightRay) -> Self {
         let (axis, origin, shear) = wt.parts();
         Self { scalar: wt, axis, origin: origin.map(Vec4::splat), shear: shear.map(Vec4::splat) }
@@ -207,37 +207,39 @@ struct LaneHits {
 }
 
 impl LaneHits {
-    /// The nearest lane (the lowest on a tie), its distance and barycentrics.
-    fn nearest(&self) -> (usize, f32, [f32; 3]) {
-        let t = self.t.to_array();
-        let mut best = self.mask.trailing_zeros() as usize;
-        for l in best + 1..PACKET {
-            if self.mask & (1 << l) != 0 && t[l] < t[best] {
-                best = l;
-            }
-        }
-        let inv = self.inv_det.to_array()[best];
-        (best, t[best], self.e.map(|e| e.to_array()[best] * inv))
+    /// The nearest lane (the lowest on a tie) and its distance.
+    #[inline(always)]
+    fn nearest(&self) -> (usize, f32) {
+        let t = self.t.min_element();
+        let lane = (self.t.cmpeq(Vec4::splat(t)).bitmask() & self.mask).trailing_zeros() as usize;
+        (lane, t)
+    }
+
+    /// Barycentrics of lane `l`'s hit.
+    fn barycentrics(&self, l: usize) -> [f32; 3] {
+        let inv = self.inv_det.to_array()[l];
+        self.e.map(|e| e.to_array()[l] * inv)
     }
 }
 
-/// A traversal stack of at most `N` entries (item, entry distance). Sized from the
-/// hierarchy (`Wide::stack_need`), so pushes never check for room; a small one costs
-/// only a few stores to clear per query.
+/// A traversal stack of at most `N` entries (item, entry distance), each packed in a
+/// `u64` (distance bits high, item low) so that clearing it per query is a few wide
+/// stores. Sized from the hierarchy (`Wide::stack_need`), so pushes never check for
+/// room.
 struct Stack<const N: usize> {
-    items: [(u32, f32); N],
+    items: [u64; N],
     len: usize,
 }
 
 impl<const N: usize> Stack<N> {
     #[inline(always)]
     fn new() -> Self {
-        Self { items: [(0, 0.0); N], len: 0 }
+        Self { items: [0; N], len: 0 }
     }
 
     #[inline(always)]
     fn push(&mut self, item: u32, t: f32) {
-        self.items[self.len] = (item, t);
+        self.items[self.len] = (t.to_bits() as u64) << 32 | item as u64;
         self.len += 1;
     }
 
@@ -245,7 +247,8 @@ impl<const N: usize> Stack<N> {
     fn pop(&mut self) -> Option<(u32, f32)> {
         (self.len > 0).then(|| {
             self.len -= 1;
-            self.items[self.len]
+            let v = self.items[self.len];
+            (v as u32, f32::from_bits((v >> 32) as u32))
         })
     }
 }
@@ -294,6 +297,7 @@ impl Wide {
     }
 
     /// Closest hit in (0, ray.tmax): leaf slot, distance and barycentrics.
+    #[inline]
     pub fn closest(&self, ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])> {
         match self.stack_need {
             0..=16 => self.closest_with(ray, wt, Stack::<16>::new()),
@@ -303,6 +307,7 @@ impl Wide {
     }
 
     /// True if anything lies in (0, ray.tmax); stops at the first hit.
+    #[inline]
     pub fn occluded(&self, ray: &BvhRay, wt: &WatertightRay) -> bool {
         match self.stack_need {
             0..=16 => self.occluded_with(ray, wt, Stack::<16>::new()),
@@ -346,13 +351,16 @@ impl Wide {
             } else {
                 let p = &self.packets[(item & !LEAF) as usize];
                 if let Some(hits) = tri.test(p, t_max) {
-                    let (lane, t, bary) = hits.nearest();
+                    let (lane, t) = hits.nearest();
                     t_max = t;
-                    best = Some((p.first as usize + lane, t, bary));
+                    best = Some((p.first as usize + lane, lane, hits));
                 }
             }
             loop {
-                let Some((next, entry)) = stack.pop() else { return best };
+                let Some((next, entry)) = stack.pop() else {
+                    // Barycentrics of the winner only.
+                    return best.map(|(slot, lane, hits)| (slot, t_max, hits.barycentrics(lane)));
+                };
                 if entry <= t_max {
                     item = next;
                     break;
@@ -422,28 +430,27 @@ impl<'a> Collapse<'a> {
     }
 
     fn run(mut self) -> Wide {
-        // (binary node, wide node it becomes); the root always becomes a wide node.
-        let root_children = if self.counts[0] as usize <= PACKET { vec![0] } else { self.open(0) };
+        // The root always becomes a wide node.
+        let root_children = if self.counts[0] as usize <= PACKET { vec![self.group(0)] } else { self.open(0) };
         // (children, wide node, its depth below the root)
         let mut todo = vec![(root_children, 0usize, 0usize)];
         self.out.nodes.push(Self::empty_node());
         while let Some((children, slot, depth)) = todo.pop() {
             self.out.stack_need = self.out.stack_need.max(3 * (depth + 1));
-            for (lane, &c) in children.iter().enumerate() {
-                let aabb = self.bvh2.nodes[c as usize].aabb;
+            for (lane, g) in children.iter().enumerate() {
                 let node = &mut self.out.nodes[slot];
                 for a in 0..3 {
-                    node.bounds[a][lane] = aabb.min[a];
-                    node.bounds[a + 3][lane] = aabb.max[a];
+                    node.bounds[a][lane] = g.aabb.min[a];
+                    node.bounds[a + 3][lane] = g.aabb.max[a];
                 }
-                if self.counts[c as usize] as usize <= PACKET {
-                    let packet = self.packet(c);
+                if g.count as usize <= PACKET {
+                    let packet = self.packet(&g.nodes);
                     self.out.nodes[slot].child[lane] = LEAF | packet;
                 } else {
                     let index = self.out.nodes.len();
                     self.out.nodes.push(Self::empty_node());
                     self.out.nodes[slot].child[lane] = index as u32;
-                    let grandchildren = self.open(c);
+                    let grandchildren = self.open(g.nodes[0]);
                     todo.push((grandchildren, index, depth + 1));
                 }
             }
@@ -451,37 +458,68 @@ impl<'a> Collapse<'a> {
         self.out
     }
 
+    /// Every slot empty: its box the point at +∞ (see `SlabRay::test`).
     fn empty_node() -> Node {
-        let (lo, hi) = ([f32::INFINITY; 4], [f32::NEG_INFINITY; 4]);
-        Node { bounds: [lo, lo, lo, hi, hi, hi], child: [EMPTY; 4] }
+        Node { bounds: [[f32::INFINITY; 4]; 6], child: [EMPTY; 4] }
     }
 
-    /// Up to four descendants of inner binary node `n` that together hold its triangles:
-    /// its two children, then repeatedly the largest one that holds more than a packet
-    /// replaced by its two children.
-    fn open(&self, n: u32) -> Vec<u32> {
+    fn group(&self, n: u32) -> Group {
+        Group { nodes: vec![n], count: self.counts[n as usize], aabb: self.bvh2.nodes[n as usize].aabb }
+    }
+
+    /// Up to four groups of descendants of inner binary node `n` that together hold its
+    /// triangles. Start from its two children and repeat, while anything changes:
+    /// - merge the two small groups (together at most a packet) whose merged box has the
+    ///   least surface area, if it is below the sum of theirs (one packet test then
+    ///   costs less, by the surface-area heuristic, than the two it replaces: the two
+    ///   triangles of a quad always merge);
+    /// - open the largest group holding more than a packet into its two children, while
+    ///   there is room.
+    fn open(&self, n: u32) -> Vec<Group> {
         let nodes = &self.bvh2.nodes;
         let first = nodes[n as usize].first_index;
-        let mut children = vec![first, first + 1];
-        while children.len() < 4 {
-            let widest = children
-                .iter()
-                .enumerate()
-                .filter(|&(_, &c)| self.counts[c as usize] as usize > PACKET)
-                .max_by(|a, b| nodes[*a.1 as usize].aabb.half_area().total_cmp(&nodes[*b.1 as usize].aabb.half_area()));
-            let Some((i, &c)) = widest else { break };
-            let f = nodes[c as usize].first_index;
-            children[i] = f;
-            children.push(f + 1);
+        let mut children = vec![self.group(first), self.group(first + 1)];
+        loop {
+            let mut merge: Option<(usize, usize, Aabb)> = None;
+            for i in 0..children.len() {
+                for j in i + 1..children.len() {
+                    let (a, b) = (&children[i], &children[j]);
+                    if (a.count + b.count) as usize > PACKET {
+                        continue;
+                    }
+                    let union = a.aabb.union(&b.aabb);
+                    let gain = a.aabb.half_area() + b.aabb.half_area() - union.half_area();
+                    if gain >= 0.0 && merge.is_none_or(|(_, _, m)| union.half_area() < m.half_area()) {
+                        merge = Some((i, j, union));
+                    }
+                }
+            }
+            if let Some((i, j, union)) = merge {
+                let b = children.swap_remove(j);
+                let a = &mut children[i];
+                a.nodes.extend(b.nodes);
+                a.count += b.count;
+                a.aabb = union;
+                continue;
+            }
+            if children.len() == 4 {
+                break;
+            }
+            let widest = children.iter().enumerate().filter(|(_, g)| g.count as usize > PACKET).max_by(|a, b| a.1.aabb.half_area().total_cmp(&b.1.aabb.half_area()));
+            let Some((i, _)) = widest else { break };
+            let f = nodes[children[i].nodes[0] as usize].first_index;
+            children[i] = self.group(f);
+            children.push(self.group(f + 1));
         }
         children
     }
 
-    /// Pack the (at most four) triangles under binary node `n`; returns the packet index.
-    fn packet(&mut self, n: u32) -> u32 {
+    /// Pack the (at most four) triangles under binary nodes `roots`; returns the packet
+    /// index.
+    fn packet(&mut self, roots: &[u32]) -> u32 {
         let nodes = &self.bvh2.nodes;
         let first = self.out.order.len() as u32;
-        let mut todo = vec![n];
+        let mut todo: Vec<u32> = roots.iter().rev().copied().collect();
         while let Some(m) = todo.pop() {
             let node = &nodes[m as usize];
             if node.is_leaf() {
@@ -504,4 +542,12 @@ impl<'a> Collapse<'a> {
         self.out.packets.push(Packet { v, first, count });
         self.out.packets.len() as u32 - 1
     }
+}
+
+/// Binary subtrees that become one child of a wide node: a single subtree, or several
+/// small ones merged into one leaf packet.
+struct Group {
+    nodes: Vec<u32>,
+    count: u32,
+    aabb: Aabb,
 }
