@@ -218,6 +218,8 @@ fn stretched(ray: &BvhRay) -> BvhRay {
 /// What a hit needs beyond the vertices (kept apart so traversal stays in cache).
 #[derive(Clone, Copy, Debug)]
 struct TriangleAttributes {
+    /// Unit geometric normal.
+    ng: Vec3,
     normals: Option<[Vec3; 3]>,
     texcoords: Option<[glam::Vec2; 3]>,
     material: MaterialId,
@@ -282,7 +284,8 @@ impl<B: TriangleBvh> AccelWith<B> {
             let attrs = order.iter().map(|&k| {
                 let original = kept[k as usize];
                 let t = &geometry.triangles[original as usize];
-                TriangleAttributes { normals: t.n, texcoords: t.uv, material: t.material, emitter: t.emitter, original }
+                let ng = hit::geometric_normal(&input[k as usize]);
+                TriangleAttributes { ng, normals: t.n, texcoords: t.uv, material: t.material, emitter: t.emitter, original }
             });
             let (tris, attrs) = (tris.collect(), attrs.collect());
             (Some(bvh), tris, attrs)
@@ -372,7 +375,8 @@ impl<B: TriangleBvh> AccelWith<B> {
         }
         // Then the spheres, closer than the triangle hit.
         let t_max = best.map_or(ray.t_max, |(t, _)| t);
-        if let Some((t, i)) = self.closest_sphere(ray, &q, t_max) {
+        let sphere = if self.spheres.is_empty() { None } else { self.closest_sphere(ray, &q, t_max) };
+        if let Some((t, i)) = sphere {
             best = Some((t, Candidate::Sphere(i)));
         }
         let (t, which) = best?;
@@ -390,9 +394,6 @@ impl<B: TriangleBvh> AccelWith<B> {
     /// Closest sphere hit in (0, t_max): distance and index into `self.spheres`.
     #[inline]
     fn closest_sphere(&self, ray: &Ray, q: &Query, t_max: f32) -> Option<(f32, usize)> {
-        if self.spheres.is_empty() {
-            return None;
-        }
         if let Some(bvh) = &self.sphere_bvh {
             let mut hit = RayHit::none();
             let mut r = q.bvh_ray;
@@ -415,7 +416,7 @@ impl<B: TriangleBvh> AccelWith<B> {
     /// barycentrics `b`.
     fn triangle_hit(&self, slot: usize, t: f32, b: [f32; 3]) -> SurfaceHit {
         let a = &self.attrs[slot];
-        hit::surface_hit(&self.tris[slot], a.normals, a.texcoords, a.material, a.emitter, t, b)
+        hit::surface_hit(&self.tris[slot], a.ng, a.normals, a.texcoords, a.material, a.emitter, t, b)
     }
 }
 

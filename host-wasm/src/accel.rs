@@ -64,6 +64,8 @@ pub fn build_bvh2_without_clock(boxes: &[Aabb]) -> Bvh2 {
 /// What a hit needs beyond the vertices (kept apart so traversal stays in cache).
 #[derive(Clone, Copy, Debug)]
 struct TriangleAttributes {
+    /// Unit geometric normal.
+    ng: Vec3,
     normals: Option<[Vec3; 3]>,
     texcoords: Option<[glam::Vec2; 3]>,
     material: MaterialId,
@@ -109,7 +111,8 @@ impl WasmAccel {
                 .iter()
                 .map(|&k| {
                     let t = &geometry.triangles[kept[k as usize]];
-                    TriangleAttributes { normals: t.n, texcoords: t.uv, material: t.material, emitter: t.emitter }
+                    let ng = hit::geometric_normal(&input[k as usize]);
+                    TriangleAttributes { ng, normals: t.n, texcoords: t.uv, material: t.material, emitter: t.emitter }
                 })
                 .collect();
             (Some(bvh), tris, attrs)
@@ -125,7 +128,7 @@ impl WasmAccel {
 
     fn triangle_hit(&self, slot: usize, t: f32, b: [f32; 3]) -> SurfaceHit {
         let a = &self.attrs[slot];
-        hit::surface_hit(&self.tris[slot], a.normals, a.texcoords, a.material, a.emitter, t, b)
+        hit::surface_hit(&self.tris[slot], a.ng, a.normals, a.texcoords, a.material, a.emitter, t, b)
     }
 }
 

@@ -12,12 +12,12 @@
 use core::ops::Range;
 
 use super::{Counters, RenderParams, SurfacePoint, survives_roulette};
-use crate::bsdf::TransportMode;
+use crate::bsdf::{Material, TransportMode, shading_normal_correction};
 use crate::geometry::{Ray, RayQuery, SurfaceHit, spawn_ray, spawn_ray_to};
 use crate::math::{Vec2, Vec3};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
-use crate::segment::{CAMERA_KERNEL_KEY, Junctions, Kernel, KernelSample, throughput_cos};
+use crate::segment::{CAMERA_KERNEL_KEY, Junctions, Kernel, KernelSample};
 use crate::spectrum::Rgb;
 
 /// Random dimensions used per bounce (light choice 1, light point 2, lobe 1, direction 2, roulette 1).
@@ -143,7 +143,8 @@ fn walk<Q: RayQuery + ?Sized>(
         let u_light = rng.next_f32();
         let u_point = rng.next_2d();
         if !material.is_delta() {
-            l += beta * next_event(scene, tracer, params, &sp, start, u_light, u_point, counters);
+            let at = Shading { sp: &sp, material: &material, wo_local, start };
+            l += beta * next_event(scene, tracer, params, &at, u_light, u_point, counters);
         }
 
         // Sample the BSDF to continue the path.
@@ -191,21 +192,22 @@ fn emission_weight(params: &RenderParams, prev: Option<PrevBounce>, light_pdf: i
     }
 }
 
-/// One light sample from `sp`: choose a light ∝ power, sample a point on it, trace the
-/// shadow ray, weight against BSDF sampling. Returns the weighted contribution (without β).
-/// With a kernel-moved `start` (segment PT) the light is sampled from there, the BSDF is
-/// still the one of `sp` (eq. 6) and the cosine the one at `start`.
-#[allow(clippy::too_many_arguments)]
-fn next_event<Q: RayQuery + ?Sized>(
-    scene: &Scene,
-    tracer: &Q,
-    params: &RenderParams,
-    sp: &SurfacePoint,
-    start: Option<&SurfaceHit>,
-    u_light: f32,
-    u_point: Vec2,
-    counters: &mut Counters,
-) -> Rgb {
+/// What next-event estimation needs of the vertex it starts from: the surface point,
+/// its material (textures resolved once per vertex), the outgoing direction in the
+/// shading frame, and where a kernel moved the segment's start (segment PT).
+struct Shading<'a> {
+    sp: &'a SurfacePoint,
+    material: &'a Material,
+    wo_local: Vec3,
+    start: Option<&'a SurfaceHit>,
+}
+
+/// One light sample from `at.sp`: choose a light ∝ power, sample a point on it, trace
+/// the shadow ray, weight against BSDF sampling. Returns the weighted contribution
+/// (without β). With a kernel-moved `start` (segment PT) the light is sampled from
+/// there, the BSDF is still the one of `sp` (eq. 6) and the cosine the one at `start`.
+fn next_event<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, at: &Shading, u_light: f32, u_point: Vec2, counters: &mut Counters) -> Rgb {
+    let (sp, start) = (at.sp, at.start);
     let Some(table) = scene.light_selection.as_ref() else { return Rgb::ZERO };
     let chosen = table.sample(u_light);
     let light = &scene.lights[chosen.index];
@@ -218,10 +220,17 @@ fn next_event<Q: RayQuery + ?Sized>(
     if !ls.pdf.is_positive() || ls.radiance.is_black() {
         return Rgb::ZERO;
     }
-    let f = throughput_cos(scene, sp, start, ls.wi, TransportMode::Radiance);
+    // f |cos| (eq. 6): the BSDF at `sp`, the cosine at the segment's start.
+    let wi_local = sp.frame.to_local(ls.wi);
+    let f = at.material.eval(at.wo_local, wi_local, TransportMode::Radiance);
     if f.is_black() {
         return Rgb::ZERO;
     }
+    let cos = match start {
+        None => wi_local.z.abs(),
+        Some(x) => x.ns.dot(ls.wi).abs(),
+    };
+    let f = f * (cos * shading_normal_correction(TransportMode::Radiance, sp.wo, ls.wi, sp.hit.ng, sp.hit.ns));
     counters.rays += 1;
     let shadow = match (start, ls.dist.is_finite()) {
         (None, true) => sp.spawn_to(ls.p, ls.n),
@@ -236,8 +245,7 @@ fn next_event<Q: RayQuery + ?Sized>(
     let w = if ls.is_delta {
         1.0
     } else {
-        let material = sp.material(scene);
-        let bsdf_pdf = material.pdf(sp.frame.to_local(sp.wo), sp.frame.to_local(ls.wi), TransportMode::Radiance).0;
+        let bsdf_pdf = at.material.pdf(at.wo_local, wi_local, TransportMode::Radiance).0;
         params.heuristic.weight(light_pdf, bsdf_pdf)
     };
     f * ls.radiance * (w / light_pdf)

@@ -32,11 +32,21 @@ pub(crate) fn box_padding(geometry: &SceneGeometry) -> f32 {
     if scale.is_finite() { scale * (1.0 / 524_288.0) } else { 0.0 }
 }
 
-/// The full record of a hit at distance `t` with barycentrics `b` on triangle `v`
-/// (vertex normals `normals`, if any, are interpolated and turned to the geometric side;
-/// texture coordinates as [`Triangle::texcoords`]).
+/// The unit geometric normal of triangle `v` (by its winding), computed once per
+/// triangle when the structure is built.
+pub(crate) fn geometric_normal(v: &[Vec3A; 3]) -> Vec3 {
+    let (p0, p1, p2) = (Vec3::from(v[0]), Vec3::from(v[1]), Vec3::from(v[2]));
+    (p1 - p0).cross(p2 - p0).normalize()
+}
+
+/// The full record of a hit at distance `t` with barycentrics `b` on triangle `v` with
+/// geometric normal `ng` ([`geometric_normal`]); vertex normals `normals`, if any, are
+/// interpolated and turned to the geometric side; texture coordinates as
+/// [`Triangle::texcoords`].
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn surface_hit(
     v: &[Vec3A; 3],
+    ng: Vec3,
     normals: Option<[Vec3; 3]>,
     texcoords: Option<[Vec2; 3]>,
     material: MaterialId,
@@ -47,7 +57,6 @@ pub(crate) fn surface_hit(
     let (p0, p1, p2) = (Vec3::from(v[0]), Vec3::from(v[1]), Vec3::from(v[2]));
     // Interpolating the vertices is more accurate than o + t·d far from the origin.
     let p = b[0] * p0 + b[1] * p1 + b[2] * p2;
-    let ng = (p1 - p0).cross(p2 - p0).normalize();
     let ns = normals.map(|n| b[0] * n[0] + b[1] * n[1] + b[2] * n[2]).and_then(|n| n.try_normalize()).map_or(ng, |n| if n.dot(ng) < 0.0 { -n } else { n });
     SurfaceHit { t, p, ng, ns, uv: texcoords_at(texcoords, b), material, emitter }
 }

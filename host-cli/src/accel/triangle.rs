@@ -74,6 +74,7 @@ impl WatertightRay {
     /// The input axes feeding the permuted x, y and z, the permuted origin and the shear
     /// (sx, sy, sz): what a packet of triangles needs to run this test lane by lane.
     #[inline(always)]
+    #[allow(dead_code, reason = "the browser host compiles this file without the BVH4")]
     pub(crate) fn parts(&self) -> ([usize; 3], [f32; 3], [f32; 3]) {
         let axis = match self.permutation {
             Permutation::Yzx => [1, 2, 0],

@@ -214,12 +214,6 @@ impl LaneHits {
         let lane = (self.t.cmpeq(Vec4::splat(t)).bitmask() & self.mask).trailing_zeros() as usize;
         (lane, t)
     }
-
-    /// Barycentrics of lane `l`'s hit.
-    fn barycentrics(&self, l: usize) -> [f32; 3] {
-        let inv = self.inv_det.to_array()[l];
-        self.e.map(|e| e.to_array()[l] * inv)
-    }
 }
 
 /// A traversal stack of at most `N` entries (item, entry distance), each packed in a
@@ -320,7 +314,9 @@ impl Wide {
     fn closest_with(&self, ray: &BvhRay, wt: &WatertightRay, mut stack: impl TraversalStack) -> Option<(usize, f32, [f32; 3])> {
         let (slab, tri) = (SlabRay::new(ray), PacketRay::new(wt));
         let mut t_max = ray.tmax;
-        let mut best = None;
+        // The closest hit so far: leaf slot (u32::MAX for none), lane, and its packet's
+        // barycentrics (all lanes; the winner's is read out at the end).
+        let (mut best_slot, mut best_lane, mut best_bary) = (u32::MAX, 0usize, [Vec4::ZERO; 3]);
         let mut item = 0u32;
         loop {
             if item & LEAF == 0 {
@@ -353,13 +349,12 @@ impl Wide {
                 if let Some(hits) = tri.test(p, t_max) {
                     let (lane, t) = hits.nearest();
                     t_max = t;
-                    best = Some((p.first as usize + lane, lane, hits));
+                    (best_slot, best_lane, best_bary) = (p.first + lane as u32, lane, hits.e.map(|e| e * hits.inv_det));
                 }
             }
             loop {
                 let Some((next, entry)) = stack.pop() else {
-                    // Barycentrics of the winner only.
-                    return best.map(|(slot, lane, hits)| (slot, t_max, hits.barycentrics(lane)));
+                    return (best_slot != u32::MAX).then(|| (best_slot as usize, t_max, best_bary.map(|b| b.to_array()[best_lane])));
                 };
                 if entry <= t_max {
                     item = next;
