@@ -235,6 +235,8 @@ pub struct AccelWith<B: TriangleBvh> {
     attrs: Vec<TriangleAttributes>,
     /// Spheres (in BVH leaf order when `sphere_bvh` is set) and their original indices.
     spheres: Vec<Sphere>,
+    /// Conservative boxes of the listed spheres: a ray that misses one skips the f64 test.
+    sphere_boxes: Vec<sphere::SphereBox>,
     sphere_ids: Vec<u32>,
     sphere_bvh: Option<Bvh2>,
 }
@@ -313,8 +315,9 @@ impl<B: TriangleBvh> AccelWith<B> {
         } else {
             (None, sphere_ids)
         };
-        let spheres = sphere_ids.iter().map(|&i| geometry.spheres[i as usize]).collect();
-        Self { bvh, tris, attrs, spheres, sphere_ids, sphere_bvh }
+        let spheres: Vec<Sphere> = sphere_ids.iter().map(|&i| geometry.spheres[i as usize]).collect();
+        let sphere_boxes = spheres.iter().map(sphere::SphereBox::new).collect();
+        Self { bvh, tris, attrs, spheres, sphere_boxes, sphere_ids, sphere_bvh }
     }
 
     /// Number of triangles kept (degenerate ones dropped).
@@ -403,7 +406,10 @@ impl<B: TriangleBvh> AccelWith<B> {
         }
         let mut best = None;
         let mut t_max = t_max;
-        for (i, s) in self.spheres.iter().enumerate() {
+        for (i, (s, b)) in self.spheres.iter().zip(&self.sphere_boxes).enumerate() {
+            if !b.may_hit(&q.bvh_ray, t_max) {
+                continue;
+            }
             if let Some(t) = sphere::intersect(s, ray.origin, ray.dir, t_max) {
                 t_max = t;
                 best = Some((t, i));
@@ -471,7 +477,12 @@ impl<B: TriangleBvh> RayQuery for AccelWith<B> {
             if !missed {
                 return true;
             }
-        } else if self.spheres.iter().any(|s| sphere::intersect(s, ray.origin, ray.dir, ray.t_max).is_some()) {
+        } else if self
+            .spheres
+            .iter()
+            .zip(&self.sphere_boxes)
+            .any(|(s, b)| b.may_hit(&q.bvh_ray, ray.t_max) && sphere::intersect(s, ray.origin, ray.dir, ray.t_max).is_some())
+        {
             return true;
         }
         // Then the triangles, stopping at the first hit.

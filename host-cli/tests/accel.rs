@@ -194,6 +194,10 @@ fn cwbvh_with_sphere_list_agrees_with_brute_force() {
     check_against_brute_force::<CwBvh>(&scene(1, 600, 3), 20_000, 0.2);
 }
 
+/// The production structure. Seen failing: with the BVH4 keeping the last packet hit
+/// instead of the nearest (its `t_max` not cut), and with the listed spheres' boxes
+/// (`SphereBox`, which let rays skip the f64 test) shrunk to 0.9 r (all three list
+/// variants).
 #[test]
 fn bvh4_with_sphere_list_agrees_with_brute_force() {
     check_against_brute_force::<Wide>(&scene(1, 600, 3), 20_000, 0.2);

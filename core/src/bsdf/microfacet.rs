@@ -158,6 +158,14 @@ impl Microfacet {
     /// D(m) / cos θo (Heitz & d'Eon 2014), for `wo` in the upper hemisphere.
     #[inline]
     pub fn visible_pdf(&self, wo: Vec3, m: Vec3) -> f32 {
+        self.visible_pdf_with(wo, m, || self.d(m), || self.g1(wo, m))
+    }
+
+    /// [`Self::visible_pdf`] with D(m) and G1(wo, m) supplied by the caller (drawn only
+    /// when needed), so that a model evaluating its value and density together computes
+    /// them once. Same operations, same bits.
+    #[inline]
+    pub fn visible_pdf_with(&self, wo: Vec3, m: Vec3, d: impl FnOnce() -> f32, g1: impl FnOnce() -> f32) -> f32 {
         if !(wo.z > 0.0) {
             return 0.0;
         }
@@ -165,11 +173,11 @@ impl Microfacet {
         if cos_om <= 0.0 {
             return 0.0;
         }
-        let d = self.d(m);
+        let d = d();
         if d == 0.0 {
             return 0.0;
         }
-        d * self.g1(wo, m) * cos_om / wo.z
+        d * g1() * cos_om / wo.z
     }
 }
 

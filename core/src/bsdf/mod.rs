@@ -309,6 +309,23 @@ impl Material {
     /// lobes; 0 for Dirac materials). Independent of the mode.
     pub fn pdf(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> SolidAnglePdf {
         let (wo, wi) = if self.mirrored(wo) { (flip_z(wo), flip_z(wi)) } else { (wo, wi) };
+        self.pdf_front(wo, wi)
+    }
+
+    /// (`eval`, `pdf`) together: the same bits as calling both, sharing what the model's
+    /// two evaluations have in common (the rough conductor's half vector, D and G1).
+    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (Rgb, SolidAnglePdf) {
+        let (wo, wi) = if self.mirrored(wo) { (flip_z(wo), flip_z(wi)) } else { (wo, wi) };
+        match &self.kind {
+            Kind::RoughConductor(b) => {
+                let (f, pdf) = b.eval_pdf(wo, wi);
+                (if f.is_finite() { f } else { Rgb::ZERO }, Self::checked_pdf(pdf))
+            }
+            _ => (self.eval_front(wo, wi, mode), self.pdf_front(wo, wi)),
+        }
+    }
+
+    fn pdf_front(&self, wo: Vec3, wi: Vec3) -> SolidAnglePdf {
         let pdf = match &self.kind {
             Kind::Diffuse(b) => b.pdf(wo, wi),
             Kind::RoughConductor(b) => b.pdf(wo, wi),
@@ -317,7 +334,12 @@ impl Material {
             Kind::Plastic(b) => b.pdf(wo, wi),
             Kind::Conductor(_) | Kind::Dielectric(_) => SolidAnglePdf::ZERO,
         };
-        // Denormal cosines can overflow the Jacobians (found by fuzzing): no density.
+        Self::checked_pdf(pdf)
+    }
+
+    /// Denormal cosines can overflow the Jacobians (found by fuzzing): no density.
+    #[inline]
+    fn checked_pdf(pdf: SolidAnglePdf) -> SolidAnglePdf {
         if pdf.value().is_finite() && pdf.value() >= 0.0 { pdf } else { SolidAnglePdf::ZERO }
     }
 

@@ -29,12 +29,17 @@ impl RoughConductor {
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
         let Some(m) = reflection_half(wo, wi) else { return Rgb::ZERO };
-        let d = self.distr.d(m);
+        self.eval_at(wo, wi, m, self.distr.d(m), self.distr.g1(wo, m), || self.distr.g1(wi, m))
+    }
+
+    /// The value at half vector `m` given D(m) and G1(wo, m) (G1(wi, m) drawn only
+    /// when needed): what [`Self::eval`], [`Self::eval_pdf`] and [`Self::sample`] share.
+    #[inline]
+    fn eval_at(&self, wo: Vec3, wi: Vec3, m: Vec3, d: f32, g1_wo: f32, g1_wi: impl FnOnce() -> f32) -> Rgb {
         if d == 0.0 {
             return Rgb::ZERO;
         }
-        let g = self.distr.g1(wo, m) * self.distr.g1(wi, m);
-        // Both cosines denormal: the product underflows to 0 (fuzzing found 0/0 here).
+        let g = g1_wo * g1_wi();
         let scalar = d * g / (4.0 * wo.z * wi.z);
         if !scalar.is_finite() {
             return Rgb::ZERO;
@@ -42,19 +47,26 @@ impl RoughConductor {
         fresnel::conductor(wo.dot(m), self.eta, self.k) * self.specular_reflectance * scalar
     }
 
-    /// Density of [`Self::sample`]: D_wo(h) / (4 wi·h).
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> SolidAnglePdf {
         let Some(m) = reflection_half(wo, wi) else { return SolidAnglePdf::ZERO };
-        // The Jacobian's wi·m equals wo·m for the exact half vector; dividing by wo·m lets
-        // it cancel the VNDF's own wo·m. With wi·m, a grazing pair (wo + wi nearly
-        // cancelling) turned f32 rounding in |wi| into a wrong ratio wi·m / wo·m: albedo
-        // 3.3 (GGX) to 5.9 (Beckmann) at 89.999° and α = 1e-4 (stability_extremes.rs).
         SolidAnglePdf(self.distr.visible_pdf(wo, m) / (4.0 * wo.dot(m)))
     }
 
-    /// Reflect `wo` about a visible normal; `None` from the back side or when the
-    /// reflection goes below the surface (that mass is absorbed, as in Mitsuba).
+    /// (`eval`, `pdf`) with the half vector, D and G1(wo) computed once: bit-identical to
+    /// calling both (next-event estimation needs both for every light sample).
+    #[inline]
+    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Rgb, SolidAnglePdf) {
+        let Some(m) = reflection_half(wo, wi) else { return (Rgb::ZERO, SolidAnglePdf::ZERO) };
+        let (d, g1_wo) = (self.distr.d(m), self.distr.g1(wo, m));
+        let f = self.eval_at(wo, wi, m, d, g1_wo, || self.distr.g1(wi, m));
+        let pdf = SolidAnglePdf(self.distr.visible_pdf_with(wo, m, || d, || g1_wo) / (4.0 * wo.dot(m)));
+        (f, pdf)
+    }
+
+    /// A visible normal, reflected. The value and both densities share one half vector
+    /// (`reflection_half` is symmetric in its arguments, bit for bit), one D and both G1:
+    /// the same bits as calling `eval`, `pdf` and `pdf` reversed.
     #[inline]
     pub fn sample(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
         let m = self.distr.sample_visible(wo, u)?;
@@ -62,6 +74,13 @@ impl RoughConductor {
         if !(wi.z > 0.0) {
             return None;
         }
-        BsdfSample::checked_reflection(wi, self.eval(wo, wi), self.pdf(wo, wi), self.pdf(wi, wo))
+        let Some(h) = reflection_half(wo, wi) else {
+            return BsdfSample::checked_reflection(wi, Rgb::ZERO, SolidAnglePdf::ZERO, SolidAnglePdf::ZERO);
+        };
+        let (d, g1_wo, g1_wi) = (self.distr.d(h), self.distr.g1(wo, h), self.distr.g1(wi, h));
+        let f = self.eval_at(wo, wi, h, d, g1_wo, || g1_wi);
+        let pdf = SolidAnglePdf(self.distr.visible_pdf_with(wo, h, || d, || g1_wo) / (4.0 * wo.dot(h)));
+        let pdf_rev = SolidAnglePdf(self.distr.visible_pdf_with(wi, h, || d, || g1_wi) / (4.0 * wi.dot(h)));
+        BsdfSample::checked_reflection(wi, f, pdf, pdf_rev)
     }
 }

@@ -206,7 +206,15 @@ struct Shading<'a> {
 /// the shadow ray, weight against BSDF sampling. Returns the weighted contribution
 /// (without β). With a kernel-moved `start` (segment PT) the light is sampled from
 /// there, the BSDF is still the one of `sp` (eq. 6) and the cosine the one at `start`.
-fn next_event<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, at: &Shading, u_light: f32, u_point: Vec2, counters: &mut Counters) -> Rgb {
+fn next_event<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    at: &Shading,
+    u_light: f32,
+    u_point: Vec2,
+    counters: &mut Counters,
+) -> Rgb {
     let (sp, start) = (at.sp, at.start);
     let Some(table) = scene.light_selection.as_ref() else { return Rgb::ZERO };
     let chosen = table.sample(u_light);
@@ -222,7 +230,14 @@ fn next_event<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderPa
     }
     // f |cos| (eq. 6): the BSDF at `sp`, the cosine at the segment's start.
     let wi_local = sp.frame.to_local(ls.wi);
-    let f = at.material.eval(at.wo_local, wi_local, TransportMode::Radiance);
+    // The BSDF's density is needed for the MIS weight unless the light is a Dirac one;
+    // evaluating both together shares their common terms (bit-identical).
+    let (f, bsdf_pdf) = if ls.is_delta {
+        (at.material.eval(at.wo_local, wi_local, TransportMode::Radiance), 0.0)
+    } else {
+        let (f, pdf) = at.material.eval_pdf(at.wo_local, wi_local, TransportMode::Radiance);
+        (f, pdf.0)
+    };
     if f.is_black() {
         return Rgb::ZERO;
     }
@@ -242,11 +257,6 @@ fn next_event<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderPa
         return Rgb::ZERO;
     }
     let light_pdf = chosen.pmf * ls.pdf.0;
-    let w = if ls.is_delta {
-        1.0
-    } else {
-        let bsdf_pdf = at.material.pdf(at.wo_local, wi_local, TransportMode::Radiance).0;
-        params.heuristic.weight(light_pdf, bsdf_pdf)
-    };
+    let w = if ls.is_delta { 1.0 } else { params.heuristic.weight(light_pdf, bsdf_pdf) };
     f * ls.radiance * (w / light_pdf)
 }

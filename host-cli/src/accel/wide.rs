@@ -500,7 +500,8 @@ impl<'a> Collapse<'a> {
             if children.len() == 4 {
                 break;
             }
-            let widest = children.iter().enumerate().filter(|(_, g)| g.count as usize > PACKET).max_by(|a, b| a.1.aabb.half_area().total_cmp(&b.1.aabb.half_area()));
+            let widest =
+                children.iter().enumerate().filter(|(_, g)| g.count as usize > PACKET).max_by(|a, b| a.1.aabb.half_area().total_cmp(&b.1.aabb.half_area()));
             let Some((i, _)) = widest else { break };
             let f = nodes[children[i].nodes[0] as usize].first_index;
             children[i] = self.group(f);

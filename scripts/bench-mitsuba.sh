@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# Side-by-side: our PT against Mitsuba 3's `llvm_ad_rgb` `path` at equal wall time
+# (startup included) on every suite scene, same threads; optionally a second ember
+# binary (EMBER_BEFORE, e.g. a build of an older commit) in the same interleaved run.
+#
+#   scripts/bench-mitsuba.sh [SECONDS=10] [THREADS=2]
+#
+# Needs `pip install mitsuba` and Debian's libllvm19. For each scene: Mitsuba is timed
+# once at a small spp to calibrate its rate, then run at the spp that fills SECONDS
+# (process start to exit, measured); ember then gets that same measured wall time with
+# `--time` (which counts from its own start). Prints per scene: spp, relMSE and MAPE of
+# each against the scene's reference, and the ratios. Outputs under $OUT (default
+# target/bench-mitsuba).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+SECONDS_BUDGET=${1:-10}
+THREADS=${2:-2}
+SCENES=${SCENES:-../shared/scenes}
+OUT=${OUT:-target/bench-mitsuba}
+mkdir -p "$OUT"
+cargo build --release -p ember-cli >/dev/null 2>&1
+cp target/release/ember "$OUT/ember"
+EMBER="$OUT/ember"
+now() { date +%s.%N; }
+metric() { # IMAGE REFERENCE FIELD
+  "$EMBER" compare "$1" "$2" | awk -v f="$3" '$1 == f { print $2 }'
+}
+printf '%-12s %9s %9s %10s %10s %9s %9s %8s %8s' scene mi_spp ours_spp mi_relMSE ours_relMSE mi_MAPE ours_MAPE relMSE_x spp_x
+[ -n "${EMBER_BEFORE:-}" ] && printf ' %9s %9s' before_spp after/before
+printf '\n'
+for dir in "$SCENES"/*/; do
+  name=$(basename "$dir")
+  scene="$dir/scene.xml"; ref="$dir/reference.exr"
+  [ -f "$scene" ] && [ -f "$ref" ] || continue
+  # Calibrate Mitsuba's rate (JIT warm-up included, like a user's first run).
+  cal=$(python3 scripts/mitsuba-render.py "$scene" 16 "$THREADS" "$OUT/$name-mi-cal.exr" | awk '{print $4}')
+  spp=$(python3 -c "print(max(16, int(16 * max(0.5, $SECONDS_BUDGET - 2.0) / max($cal, 1e-3))))")
+  t0=$(now); python3 scripts/mitsuba-render.py "$scene" "$spp" "$THREADS" "$OUT/$name-mi.exr" >/dev/null; t1=$(now)
+  wall=$(python3 -c "print(f'{$t1 - $t0:.2f}')")
+  ours_spp=$("$EMBER" render "$scene" -e pt --time "$wall" --threads "$THREADS" --no-plan -o "$OUT/$name-ours.exr" 2>/dev/null | awk '$1 == "passes" { print $2 }')
+  line=$(printf '%-12s %9s %9s %10s %10s %9s %9s' "$name" "$spp" "$ours_spp" \
+    "$(metric "$OUT/$name-mi.exr" "$ref" relMSE)" "$(metric "$OUT/$name-ours.exr" "$ref" relMSE)" \
+    "$(metric "$OUT/$name-mi.exr" "$ref" MAPE)" "$(metric "$OUT/$name-ours.exr" "$ref" MAPE)")
+  ratio=$(python3 -c "a,b='$(metric "$OUT/$name-ours.exr" "$ref" relMSE)','$(metric "$OUT/$name-mi.exr" "$ref" relMSE)'; print(f'{float(a)/float(b):.2f}')")
+  sppx=$(python3 -c "print(f'{$ours_spp/$spp:.2f}')")
+  line="$line $(printf '%8s %8s' "$ratio" "$sppx")"
+  if [ -n "${EMBER_BEFORE:-}" ]; then
+    before=$("$EMBER_BEFORE" render "$scene" -e pt --time "$wall" --threads "$THREADS" --no-plan -o "$OUT/$name-before.exr" 2>/dev/null | awk '$1 == "passes" { print $2 }')
+    line="$line $(printf ' %9s %9s' "$before" "$(python3 -c "print(f'{$ours_spp/max($before,1):.2f}')")")"
+  fi
+  echo "$line (wall $wall s)"
+done
