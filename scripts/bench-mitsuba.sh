@@ -6,7 +6,7 @@
 #   scripts/bench-mitsuba.sh [SECONDS=10] [THREADS=2]
 #
 # Needs `pip install mitsuba` and Debian's libllvm19. For each scene: Mitsuba is timed
-# once at a small spp to calibrate its rate, then run at the spp that fills SECONDS
+# at 16 and 64 spp to calibrate its rate, then run at the spp that fills SECONDS
 # (process start to exit, measured); ember then gets that same measured wall time with
 # `--time` (which counts from its own start). Prints per scene: spp, relMSE and MAPE of
 # each against the scene's reference, and the ratios. Outputs under $OUT (default
@@ -32,9 +32,13 @@ for dir in "$SCENES"/*/; do
   name=$(basename "$dir")
   scene="$dir/scene.xml"; ref="$dir/reference.exr"
   [ -f "$scene" ] && [ -f "$ref" ] || continue
-  # Calibrate Mitsuba's rate (JIT warm-up included, like a user's first run).
-  cal=$(python3 scripts/mitsuba-render.py "$scene" 16 "$THREADS" "$OUT/$name-mi-cal.exr" | awk '{print $4}')
-  spp=$(python3 -c "print(max(16, int(16 * max(0.5, $SECONDS_BUDGET - 2.0) / max($cal, 1e-3))))")
+  # Calibrate Mitsuba's rate from 16 and 64 spp (the difference cancels its JIT
+  # compilation), then fill the budget less ~1.5 s of process start and scene loading.
+  c16=$(python3 scripts/mitsuba-render.py "$scene" 16 "$THREADS" "$OUT/$name-mi-cal.exr" | awk '{print $4}')
+  c64=$(python3 scripts/mitsuba-render.py "$scene" 64 "$THREADS" "$OUT/$name-mi-cal.exr" | awk '{print $4}')
+  spp=$(python3 -c "
+rate = 48 / max($c64 - $c16, 1e-3); fixed = max($c16 - 16 / rate, 0.0)
+print(max(16, int(rate * max(0.5, $SECONDS_BUDGET - 1.5 - fixed))))")
   t0=$(now); python3 scripts/mitsuba-render.py "$scene" "$spp" "$THREADS" "$OUT/$name-mi.exr" >/dev/null; t1=$(now)
   wall=$(python3 -c "print(f'{$t1 - $t0:.2f}')")
   ours_spp=$("$EMBER" render "$scene" -e pt --time "$wall" --threads "$THREADS" --no-plan -o "$OUT/$name-ours.exr" 2>/dev/null | awk '$1 == "passes" { print $2 }')
