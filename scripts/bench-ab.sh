@@ -6,11 +6,13 @@
 set -u
 cd "$(dirname "$0")/.."
 S=${SCENES:-../shared/scenes}
+OUT=${OUT:-target/bench-ab}
+mkdir -p "$OUT"
 for sc in $(ls $S); do
   [ -f $S/$sc/scene.xml ] || continue
   line="$sc"
   for r in 1 2; do for b in "$@"; do
-    v=$($b render $S/$sc/scene.xml -e pt --width 160 --spp 8 --threads 1 --no-plan -o /tmp/ab.exr 2>/dev/null | grep "ksamples/s" | awk '{print $2}')
+    v=$($b render $S/$sc/scene.xml -e pt --width 160 --spp 8 --threads 1 --no-plan -o "$OUT/ab.exr" 2>/dev/null | grep "ksamples/s" | awk '{print $2}')
     line="$line $v"
   done; done
   echo $line

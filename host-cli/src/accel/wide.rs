@@ -12,14 +12,16 @@
 //! # Build
 //! obvhs builds the binary hierarchy (PLOC with reinsertion, `medium_build`, one
 //! triangle per leaf); it is then collapsed top-down: a subtree of at most
-//! [`PACKET`] triangles becomes one leaf packet, and a node adopts the children of its
-//! largest (by surface area) inner child until it has four children or none of them can
-//! be opened further. Empty child slots hold an inverted box, which no ray hits.
+//! [`PACKET`] triangles becomes one leaf packet, small sibling subtrees merge into one
+//! packet where the surface-area heuristic favours it, and a node adopts the children
+//! of its largest (by surface area) inner child until it has four children or none of
+//! them can be opened further. Empty child slots hold the point at +∞ as their box,
+//! which no ray enters.
 //!
 //! # Exactness
 //! The lane arithmetic is the scalar watertight test's (`triangle.rs`), operation for
 //! operation, with no fused multiply-adds, so a lane's answer is bit-identical to the
-//! scalar test on that triangle. A packet where any live lane has an edge function of
+//! scalar test on that triangle. A packet where any lane has an edge function of
 //! exactly zero goes through the scalar test, which redoes those in f64. The slab test
 //! runs on the padded leaf boxes (see `hit::box_padding`) and also widens each box's
 //! far distance by 1 + 2γ₃ as pbrt-v4 does, so a ray through the rim of a flat box is
@@ -29,8 +31,13 @@
 //! # Traversal
 //! Closest hit: the children a ray enters are visited nearest first; the others wait on
 //! a stack with their entry distance and are dropped when popped beyond the closest hit
-//! so far. Occlusion stops at the first hit and does not sort. The stack lives in a
-//! fixed array; a hierarchy deep enough to overflow it spills to the heap.
+//! so far. Occlusion stops at the first hit and does not sort. The stack is a fixed
+//! array of 16 or 64 entries, chosen by the hierarchy's depth (three entries per level
+//! at most); a deeper hierarchy, which only a pathological build makes, gets a heap
+//! stack.
+//!
+//! Measured (callgrind, PT on the built-in box): about 45 instructions per node test and
+//! 131 per packet test; a closest-hit query visits 2.6 nodes and 2.1 packets there.
 
 use glam::{Vec3A, Vec4};
 use obvhs::BvhBuildParams;
@@ -43,7 +50,8 @@ use super::triangle::WatertightRay;
 /// Triangles per leaf packet (the SIMD width).
 pub const PACKET: usize = 4;
 
-/// Child reference: an inner node's index, or `LEAF | packet index`, or [`EMPTY`].
+/// Child reference: an inner node's index, or `LEAF | packet index`, or [`EMPTY`]
+/// (never followed: an empty slot's box is never entered).
 const LEAF: u32 = 1 << 31;
 const EMPTY: u32 = u32::MAX;
 
@@ -546,4 +554,62 @@ struct Group {
     nodes: Vec<u32>,
     count: u32,
     aabb: Aabb,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::vec3a;
+
+    fn build(tris: &[[Vec3A; 3]]) -> Wide {
+        let boxes: Vec<Aabb> = tris.iter().map(|v| Aabb::from_points(v)).collect();
+        Wide::build(tris, &boxes)
+    }
+
+    /// Every ray along +z through a triangle's centroid, against the scalar test over all
+    /// triangles: the same slot, distance and barycentrics bit for bit, and occlusion
+    /// agrees.
+    fn check_against_scalar(tris: &[[Vec3A; 3]], wide: &Wide) {
+        for (i, t) in tris.iter().enumerate() {
+            let c = (t[0] + t[1] + t[2]) / 3.0;
+            let (o, d) = (c - vec3a(0.0, 0.0, 5.0), vec3a(1e-30, 1e-30, 1.0));
+            let ray = BvhRay { origin: o, direction: d, inv_direction: Vec3A::ONE / d, tmin: 0.0, tmax: f32::INFINITY };
+            let wt = WatertightRay::new(o, d);
+            let want =
+                tris.iter().enumerate().filter_map(|(k, v)| wt.hit(v[0], v[1], v[2], f32::INFINITY).map(|(t, b)| (k, t, b))).min_by(|a, b| a.1.total_cmp(&b.1));
+            let got = wide.closest(&ray, &wt).map(|(slot, t, b)| (wide.order()[slot] as usize, t, b));
+            assert_eq!(got, want, "ray through triangle {i}");
+            assert!(wide.occluded(&ray, &wt), "ray through triangle {i}");
+        }
+    }
+
+    /// Triangles at exponentially growing distances make a deep tree (PLOC chains them):
+    /// deeper than the 16-entry stack covers, so the 64-entry one runs; then the same
+    /// tree through the heap stack (forced: no build here is that deep). Seen failing
+    /// with `stack_need` counted as one entry per level instead of three.
+    #[test]
+    fn deep_trees_use_the_larger_stacks() {
+        let tris: Vec<[Vec3A; 3]> = (0..160)
+            .map(|k| {
+                let x = 1.2f32.powi(k);
+                [vec3a(x, 0.0, 0.0), vec3a(x + 0.1 * x.max(1.0), 0.0, 0.0), vec3a(x, 0.1 * x.max(1.0), 0.0)]
+            })
+            .collect();
+        let mut wide = build(&tris);
+        assert!((17..=64).contains(&wide.stack_need), "stack need {}", wide.stack_need);
+        check_against_scalar(&tris, &wide);
+        wide.stack_need = 65;
+        check_against_scalar(&tris, &wide);
+    }
+
+    /// One to five triangles: a root holding one leaf, and one packet plus a second.
+    #[test]
+    fn tiny_inputs() {
+        for n in 1..=5 {
+            let tris: Vec<[Vec3A; 3]> = (0..n).map(|k| [vec3a(k as f32, 0.0, 0.0), vec3a(k as f32 + 0.5, 0.0, 0.0), vec3a(k as f32, 0.5, 0.0)]).collect();
+            let wide = build(&tris);
+            assert_eq!(wide.order().len(), n);
+            check_against_scalar(&tris, &wide);
+        }
+    }
 }
