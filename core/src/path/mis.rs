@@ -84,22 +84,26 @@ pub fn for_each_strategy_ratio<V: FnMut(usize, usize, f64)>(
     let mut qs_minus_rev = VertexPdf::ZERO;
     if let Some(pt) = pt {
         // pt's reverse density: from qs (connection), or as a light-path origin (s = 0).
+        // At each connection vertex with a neighbour on its own side, both ways through
+        // it are evaluated together (`pdf_both_ways`: one material lookup, shared
+        // directions).
         pt_rev = match (qs, pt_minus) {
-            (Some(q), _) => q.pdf(scene, qs_minus, pt, TransportMode::Importance),
+            (Some(q), _) => match qs_minus {
+                Some(qm) => {
+                    let (to_pt, to_qm) = q.pdf_both_ways(scene, qm, pt, TransportMode::Importance);
+                    qs_minus_rev = to_qm;
+                    to_pt
+                }
+                None => q.pdf(scene, None, pt, TransportMode::Importance),
+            },
             (None, Some(pm)) => pt.pdf_light_origin(scene, pm),
             (None, None) => VertexPdf::ZERO,
         };
-        if let Some(pm) = pt_minus {
-            pt_minus_rev = match qs {
-                Some(q) => pt.pdf(scene, Some(q), pm, TransportMode::Importance),
-                None => pt.pdf_light(scene, pm),
-            };
-        }
-        if let Some(q) = qs {
-            qs_rev = pt.pdf(scene, pt_minus, q, TransportMode::Radiance);
-            if let Some(qm) = qs_minus {
-                qs_minus_rev = q.pdf(scene, Some(pt), qm, TransportMode::Radiance);
-            }
+        match (pt_minus, qs) {
+            (Some(pm), Some(q)) => (pt_minus_rev, qs_rev) = pt.pdf_both_ways(scene, q, pm, TransportMode::Importance),
+            (Some(pm), None) => pt_minus_rev = pt.pdf_light(scene, pm),
+            (None, Some(q)) => qs_rev = pt.pdf(scene, None, q, TransportMode::Radiance),
+            (None, None) => {}
         }
     }
     let cam_rev = |i: usize| match i {

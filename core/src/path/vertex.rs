@@ -260,6 +260,26 @@ impl Vertex {
         self.convert_density(pdf, next, mode)
     }
 
+    /// (`self.pdf(scene, Some(a), b, mode)`, `self.pdf(scene, Some(b), a, mode.flip())`):
+    /// the densities of the two ways through this vertex between neighbours `a` and `b`,
+    /// as a connection's MIS weight needs them at both connection vertices. At a surface
+    /// vertex the two share the material lookup and both directions (each one's `wn` is
+    /// the other's `wp`), so they cost about one and a half evaluations instead of two;
+    /// the operations are those of [`Self::pdf`], bit for bit.
+    pub fn pdf_both_ways(&self, scene: &Scene, a: &Vertex, b: &Vertex, mode: TransportMode) -> (VertexPdf, VertexPdf) {
+        if self.kind != VertexKind::Surface {
+            return (self.pdf(scene, Some(a), b, mode), self.pdf(scene, Some(b), a, mode.flip()));
+        }
+        let m = scene.material(self.material, self.uv);
+        if m.is_delta() {
+            return (self.convert_density(SolidAnglePdf(1.0), b, mode), self.convert_density(SolidAnglePdf(1.0), a, mode.flip()));
+        }
+        let (wb, wa) = (self.frame.to_local(self.dir_to(b, mode)), self.frame.to_local(self.dir_to(a, mode.flip())));
+        let to_b = m.pdf(wa, wb, TransportMode::Radiance);
+        let to_a = m.pdf(wb, wa, TransportMode::Radiance);
+        (self.convert_density(to_b, b, mode), self.convert_density(to_a, a, mode.flip()))
+    }
+
     /// [`Self::pdf`] for the bounce this vertex's own walk took (`prev` and `next` its
     /// neighbours on its sub-path): where that bounce drew a Dirac lobe of a material that
     /// also has continuous ones (smooth plastic's mirror), the unit Dirac as for a
