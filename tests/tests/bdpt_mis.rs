@@ -18,6 +18,7 @@
 //! the forward instead of the reverse density as `pdf_rev` in the walk fails (1)
 //! (0.625 vs 0.639 at (3, 1)).
 
+use ember_core::bsdf::TransportMode;
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::path::mis::mis_weight;
 use ember_core::path::{LightPointSample, Vertex, camera_subpath, connect, light_subpath};
@@ -124,4 +125,40 @@ fn recursive_weights_of_one_path_sum_to_one() {
     }
     println!("{paths} full paths, worst |Σw − 1| = {worst:e}");
     assert!(paths > 2000, "too few paths: {paths}");
+}
+
+/// `Vertex::pdf_both_ways`, which the weight walk uses at the connection vertices, is
+/// the two `Vertex::pdf` calls it replaces, bit for bit: at every vertex of both
+/// sub-paths (camera, light, diffuse, the rough gold and the smooth glass sphere's Dirac
+/// vertices), toward every vertex of the other sub-path and its own neighbour, in both
+/// modes. Seen failing with the second way evaluated in the first way's direction
+/// (`m.pdf(wa, wb)` twice).
+#[test]
+fn both_ways_densities_equal_two_single_evaluations() {
+    let (scene, tracer) = setup();
+    let params = RenderParams { max_depth: MaxDepth(8), seed: 9, ..RenderParams::default() };
+    let mut compared = 0usize;
+    for i in 0..400u32 {
+        let mut counters = Counters::default();
+        let mut rng = SampleStream::for_sample(2, Stream::Camera, i, 0, 0);
+        let film = rng.next_2d() * Vec2::splat(24.0);
+        let cam = camera_subpath(&scene, &tracer, &params, film, 9, &mut rng, &mut counters);
+        let mut lrng = SampleStream::for_sample(2, Stream::Light, i, 0, 0);
+        let light = light_subpath(&scene, &tracer, &params, 8, &mut lrng, &mut counters);
+        for (own, other) in [(&cam, &light), (&light, &cam)] {
+            for (k, v) in own.iter().enumerate() {
+                let Some(a) = k.checked_sub(1).map(|j| &own[j]) else { continue };
+                for b in other.iter() {
+                    for mode in [TransportMode::Radiance, TransportMode::Importance] {
+                        let pair = v.pdf_both_ways(&scene, a, b, mode);
+                        let single = (v.pdf(&scene, Some(a), b, mode), v.pdf(&scene, Some(b), a, mode.flip()));
+                        assert_eq!(pair.0.value().to_bits(), single.0.value().to_bits(), "path {i}, vertex {k}, {mode:?}");
+                        assert_eq!(pair.1.value().to_bits(), single.1.value().to_bits(), "path {i}, vertex {k}, {mode:?}");
+                        compared += 1;
+                    }
+                }
+            }
+        }
+    }
+    assert!(compared > 5_000, "{compared} pairs compared");
 }
