@@ -128,7 +128,8 @@ fn recursive_weights_of_one_path_sum_to_one() {
 }
 
 /// `Vertex::pdf_both_ways`, which the weight walk uses at the connection vertices, is
-/// the two `Vertex::pdf` calls it replaces, bit for bit: at every vertex of both
+/// the two `Vertex::pdf` calls it replaces, bit for bit (and `pdf_along_both_ways`, which
+/// the sub-path walks use, the two `pdf_along` calls): at every vertex of both
 /// sub-paths (camera, light, diffuse, the rough gold and the smooth glass sphere's Dirac
 /// vertices), toward every vertex of the other sub-path and its own neighbour, in both
 /// modes. Seen failing with the second way evaluated in the first way's direction
@@ -154,6 +155,11 @@ fn both_ways_densities_equal_two_single_evaluations() {
                         let single = (v.pdf(&scene, Some(a), b, mode), v.pdf(&scene, Some(b), a, mode.flip()));
                         assert_eq!(pair.0.value().to_bits(), single.0.value().to_bits(), "path {i}, vertex {k}, {mode:?}");
                         assert_eq!(pair.1.value().to_bits(), single.1.value().to_bits(), "path {i}, vertex {k}, {mode:?}");
+                        // The walk's variant (a Dirac lobe drawn by the walk itself).
+                        let pair = v.pdf_along_both_ways(&scene, a, b, mode);
+                        let single = (v.pdf_along(&scene, Some(a), b, mode), v.pdf_along(&scene, Some(b), a, mode.flip()));
+                        assert_eq!(pair.0.value().to_bits(), single.0.value().to_bits(), "along: path {i}, vertex {k}, {mode:?}");
+                        assert_eq!(pair.1.value().to_bits(), single.1.value().to_bits(), "along: path {i}, vertex {k}, {mode:?}");
                         compared += 1;
                     }
                 }

@@ -292,6 +292,16 @@ impl Vertex {
         self.pdf(scene, prev, next, mode)
     }
 
+    /// (`pdf_along(Some(a), b, mode)`, `pdf_along(Some(b), a, mode.flip())`) together, as
+    /// [`Self::pdf_both_ways`] does for [`Self::pdf`]: the walk's forward density of a new
+    /// vertex `b` and the reverse density of the vertex `a` before this one.
+    pub fn pdf_along_both_ways(&self, scene: &Scene, a: &Vertex, b: &Vertex, mode: TransportMode) -> (VertexPdf, VertexPdf) {
+        if self.delta && self.kind == VertexKind::Surface {
+            return (self.convert_density(SolidAnglePdf(1.0), b, mode), self.convert_density(SolidAnglePdf(1.0), a, mode.flip()));
+        }
+        self.pdf_both_ways(scene, a, b, mode)
+    }
+
     /// Area density at `next` (toward the camera side) of a light path leaving this
     /// light vertex toward it.
     pub fn pdf_light(&self, scene: &Scene, next: &Vertex) -> VertexPdf {

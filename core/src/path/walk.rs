@@ -188,10 +188,7 @@ fn random_walk<Q: RayQuery + ?Sized>(
             // Camera paths that escape end on the infinite lights.
             if mode == TransportMode::Radiance && scene.infinite_lights().next().is_some() {
                 let mut v = Vertex::infinite(prev.exit.p + ray.dir, beta, VertexPdf::ZERO);
-                v.pdf_fwd = prev.pdf_along(scene, n.checked_sub(2).map(|i| &path[i]), &v, mode);
-                if n >= 2 {
-                    path[n - 2].pdf_rev = prev.pdf_along(scene, Some(&v), &path[n - 2], mode.flip());
-                }
+                set_densities(scene, path, &prev, &mut v, mode);
                 let _ = path.push(v);
             }
             return;
@@ -233,11 +230,7 @@ fn random_walk<Q: RayQuery + ?Sized>(
             exit: Exit::at(exit.p, exit.ng, exit.ns),
             kernel_ratio,
         };
-        v.pdf_fwd = prev.pdf_along(scene, n.checked_sub(2).map(|i| &path[i]), &v, mode);
-        if n >= 2 {
-            // Now that the successor is known: density of reaching path[n−2] from prev.
-            path[n - 2].pdf_rev = prev.pdf_along(scene, Some(&v), &path[n - 2], mode.flip());
-        }
+        set_densities(scene, path, &prev, &mut v, mode);
         if path.push(v).is_err() || path.len() >= max_vertices {
             return;
         }
@@ -275,4 +268,20 @@ fn random_walk<Q: RayQuery + ?Sized>(
 /// [`crate::segment::Kernel::reversed_ratio`] of the junctions' kernel (1 without one).
 fn kernel_reversed_ratio(junctions: Option<&Junctions>, hit: &crate::geometry::SurfaceHit, x: &crate::geometry::SurfaceHit) -> f32 {
     junctions.map_or(1.0, |j| j.kernel.reversed_ratio(hit, x))
+}
+
+/// The new vertex `v`'s forward density from `prev` (the path's last vertex) and, now
+/// that `prev`'s successor is known, the reverse density of reaching the vertex before
+/// `prev` from it: both ways through `prev` at once where both exist
+/// ([`Vertex::pdf_along_both_ways`]).
+#[inline]
+fn set_densities(scene: &Scene, path: &mut SubPath, prev: &Vertex, v: &mut Vertex, mode: TransportMode) {
+    let n = path.len();
+    if n >= 2 {
+        let (fwd, rev) = prev.pdf_along_both_ways(scene, &path[n - 2], v, mode);
+        v.pdf_fwd = fwd;
+        path[n - 2].pdf_rev = rev;
+    } else {
+        v.pdf_fwd = prev.pdf_along(scene, None, v, mode);
+    }
 }
