@@ -33,8 +33,8 @@
 //! Builds: 0.10–0.11 s each. Measured on a 2-core x86-64 VM (Xeon, AVX-512, 2 GHz) shared
 //! with other work: absolute rates move by up to 2× from run to run, the ratios much
 //! less. On the 36-triangle Cornell box the difference is larger: callgrind counts about
-//! 1 240 instructions per closest-hit query inside obvhs's CWBVH and 750 inside the BVH4
-//! (docs/performance.md). [`AccelWith`] keeps the obvhs variants for the benchmark and
+//! 1 240 instructions per closest-hit query with obvhs's CWBVH and 940 with the BVH4,
+//! the hit record included (docs/performance.md). [`AccelWith`] keeps the obvhs variants for the benchmark and
 //! the tests.
 //!
 //! # Spheres
