@@ -42,10 +42,10 @@ print(max(16, int(rate * max(0.5, $SECONDS_BUDGET - 1.5 - fixed))))")
   t0=$(now); python3 scripts/mitsuba-render.py "$scene" "$spp" "$THREADS" "$OUT/$name-mi.exr" >/dev/null; t1=$(now)
   wall=$(python3 -c "print(f'{$t1 - $t0:.2f}')")
   ours_spp=$("$EMBER" render "$scene" -e pt --time "$wall" --threads "$THREADS" --no-plan -o "$OUT/$name-ours.exr" 2>/dev/null | awk '$1 == "passes" { print $2 }')
-  line=$(printf '%-12s %9s %9s %10s %10s %9s %9s' "$name" "$spp" "$ours_spp" \
-    "$(metric "$OUT/$name-mi.exr" "$ref" relMSE)" "$(metric "$OUT/$name-ours.exr" "$ref" relMSE)" \
+  mi_rel=$(metric "$OUT/$name-mi.exr" "$ref" relMSE); ours_rel=$(metric "$OUT/$name-ours.exr" "$ref" relMSE)
+  line=$(printf '%-12s %9s %9s %10s %10s %9s %9s' "$name" "$spp" "$ours_spp" "$mi_rel" "$ours_rel" \
     "$(metric "$OUT/$name-mi.exr" "$ref" MAPE)" "$(metric "$OUT/$name-ours.exr" "$ref" MAPE)")
-  ratio=$(python3 -c "a,b='$(metric "$OUT/$name-ours.exr" "$ref" relMSE)','$(metric "$OUT/$name-mi.exr" "$ref" relMSE)'; print(f'{float(a)/float(b):.2f}')")
+  ratio=$(python3 -c "print(f'{float(\"$ours_rel\") / float(\"$mi_rel\"):.2f}')")
   sppx=$(python3 -c "print(f'{$ours_spp/$spp:.2f}')")
   line="$line $(printf '%8s %8s' "$ratio" "$sppx")"
   if [ -n "${EMBER_BEFORE:-}" ]; then

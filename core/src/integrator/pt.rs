@@ -12,12 +12,12 @@
 use core::ops::Range;
 
 use super::{Counters, RenderParams, SurfacePoint, survives_roulette};
-use crate::bsdf::{Material, TransportMode, shading_normal_correction};
+use crate::bsdf::{Material, TransportMode};
 use crate::geometry::{Ray, RayQuery, SurfaceHit, spawn_ray, spawn_ray_to};
 use crate::math::{Vec2, Vec3};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
-use crate::segment::{CAMERA_KERNEL_KEY, Junctions, Kernel, KernelSample};
+use crate::segment::{CAMERA_KERNEL_KEY, Junctions, Kernel, KernelSample, start_cosine};
 use crate::spectrum::Rgb;
 
 /// Random dimensions used per bounce (light choice 1, light point 2, lobe 1, direction 2, roulette 1).
@@ -241,11 +241,7 @@ fn next_event<Q: RayQuery + ?Sized>(
     if f.is_black() {
         return Rgb::ZERO;
     }
-    let cos = match start {
-        None => wi_local.z.abs(),
-        Some(x) => x.ns.dot(ls.wi).abs(),
-    };
-    let f = f * (cos * shading_normal_correction(TransportMode::Radiance, sp.wo, ls.wi, sp.hit.ng, sp.hit.ns));
+    let f = f * start_cosine(sp, start, ls.wi, wi_local, TransportMode::Radiance);
     counters.rays += 1;
     let shadow = match (start, ls.dist.is_finite()) {
         (None, true) => sp.spawn_to(ls.p, ls.n),

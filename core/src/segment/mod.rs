@@ -21,7 +21,7 @@
 //! reuse. The *throughput* across a disconnection is shift invariant (eq. 6): the next
 //! segment is translated so that it starts at y_i, and the BSDF of y_i is evaluated for
 //! the incoming direction of s_i and the outgoing direction of s_{i+1}
-//! ([`throughput_cos`]). G(s) = |n_x·ŝ| |n_y·ŝ| V(x, y) / |x − y|² is the geometry term
+//! ([`start_cosine`]). G(s) = |n_x·ŝ| |n_y·ŝ| V(x, y) / |x − y|² is the geometry term
 //! of the segment itself.
 //!
 //! The recursive form (eq. 7, 8) L(s) = L_e(s) + ∫ K f_r G L(s') ds',
@@ -58,7 +58,7 @@
 //!   estimator (eq. 16), and in segment PT the light-sampled last segment combined by
 //!   eq. (17).
 //!
-//! The kernels and [`throughput_cos`] are always compiled: PT, LT and BDPT walk with an
+//! The kernels and [`start_cosine`] are always compiled: PT, LT and BDPT walk with an
 //! optional kernel, and with none they are the vertex estimators. The segment estimators,
 //! samplers and [`contribution`] need the cargo feature `segments`, the filters
 //! (`filter`) `filtering` (docs/features.md).
@@ -96,8 +96,6 @@ use crate::bsdf::{TransportMode, shading_normal_correction};
 use crate::geometry::SurfaceHit;
 use crate::math::Vec3;
 use crate::measure::AreaPdf;
-use crate::scene::Scene;
-use crate::spectrum::Rgb;
 
 /// A segment endpoint: a position and its unit geometric normal (zero at the pinhole and
 /// at a point light, where the cosine factor is 1).
@@ -162,23 +160,22 @@ impl SegmentPdf {
 /// the cosine that G(s_{i+1}) has at its start x_{i+1}, the factor a sequential sampler
 /// divides by its directional density:
 ///
-/// f_r(x_i, y_i, y_i + ŝ_{i+1}) · |n(x_{i+1}) · ŝ_{i+1}|
+/// The cosine factor of eq. 6's f_r(x_i, y_i, y_i + ŝ_{i+1}) · |n(x_{i+1}) · ŝ_{i+1}|:
+/// multiply the BSDF value of `y` by it.
 ///
 /// `y` is the shading point at y_i (its `wo` points back along s_i), `wi` the unit
-/// direction of s_{i+1} (the direction light arrives from, in radiance transport),
-/// `start` the surface x_{i+1} when the kernel moved it off y_i. When it did not (the
-/// Dirac kernel), this is [`crate::integrator::SurfacePoint::f_cos`] exactly, the
-/// vertex formulation's factor with its shading-normal cosine. When it did, the cosine is
-/// taken with the shading normal of x_{i+1}; the adjoint shading-normal correction stays
-/// the one of y_i, whose BSDF is evaluated.
+/// direction of s_{i+1} (the direction light arrives from, in radiance transport) and
+/// `wi_local` the same in `y`'s shading frame, `start` the surface x_{i+1} when the
+/// kernel moved it off y_i. When it did not (the Dirac kernel), the product is
+/// [`crate::integrator::SurfacePoint::f_cos`] exactly, the vertex formulation's factor
+/// with its shading-normal cosine. When it did, the cosine is taken with the shading
+/// normal of x_{i+1}; the adjoint shading-normal correction stays the one of y_i, whose
+/// BSDF is evaluated. The caller evaluates the BSDF (PT together with its density).
 #[inline]
-pub fn throughput_cos(scene: &Scene, y: &crate::integrator::SurfacePoint, start: Option<&SurfaceHit>, wi: Vec3, mode: TransportMode) -> Rgb {
-    let Some(x) = start else { return y.f_cos(scene, wi, mode) };
-    let m = y.material(scene);
-    let (wo_l, wi_l) = (y.frame.to_local(y.wo), y.frame.to_local(wi));
-    let f = m.eval(wo_l, wi_l, mode);
-    if f.is_black() {
-        return Rgb::ZERO;
-    }
-    f * (x.ns.dot(wi).abs() * shading_normal_correction(mode, y.wo, wi, y.hit.ng, y.hit.ns))
+pub fn start_cosine(y: &crate::integrator::SurfacePoint, start: Option<&SurfaceHit>, wi: Vec3, wi_local: Vec3, mode: TransportMode) -> f32 {
+    let cos = match start {
+        None => wi_local.z.abs(),
+        Some(x) => x.ns.dot(wi).abs(),
+    };
+    cos * shading_normal_correction(mode, y.wo, wi, y.hit.ng, y.hit.ns)
 }

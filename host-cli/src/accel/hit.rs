@@ -13,6 +13,13 @@ pub(crate) fn can_be_hit(t: &Triangle) -> bool {
     t.p.iter().all(|p| p.is_finite()) && n.is_finite() && n.length_squared() > 0.0
 }
 
+/// 1 + 2γ₃ (γₙ = nε / (1 − nε), ε the unit roundoff): pbrt-v4's widening of a slab
+/// test's far distance, which makes the test conservative for the box as stored. Our
+/// own slab tests (the BVH4's nodes, the listed spheres' boxes) apply it on top of the
+/// padding below; the browser host's BVH2 (obvhs's test) relies on the padding alone.
+#[allow(dead_code, reason = "the browser host compiles this file and has no slab test of its own")]
+pub(crate) const SLAB_WIDEN: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+
 /// How far every leaf box is grown: 2⁻¹⁹ of the scene's largest coordinate (8 ulps).
 ///
 /// obvhs's slab test is not conservative (pbrt-v4 widens t_max by 1 + 2γ(3) for this;

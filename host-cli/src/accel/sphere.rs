@@ -32,10 +32,6 @@ pub(crate) struct SphereBox {
     max: Vec3A,
 }
 
-/// 1 + 2γ₃, γₙ = nε / (1 − nε) with ε the unit roundoff.
-#[allow(dead_code, reason = "see SphereBox")]
-const WIDEN: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
-
 #[allow(dead_code, reason = "see SphereBox")]
 impl SphereBox {
     pub(crate) fn new(s: &Sphere) -> Self {
@@ -51,8 +47,8 @@ impl SphereBox {
         let t0 = (self.min - ray.origin) * ray.inv_direction;
         let t1 = (self.max - ray.origin) * ray.inv_direction;
         let near = t0.min(t1).max_element().max(0.0);
-        let far = t0.max(t1).min_element() * WIDEN;
-        near <= far && near <= t_max * WIDEN
+        let far = t0.max(t1).min_element() * super::hit::SLAB_WIDEN;
+        near <= far && near <= t_max * super::hit::SLAB_WIDEN
     }
 }
 

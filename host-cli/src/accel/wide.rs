@@ -45,6 +45,7 @@ use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
 use obvhs::ray::Ray as BvhRay;
 
+use super::hit::SLAB_WIDEN;
 use super::triangle::WatertightRay;
 
 /// Triangles per leaf packet (the SIMD width).
@@ -54,9 +55,6 @@ pub const PACKET: usize = 4;
 /// (never followed: an empty slot's box is never entered).
 const LEAF: u32 = 1 << 31;
 const EMPTY: u32 = u32::MAX;
-
-/// 1 + 2γ₃ (pbrt-v4's widening of a slab test's far distance), γₙ = nε / (1 − nε).
-const WIDEN: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// Four children's boxes: rows min x, min y, min z, max x, max y, max z, one lane each.
 #[derive(Clone, Copy, Debug)]
@@ -126,7 +124,7 @@ impl SlabRay {
         };
         let ((n0, f0), (n1, f1), (n2, f2)) = (slab(0), slab(1), slab(2));
         let near = n0.max(n1).max(n2).max(Vec4::ZERO);
-        let far = (f0.min(f1).min(f2) * WIDEN).min(Vec4::splat(t_max.min(f32::MAX)));
+        let far = (f0.min(f1).min(f2) * SLAB_WIDEN).min(Vec4::splat(t_max.min(f32::MAX)));
         (near, near.cmple(far).bitmask())
     }
 }
