@@ -33,9 +33,8 @@
 use alloc::vec::Vec;
 
 use super::bidir::Bidirectional;
-use super::mvf::CHUNK;
 use super::nodes::{trace_camera_nodes, trace_light_nodes};
-use super::pass::FilterPass;
+use super::pass::{CHUNK, FilterPass, node_chunk, reserve_headroom};
 use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;
 use crate::merge::{Footprint, progressive_radius};
@@ -91,7 +90,7 @@ impl Bpf {
 
 impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
     fn next_phase(&self) -> Option<Phase> {
-        let nodes = self.pass.nodes.len() as u32;
+        let (nodes, paths) = (self.pass.nodes.len() as u32, self.pixels.saturating_add(self.light_paths()));
         Some(match self.cursor.stage()? {
             Stage::Setup(_) => {
                 let items = if self.config.radius.needs_footprint() { self.pixels } else { 0 };
@@ -100,9 +99,9 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
             Stage::Pass(pass, 0) => {
                 Phase { name: "paths", id: 1, pass: Some(pass), items: self.pixels.saturating_add(self.light_paths()), chunk: CHUNK, samples: true }
             }
-            Stage::Pass(pass, 1) => Phase { name: "denominators", id: 2, pass: Some(pass), items: nodes, chunk: CHUNK, samples: false },
-            Stage::Pass(pass, 2) => Phase { name: "filter", id: 3, pass: Some(pass), items: nodes, chunk: CHUNK, samples: false },
-            Stage::Pass(pass, i) => Phase { name: "propagate", id: i.saturating_add(1), pass: Some(pass), items: nodes, chunk: CHUNK, samples: false },
+            Stage::Pass(pass, 1) => Phase { name: "denominators", id: 2, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
+            Stage::Pass(pass, 2) => Phase { name: "filter", id: 3, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
+            Stage::Pass(pass, i) => Phase { name: "propagate", id: i.saturating_add(1), pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
         })
     }
     fn start_pass(&mut self, pass: u32) {
@@ -125,8 +124,8 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
                 let camera = items.start.min(p)..items.end.min(p);
                 let light = items.start.max(p) - p..items.end.max(p) - p;
                 let mut c = trace_camera_nodes(scene, tracer, &self.params, self.segments, pass, camera, &mut chunk.nodes, &mut chunk.links, &mut chunk.values);
-                let (mut pred, mut base) = (Vec::new(), Vec::new());
                 if !light.is_empty() {
+                    let (pred, base) = &mut chunk.light_scratch;
                     let l = trace_light_nodes(
                         scene,
                         tracer,
@@ -137,8 +136,8 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
                         light,
                         true,
                         &mut chunk.nodes,
-                        &mut pred,
-                        &mut base,
+                        pred,
+                        base,
                     );
                     c += l;
                 }
@@ -146,10 +145,12 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
             }
             2 => {
                 let w = self.weights(scene);
+                reserve_headroom(&mut chunk.dens, range.len());
                 chunk.dens.extend(range.map(|i| w.denominators(i as u32)));
             }
             3 => {
                 let w = self.weights(scene);
+                chunk.rows.reserve_headroom(range.len(), 0);
                 for i in range {
                     let (emission, direct) = w.row::<f32>(i as u32, &self.pass.dens, &mut chunk.pairs);
                     chunk.rows.push_row(emission, direct, chunk.pairs.iter().copied());

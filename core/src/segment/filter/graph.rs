@@ -141,6 +141,22 @@ impl<T: Real> FilterGraph<T> {
         self.starts.push(self.targets.len() as u32);
     }
 
+    /// Pairs over all rows.
+    pub fn pairs(&self) -> usize {
+        self.targets.len()
+    }
+
+    /// Make room for `rows` more rows and `pairs` more pairs, with headroom where the
+    /// storage must grow ([`super::pass::reserve_headroom`]).
+    pub fn reserve_headroom(&mut self, rows: usize, pairs: usize) {
+        use super::pass::reserve_headroom;
+        reserve_headroom(&mut self.emission, rows);
+        reserve_headroom(&mut self.direct, rows);
+        reserve_headroom(&mut self.starts, rows);
+        reserve_headroom(&mut self.targets, pairs);
+        reserve_headroom(&mut self.coefficients, pairs);
+    }
+
     /// Append another graph's rows, its targets shifted by `offset` (chunks built apart).
     pub fn append(&mut self, other: &FilterGraph<T>, offset: u32) {
         let base = self.targets.len() as u32;

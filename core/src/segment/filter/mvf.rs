@@ -13,15 +13,12 @@
 use alloc::vec::Vec;
 
 use super::nodes::trace_camera_nodes;
-use super::pass::FilterPass;
+use super::pass::{CHUNK, FilterPass, node_chunk};
 use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;
 use crate::merge::{Footprint, progressive_radius};
 use crate::render::{ChunkOutput, Context, Cursor, Film, FilterConfig, Phase, Phased, Stage};
 use crate::spectrum::Rgb;
-
-/// Items per chunk.
-pub(super) const CHUNK: u32 = 1024;
 
 /// Multi-vertex path filtering configured for one film, with the current pass's nodes.
 #[derive(Clone, Debug)]
@@ -57,16 +54,16 @@ impl Mvf {
 
 impl<Q: RayQuery + ?Sized> Phased<Q> for Mvf {
     fn next_phase(&self) -> Option<Phase> {
-        let nodes = self.pass.nodes.len() as u32;
+        let (nodes, paths) = (self.pass.nodes.len() as u32, self.pixels);
         Some(match self.cursor.stage()? {
             Stage::Setup(_) => {
                 let items = if self.config.radius.needs_footprint() { self.pixels } else { 0 };
                 Phase { name: "footprint", id: 0, pass: None, items, chunk: CHUNK, samples: false }
             }
             Stage::Pass(pass, 0) => Phase { name: "camera paths", id: 1, pass: Some(pass), items: self.pixels, chunk: CHUNK, samples: true },
-            Stage::Pass(pass, 1) => Phase { name: "denominators", id: 2, pass: Some(pass), items: nodes, chunk: CHUNK, samples: false },
-            Stage::Pass(pass, 2) => Phase { name: "filter", id: 3, pass: Some(pass), items: nodes, chunk: CHUNK, samples: false },
-            Stage::Pass(pass, i) => Phase { name: "propagate", id: i.saturating_add(1), pass: Some(pass), items: nodes, chunk: CHUNK, samples: false },
+            Stage::Pass(pass, 1) => Phase { name: "denominators", id: 2, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
+            Stage::Pass(pass, 2) => Phase { name: "filter", id: 3, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
+            Stage::Pass(pass, i) => Phase { name: "propagate", id: i.saturating_add(1), pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
         })
     }
     fn start_pass(&mut self, pass: u32) {

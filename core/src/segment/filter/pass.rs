@@ -17,6 +17,37 @@ use crate::spectrum::Rgb;
 /// Largest mean number of nodes per kernel a pass keeps (see [`FilterPass::gather_nodes`]).
 pub const NEIGHBOUR_BUDGET: u32 = 64;
 
+/// Items per chunk of the phases over paths (pixels, light paths).
+pub(super) const CHUNK: u32 = 1024;
+
+/// Chunks of a phase over nodes, per chunk of the pass's paths.
+const NODE_CHUNKS_PER_PATH_CHUNK: u32 = 4;
+
+/// Fewest items per chunk of a phase over nodes.
+const MIN_NODE_CHUNK: u32 = 64;
+
+/// Items per chunk of a phase over the pass's `nodes`, traced from `paths` paths.
+///
+/// The number of node chunks is fixed by the number of paths, not by the number of
+/// nodes, which varies from pass to pass. A pass with more nodes than any before then
+/// fills the same chunk buffers a little further instead of adding a chunk whose
+/// buffers are all new. With [`reserve_headroom`] that keeps the steady state free of
+/// allocations (tests/alloc_free.rs).
+pub(super) fn node_chunk(nodes: u32, paths: u32) -> u32 {
+    let chunks = NODE_CHUNKS_PER_PATH_CHUNK * paths.div_ceil(CHUNK).max(1);
+    nodes.div_ceil(chunks).max(MIN_NODE_CHUNK)
+}
+
+/// Make room for `n` more elements. Where the vector must grow it takes a quarter more
+/// than it needs, so that the next pass's slightly larger node count fits. `Vec`'s own
+/// growth is exact when a vector's first fill reserves its length, as `extend` does.
+pub(super) fn reserve_headroom<T>(v: &mut Vec<T>, n: usize) {
+    let need = v.len().saturating_add(n);
+    if need > v.capacity() {
+        v.reserve(need.saturating_add(need / 4) - v.len());
+    }
+}
+
 /// A node's position in the grid: emission nodes (all on the lights, and never anyone's
 /// neighbour) are left out, so that queries near a small light do not visit every light
 /// path's origin.
@@ -44,6 +75,10 @@ pub struct FilterChunk {
     /// `filter`: scratch for one row's pairs (never sent between workers).
     #[cfg_attr(feature = "wire", serde(skip))]
     pub pairs: Vec<(u32, Rgb3<f32>)>,
+    /// Bidirectional `paths`: scratch for the light paths' predecessors and base fluxes,
+    /// which that estimator reads from the nodes instead (never sent between workers).
+    #[cfg_attr(feature = "wire", serde(skip))]
+    pub light_scratch: (Vec<u32>, Vec<Rgb>),
 }
 
 impl FilterChunk {
@@ -55,6 +90,8 @@ impl FilterChunk {
         self.dens.clear();
         self.rows.clear();
         self.radiance.clear();
+        self.light_scratch.0.clear();
+        self.light_scratch.1.clear();
     }
 }
 
@@ -100,6 +137,15 @@ impl FilterPass {
         self.nodes.clear();
         self.links.clear();
         self.values.clear();
+        let (mut nodes, mut links) = (0, 0);
+        for out in outputs.iter_mut() {
+            let chunk = out.filter_chunk();
+            nodes += chunk.nodes.len();
+            links += chunk.links.len();
+        }
+        reserve_headroom(&mut self.nodes, nodes);
+        reserve_headroom(&mut self.links, links);
+        reserve_headroom(&mut self.values, links);
         for out in outputs.iter_mut() {
             let chunk = out.filter_chunk();
             let offset = self.nodes.len() as u32;
@@ -153,6 +199,7 @@ impl FilterPass {
     /// Gather the chunks' denominators.
     pub fn gather_denominators(&mut self, outputs: &mut [ChunkOutput]) {
         self.dens.clear();
+        reserve_headroom(&mut self.dens, self.nodes.len());
         for out in outputs.iter_mut() {
             self.dens.extend_from_slice(&out.filter_chunk().dens);
         }
@@ -161,16 +208,20 @@ impl FilterPass {
     /// Gather the chunks' rows; L₀ = the rows' emission.
     pub fn gather_rows(&mut self, outputs: &mut [ChunkOutput]) {
         self.graph.clear();
+        let pairs = outputs.iter_mut().map(|out| out.filter_chunk().rows.pairs()).sum();
+        self.graph.reserve_headroom(self.nodes.len(), pairs);
         for out in outputs.iter_mut() {
             self.graph.append(&out.filter_chunk().rows, 0);
         }
         self.radiance.clear();
+        reserve_headroom(&mut self.radiance, self.nodes.len());
         self.radiance.extend_from_slice(&self.graph.emission);
     }
 
     /// Gather one sweep's L_i.
     pub fn gather_sweep(&mut self, outputs: &mut [ChunkOutput]) {
         self.radiance.clear();
+        reserve_headroom(&mut self.radiance, self.nodes.len());
         for out in outputs.iter_mut() {
             self.radiance.extend_from_slice(&out.filter_chunk().radiance);
         }
@@ -196,6 +247,7 @@ impl FilterPass {
         row: impl Fn(&Neighbourhood<'_>, usize, &mut Vec<(u32, Rgb3<f32>)>) -> (Rgb3<f32>, Rgb3<f32>),
     ) {
         let hood = self.neighbourhood(scene);
+        chunk.rows.reserve_headroom(range.len(), 0);
         for i in range {
             let (emission, direct) = row(&hood, i, &mut chunk.pairs);
             chunk.rows.push_row(emission, direct, chunk.pairs.iter().copied());
@@ -205,11 +257,13 @@ impl FilterPass {
     /// Map step of `denominators` over nodes `range`.
     pub fn map_denominators(&self, scene: &Scene, range: core::ops::Range<usize>, chunk: &mut FilterChunk) {
         let hood = self.neighbourhood(scene);
+        reserve_headroom(&mut chunk.dens, range.len());
         chunk.dens.extend(range.map(|i| hood.denominators(i as u32)));
     }
 
     /// Map step of a sweep over nodes `range`.
     pub fn map_sweep(&self, range: core::ops::Range<usize>, chunk: &mut FilterChunk) {
+        reserve_headroom(&mut chunk.radiance, range.len());
         self.graph.sweep(Some(&self.radiance), range, &mut chunk.radiance);
     }
 

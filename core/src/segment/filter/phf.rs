@@ -30,9 +30,8 @@
 //! are not filtered. The camera side follows Dirac bounces to the first other vertex, as
 //! progressive photon mapping does; those bounces are not counted in the depth.
 
-use super::mvf::CHUNK;
 use super::nodes::trace_light_nodes;
-use super::pass::FilterPass;
+use super::pass::{CHUNK, FilterPass, node_chunk};
 use crate::bsdf::TransportMode;
 use crate::geometry::RayQuery;
 use crate::integrator::{Counters, RenderParams, SurfacePoint};
@@ -89,16 +88,16 @@ impl Phf {
 
 impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
     fn next_phase(&self) -> Option<Phase> {
-        let nodes = self.pass.nodes.len() as u32;
+        let (nodes, paths) = (self.pass.nodes.len() as u32, self.light_paths());
         Some(match self.cursor.stage()? {
             Stage::Setup(_) => {
                 let items = if self.config.radius.needs_footprint() { self.pixels } else { 0 };
                 Phase { name: "footprint", id: 0, pass: None, items, chunk: CHUNK, samples: false }
             }
             Stage::Pass(pass, 0) => Phase { name: "light paths", id: 1, pass: Some(pass), items: self.light_paths(), chunk: CHUNK, samples: true },
-            Stage::Pass(pass, 1) => Phase { name: "denominators", id: 2, pass: Some(pass), items: nodes, chunk: CHUNK, samples: false },
-            Stage::Pass(pass, 2) => Phase { name: "filter", id: 3, pass: Some(pass), items: nodes, chunk: CHUNK, samples: false },
-            Stage::Pass(pass, i) if i < 3 + self.sweeps => Phase { name: "propagate", id: i + 1, pass: Some(pass), items: nodes, chunk: CHUNK, samples: false },
+            Stage::Pass(pass, 1) => Phase { name: "denominators", id: 2, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
+            Stage::Pass(pass, 2) => Phase { name: "filter", id: 3, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
+            Stage::Pass(pass, i) if i < 3 + self.sweeps => Phase { name: "propagate", id: i + 1, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
             Stage::Pass(pass, i) => Phase { name: "camera", id: i + 1, pass: Some(pass), items: self.pixels, chunk: CHUNK, samples: false },
         })
     }
