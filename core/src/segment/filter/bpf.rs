@@ -101,7 +101,9 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
             }
             Stage::Pass(pass, 1) => Phase { name: "denominators", id: 2, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
             Stage::Pass(pass, 2) => Phase { name: "filter", id: 3, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
-            Stage::Pass(pass, i) => Phase { name: "propagate", id: i.saturating_add(1), pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
+            Stage::Pass(pass, i) => {
+                Phase { name: "propagate", id: i.saturating_add(1), pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false }
+            }
         })
     }
     fn start_pass(&mut self, pass: u32) {
@@ -126,19 +128,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
                 let mut c = trace_camera_nodes(scene, tracer, &self.params, self.segments, pass, camera, &mut chunk.nodes, &mut chunk.links, &mut chunk.values);
                 if !light.is_empty() {
                     let (pred, base) = &mut chunk.light_scratch;
-                    let l = trace_light_nodes(
-                        scene,
-                        tracer,
-                        &self.params,
-                        self.segments,
-                        self.light_paths(),
-                        pass,
-                        light,
-                        true,
-                        &mut chunk.nodes,
-                        pred,
-                        base,
-                    );
+                    let l = trace_light_nodes(scene, tracer, &self.params, self.segments, self.light_paths(), pass, light, true, &mut chunk.nodes, pred, base);
                     c += l;
                 }
                 out.counters = c;

@@ -63,7 +63,9 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Mvf {
             Stage::Pass(pass, 0) => Phase { name: "camera paths", id: 1, pass: Some(pass), items: self.pixels, chunk: CHUNK, samples: true },
             Stage::Pass(pass, 1) => Phase { name: "denominators", id: 2, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
             Stage::Pass(pass, 2) => Phase { name: "filter", id: 3, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
-            Stage::Pass(pass, i) => Phase { name: "propagate", id: i.saturating_add(1), pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
+            Stage::Pass(pass, i) => {
+                Phase { name: "propagate", id: i.saturating_add(1), pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false }
+            }
         })
     }
     fn start_pass(&mut self, pass: u32) {

@@ -261,7 +261,7 @@ fn walk<Q: RayQuery + ?Sized>(
         }
 
         let draws = ContinuationDraws { more, segments, u_rr, u_lobe, u_dir };
-        let next_ray = continue_path(params, &sp, &material, TransportMode::Radiance, 1.0, draws, &mut node, &mut beta);
+        let next_ray = continue_path(params, &sp, &material, TransportMode::Radiance, draws, &mut node, &mut beta);
         nodes.push(node);
         let Some(r) = next_ray else { break };
         parent = index;
@@ -394,7 +394,6 @@ fn light_walk<Q: RayQuery + ?Sized>(
     counters: &mut Counters,
 ) {
     let first_dim = rng.dimension();
-    let reference = crate::integrator::light_roulette_reference(start.beta0);
     let mut beta = start.beta0;
     let mut parent = NONE;
     let mut segments = 1u32;
@@ -436,7 +435,7 @@ fn light_walk<Q: RayQuery + ?Sized>(
         let u_rr = rng.next_f32();
         let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
         let draws = ContinuationDraws { more, segments, u_rr, u_lobe, u_dir };
-        let next_ray = continue_path(params, &sp, &material, TransportMode::Importance, reference, draws, &mut node, &mut beta);
+        let next_ray = continue_path(params, &sp, &material, TransportMode::Importance, draws, &mut node, &mut beta);
         out.nodes.push(node);
         out.pred.push(parent);
         out.base.push(if segments == 1 { start.beta0 / start.paths_per_pass.max(1) as f32 } else { Rgb::ZERO });
@@ -459,18 +458,28 @@ struct ContinuationDraws {
     u_dir: Vec2,
 }
 
-/// The continuation of `node` at `sp` on both walks: roulette first, on the throughput so
-/// far over `reference`, so that its probability q (recorded in `node.next.q`) does not
-/// depend on the direction drawn; then the BSDF draw in `mode` (the adjoint, with its
-/// shading-normal correction, for importance). Fills `node.next`, updates `beta` and
-/// returns the ray to trace, if any.
-#[allow(clippy::too_many_arguments)]
+/// Least survival probability of the roulette (see [`continue_path`]).
+const MIN_SURVIVAL: f32 = 0.25;
+
+/// The continuation of `node` at `sp` on both walks: roulette first, so that its
+/// probability q (recorded in `node.next.q`) does not depend on the direction drawn;
+/// then the BSDF draw in `mode` (the adjoint, with its shading-normal correction, for
+/// importance). Fills `node.next`, updates `beta` and returns the ray to trace, if any.
+///
+/// From `rr_depth` segments on, q is the node's own albedo (its material's
+/// [`crate::bsdf::Material::albedo_hint`], clamped to [`MIN_SURVIVAL`]..0.95), not the
+/// path's throughput as in PT. A continuation is reused, with its 1/q, by every path
+/// whose kernel covers its start, so q must not carry one path's history. With q from
+/// the throughput, a dim path's continuation entered bright paths' rows ×1/q: on the
+/// caustic scene a wall node alone in its kernel had a coefficient of 76, and a cycle
+/// through it and a ceiling node grew 15× per two sweeps, a pixel 18 000× the
+/// reference (`host-cli/tests/filter_caustic.rs`). With q ≈ ρ the coefficients
+/// f |cos| / (q p) stay near 1.
 fn continue_path(
     params: &RenderParams,
     sp: &SurfacePoint,
     material: &crate::bsdf::Material,
     mode: TransportMode,
-    reference: f32,
     draws: ContinuationDraws,
     node: &mut Node,
     beta: &mut Rgb,
@@ -480,7 +489,8 @@ fn continue_path(
     } else if draws.segments < params.rr_depth {
         1.0
     } else {
-        (beta.max_component() / reference).min(0.95)
+        // `max` first: a NaN albedo gives the least survival.
+        material.albedo_hint().max_component().max(MIN_SURVIVAL).min(0.95)
     };
     node.next.q = q;
     if !(q > 0.0 && draws.u_rr < q) {

@@ -97,7 +97,9 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
             Stage::Pass(pass, 0) => Phase { name: "light paths", id: 1, pass: Some(pass), items: self.light_paths(), chunk: CHUNK, samples: true },
             Stage::Pass(pass, 1) => Phase { name: "denominators", id: 2, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
             Stage::Pass(pass, 2) => Phase { name: "filter", id: 3, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
-            Stage::Pass(pass, i) if i < 3 + self.sweeps => Phase { name: "propagate", id: i + 1, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
+            Stage::Pass(pass, i) if i < 3 + self.sweeps => {
+                Phase { name: "propagate", id: i + 1, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false }
+            }
             Stage::Pass(pass, i) => Phase { name: "camera", id: i + 1, pass: Some(pass), items: self.pixels, chunk: CHUNK, samples: false },
         })
     }
