@@ -72,7 +72,7 @@ impl Phf {
     pub fn new(params: RenderParams, config: FilterConfig, pixels: u32) -> Self {
         let segments = config.segments(params.max_depth);
         let sweeps = segments.saturating_sub(2) as u8;
-        Self { params, config, r0: 0.0, segments, pixels, pass: FilterPass::default(), sweeps, cursor: Cursor::new(1, 4 + sweeps) }
+        Self { params, config, r0: 0.0, segments, pixels, pass: FilterPass::with_links_per_node(), sweeps, cursor: Cursor::new(1, 4 + sweeps) }
     }
 
     /// The kernel radius of global pass `pass`.
