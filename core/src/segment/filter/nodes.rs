@@ -489,8 +489,8 @@ fn continue_path(
     } else if draws.segments < params.rr_depth {
         1.0
     } else {
-        // `max` first: a NaN albedo gives the least survival.
-        material.albedo_hint().max_component().max(MIN_SURVIVAL).min(0.95)
+        let albedo = material.albedo_hint().max_component();
+        if albedo.is_nan() { MIN_SURVIVAL } else { albedo.clamp(MIN_SURVIVAL, 0.95) }
     };
     node.next.q = q;
     if !(q > 0.0 && draws.u_rr < q) {

@@ -204,10 +204,9 @@ impl FilterPass {
         for (slot, &old) in self.grid.order().iter().enumerate() {
             self.new_index[old as usize] = slot as u32;
         }
-        let mut next = self.grid.order().len() as u32;
-        for k in self.new_index.iter_mut().filter(|k| **k == NONE) {
+        let after_slots = self.grid.order().len() as u32..;
+        for (next, k) in after_slots.zip(self.new_index.iter_mut().filter(|k| **k == NONE)) {
             *k = next;
-            next += 1;
         }
         let map = |i: u32, new_index: &[u32]| if i == NONE { NONE } else { new_index[i as usize] };
         for node in &mut self.nodes {
