@@ -40,7 +40,7 @@ use ember_core::merge::HashGrid;
 use ember_core::scene::Scene;
 use ember_core::segment::Kernel;
 use ember_core::segment::filter::nodes::{NONE, NodeKind};
-use ember_core::segment::filter::{Bidirectional, FilterGraph, Neighbourhood, trace_camera_nodes, trace_light_nodes};
+use ember_core::segment::filter::{Bidirectional, FilterGraph, Neighbourhood, kernel_points, trace_camera_nodes, trace_light_nodes};
 use ember_core::spectrum::Rgb;
 use ember_fuzz::Bytes;
 use ember_tests::bdpt_oracle::for_each_strategy_split;
@@ -149,7 +149,8 @@ fn filtering(b: &mut Bytes, scene: &Scene, tracer: &BruteForce, params: &RenderP
     for (nodes, is_light) in [(&cam, false), (&light, true)] {
         let mut grid = HashGrid::new();
         grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
-        let hood = Neighbourhood { scene, nodes, grid: &grid, kernel: Kernel::Disk { radius } };
+        let points = kernel_points(nodes);
+        let hood = Neighbourhood { scene, nodes, points: &points, grid: &grid, kernel: Kernel::Disk { radius } };
         let dens: Vec<_> = (0..nodes.len() as u32).map(|i| hood.denominators(i)).collect();
         for (u, d) in nodes.iter().zip(&dens) {
             if u.delta {
@@ -194,7 +195,8 @@ fn bidirectional(b: &mut Bytes, scene: &Scene, tracer: &BruteForce, params: &Ren
     }));
     let mut grid = HashGrid::new();
     grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
-    let hood = Neighbourhood { scene, nodes: &nodes, grid: &grid, kernel: Kernel::Disk { radius } };
+    let points = kernel_points(&nodes);
+    let hood = Neighbourhood { scene, nodes: &nodes, points: &points, grid: &grid, kernel: Kernel::Disk { radius } };
     let w = Bidirectional { hood, light_paths: 16.0, merges_only: b.u8() % 2 == 1 };
     let dens: Vec<_> = (0..nodes.len() as u32).map(|i| w.denominators(i)).collect();
     let ok = |x: f64| x.is_finite() && x > 0.0;

@@ -21,7 +21,7 @@ use ember_core::merge::HashGrid;
 use ember_core::scene::{AreaEmission, Scene};
 use ember_core::segment::Kernel;
 use ember_core::segment::filter::nodes::{NONE, NodeKind};
-use ember_core::segment::filter::{Bidirectional, Denominators, FilterGraph, Neighbourhood, Node, trace_camera_nodes, trace_light_nodes};
+use ember_core::segment::filter::{Bidirectional, Denominators, FilterGraph, Neighbourhood, Node, kernel_points, trace_camera_nodes, trace_light_nodes};
 use ember_core::spectrum::Rgb;
 use ember_tests::scenes::{cornell, cornell_with_spheres};
 use ember_tests::tracer::BruteForce;
@@ -269,8 +269,11 @@ fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
     let mut grid = HashGrid::new();
     grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
     let kernel = Kernel::Disk { radius };
-    let weights =
-        Bidirectional { hood: Neighbourhood { scene: &scene, nodes: &nodes, grid: &grid, kernel }, light_paths: light_paths as f64, merges_only: false };
+    let weights = Bidirectional {
+        hood: Neighbourhood { scene: &scene, nodes: &nodes, points: &kernel_points(&nodes), grid: &grid, kernel },
+        light_paths: light_paths as f64,
+        merges_only: false,
+    };
     let dens: Vec<Denominators> = (0..nodes.len() as u32).map(|i| weights.denominators(i)).collect();
     let mut graph = FilterGraph::<f64>::new();
     let mut pairs = Vec::new();
@@ -319,7 +322,7 @@ fn bpf_denominators_are_finite_and_positive() {
     for radius in [1e-3f32, 0.05, 0.5] {
         let mut grid = HashGrid::new();
         grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
-        let hood = Neighbourhood { scene: &scene, nodes: &nodes, grid: &grid, kernel: Kernel::Disk { radius } };
+        let hood = Neighbourhood { scene: &scene, nodes: &nodes, points: &kernel_points(&nodes), grid: &grid, kernel: Kernel::Disk { radius } };
         let w = Bidirectional { hood, light_paths: 40.0, merges_only: false };
         for (i, u) in nodes.iter().enumerate().filter(|(_, u)| !u.delta) {
             let d = w.denominators(i as u32);

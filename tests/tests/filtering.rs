@@ -19,7 +19,7 @@ use ember_core::render::FilterSide;
 use ember_core::scene::Scene;
 use ember_core::segment::Kernel;
 use ember_core::segment::filter::nodes::NONE;
-use ember_core::segment::filter::{Denominators, FilterGraph, Neighbourhood, Node, trace_camera_nodes, trace_light_nodes};
+use ember_core::segment::filter::{Denominators, FilterGraph, Neighbourhood, Node, kernel_points, trace_camera_nodes, trace_light_nodes};
 use ember_core::spectrum::Rgb;
 use ember_tests::render::cornell_relmse;
 use ember_tests::scenes::{cornell, cornell_with_spheres};
@@ -174,7 +174,7 @@ fn propagation_equals_the_naive_recursion_in_f64() {
     let mut grid = HashGrid::new();
     grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
     let kernel = Kernel::Disk { radius };
-    let hood = Neighbourhood { scene: &scene, nodes: &nodes, grid: &grid, kernel };
+    let hood = Neighbourhood { scene: &scene, nodes: &nodes, points: &kernel_points(&nodes), grid: &grid, kernel };
     let (_, graph) = graph_f64(&hood);
     let propagated = graph.propagate(segments - 1);
     let naive = Naive { scene: &scene, nodes: &nodes, kernel, sums: Default::default() };
@@ -256,7 +256,7 @@ fn photon_filtering_propagation_equals_its_recursion_in_f64() {
     let mut grid = HashGrid::new();
     grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
     let kernel = Kernel::Disk { radius };
-    let hood = Neighbourhood { scene: &scene, nodes: &nodes, grid: &grid, kernel };
+    let hood = Neighbourhood { scene: &scene, nodes: &nodes, points: &kernel_points(&nodes), grid: &grid, kernel };
     let dens: Vec<Denominators> = (0..nodes.len() as u32).map(|i| hood.denominators(i)).collect();
     let mut graph = FilterGraph::<f64>::new();
     let mut pairs = Vec::new();
@@ -294,7 +294,7 @@ fn denominators_are_finite_and_positive() {
     for radius in [1e-3f32, 0.05, 0.5] {
         let mut grid = HashGrid::new();
         grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
-        let hood = Neighbourhood { scene: &scene, nodes: &nodes, grid: &grid, kernel: Kernel::Disk { radius } };
+        let hood = Neighbourhood { scene: &scene, nodes: &nodes, points: &kernel_points(&nodes), grid: &grid, kernel: Kernel::Disk { radius } };
         for (i, u) in nodes.iter().enumerate().filter(|(_, u)| !u.delta) {
             let d = hood.denominators(i as u32);
             if u.next.dir != Vec3::ZERO && !u.next.delta {

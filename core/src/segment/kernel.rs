@@ -61,7 +61,7 @@ impl Kernel {
     /// The side normal: y's geometric normal turned toward `toward` (the direction back
     /// along the arriving segment).
     #[inline]
-    fn side(y: &SurfaceHit, toward: Vec3) -> Vec3 {
+    pub fn side_normal(y: &SurfaceHit, toward: Vec3) -> Vec3 {
         if y.ng.dot(toward) < 0.0 { -y.ng } else { y.ng }
     }
 
@@ -69,7 +69,7 @@ impl Kernel {
     /// `toward` (unit, pointing from y_i back to x_i), with `u` uniform on [0, 1)².
     pub fn sample<Q: RayQuery + ?Sized>(&self, tracer: &Q, y: &SurfaceHit, toward: Vec3, u: Vec2) -> KernelSample {
         let Self::Disk { radius } = *self else { return KernelSample::AtEnd };
-        let n = Self::side(y, toward);
+        let n = Self::side_normal(y, toward);
         let frame = Frame::from_normal(n);
         let d = sample_concentric_disk(u) * radius;
         let origin = y.p + frame.to_world(Vec3::new(d.x, d.y, 0.0)) + n * radius;
@@ -84,9 +84,15 @@ impl Kernel {
     /// projected disk and within r of the tangent plane, else 0. The Dirac kernel has no
     /// continuous part (returns 0).
     pub fn density(&self, y: &SurfaceHit, toward: Vec3, x: Vec3, nx: Vec3) -> AreaPdf {
+        self.density_around(y.p, Self::side_normal(y, toward), x, nx)
+    }
+
+    /// [`Self::density`] around the point `y` whose side normal ([`Self::side_normal`])
+    /// is `n`. Only |n_x · n| enters, so either orientation of `nx` gives the same value.
+    #[inline]
+    pub fn density_around(&self, y: Vec3, n: Vec3, x: Vec3, nx: Vec3) -> AreaPdf {
         let Self::Disk { radius } = *self else { return AreaPdf::ZERO };
-        let n = Self::side(y, toward);
-        let d = x - y.p;
+        let d = x - y;
         let h = d.dot(n);
         let tangential = d - n * h;
         if tangential.length_squared() >= radius * radius || h.abs() > radius {

@@ -87,7 +87,7 @@ use alloc::vec::Vec;
 
 use super::graph::{REFLECTED, Real, Rgb3, add3, mul3, rgb, scale3};
 use super::nodes::{LightEnd, NONE, Node, NodeKind};
-use super::weights::{Denominators, Neighbourhood};
+use super::weights::{Denominators, KernelPoint, Neighbourhood};
 use crate::bsdf::TransportMode;
 use crate::math::{Frame, Vec3};
 use crate::spectrum::Rgb;
@@ -223,15 +223,17 @@ impl Bidirectional<'_> {
     /// its sampler reported. Returns (all, light samples' part).
     fn camera_techniques(&self, x: &Node, dir: Vec3, nee: f64, bsdf: bool, own: Option<(u32, f64)>) -> (f64, f64) {
         let (mut all, mut nee_part) = (0.0, 0.0);
+        let xp = KernelPoint::of(x);
         self.hood.grid.query(x.hit.p, |i| {
-            let t = &self.nodes()[i as usize];
-            if t.delta || t.kind != NodeKind::Camera {
+            let tp = &self.hood.points[i as usize];
+            if tp.delta || tp.kind != NodeKind::Camera {
                 return;
             }
-            let k = self.hood.kernel_at(t, x.hit.p, x.hit.ng);
+            let k = tp.kernel(&self.hood.kernel, &xp);
             if !(k > 0.0) {
                 return;
             }
+            let t = &self.nodes()[i as usize];
             if bsdf {
                 let p = match own {
                     Some((o, pdf)) if o == i => pdf,
@@ -257,7 +259,9 @@ impl Bidirectional<'_> {
         }
         let mut sum = 0.0;
         self.hood.grid.query(py, |i| {
-            if !own_only || i == own {
+            // The kernel point first: most neighbours are skipped without their node.
+            let tp = &self.hood.points[i as usize];
+            if (!own_only || i == own) && !tp.delta && tp.kind == NodeKind::Light {
                 sum += self.light_term(&self.nodes()[i as usize], py, ny, dir, i == own);
             }
         });
@@ -453,24 +457,26 @@ impl Bidirectional<'_> {
         // path's emission out of the emission technique's count.
         let light_junction = centre.kind == NodeKind::Light && !v.delta && !self.merges_only && self.light_side_owns_dirac();
         let own_path = if light_junction && self.light_paths > 0.0 { 1.0 / self.light_paths } else { 0.0 };
+        let cp = KernelPoint::of(centre);
         self.hood.grid.query(centre.hit.p, |i| {
-            let u = &nodes[i as usize];
-            if u.delta || u.kind == NodeKind::Emission {
+            let up = &self.hood.points[i as usize];
+            if up.delta || up.kind == NodeKind::Emission {
                 return;
             }
             // Merges only: a camera junction reuses its own segments and light segments,
             // a light junction its own chain.
-            if self.merges_only && i != centre_index && (u.kind == NodeKind::Camera || centre.kind == NodeKind::Light) {
+            if self.merges_only && i != centre_index && (up.kind == NodeKind::Camera || centre.kind == NodeKind::Light) {
                 return;
             }
             if light_junction && i == centre_index {
                 // Its own arriving segment: the sample that placed it.
                 return;
             }
-            let k = self.hood.kernel_at(centre, u.hit.p, u.hit.ng);
+            let k = cp.kernel(&self.hood.kernel, up);
             if !(k > 0.0) {
                 return;
             }
+            let u = &nodes[i as usize];
             let d = &dens[i as usize];
             let n = u.hit.ns;
             // A reused segment along `dir` with denominators (all, light samples' part),

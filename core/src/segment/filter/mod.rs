@@ -54,4 +54,4 @@ pub use mvf::Mvf;
 pub use nodes::{Node, trace_camera_nodes, trace_light_nodes};
 pub use pass::{FilterChunk, FilterPass};
 pub use phf::Phf;
-pub use weights::{Denominators, Neighbourhood};
+pub use weights::{Denominators, KernelPoint, Neighbourhood, kernel_points};

@@ -6,7 +6,7 @@ use alloc::vec::Vec;
 
 use super::graph::{FilterGraph, Rgb3};
 use super::nodes::{NONE, Node};
-use super::weights::{Denominators, Neighbourhood};
+use super::weights::{Denominators, KernelPoint, Neighbourhood};
 use crate::camera::PerspectiveCamera;
 use crate::merge::HashGrid;
 use crate::render::{ChunkOutput, Film};
@@ -100,6 +100,8 @@ impl FilterChunk {
 pub struct FilterPass {
     /// The nodes, indices global.
     pub nodes: Vec<Node>,
+    /// Their kernel points, in the same order.
+    pub points: Vec<KernelPoint>,
     /// Per-item links gathered with them (global node indices; [`NONE`] kept).
     pub links: Vec<u32>,
     /// Per-item values gathered with them.
@@ -127,6 +129,7 @@ impl FilterPass {
     /// Bytes held (capacity).
     pub fn size_bytes(&self) -> usize {
         self.nodes.capacity() * core::mem::size_of::<Node>()
+            + self.points.capacity() * core::mem::size_of::<KernelPoint>()
             + self.links.capacity() * 4
             + self.values.capacity() * core::mem::size_of::<Rgb>()
             + self.grid.size_bytes()
@@ -138,7 +141,7 @@ impl FilterPass {
 
     /// What the weights read.
     pub fn neighbourhood<'a>(&'a self, scene: &'a Scene) -> Neighbourhood<'a> {
-        Neighbourhood { scene, nodes: &self.nodes, grid: &self.grid, kernel: Kernel::Disk { radius: self.r } }
+        Neighbourhood { scene, nodes: &self.nodes, points: &self.points, grid: &self.grid, kernel: Kernel::Disk { radius: self.r } }
     }
 
     /// Gather the chunks' nodes, links and values (node indices shifted to global), and
@@ -234,6 +237,9 @@ impl FilterPass {
             }
         }
         self.grid.build(self.nodes.iter().map(grid_point), self.r * core::f32::consts::SQRT_2);
+        self.points.clear();
+        reserve_headroom(&mut self.points, n);
+        self.points.extend(self.nodes.iter().map(KernelPoint::of));
     }
 
     /// Rebuild the grid for kernel radius `r` (PhF's gather, which keeps the progressive

@@ -22,22 +22,57 @@
 use alloc::vec::Vec;
 
 use super::graph::{Real, Rgb3, rgb, scale3};
-use super::nodes::{NONE, Node};
+use super::nodes::{NONE, Node, NodeKind};
 use crate::bsdf::TransportMode;
+use crate::math::Vec3;
 use crate::merge::HashGrid;
 use crate::scene::Scene;
 use crate::segment::Kernel;
 use crate::spectrum::Rgb;
 
-/// What the weights read: the pass's nodes, the grid over their positions (built for
-/// queries of radius √2 r at least: the disk kernel's support reaches that far) and the
-/// kernel.
+/// What the weights read: the pass's nodes, their kernel points (same order), the grid
+/// over their positions (built for queries of radius √2 r at least: the disk kernel's
+/// support reaches that far) and the kernel.
 #[derive(Clone, Copy, Debug)]
 pub struct Neighbourhood<'a> {
     pub scene: &'a Scene,
     pub nodes: &'a [Node],
+    /// [`KernelPoint::of`] each node.
+    pub points: &'a [KernelPoint],
     pub grid: &'a HashGrid,
     pub kernel: Kernel,
+}
+
+/// What a kernel test reads of a node, packed in 28 bytes (a node takes 236). Every
+/// grid candidate is tested, and many are then skipped (Dirac nodes, nodes of the
+/// other side, nodes outside the kernel) without reading their node.
+#[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
+pub struct KernelPoint {
+    /// The node's end.
+    pub p: Vec3,
+    /// Its side normal ([`Kernel::side_normal`]): the kernel's plane as a centre, and as
+    /// a point in another's kernel its normal (whose sign the density ignores).
+    pub side: Vec3,
+    pub delta: bool,
+    pub kind: NodeKind,
+}
+
+impl KernelPoint {
+    pub fn of(node: &Node) -> Self {
+        Self { p: node.hit.p, side: Kernel::side_normal(&node.hit, node.wo), delta: node.delta, kind: node.kind }
+    }
+
+    /// K(self → x): the density of `x` in this point's kernel.
+    #[inline]
+    pub fn kernel(&self, kernel: &Kernel, x: &KernelPoint) -> f64 {
+        kernel.density_around(self.p, self.side, x.p, x.side).0 as f64
+    }
+}
+
+/// Each node's kernel point, in node order.
+pub fn kernel_points(nodes: &[Node]) -> Vec<KernelPoint> {
+    nodes.iter().map(KernelPoint::of).collect()
 }
 
 /// The MMIS denominators of one node's two segments (per solid angle at its end).
@@ -66,12 +101,6 @@ pub struct Denominators {
 }
 
 impl Neighbourhood<'_> {
-    /// K(t → x) for the node t's kernel at x = node x's end.
-    #[inline]
-    fn kernel(&self, t: &Node, x: &Node) -> f64 {
-        self.kernel_at(t, x.hit.p, x.hit.ng)
-    }
-
     /// K(t → x) for the point `x` with geometric normal `nx`.
     #[inline]
     pub(super) fn kernel_at(&self, t: &Node, x: crate::math::Vec3, nx: crate::math::Vec3) -> f64 {
@@ -91,14 +120,15 @@ impl Neighbourhood<'_> {
     /// the kernel around `center` (as_center: K(center → node)) or whose kernel covers
     /// `center`'s end (otherwise: K(node → center)), with that density.
     fn each_neighbour(&self, center: &Node, as_center: bool, mut visit: impl FnMut(u32, &Node, f64)) {
-        self.grid.query(center.hit.p, |i| {
-            let n = &self.nodes[i as usize];
+        let c = KernelPoint::of(center);
+        self.grid.query(c.p, |i| {
+            let n = &self.points[i as usize];
             if n.delta {
                 return;
             }
-            let k = if as_center { self.kernel(center, n) } else { self.kernel(n, center) };
+            let k = if as_center { c.kernel(&self.kernel, n) } else { n.kernel(&self.kernel, &c) };
             if k > 0.0 {
-                visit(i, n, k);
+                visit(i, &self.nodes[i as usize], k);
             }
         });
     }
@@ -214,10 +244,11 @@ impl Neighbourhood<'_> {
         let material = self.scene.material(w.hit.material, w.hit.uv);
         let out = frame.to_local(w.next.dir);
         let cos = T::from_f32(w.hit.ns.dot(w.next.dir).abs()) / T::from_f64(d);
+        let centre = KernelPoint::of(w);
         self.grid.query(w.hit.p, |i| {
-            let u = &self.nodes[i as usize];
-            let k = self.kernel(w, u);
+            let k = centre.kernel(&self.kernel, &self.points[i as usize]);
             if k > 0.0 {
+                let u = &self.nodes[i as usize];
                 let fr = material.eval(out, frame.to_local(u.wo), TransportMode::Radiance);
                 if !fr.is_black() {
                     pairs.push((i, scale3(rgb::<T>(fr), cos * T::from_f64(k))));
