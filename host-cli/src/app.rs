@@ -508,6 +508,17 @@ impl fmt::Display for RenderReport {
         writeln!(f, "samples    {}samples/s ({}samples)", si(s.samples_per_second), si(s.stats.samples as f64))?;
         writeln!(f, "rays       {}rays/s ({}rays)", si(s.rays_per_second), si(s.stats.rays as f64))?;
         writeln!(f, "discarded  {} samples (NaN, infinite or negative)", s.discarded)?;
+        let c = s.stats.connections;
+        if c.traced > 0 {
+            let share = |part: f64, all: f64| if all > 0.0 { 100.0 * part / all } else { 0.0 };
+            writeln!(
+                f,
+                "connect    {} interior connections traced: {:.1} % occluded, {:.1} % of the value they would carry",
+                c.traced,
+                share(c.occluded as f64, c.traced as f64),
+                share(c.occluded_value, c.value)
+            )?;
+        }
         match (&self.partial, &self.png) {
             (Some((held, total)), _) => write!(f, "wrote      {} (partial: passes {held} of {total}; `ember merge` the parts)", self.exr.display()),
             (None, Some(png)) => write!(f, "wrote      {} and {}", self.exr.display(), png.display()),

@@ -31,24 +31,29 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 
 use ember_core::geometry::RayQuery;
+use ember_core::integrator::ConnectionStats;
 use ember_core::render::{ChunkOutput, Context, Film, Phase, PhaseBuffers, Phased};
 
 /// A contribution at a continuous film position: the core's type.
 pub use ember_core::integrator::Splat;
 
 /// Work counted by a renderer.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PassStats {
     /// Ray queries (closest hit and occlusion).
     pub rays: u64,
     /// Camera samples and light paths.
     pub samples: u64,
+    /// Interior connections traced, and how many the shadow ray found occluded.
+    pub connections: ConnectionStats,
 }
 
 impl core::ops::Add for PassStats {
     type Output = Self;
     fn add(self, o: Self) -> Self {
-        Self { rays: self.rays + o.rays, samples: self.samples + o.samples }
+        let mut connections = self.connections;
+        connections += o.connections;
+        Self { rays: self.rays + o.rays, samples: self.samples + o.samples, connections }
     }
 }
 
@@ -98,6 +103,10 @@ where
         })
         .sum();
     stats.rays += rays;
+    // In chunk order, so the sums do not depend on the thread count.
+    for out in outputs.iter() {
+        stats.connections += out.counters.connections;
+    }
     if phase.samples {
         stats.samples += phase.items as u64;
     }

@@ -98,8 +98,46 @@ pub struct Splat {
     pub value: Rgb,
 }
 
+/// The interior connections (strategies with s ≥ 2 and t ≥ 2, [`crate::path::connect`])
+/// whose shadow ray was traced, and the share the shadow ray found occluded, by count
+/// and by value: `value` sums the luminance of each traced connection's unweighted f/p
+/// (what it would have carried if visible), `occluded_value` that of the occluded ones.
+/// What a connection strategy's choice of light vertices wastes (issue 18's first
+/// measurement: LVCBPT's uniform choice against SPCBPT's Γ-guided one).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
+pub struct ConnectionStats {
+    pub traced: u64,
+    pub occluded: u64,
+    pub value: f64,
+    pub occluded_value: f64,
+}
+
+impl ConnectionStats {
+    /// Count one traced connection carrying `value` (if visible).
+    #[inline]
+    pub fn record(&mut self, value: Rgb, occluded: bool) {
+        let y = value.luminance().abs() as f64;
+        self.traced += 1;
+        self.value += y;
+        if occluded {
+            self.occluded += 1;
+            self.occluded_value += y;
+        }
+    }
+}
+
+impl core::ops::AddAssign for ConnectionStats {
+    fn add_assign(&mut self, o: Self) {
+        self.traced += o.traced;
+        self.occluded += o.occluded;
+        self.value += o.value;
+        self.occluded_value += o.occluded_value;
+    }
+}
+
 /// Work counters of one call, summed by the host.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct Counters {
     /// Rays traced (closest-hit and shadow).
@@ -108,6 +146,8 @@ pub struct Counters {
     pub discarded: u64,
     /// Paths truncated by the fixed vertex capacity with unbounded depth.
     pub truncated: u64,
+    /// Interior connections traced and found occluded.
+    pub connections: ConnectionStats,
 }
 
 impl core::ops::AddAssign for Counters {
@@ -115,6 +155,7 @@ impl core::ops::AddAssign for Counters {
         self.rays += o.rays;
         self.discarded += o.discarded;
         self.truncated += o.truncated;
+        self.connections += o.connections;
     }
 }
 

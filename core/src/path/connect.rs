@@ -169,7 +169,9 @@ pub fn connect<Q: RayQuery + ?Sized>(
             return None;
         }
         counters.rays += 1;
-        if tracer.occluded(&connect_ray(qs, pt)) {
+        let occluded = tracer.occluded(&connect_ray(qs, pt));
+        counters.connections.record(v, occluded);
+        if occluded {
             return None;
         }
         value = v;
