@@ -221,6 +221,7 @@ impl FilterPass {
         }
         // Node i goes to new_index[i]: follow each cycle, swapping (no second copy of
         // the nodes); each swap puts one node in its place.
+        debug_assert!(!self.per_node_links || (self.links.len() == n && self.values.len() == n), "per-node links and values, one per node");
         let per_node = self.per_node_links && self.links.len() == n && self.values.len() == n;
         for i in 0..n {
             loop {
