@@ -34,7 +34,7 @@ use alloc::vec::Vec;
 
 use super::bidir::Bidirectional;
 use super::nodes::{trace_camera_nodes, trace_light_nodes};
-use super::pass::{CHUNK, FilterPass, node_chunk, reserve_headroom};
+use super::pass::{CHUNK, FilterPass, node_chunk};
 use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;
 use crate::merge::{Footprint, progressive_radius};
@@ -135,16 +135,11 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
             }
             2 => {
                 let w = self.weights(scene);
-                reserve_headroom(&mut chunk.dens, range.len());
-                chunk.dens.extend(range.map(|i| w.denominators(i as u32)));
+                self.pass.map_denominators(scene, range, chunk, |_, i| w.denominators(i));
             }
             3 => {
                 let w = self.weights(scene);
-                chunk.rows.reserve_headroom(range.len(), 0);
-                for i in range {
-                    let (emission, direct) = w.row::<f32>(i as u32, &self.pass.dens, &mut chunk.pairs);
-                    chunk.rows.push_row(emission, direct, chunk.pairs.iter().copied());
-                }
+                self.pass.map_rows(scene, range, chunk, |_, i, pairs| w.row::<f32>(i as u32, &self.pass.dens, pairs));
             }
             _ => self.pass.map_sweep(range, chunk),
         }

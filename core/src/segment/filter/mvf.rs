@@ -86,7 +86,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Mvf {
                 let c = trace_camera_nodes(scene, tracer, &self.params, self.segments, pass, items, &mut chunk.nodes, &mut chunk.links, &mut chunk.values);
                 out.counters = c;
             }
-            2 => self.pass.map_denominators(scene, range, chunk),
+            2 => self.pass.map_denominators(scene, range, chunk, |hood, i| hood.denominators(i)),
             3 => self.pass.map_rows(scene, range, chunk, |hood, i, pairs| hood.row::<f32>(&self.pass.nodes[i], &self.pass.dens, pairs)),
             _ => self.pass.map_sweep(range, chunk),
         }

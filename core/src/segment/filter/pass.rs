@@ -323,11 +323,17 @@ impl FilterPass {
         }
     }
 
-    /// Map step of `denominators` over nodes `range`.
-    pub fn map_denominators(&self, scene: &Scene, range: core::ops::Range<usize>, chunk: &mut FilterChunk) {
+    /// Map step of `denominators` over nodes `range`: node i's from `denominators(hood, i)`.
+    pub fn map_denominators(
+        &self,
+        scene: &Scene,
+        range: core::ops::Range<usize>,
+        chunk: &mut FilterChunk,
+        denominators: impl Fn(&Neighbourhood<'_>, u32) -> Denominators,
+    ) {
         let hood = self.neighbourhood(scene);
         reserve_headroom(&mut chunk.dens, range.len());
-        chunk.dens.extend(range.map(|i| hood.denominators(i as u32)));
+        chunk.dens.extend(range.map(|i| denominators(&hood, i as u32)));
     }
 
     /// Map step of a sweep over nodes `range`.

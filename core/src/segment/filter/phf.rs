@@ -137,7 +137,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
                 );
                 out.counters = c;
             }
-            2 => self.pass.map_denominators(scene, range, chunk),
+            2 => self.pass.map_denominators(scene, range, chunk, |hood, i| hood.denominators(i)),
             3 => {
                 self.pass.map_rows(scene, range, chunk, |hood, u, pairs| hood.light_row::<f32>(self.pass.links[u], self.pass.values[u], &self.pass.dens, pairs))
             }
