@@ -236,7 +236,16 @@ impl Naive<'_> {
             };
             let own = if light_junction { emission / self.light_paths } else { 0.0 };
             let (all, reflected) = (&((*all - own) / dep), &((*reflected - own) / dep));
-            let fr = f64s(m.eval(frame.to_local(wo), frame.to_local(s.dir), TransportMode::Radiance));
+            // The BSDF at the junction vertex: the camera junction's own; on the light
+            // side (a light node's or an emission node's segment), that of the node where
+            // the reused segment arrives (x).
+            let fr = if centre.kind != NodeKind::Camera {
+                let at = Frame::from_normal(x.hit.ns);
+                let mx = &self.scene.materials[x.hit.material as usize];
+                f64s(mx.eval(at.to_local(wo), at.to_local(s.dir), TransportMode::Radiance))
+            } else {
+                f64s(m.eval(frame.to_local(wo), frame.to_local(s.dir), TransportMode::Radiance))
+            };
             let d2 = (s.y.as_dvec3() - x.hit.p.as_dvec3()).length_squared();
             let g = x.hit.ns.dot(s.dir).abs() as f64 * s.ny.dot(s.dir).abs() as f64 / d2;
             let carried = match s.next {

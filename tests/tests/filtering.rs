@@ -223,13 +223,14 @@ impl PhotonNaive<'_> {
         // Per unit area at u: the techniques' densities and G.
         let denom = self.naive.sum_over_techniques(w, dir, 0.0, true) * cos_u / d2;
         let g = cos_w * cos_u / d2;
-        let frame = Frame::from_normal(w.hit.ns);
-        let m = &scene.materials[w.hit.material as usize];
         for (i, u2) in nodes.iter().enumerate() {
             let k = self.naive.k(w, u2);
             if k == 0.0 {
                 continue;
             }
+            // The BSDF where the reused segment arrives: u2's own.
+            let frame = Frame::from_normal(u2.hit.ns);
+            let m = &scene.materials[u2.hit.material as usize];
             let fr = m.eval(frame.to_local(dir), frame.to_local(u2.wo), TransportMode::Radiance);
             let prev = self.flux(i, depth - 1);
             let fr = [fr.r as f64, fr.g as f64, fr.b as f64];

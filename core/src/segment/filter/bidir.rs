@@ -74,6 +74,17 @@
 //!   b's start), so u's term K(u → y_a) q_u p*_σ |n_x·ŝ| / |n_y·ŝ| leaves D_a for that
 //!   pair: the pair (a, b) enters over (D_a − D_a,u) D_b, a factor in b's row coefficient.
 //!
+//! **The BSDF at a light junction.** A junction's BSDF is the one where its incoming
+//! segment arrives (eq. 6: f_r at y_i). At a camera junction that is the junction's own
+//! node, whose arrival it keeps. At a light junction (a light or emission node's segment
+//! s, leaving w) the incoming segments are the reused ones, so each pair takes the BSDF
+//! of the reused segment's own node u, with s's direction as the outgoing one. Taken at
+//! w, it was the lobe that drew s: on a glossy surface that curves within the kernel
+//! (spot_mirror's sphere, GGX α = 0.02), neighbours' lobes miss ŝ, D(s) holds little more
+//! than w's own technique, and every arrival in the kernel met w's lobe, so the light
+//! leaving w was counted once per arrival (the room 60× too bright;
+//! `host-cli/tests/filter_scenes.rs`). On diffuse scenes the two agree.
+//!
 //! With these the estimator agrees with the path tracer at fixed kernels of 0.02 to 0.5
 //! pixel footprints at depth 3; a shortfall of 2–8 % remains where light nodes are dense
 //! (depth 8 with β ≥ 1 or radii of a footprint; 5 % on the caustic scene, 7 % on ajar at
@@ -446,11 +457,22 @@ impl Bidirectional<'_> {
             return (emission, direct);
         }
         let centre_index = if v.kind == NodeKind::Camera { index } else { v.pred };
+        // The BSDF at the junction vertex: for a camera junction its own (the kept segment
+        // arrives there); for a light junction the reused segment's own node, where that
+        // segment arrives (module notes, "The BSDF at a light junction").
+        let camera_junction = centre.kind == NodeKind::Camera;
         let frame = Frame::from_normal(centre.hit.ns);
         let material = self.hood.scene.material(centre.hit.material, centre.hit.uv);
         let wo_world = wo;
         let wo = frame.to_local(wo);
-        let f = |dir: Vec3| material.eval(wo, frame.to_local(dir), TransportMode::Radiance);
+        let f = |u: &Node, dir: Vec3| {
+            if camera_junction {
+                material.eval(wo, frame.to_local(dir), TransportMode::Radiance)
+            } else {
+                let at = Frame::from_normal(u.hit.ns);
+                self.hood.scene.material(u.hit.material, u.hit.uv).eval(at.to_local(wo_world), at.to_local(dir), TransportMode::Radiance)
+            }
+        };
         let pair = self.pair_segment(index, dens);
         let start = pair.map(|a| &nodes[a.start as usize]);
         // A light junction (module notes): without its own arrival, and with its own
@@ -489,7 +511,7 @@ impl Bidirectional<'_> {
                 if !(all > 0.0) {
                     return;
                 }
-                let fr = f(dir);
+                let fr = f(u, dir);
                 if fr.is_black() {
                     return;
                 }

@@ -473,7 +473,7 @@ const MIN_SURVIVAL: f32 = 0.25;
 /// the throughput, a dim path's continuation entered bright paths' rows ×1/q: on the
 /// caustic scene a wall node alone in its kernel had a coefficient of 76, and a cycle
 /// through it and a ceiling node grew 15× per two sweeps, a pixel 18 000× the
-/// reference (`host-cli/tests/filter_caustic.rs`). With q ≈ ρ the coefficients
+/// reference (`host-cli/tests/filter_scenes.rs`). With q ≈ ρ the coefficients
 /// f |cos| / (q p) stay near 1.
 fn continue_path(
     params: &RenderParams,

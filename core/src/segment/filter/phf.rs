@@ -6,11 +6,17 @@
 //! β₀ / N_L for a first hit, and for a segment s = (w, u) continuing node w
 //! ([`super::weights::Neighbourhood::light_row`])
 //!
-//!   A(u) = |n_w·ŝ| / D(s) · Σ_{u'} K(w → u') f_r(w; ŝ, −ŝ_{u'}) A(u'),
+//!   A(u) = |n_w·ŝ| / D(s) · Σ_{u'} K(w → u') f_r(u'; ŝ, −ŝ_{u'}) A(u'),
 //!
 //! every segment arriving in w's kernel continued by s, D(s) summing the continuations
 //! conditioned on every node whose kernel covers w (the same denominators as MVF's,
-//! without light samples). A camera vertex c then gathers
+//! without light samples). The BSDF is the one where the reused segment arrives, at u'
+//! (its frame, its material), as MVF's rows take the BSDF of the node whose arrival they
+//! keep (eq. 6: f_r at the end y_i of the arriving segment). Taken at w instead, it is
+//! the lobe that drew ŝ: where neighbours' lobes do not overlap w's (a glossy surface
+//! curving within the kernel), D(s) holds little more than w's own technique while every
+//! arrival in the kernel meets that lobe, and the flux leaving w was counted once per
+//! arrival (spot_mirror's walls 45× too bright; `host-cli/tests/filter_scenes.rs`). A camera vertex c then gathers
 //! Σ_u K(c → u) f_r(c; ω_o, −ŝ_u) A(u) / ∫K, the last kernel of the segment path,
 //! normalised over the part of the disk that lies on surfaces (16 stratified rays):
 //! without it the estimate falls short within r of every edge, PPM's boundary bias.

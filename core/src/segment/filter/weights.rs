@@ -220,11 +220,12 @@ impl Neighbourhood<'_> {
     /// hit) plus, for w's continuation s = (w, u), the terms of every segment arriving at
     /// a node u' in w's kernel:
     ///
-    ///   A(u) = |n_w·ŝ| / D(s) · Σ_{u'} K(w → u') f_r(w; ŝ, −ŝ_{u'}) A(u'),
+    ///   A(u) = |n_w·ŝ| / D(s) · Σ_{u'} K(w → u') f_r(u'; ŝ, −ŝ_{u'}) A(u'),
     ///
-    /// the adjoint of [`Self::row`]: the reused segments are the arriving ones, and D(s)
-    /// sums the continuations conditioned on every node whose kernel covers w. A Dirac w
-    /// passes on its own flux times f |cos| / (q p).
+    /// the adjoint of [`Self::row`]: the reused segments are the arriving ones, each
+    /// turned into ŝ by the BSDF of the node it arrived at (see the module notes of
+    /// [`super::phf`]), and D(s) sums the continuations conditioned on every node whose
+    /// kernel covers w. A Dirac w passes on its own flux times f |cos| / (q p).
     pub fn light_row<T: Real>(&self, pred: u32, base: Rgb, dens: &[Denominators], pairs: &mut Vec<(u32, Rgb3<T>)>) -> (Rgb3<T>, Rgb3<T>) {
         pairs.clear();
         let zero = [T::zero(); 3];
@@ -240,16 +241,18 @@ impl Neighbourhood<'_> {
         if !(d > 0.0) {
             return (rgb::<T>(base), zero);
         }
-        let frame = crate::math::Frame::from_normal(w.hit.ns);
-        let material = self.scene.material(w.hit.material, w.hit.uv);
-        let out = frame.to_local(w.next.dir);
-        let cos = T::from_f32(w.hit.ns.dot(w.next.dir).abs()) / T::from_f64(d);
+        let out = w.next.dir;
+        let cos = T::from_f32(w.hit.ns.dot(out).abs()) / T::from_f64(d);
         let centre = KernelPoint::of(w);
         self.grid.query(w.hit.p, |i| {
             let k = centre.kernel(&self.kernel, &self.points[i as usize]);
             if k > 0.0 {
+                // The BSDF of the reused arrival's own node (its frame, its material), as
+                // MVF's rows take the BSDF of the node whose arrival they keep.
                 let u = &self.nodes[i as usize];
-                let fr = material.eval(out, frame.to_local(u.wo), TransportMode::Radiance);
+                let frame = crate::math::Frame::from_normal(u.hit.ns);
+                let material = self.scene.material(u.hit.material, u.hit.uv);
+                let fr = material.eval(frame.to_local(out), frame.to_local(u.wo), TransportMode::Radiance);
                 if !fr.is_black() {
                     pairs.push((i, scale3(rgb::<T>(fr), cos * T::from_f64(k))));
                 }
