@@ -537,6 +537,11 @@ pub struct CacheArgs {
     /// to BPM)
     #[arg(long, value_name = "REUSE", default_value = "every", value_parser = ["every", "merges"])]
     pub filter_reuse: String,
+    /// MVF/PhF/BPF: nodes on materials of microfacet roughness α below this get a kernel
+    /// α / this times the pass's, so glossy highlights are not smeared over the kernel;
+    /// 0 to 1, 0 gives every node the pass's kernel
+    #[arg(long, value_name = "ALPHA", allow_negative_numbers = true, default_value_t = FilterConfig::DEFAULT.glossy_alpha)]
+    pub glossy_alpha: f32,
 }
 
 impl Default for CacheArgs {
@@ -563,6 +568,7 @@ impl Default for CacheArgs {
             max_segments: None,
             beta: FilterConfig::DEFAULT.beta,
             filter_reuse: "every".into(),
+            glossy_alpha: FilterConfig::DEFAULT.glossy_alpha,
         }
     }
 }
@@ -618,6 +624,7 @@ impl CacheArgs {
             max_segments: self.max_segments,
             beta: self.beta,
             reuse: if self.filter_reuse == "merges" { ember_core::render::FilterReuse::Merges } else { ember_core::render::FilterReuse::Every },
+            glossy_alpha: self.glossy_alpha,
         }
     }
     /// The configuration of `estimator` (these options apply to the cache-based and

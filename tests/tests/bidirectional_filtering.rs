@@ -106,7 +106,7 @@ struct Pooled {
 
 impl Naive<'_> {
     fn k(&self, t: &Node, p: Vec3, n: Vec3) -> f64 {
-        self.kernel.density(&t.hit, t.wo, p, n).0 as f64
+        self.kernel.scaled(t.kernel_scale).density(&t.hit, t.wo, p, n).0 as f64
     }
     fn pdf(&self, t: &Node, dir: Vec3, mode: TransportMode) -> f64 {
         let frame = Frame::from_normal(t.hit.ns);
@@ -273,7 +273,13 @@ fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
     let params = RenderParams { max_depth: MaxDepth(3), seed: 5, ..RenderParams::default() };
     let segments = 3;
     let light_paths = 24;
-    let (nodes, first) = bpf_nodes(&scene, &tracer, &params, segments, 48, light_paths);
+    let (mut nodes, first) = bpf_nodes(&scene, &tracer, &params, segments, 48, light_paths);
+    // Some kernels narrower than the pass's (as `scale_kernels` makes glossy nodes'):
+    // every kernel must be its centre's own. Seen failing with the light techniques'
+    // K(t → y) at the pass's radius (`Neighbourhood::kernel_at` unscaled): 4.9e-3.
+    for (i, n) in nodes.iter_mut().enumerate() {
+        n.kernel_scale = if i % 8 == 0 { 0.25 } else if i % 4 == 0 { 0.5 } else { 1.0 };
+    }
     let radius = 0.8f32;
     let mut grid = HashGrid::new();
     grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
@@ -315,7 +321,8 @@ fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
     }
     println!("{checked} pixels, {} nodes ({lights} light, {emission_nodes} emission), {} reused segments, worst {worst:e}", nodes.len(), graph.targets.len());
     assert!(checked >= 40 && lights >= 24 && emission_nodes >= 4, "too few paths to test");
-    assert!(graph.targets.len() > 8 * nodes.len(), "too little reuse: {} pairs", graph.targets.len());
+    // (Eight pairs per node with every kernel the pass's; about 7.7 with the narrower ones.)
+    assert!(graph.targets.len() > 6 * nodes.len(), "too little reuse: {} pairs", graph.targets.len());
 }
 
 /// Every denominator of a segment that exists is finite and positive (its own technique

@@ -72,7 +72,8 @@ struct Naive<'a> {
 
 impl Naive<'_> {
     fn k(&self, center: &Node, x: &Node) -> f64 {
-        self.kernel.density(&center.hit, center.wo, x.hit.p, x.hit.ng).0 as f64
+        // The centre's own kernel (glossy nodes' are narrower: `scale_kernels`).
+        self.kernel.scaled(center.kernel_scale).density(&center.hit, center.wo, x.hit.p, x.hit.ng).0 as f64
     }
     fn pdf_sigma(&self, t: &Node, dir: Vec3) -> f64 {
         let frame = Frame::from_normal(t.hit.ns);
@@ -161,15 +162,28 @@ impl Naive<'_> {
     }
 }
 
+/// Give every fourth node a kernel half the pass's, or a quarter for every eighth (as
+/// `scale_kernels` does to glossy nodes), so the recursions below check that every
+/// kernel is its centre's own.
+pub fn vary_kernels(nodes: &mut [Node]) {
+    for (i, n) in nodes.iter_mut().enumerate() {
+        n.kernel_scale = if i % 8 == 0 { 0.25 } else if i % 4 == 0 { 0.5 } else { 1.0 };
+    }
+}
+
 /// The propagation equals eq. (18)–(19) expanded as a recursion, to 1e-9 relative in f64,
 /// on 48 camera paths of 4 segments in the Cornell box with a rough gold sphere, with a
-/// kernel of radius 0.8 (the box is 2 wide) so that kernels hold many nodes.
+/// kernel of radius 0.8 (the box is 2 wide) so that kernels hold many nodes; some
+/// nodes' kernels are narrower ([`vary_kernels`]). Seen failing with every kernel at
+/// the pass's radius instead of its centre's own (`KernelPoint::kernel` unscaled):
+/// 5.9e-1 here, 3.5e-1 in PhF's recursion below, 1.2e-1 in BPF's.
 #[test]
 fn propagation_equals_the_naive_recursion_in_f64() {
     let (scene, tracer) = cornell_with_gold(8, 6);
     let params = RenderParams { max_depth: MaxDepth(4), seed: 3, ..RenderParams::default() };
     let segments = 4;
-    let (nodes, first) = pass_nodes(&scene, &tracer, &params, segments, 48);
+    let (mut nodes, first) = pass_nodes(&scene, &tracer, &params, segments, 48);
+    vary_kernels(&mut nodes);
     let radius = 0.8f32;
     let mut grid = HashGrid::new();
     grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
@@ -253,6 +267,7 @@ fn photon_filtering_propagation_equals_its_recursion_in_f64() {
     let segments = 5;
     let (mut nodes, mut pred, mut base) = (Vec::new(), Vec::new(), Vec::new());
     trace_light_nodes(&scene, &tracer, &params, segments, 40, 0, 0..40, false, &mut nodes, &mut pred, &mut base);
+    vary_kernels(&mut nodes);
     let radius = 0.8f32;
     let mut grid = HashGrid::new();
     grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
@@ -279,7 +294,7 @@ fn photon_filtering_propagation_equals_its_recursion_in_f64() {
         }
     }
     println!("{} light nodes, {} reused segments, worst relative difference {worst:e}", nodes.len(), graph.targets.len());
-    assert!(graph.targets.len() > 8 * nodes.len(), "too little reuse: {} pairs", graph.targets.len());
+    assert!(graph.targets.len() > 6 * nodes.len(), "too little reuse: {} pairs", graph.targets.len());
 }
 
 /// Every denominator of a segment that exists is finite and positive (its own node's

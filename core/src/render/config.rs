@@ -663,6 +663,16 @@ mod tests {
         ] {
             assert_eq!(c.validate().map_err(|e| e.field), Err(field));
         }
+        let f = FilterConfig::DEFAULT;
+        assert!(f.validate().is_ok() && FilterConfig { glossy_alpha: 0.0, ..f }.validate().is_ok());
+        for (c, field) in [
+            (FilterConfig { glossy_alpha: -0.1, ..f }, "glossy-alpha"),
+            (FilterConfig { glossy_alpha: 1.5, ..f }, "glossy-alpha"),
+            (FilterConfig { glossy_alpha: f32::NAN, ..f }, "glossy-alpha"),
+            (FilterConfig { beta: 17.0, ..f }, "beta"),
+        ] {
+            assert_eq!(c.validate().map_err(|e| e.field), Err(field));
+        }
     }
 
     #[test]
@@ -717,6 +727,10 @@ pub struct FilterConfig {
     pub beta: f32,
     /// Bidirectional filtering: which segment paths a junction forms (default: every).
     pub reuse: FilterReuse,
+    /// Nodes on a material of microfacet roughness α below this get a kernel α / this
+    /// times the pass's (`segment::filter::nodes::scale_kernels`); 0 gives every node
+    /// the pass's kernel. In [0, 1] (default 0.05).
+    pub glossy_alpha: f32,
 }
 
 /// Which segments bidirectional filtering's junctions reuse.
@@ -741,7 +755,7 @@ pub const MAX_FILTER_SEGMENTS: u32 = 64;
 
 impl FilterConfig {
     /// The defaults.
-    pub const DEFAULT: Self = Self { radius: RadiusRule::DEFAULT, alpha: 0.67, max_segments: None, beta: 0.25, reuse: FilterReuse::Every };
+    pub const DEFAULT: Self = Self { radius: RadiusRule::DEFAULT, alpha: 0.67, max_segments: None, beta: 0.25, reuse: FilterReuse::Every, glossy_alpha: 0.05 };
 
     /// Light paths per pass for a film of `pixels` pixels: round(β · pixels), at least one
     /// where β > 0.
@@ -763,6 +777,7 @@ impl FilterConfig {
         check_radius(self.radius)?;
         check_f32("alpha", self.alpha, self.alpha > 0.0 && self.alpha <= 1.0, "(0, 1]")?;
         check_f32("beta", self.beta, self.beta >= 0.0 && self.beta <= MAX_FILTER_BETA, "0 to 16")?;
+        check_f32("glossy-alpha", self.glossy_alpha, (0.0..=1.0).contains(&self.glossy_alpha), "0 to 1")?;
         match self.max_segments {
             Some(n) if !(1..=MAX_FILTER_SEGMENTS).contains(&n) => Err(ConfigError { field: "max-segments", value: n as f64, allowed: "1 to 64" }),
             _ => Ok(()),

@@ -52,6 +52,16 @@ impl KernelSample {
 }
 
 impl Kernel {
+    /// The kernel with its radius times `scale` (a node's own kernel, see
+    /// `segment::filter::nodes::Node::kernel_scale`); the Dirac kernel unchanged.
+    #[inline]
+    pub fn scaled(&self, scale: f32) -> Self {
+        match *self {
+            Self::Disk { radius } => Self::Disk { radius: radius * scale },
+            Self::Dirac => Self::Dirac,
+        }
+    }
+
     /// Does sampling the kernel need random numbers (and rays)?
     #[inline]
     pub fn is_dirac(&self) -> bool {

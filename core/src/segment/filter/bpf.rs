@@ -33,7 +33,7 @@
 use alloc::vec::Vec;
 
 use super::bidir::Bidirectional;
-use super::nodes::{trace_camera_nodes, trace_light_nodes};
+use super::nodes::{scale_kernels, trace_camera_nodes, trace_light_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk};
 use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;
@@ -131,6 +131,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
                     let l = trace_light_nodes(scene, tracer, &self.params, self.segments, self.light_paths(), pass, light, true, &mut chunk.nodes, pred, base);
                     c += l;
                 }
+                scale_kernels(scene, self.config.glossy_alpha, &mut chunk.nodes);
                 out.counters = c;
             }
             2 => {

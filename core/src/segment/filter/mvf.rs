@@ -12,7 +12,7 @@
 
 use alloc::vec::Vec;
 
-use super::nodes::trace_camera_nodes;
+use super::nodes::{scale_kernels, trace_camera_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk};
 use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;
@@ -84,6 +84,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Mvf {
         match phase.id {
             1 => {
                 let c = trace_camera_nodes(scene, tracer, &self.params, self.segments, pass, items, &mut chunk.nodes, &mut chunk.links, &mut chunk.values);
+                scale_kernels(scene, self.config.glossy_alpha, &mut chunk.nodes);
                 out.counters = c;
             }
             2 => self.pass.map_denominators(scene, range, chunk, |hood, i| hood.denominators(i)),

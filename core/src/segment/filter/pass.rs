@@ -379,6 +379,7 @@ mod tests {
             wo: Vec3::Y,
             emitted: Rgb::ZERO,
             delta: false,
+            kernel_scale: 1.0,
             kind,
             pred,
             source: LightEnd::default(),

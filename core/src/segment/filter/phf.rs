@@ -36,7 +36,7 @@
 //! are not filtered. The camera side follows Dirac bounces to the first other vertex, as
 //! progressive photon mapping does; those bounces are not counted in the depth.
 
-use super::nodes::trace_light_nodes;
+use super::nodes::{scale_kernels, trace_light_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk};
 use crate::bsdf::TransportMode;
 use crate::geometry::RayQuery;
@@ -141,6 +141,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
                     &mut chunk.links,
                     &mut chunk.values,
                 );
+                scale_kernels(scene, self.config.glossy_alpha, &mut chunk.nodes);
                 out.counters = c;
             }
             2 => self.pass.map_denominators(scene, range, chunk, |hood, i| hood.denominators(i)),

@@ -56,17 +56,20 @@ pub struct KernelPoint {
     pub side: Vec3,
     pub delta: bool,
     pub kind: NodeKind,
+    /// Its kernel's radius over the pass's ([`Node::kernel_scale`]).
+    pub scale: f32,
 }
 
 impl KernelPoint {
     pub fn of(node: &Node) -> Self {
-        Self { p: node.hit.p, side: Kernel::side_normal(&node.hit, node.wo), delta: node.delta, kind: node.kind }
+        Self { p: node.hit.p, side: Kernel::side_normal(&node.hit, node.wo), delta: node.delta, kind: node.kind, scale: node.kernel_scale }
     }
 
-    /// K(self → x): the density of `x` in this point's kernel.
+    /// K(self → x): the density of `x` in this point's own kernel (the pass's `kernel`
+    /// scaled by [`Self::scale`]).
     #[inline]
     pub fn kernel(&self, kernel: &Kernel, x: &KernelPoint) -> f64 {
-        kernel.density_around(self.p, self.side, x.p, x.side).0 as f64
+        kernel.scaled(self.scale).density_around(self.p, self.side, x.p, x.side).0 as f64
     }
 }
 
@@ -101,10 +104,10 @@ pub struct Denominators {
 }
 
 impl Neighbourhood<'_> {
-    /// K(t → x) for the point `x` with geometric normal `nx`.
+    /// K(t → x) for the point `x` with geometric normal `nx` (t's own kernel).
     #[inline]
     pub(super) fn kernel_at(&self, t: &Node, x: crate::math::Vec3, nx: crate::math::Vec3) -> f64 {
-        self.kernel.density(&t.hit, t.wo, x, nx).0 as f64
+        self.kernel.scaled(t.kernel_scale).density(&t.hit, t.wo, x, nx).0 as f64
     }
 
     /// The BSDF density of node t for leaving along `dir` (its own incoming direction),
