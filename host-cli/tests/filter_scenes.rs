@@ -60,6 +60,13 @@ fn block_reference(name: &str, width: usize, height: usize) -> Vec<[f64; 3]> {
     (0..width * height).map(|i| reference.block_mean(i % width, i / width, sx, sy)).collect()
 }
 
+/// relMSE of `film`'s mean over its passes against `target` (as `ember compare`).
+fn relmse(film: &Film, target: &[[f64; 3]]) -> f64 {
+    let n = film.passes() as f64;
+    let sum: f64 = film.sums().iter().zip(target).map(|(s, t)| (0..3).map(|c| (s[c] / n - t[c]).powi(2) / (t[c] * t[c] + 1e-2)).sum::<f64>() / 3.0).sum();
+    sum / target.len() as f64
+}
+
 /// relMSE against the reference after each of `steps` passes (ascending) of one render
 /// with `seed`: the first n passes of a render are the render of n passes, since every
 /// pass's samples and radius depend on its index alone.
@@ -73,12 +80,7 @@ fn relmse_series(config: EstimatorConfig, seed: u64, steps: &[u32]) -> Vec<f64> 
         .map(|&n| {
             r.render(&mut film, Limits { spp: n, deadline: None, interrupt: None, first_pass: 0 }, driver, Instant::now()).expect("render");
             assert_eq!(film.passes(), n);
-            film.sums()
-                .iter()
-                .zip(&target)
-                .map(|(s, t)| (0..3).map(|c| (s[c] / n as f64 - t[c]).powi(2) / (t[c] * t[c] + 1e-2)).sum::<f64>() / 3.0)
-                .sum::<f64>()
-                / (W * H) as f64
+            relmse(&film, &target)
         })
         .collect()
 }
@@ -177,8 +179,7 @@ fn full_size_relmse(name: &str, config: EstimatorConfig, passes: u32) -> f64 {
     let mut film = Film::new(w as u32, h as u32);
     let driver = DriverConfig { progress: false, ..DriverConfig::with_threads(2) };
     r.render(&mut film, Limits { spp: passes, deadline: None, interrupt: None, first_pass: 0 }, driver, Instant::now()).expect("render");
-    let n = passes as f64;
-    film.sums().iter().zip(&target).map(|(s, t)| (0..3).map(|c| (s[c] / n - t[c]).powi(2) / (t[c] * t[c] + 1e-2)).sum::<f64>() / 3.0).sum::<f64>() / (w * h) as f64
+    relmse(&film, &target)
 }
 
 /// MVF and BPF keep the highlights of veach-mis sharp: nodes on the plates of roughness

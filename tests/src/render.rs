@@ -162,3 +162,18 @@ pub fn cornell_relmse(config: EstimatorConfig, checkpoints: &[u32]) -> Vec<f64> 
     }
     errors
 }
+
+/// Give every fourth node a kernel half the pass's, or a quarter for every eighth (as
+/// `segment::filter::scale_kernels` does to glossy nodes), so that the filters'
+/// propagation-against-recursion tests check that every kernel is its centre's own.
+pub fn vary_kernels(nodes: &mut [ember_core::segment::filter::Node]) {
+    for (i, n) in nodes.iter_mut().enumerate() {
+        n.kernel_scale = if i % 8 == 0 {
+            0.25
+        } else if i % 4 == 0 {
+            0.5
+        } else {
+            1.0
+        };
+    }
+}

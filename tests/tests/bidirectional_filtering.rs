@@ -23,6 +23,7 @@ use ember_core::segment::Kernel;
 use ember_core::segment::filter::nodes::{NONE, NodeKind};
 use ember_core::segment::filter::{Bidirectional, Denominators, FilterGraph, Neighbourhood, Node, kernel_points, trace_camera_nodes, trace_light_nodes};
 use ember_core::spectrum::Rgb;
+use ember_tests::render::vary_kernels;
 use ember_tests::scenes::{cornell, cornell_with_spheres};
 use ember_tests::tracer::BruteForce;
 use glam::Vec3;
@@ -277,9 +278,7 @@ fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
     // Some kernels narrower than the pass's (as `scale_kernels` makes glossy nodes'):
     // every kernel must be its centre's own. Seen failing with the light techniques'
     // K(t → y) at the pass's radius (`Neighbourhood::kernel_at` unscaled): 4.9e-3.
-    for (i, n) in nodes.iter_mut().enumerate() {
-        n.kernel_scale = if i % 8 == 0 { 0.25 } else if i % 4 == 0 { 0.5 } else { 1.0 };
-    }
+    vary_kernels(&mut nodes);
     let radius = 0.8f32;
     let mut grid = HashGrid::new();
     grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);

@@ -21,7 +21,7 @@ use ember_core::segment::Kernel;
 use ember_core::segment::filter::nodes::NONE;
 use ember_core::segment::filter::{Denominators, FilterGraph, Neighbourhood, Node, kernel_points, trace_camera_nodes, trace_light_nodes};
 use ember_core::spectrum::Rgb;
-use ember_tests::render::cornell_relmse;
+use ember_tests::render::{cornell_relmse, vary_kernels};
 use ember_tests::scenes::{cornell, cornell_with_spheres};
 use ember_tests::tracer::BruteForce;
 use glam::Vec3;
@@ -159,15 +159,6 @@ impl Naive<'_> {
             }
         }
         l
-    }
-}
-
-/// Give every fourth node a kernel half the pass's, or a quarter for every eighth (as
-/// `scale_kernels` does to glossy nodes), so the recursions below check that every
-/// kernel is its centre's own.
-pub fn vary_kernels(nodes: &mut [Node]) {
-    for (i, n) in nodes.iter_mut().enumerate() {
-        n.kernel_scale = if i % 8 == 0 { 0.25 } else if i % 4 == 0 { 0.5 } else { 1.0 };
     }
 }
 
