@@ -122,7 +122,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
         let Some(pass) = phase.pass else { return };
         let range = items.start as usize..items.end as usize;
         if phase.id == 4 + self.sweeps {
-            out.counters = gather_pixels(scene, tracer, &self.params, &self.pass, pass, items, out.pixel_buffer());
+            out.counters = gather_pixels(scene, tracer, &self.params, self.config.glossy_alpha, &self.pass, pass, items, out.pixel_buffer());
             return;
         }
         let chunk = out.filter_chunk();
@@ -172,13 +172,24 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
     }
 }
 
-/// The camera side: for each pixel, the camera ray through Dirac bounces to the first
-/// other vertex c, its emission there and Σ_u K(c → u) f_r(c) A(u) over the light nodes
-/// in c's kernel.
+/// The camera side: for each pixel, the camera ray through Dirac and near-specular
+/// bounces to the first other vertex c, its emission there and Σ_u K(c → u) f_r(c) A(u)
+/// over the light nodes in c's kernel.
+///
+/// A near-specular vertex (microfacet roughness below `glossy_alpha`, as for the reuse
+/// kernels: `nodes::scale_kernels`) is passed through like a Dirac one, as SPPM passes
+/// glossy surfaces: a density estimate there multiplies each photon by a lobe of height
+/// ~1/α², and on veach-mis's α = 0.01 plate a few photons made the image's fireflies.
+/// Light reaching it from an area or infinite light is found by the BSDF sample hitting
+/// the light (counted with weight 1, as after a Dirac bounce: nothing else estimates it);
+/// from a Dirac light, which no sample can hit, by next-event estimation to every Dirac
+/// light ([`dirac_light_at`]).
+#[allow(clippy::too_many_arguments)]
 fn gather_pixels<Q: RayQuery + ?Sized>(
     scene: &Scene,
     tracer: &Q,
     params: &RenderParams,
+    glossy_alpha: f32,
     pass_data: &FilterPass,
     pass: u32,
     pixels: core::ops::Range<u32>,
@@ -209,12 +220,16 @@ fn gather_pixels<Q: RayQuery + ?Sized>(
                 l += beta * scene.lights[id as usize].radiance(hit.p, hit.ng, sp.wo);
             }
             let material = sp.material(scene);
-            if !material.is_delta() {
+            let near_specular = material.roughness().is_some_and(|a| a < glossy_alpha);
+            if !material.is_delta() && !near_specular {
                 // The gather adds the light path's segments (at least one).
                 if params.max_depth.allows(segments + 1) {
                     l += beta * gather(tracer, pass_data, &kernel, &sp, &material, params.seed, pixel, pass, &mut counters);
                 }
                 break;
+            }
+            if near_specular && params.max_depth.allows(segments + 1) {
+                l += beta * dirac_light_at(scene, tracer, &sp, &material, &mut counters);
             }
             let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
             let Some(bs) = material.sample(sp.frame.to_local(sp.wo), u_lobe, u_dir, TransportMode::Radiance) else { break };
@@ -231,6 +246,30 @@ fn gather_pixels<Q: RayQuery + ?Sized>(
         *slot = counters.sanitize(l);
     }
     counters
+}
+
+/// Σ over the Dirac lights (point, spot, directional) of f_r |cos| L / p at `sp`: their
+/// direct light, which a BSDF sample cannot find.
+fn dirac_light_at<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, sp: &SurfacePoint, material: &crate::bsdf::Material, counters: &mut Counters) -> Rgb {
+    let wo = sp.frame.to_local(sp.wo);
+    let mut l = Rgb::ZERO;
+    for light in scene.lights.iter().filter(|light| light.is_delta()) {
+        let Some(ls) = light.sample_li(sp.reflection_origin(), crate::math::Vec2::ZERO) else { continue };
+        if !ls.pdf.is_positive() || ls.radiance.is_black() {
+            continue;
+        }
+        let wi = sp.frame.to_local(ls.wi);
+        let f = material.eval(wo, wi, TransportMode::Radiance);
+        if f.is_black() {
+            continue;
+        }
+        counters.rays += 1;
+        let shadow = if ls.dist.is_finite() { sp.spawn_to(ls.p, ls.n) } else { sp.spawn(ls.wi) };
+        if !tracer.occluded(&shadow) {
+            l += f * ls.radiance * (wi.z.abs() / ls.pdf.0);
+        }
+    }
+    l
 }
 
 /// Σ_u K(c → u) f_r(c) A(u) / ∫K at camera vertex `sp`: the light nodes in its kernel,
