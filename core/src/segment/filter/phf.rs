@@ -16,8 +16,9 @@
 //! the lobe that drew ŝ: where neighbours' lobes do not overlap w's (a glossy surface
 //! curving within the kernel), D(s) holds little more than w's own technique while every
 //! arrival in the kernel meets that lobe, and the flux leaving w was counted once per
-//! arrival (spot_mirror's walls 45× too bright; `host-cli/tests/filter_scenes.rs`). A camera vertex c then gathers
-//! Σ_u K(c → u) f_r(c; ω_o, −ŝ_u) A(u) / ∫K, the last kernel of the segment path,
+//! arrival (spot_mirror's walls 45× too bright; `host-cli/tests/filter_scenes.rs`).
+//!
+//! A camera vertex c then gathers Σ_u K(c → u) f_r(c; ω_o, −ŝ_u) A(u) / ∫K, the last kernel of the segment path,
 //! normalised over the part of the disk that lies on surfaces (16 stratified rays):
 //! without it the estimate falls short within r of every edge, PPM's boundary bias.
 //! Both kernels are the same disk, shrinking over passes (the reuse kernels appear in
@@ -33,8 +34,8 @@
 //! | pass 3 + d | `camera` | W·H | camera samples staged; pass committed (factor 1) |
 //!
 //! d = (segments per path) − 2 sweeps: the camera's segment and the light path's first
-//! are not filtered. The camera side follows Dirac bounces to the first other vertex, as
-//! progressive photon mapping does; those bounces are not counted in the depth.
+//! are not filtered. The camera side follows Dirac and near-specular bounces to the first
+//! other vertex, as progressive photon mapping does (`gather_pixels`).
 
 use super::nodes::{scale_kernels, trace_light_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk};
