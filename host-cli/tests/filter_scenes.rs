@@ -32,7 +32,7 @@ use ember_cli::estimators::{CoreRenderer, PreparedScene};
 use ember_cli::mitsuba::{LoadOptions, load_scene_from_str};
 use ember_core::merge::RadiusRule;
 use ember_core::render::{EstimatorConfig, Film, FilterConfig, FilterSide};
-use ember_tests::reference::read_exr;
+use ember_tests::reference::{Image, read_exr};
 
 const W: usize = 40;
 const H: usize = 30;
@@ -52,12 +52,34 @@ fn load(name: &str, width: usize, height: usize) -> PreparedScene {
     PreparedScene { name: name.into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new() }
 }
 
+/// Scene `name`'s reference image.
+fn reference(name: &str) -> Image {
+    read_exr(&scene_dir(name).join("reference.exr")).expect("the suite's reference (../shared/scenes)")
+}
+
 /// Scene `name`'s reference averaged over blocks to `width`×`height`.
 fn block_reference(name: &str, width: usize, height: usize) -> Vec<[f64; 3]> {
-    let reference = read_exr(&scene_dir(name).join("reference.exr")).expect("the suite's reference (../shared/scenes)");
+    block_means(&reference(name), width, height)
+}
+
+/// `reference` averaged over blocks to `width`×`height`.
+fn block_means(reference: &Image, width: usize, height: usize) -> Vec<[f64; 3]> {
     let (sx, sy) = (reference.width / width, reference.height / height);
     assert_eq!((sx * width, sy * height), (reference.width, reference.height), "the reference's size is a multiple of the film's");
     (0..width * height).map(|i| reference.block_mean(i % width, i / width, sx, sy)).collect()
+}
+
+/// Two threads, no progress bar.
+fn driver() -> DriverConfig {
+    DriverConfig { progress: false, ..DriverConfig::with_threads(2) }
+}
+
+/// `passes` passes of `config` on suite scene `name` at `width`×`height` with `seed`.
+fn render(name: &str, width: usize, height: usize, config: EstimatorConfig, seed: u64, passes: u32) -> Film {
+    let mut r = CoreRenderer::with_config(load(name, width, height), config, -1, seed, 2).expect("renderer");
+    let mut film = Film::new(width as u32, height as u32);
+    r.render(&mut film, Limits { spp: passes, deadline: None, interrupt: None, first_pass: 0 }, driver(), Instant::now()).expect("render");
+    film
 }
 
 /// relMSE of `film`'s mean over its passes against `target` (as `ember compare`).
@@ -74,11 +96,10 @@ fn relmse_series(config: EstimatorConfig, seed: u64, steps: &[u32]) -> Vec<f64> 
     let target = block_reference("caustic", W, H);
     let mut r = CoreRenderer::with_config(load("caustic", W, H), config, -1, seed, 2).expect("renderer");
     let mut film = Film::new(W as u32, H as u32);
-    let driver = DriverConfig { progress: false, ..DriverConfig::with_threads(2) };
     steps
         .iter()
         .map(|&n| {
-            r.render(&mut film, Limits { spp: n, deadline: None, interrupt: None, first_pass: 0 }, driver, Instant::now()).expect("render");
+            r.render(&mut film, Limits { spp: n, deadline: None, interrupt: None, first_pass: 0 }, driver(), Instant::now()).expect("render");
             assert_eq!(film.passes(), n);
             relmse(&film, &target)
         })
@@ -159,10 +180,7 @@ fn light_side_filters_light_the_room_of_spot_mirror() {
     let mean = |values: &mut dyn Iterator<Item = f64>| values.sum::<f64>() / (rows.len() * W * 3) as f64;
     let expected = mean(&mut target[rows.start * W..].iter().flat_map(|p| p.iter().copied()));
     for side in [FilterSide::Light, FilterSide::Both] {
-        let mut r = CoreRenderer::with_config(load("spot_mirror", W, H), EstimatorConfig::Filter(side, FilterConfig::DEFAULT), -1, 1, 2).expect("renderer");
-        let mut film = Film::new(W as u32, H as u32);
-        let driver = DriverConfig { progress: false, ..DriverConfig::with_threads(2) };
-        r.render(&mut film, Limits { spp: PASSES, deadline: None, interrupt: None, first_pass: 0 }, driver, Instant::now()).expect("render");
+        let film = render("spot_mirror", W, H, EstimatorConfig::Filter(side, FilterConfig::DEFAULT), 1, PASSES);
         let got = mean(&mut film.sums()[rows.start * W..].iter().flat_map(|s| s.iter().map(|v| v / PASSES as f64)));
         let ratio = got / expected;
         println!("{side:?}: walls and floor at {ratio:.3} of the reference");
@@ -172,14 +190,9 @@ fn light_side_filters_light_the_room_of_spot_mirror() {
 
 /// relMSE of `config` on suite scene `name` at full size after `passes` passes (seed 1).
 fn full_size_relmse(name: &str, config: EstimatorConfig, passes: u32) -> f64 {
-    let reference = read_exr(&scene_dir(name).join("reference.exr")).expect("the suite's reference (../shared/scenes)");
+    let reference = reference(name);
     let (w, h) = (reference.width, reference.height);
-    let target = block_reference(name, w, h);
-    let mut r = CoreRenderer::with_config(load(name, w, h), config, -1, 1, 2).expect("renderer");
-    let mut film = Film::new(w as u32, h as u32);
-    let driver = DriverConfig { progress: false, ..DriverConfig::with_threads(2) };
-    r.render(&mut film, Limits { spp: passes, deadline: None, interrupt: None, first_pass: 0 }, driver, Instant::now()).expect("render");
-    relmse(&film, &target)
+    relmse(&render(name, w, h, config, 1, passes), &block_means(&reference, w, h))
 }
 
 /// MVF, PhF and BPF keep the highlights of veach-mis sharp: nodes on the plates of roughness

@@ -5,7 +5,7 @@
 
 use alloc::vec::Vec;
 
-use crate::bsdf::TransportMode;
+use crate::bsdf::{Material, TransportMode};
 use crate::geometry::{Ray, RayQuery, SurfaceHit, spawn_ray};
 use crate::integrator::{Counters, RenderParams, SurfacePoint};
 use crate::math::{Vec2, Vec3};
@@ -166,15 +166,23 @@ pub fn scale_kernels(scene: &Scene, glossy_alpha: f32, nodes: &mut [Node]) {
         return;
     }
     for n in nodes {
-        n.kernel_scale = scene.materials[n.hit.material as usize].roughness().map_or(1.0, |a| kernel_scale(a, glossy_alpha));
+        n.kernel_scale = near_specular(&scene.materials[n.hit.material as usize], glossy_alpha).unwrap_or(1.0);
     }
 }
 
-/// α / `glossy_alpha` clamped to [10⁻³, 1] (1 for a non-finite ratio).
+/// For a material of microfacet roughness α below `glossy_alpha` (near-specular), its
+/// kernel scale α / `glossy_alpha` (floored at 10⁻³); `None` for every other material.
+/// The one rule for "near-specular": [`scale_kernels`] narrows these nodes' kernels, and
+/// PhF's camera side passes these vertices instead of gathering there.
 #[inline]
-fn kernel_scale(alpha: f32, glossy_alpha: f32) -> f32 {
-    let s = alpha / glossy_alpha;
-    if s.is_finite() { s.clamp(1e-3, 1.0) } else { 1.0 }
+pub(super) fn near_specular(material: &Material, glossy_alpha: f32) -> Option<f32> {
+    material.roughness().and_then(|a| kernel_scale(a, glossy_alpha))
+}
+
+/// α / `glossy_alpha` clamped to [10⁻³, 1) where α < `glossy_alpha`.
+#[inline]
+fn kernel_scale(alpha: f32, glossy_alpha: f32) -> Option<f32> {
+    (alpha < glossy_alpha).then(|| (alpha / glossy_alpha).max(1e-3))
 }
 
 /// Trace the camera paths of pixels `pixels` in pass `pass`, at most `max_segments`
@@ -552,10 +560,12 @@ mod tests {
 
     #[test]
     fn glossy_kernels_shrink_with_roughness() {
-        assert!((kernel_scale(0.01, 0.05) - 0.2).abs() < 1e-6);
-        assert_eq!(kernel_scale(0.05, 0.05), 1.0);
-        assert_eq!(kernel_scale(0.3, 0.05), 1.0);
-        assert_eq!(kernel_scale(0.0, 0.05), 1e-3);
-        assert_eq!(kernel_scale(f32::NAN, 0.05), 1.0);
+        let scale = |a, g| kernel_scale(a, g).unwrap_or(1.0);
+        assert!((scale(0.01, 0.05) - 0.2).abs() < 1e-6);
+        assert_eq!(scale(0.05, 0.05), 1.0);
+        assert_eq!(scale(0.3, 0.05), 1.0);
+        assert_eq!(scale(0.0, 0.05), 1e-3);
+        assert_eq!(scale(f32::NAN, 0.05), 1.0);
+        assert_eq!(scale(0.01, 0.0), 1.0);
     }
 }

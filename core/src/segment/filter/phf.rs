@@ -37,7 +37,7 @@
 //! are not filtered. The camera side follows Dirac and near-specular bounces to the first
 //! other vertex, as progressive photon mapping does (`gather_pixels`).
 
-use super::nodes::{scale_kernels, trace_light_nodes};
+use super::nodes::{near_specular, scale_kernels, trace_light_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk};
 use crate::bsdf::TransportMode;
 use crate::geometry::RayQuery;
@@ -177,8 +177,8 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
 /// bounces to the first other vertex c, its emission there and Σ_u K(c → u) f_r(c) A(u)
 /// over the light nodes in c's kernel.
 ///
-/// A near-specular vertex (microfacet roughness below `glossy_alpha`, as for the reuse
-/// kernels: `nodes::scale_kernels`) is passed through like a Dirac one, as SPPM passes
+/// A near-specular vertex (microfacet roughness below `glossy_alpha`: `nodes::near_specular`,
+/// the rule that narrows the reuse kernels) is passed through like a Dirac one, as SPPM passes
 /// glossy surfaces: a density estimate there multiplies each photon by a lobe of height
 /// ~1/α², and on veach-mis's α = 0.01 plate a few photons made the image's fireflies.
 /// Light reaching it from an area or infinite light is found by the BSDF sample hitting
@@ -221,15 +221,15 @@ fn gather_pixels<Q: RayQuery + ?Sized>(
                 l += beta * scene.lights[id as usize].radiance(hit.p, hit.ng, sp.wo);
             }
             let material = sp.material(scene);
-            let near_specular = material.roughness().is_some_and(|a| a < glossy_alpha);
-            if !material.is_delta() && !near_specular {
+            let pass_through = near_specular(&material, glossy_alpha).is_some();
+            if !material.is_delta() && !pass_through {
                 // The gather adds the light path's segments (at least one).
                 if params.max_depth.allows(segments + 1) {
                     l += beta * gather(tracer, pass_data, &kernel, &sp, &material, params.seed, pixel, pass, &mut counters);
                 }
                 break;
             }
-            if near_specular && params.max_depth.allows(segments + 1) {
+            if pass_through && params.max_depth.allows(segments + 1) {
                 l += beta * dirac_light_at(scene, tracer, &sp, &material, &mut counters);
             }
             let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());

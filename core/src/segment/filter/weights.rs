@@ -9,8 +9,8 @@
 //!
 //! with p_σ(ŝ' | t) the density of t's BSDF (for t's own incoming direction: the shift
 //! invariance of eq. 6) and c_t = 1 where t drew a light sample. Each K(t → ·) is t's
-//! own kernel: the pass's, narrower on glossy nodes (`nodes::scale_kernels`). The factor |n_y'·ŝ'|/d²
-//! cancels against G(s') in eq. (18), leaving per solid angle at x'
+//! own kernel: the pass's, narrower on glossy nodes (`nodes::scale_kernels`). The factor
+//! |n_y'·ŝ'|/d² cancels against G(s') in eq. (18), leaving per solid angle at x'
 //!
 //!   D(s') = Σ_t K(t → x') [q_t p_σ(ŝ' | t) + c_t P_L p_L(ŝ' | x')],
 //!
