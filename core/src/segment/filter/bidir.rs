@@ -85,6 +85,26 @@
 //! leaving w was counted once per arrival (the room 60× too bright;
 //! `host-cli/tests/filter_scenes.rs`). On diffuse scenes the two agree.
 //!
+//! **Merges only** ([`crate::render::FilterReuse::Merges`], the reduction to BPM). A
+//! camera junction reuses its own continuation and light sample and merges the light
+//! segments in its kernel; a light junction follows its own path. A merged segment
+//! s = (x, y) leaving light node w at y is the light technique's sample, whose density is
+//! the marginal λ(w) q p*, estimated by the light nodes near w. Counting w itself in that
+//! estimate, with its own chain's K(0) (the first light junction's) in L(s), made the
+//! chain its own density estimate: with N other light nodes near w, a merge weighed
+//! K(0) a / (K A + (1 + N) K(0) a) against the exact λ a / (K A + λ a) (A the camera
+//! junction's density, a = q p*). In the sparse limit it was counted beside the camera's
+//! path at a / (A + a) (the image 13–19 % too bright at 0.1–0.2 pixel footprints). Now a
+//! chain merges with its reflected part times X_o / (K(0) a), X_o the other light nodes'
+//! terms, over the junction's techniques, the emission and X_o. By Mecke's formula (given
+//! a light node at w, the others are distributed as the light nodes near any point), the
+//! merges' mean weight E[N / (α + N)], α = K A / (K(0) a), is exactly what the camera's
+//! continuation loses to the light nodes near its end, E[1 − α / (α + N)]. The pair
+//! correction above applies to camera rows as well: the light node merged at the next
+//! junction leaves D of the continuation that reached it (without: −3.6 % at 0.5
+//! footprints with β = 4). The emitted part of a merged segment that ends on a
+//! reflective emitter keeps its weight over the full D (not corrected).
+//!
 //! With these the estimator agrees with the path tracer at fixed kernels of 0.02 to 0.5
 //! pixel footprints at depth 3; a shortfall of 2–8 % remains where light nodes are dense
 //! (depth 8 with β ≥ 1 or radii of a footprint; 5 % on the caustic scene, 7 % on ajar at
@@ -375,10 +395,10 @@ impl Bidirectional<'_> {
                 if self.merges_only {
                     // A light junction reuses its own path alone: its own technique and
                     // the emission.
-                    d.arrive_own = d.arrive_light;
                     if let Far::Surface(py, ny, _) = far {
-                        d.arrive_own += self.light_techniques(u, py, ny, dir, own, true);
+                        d.arrive_self = self.light_techniques(u, py, ny, dir, own, true);
                     }
+                    d.arrive_own = d.arrive_light + d.arrive_self;
                 }
             }
             NodeKind::Emission => {}
@@ -389,7 +409,7 @@ impl Bidirectional<'_> {
     /// This row's segment a for the pair correction, or `None` where it does not apply
     /// (merges only, no light paths, the primary ray, Dirac chains).
     fn pair_segment(&self, index: u32, dens: &[Denominators]) -> Option<PairSegment> {
-        if self.merges_only || !self.light_side_owns_dirac() {
+        if !self.light_side_owns_dirac() {
             return None;
         }
         let nodes = self.nodes();
@@ -403,11 +423,22 @@ impl Bidirectional<'_> {
                     return None;
                 }
                 let d = &dens[v.pred as usize];
-                Some(PairSegment { d: split(d.next, d.next_light), start: v.pred })
+                let (mut all, mut light) = (d.next, d.next_light);
+                if self.merges_only {
+                    // D_a as the junction at the predecessor divides by: its own
+                    // techniques at K(0) added to the light side's.
+                    let p = KernelPoint::of(pred);
+                    let (ja, jn) =
+                        self.junction(pred, p.kernel(&self.hood.kernel, &p), pred.next.dir, pred.next.light_pdf as f64, true, Some(pred.next.pdf as f64));
+                    (all, light) = (all + ja, light + jn);
+                }
+                Some(PairSegment { d: split(all, light), start: v.pred })
             }
             NodeKind::Light => {
                 let w = nodes.get(v.pred as usize)?;
-                if v.delta || w.delta || w.kind != NodeKind::Light {
+                // With merges only a light junction follows its own chain, whose D holds
+                // the technique that drew it: nothing to correct.
+                if self.merges_only || v.delta || w.delta || w.kind != NodeKind::Light {
                     return None;
                 }
                 let d = &dens[index as usize];
@@ -506,8 +537,11 @@ impl Bidirectional<'_> {
             // The pair correction D_a D_b / (D_a − dep) (D_b − own): `dep` the term in D_a
             // of the light node b reached, `emit` D_b's emission part, `own` one light
             // path's share of it at a light junction (module notes).
-            let mut reuse = |dir: Vec3, all: f64, nee: f64, target: u32, constant: Rgb, dep: f64, emit: f64| {
-                let reflected = all - nee;
+            // `chain`: with merges only, a light path's own chain merged at a camera
+            // junction (module notes): the reflected part's D and the factor that trades the
+            // chain's K(0) for the other light nodes' density.
+            let mut reuse = |dir: Vec3, all: f64, nee: f64, target: u32, constant: Rgb, dep: f64, emit: f64, chain: Option<(f64, f64)>| {
+                let (reflected, gain) = chain.unwrap_or((all - nee, 1.0));
                 if !(all > 0.0) {
                     return;
                 }
@@ -528,18 +562,19 @@ impl Bidirectional<'_> {
                     direct = add3(direct, scale3(mul3(c, rgb::<T>(constant)), T::from_f64(g * whole / all)));
                     return;
                 }
-                if !(reflected > 0.0) {
+                if chain.is_none() && !(reflected > 0.0) {
                     // Only light samples draw it: its emitted part alone.
                     direct = add3(direct, scale3(mul3(c, rgb::<T>(nodes[target as usize].emitted)), T::from_f64(g * whole / all)));
                     return;
                 }
                 let e = nodes[target as usize].emitted;
+                let coefficient = if reflected > 0.0 { g * gain * part / reflected } else { 0.0 };
                 if nee > 0.0 && !e.is_black() {
                     // The reflected part over D_r, the emitted part over D.
-                    pairs.push((target | REFLECTED, scale3(c, T::from_f64(g * part / reflected))));
+                    pairs.push((target | REFLECTED, scale3(c, T::from_f64(coefficient))));
                     direct = add3(direct, scale3(mul3(c, rgb::<T>(e)), T::from_f64(g * whole / all)));
-                } else {
-                    pairs.push((target, scale3(c, T::from_f64(g * part / reflected))));
+                } else if coefficient > 0.0 {
+                    pairs.push((target, scale3(c, T::from_f64(coefficient))));
                 }
             };
             // The junction's own techniques, with merges only (camera junctions).
@@ -552,14 +587,14 @@ impl Bidirectional<'_> {
                         if u.next.node != NONE && nodes[u.next.node as usize].delta && self.light_side_owns_dirac() {
                             // Into a Dirac vertex: the light side's (see the module notes).
                         } else if u.next.node != NONE {
-                            reuse(u.next.dir, d.next + ja, d.next_light + jn, u.next.node, Rgb::ZERO, 0.0, d.next_emit);
+                            reuse(u.next.dir, d.next + ja, d.next_light + jn, u.next.node, Rgb::ZERO, 0.0, d.next_emit, None);
                         } else if !u.next.escaped.is_black() {
-                            reuse(u.next.dir, d.next + ja, 0.0, NONE, u.next.escaped, 0.0, d.next_emit);
+                            reuse(u.next.dir, d.next + ja, 0.0, NONE, u.next.escaped, 0.0, d.next_emit, None);
                         }
                     }
                     if !u.light.radiance.is_black() {
                         let ja = if at_junction { self.junction(centre, k, u.light.dir, u.light.pdf as f64, !u.light.delta, None).0 } else { 0.0 };
-                        reuse(u.light.dir, d.light + ja, 0.0, NONE, u.light.radiance, 0.0, d.light_emit);
+                        reuse(u.light.dir, d.light + ja, 0.0, NONE, u.light.radiance, 0.0, d.light_emit, None);
                     }
                 }
                 NodeKind::Light => {
@@ -571,8 +606,16 @@ impl Bidirectional<'_> {
                         (ja, jn) = self.junction(centre, k, u.wo, nee, !self.delta_end(far), None);
                     }
                     let all = if self.merges_only && centre.kind == NodeKind::Light { d.arrive_own } else { d.arrive + ja };
+                    let nee = d.arrive_light + jn;
+                    // A light path's own chain merged at a camera junction (merges only): its
+                    // reflected part over the junction's techniques, the emission and the
+                    // other light nodes' continuations, times (others) / (its own K(0) term).
+                    let chain = (at_junction && d.arrive_self > 0.0).then(|| {
+                        let others = (d.arrive - d.arrive_emit - d.arrive_self).max(0.0);
+                        (all - d.arrive_self - nee, others / d.arrive_self)
+                    });
                     let dep = start.map_or(0.0, |x_a| self.light_instance(u, centre, x_a, wo_world));
-                    reuse(u.wo, all, d.arrive_light + jn, i, Rgb::ZERO, dep, d.arrive_emit)
+                    reuse(u.wo, all, nee, i, Rgb::ZERO, dep, d.arrive_emit, chain)
                 }
                 NodeKind::Emission => {}
             }

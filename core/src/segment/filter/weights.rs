@@ -96,6 +96,10 @@ pub struct Denominators {
     /// Bidirectional filtering with merges only: D of the arriving segment at its own
     /// path's junction (its own technique and the emission).
     pub arrive_own: f64,
+    /// Bidirectional filtering with merges only: the part of `arrive` (and `arrive_own`)
+    /// of the light node whose continuation drew the arriving segment, K(0) q p*
+    /// |n_x·ŝ| / |n_y·ŝ|; 0 where the emission drew it.
+    pub arrive_self: f64,
     /// Bidirectional filtering: the emission technique's part of `next`, `light` and
     /// `arrive` (all N_L light paths'), which a light junction counts without its own
     /// path's.
