@@ -40,7 +40,8 @@ use ember_core::merge::HashGrid;
 use ember_core::scene::Scene;
 use ember_core::segment::Kernel;
 use ember_core::segment::filter::nodes::{NONE, NodeKind};
-use ember_core::segment::filter::{Bidirectional, FilterGraph, Neighbourhood, kernel_points, trace_camera_nodes, trace_light_nodes};
+use ember_core::segment::filter::bidir::bridge_end;
+use ember_core::segment::filter::{Bidirectional, FilterGraph, Neighbourhood, kernel_points, trace_bridges, trace_camera_nodes, trace_light_nodes};
 use ember_core::spectrum::Rgb;
 use ember_fuzz::Bytes;
 use ember_tests::bdpt_oracle::for_each_strategy_split;
@@ -193,11 +194,21 @@ fn bidirectional(b: &mut Bytes, scene: &Scene, tracer: &BruteForce, params: &Ren
         n.next.node = shift(n.next.node);
         n
     }));
+    // Every segment, merges only, or every segment and bridges.
+    let mode = b.u8() % 3;
+    let mut bridge_choice = None;
+    if mode == 2 {
+        let ends: Vec<u32> = (0..nodes.len() as u32).filter(|&i| bridge_end(&nodes[i as usize])).collect();
+        let mut bridges = Vec::new();
+        trace_bridges(scene, tracer, params.seed, 0, &nodes, &ends, 0..nodes.len(), &mut bridges);
+        nodes.extend(bridges);
+        bridge_choice = (!ends.is_empty()).then(|| 1.0 / ends.len() as f64);
+    }
     let mut grid = HashGrid::new();
     grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
     let points = kernel_points(&nodes);
     let hood = Neighbourhood { scene, nodes: &nodes, points: &points, grid: &grid, kernel: Kernel::Disk { radius } };
-    let w = Bidirectional { hood, light_paths: 16.0, merges_only: b.u8() % 2 == 1 };
+    let w = Bidirectional { hood, light_paths: 16.0, merges_only: mode == 1, bridge_choice };
     let dens: Vec<_> = (0..nodes.len() as u32).map(|i| w.denominators(i)).collect();
     let ok = |x: f64| x.is_finite() && x > 0.0;
     for (u, d) in nodes.iter().zip(&dens) {

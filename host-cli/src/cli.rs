@@ -533,9 +533,10 @@ pub struct CacheArgs {
     #[arg(long, value_name = "BETA", allow_negative_numbers = true, default_value_t = FilterConfig::DEFAULT.beta)]
     pub beta: f32,
     /// BPF: which segment paths its junctions form: `every` segment in a kernel (the
-    /// paper's estimator) or only bidirectional photon mapping's `merges` (its reduction
-    /// to BPM)
-    #[arg(long, value_name = "REUSE", default_value = "every", value_parser = ["every", "merges"])]
+    /// paper's estimator), only bidirectional photon mapping's `merges` (its reduction
+    /// to BPM), or every segment and `bridges` from each camera node to a light node (the
+    /// paper's Fig. 7)
+    #[arg(long, value_name = "REUSE", default_value = "every", value_parser = ["every", "merges", "bridges"])]
     pub filter_reuse: String,
     /// MVF/PhF/BPF: nodes on materials of microfacet roughness α below this get a kernel
     /// α / this times the pass's, so glossy highlights are not smeared over the kernel;
@@ -623,7 +624,11 @@ impl CacheArgs {
             alpha: self.alpha,
             max_segments: self.max_segments,
             beta: self.beta,
-            reuse: if self.filter_reuse == "merges" { ember_core::render::FilterReuse::Merges } else { ember_core::render::FilterReuse::Every },
+            reuse: match self.filter_reuse.as_str() {
+                "merges" => ember_core::render::FilterReuse::Merges,
+                "bridges" => ember_core::render::FilterReuse::Bridges,
+                _ => ember_core::render::FilterReuse::Every,
+            },
             glossy_alpha: self.glossy_alpha,
         }
     }

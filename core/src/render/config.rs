@@ -743,6 +743,10 @@ pub enum FilterReuse {
     /// a light junction its own path. The reduction to BPM (recursive MMIS over BPM's
     /// techniques), for testing and for measuring what the filtering adds.
     Merges,
+    /// Every segment in a kernel, and bridge segments: each camera node joins a light
+    /// node of the pass by a shadow ray, the bridge reused like a light segment (the
+    /// segment paper's §6.4 and Fig. 7).
+    Bridges,
 }
 
 /// Largest β.
@@ -764,6 +768,11 @@ impl FilterConfig {
             return 0;
         }
         (libm::round(self.beta as f64 * pixels as f64) as u32).max(1)
+    }
+
+    /// Are bridge segments traced?
+    pub fn bridges(&self) -> bool {
+        self.reuse == FilterReuse::Bridges && self.beta > 0.0
     }
 
     /// Segments per path under `max_depth`.

@@ -24,16 +24,26 @@
 //! |---|---|---|---|
 //! | setup 0 | `footprint` | W·H pixels (none unless r₀ is in pixel footprints) | mean footprint → r₀ |
 //! | pass 0 | `paths` | W·H camera paths, then N_L light paths | nodes appended, grid built for r_pass |
+//! | (pass 0½) | `bridges` (with bridges only) | nodes | bridge nodes appended, grid rebuilt |
 //! | pass 1 | `denominators` | nodes | D of every reusable segment |
 //! | pass 2 | `filter` | nodes | rows appended; L₀ = L_e |
 //! | pass 3 … 2 + d | `propagate` | nodes | L_i from L_{i−1}; after the last, each pixel's L |
 //!
 //! d = (segments per path) − 1 sweeps; committed with splat factor 1 (no splats).
+//!
+//! **Bridge segments** ([`crate::render::FilterReuse::Bridges`], §6.4 and Fig. 7): each
+//! camera node that may take another segment also joins one light node of the pass,
+//! drawn uniformly among its M non-Dirac light nodes, by a shadow ray. A bridge is
+//! reused like a light segment arriving at the camera node, and its radiance is the
+//! light node's reflection toward it, from that node's row. Its technique enters every
+//! D as (1 / M) Σ K(c → x) Σ K(l → y) d² / |n_y·ŝ|, which costs nothing beyond the two
+//! grid queries each D already makes ([`super::bidir`]); what it adds is pool: one more
+//! reusable segment per camera node, so more pairs per row.
 
 use alloc::vec::Vec;
 
-use super::bidir::Bidirectional;
-use super::nodes::{scale_kernels, trace_camera_nodes, trace_light_nodes};
+use super::bidir::{Bidirectional, bridge_end};
+use super::nodes::{scale_kernels, trace_bridges, trace_camera_nodes, trace_light_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk};
 use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;
@@ -57,15 +67,43 @@ pub struct Bpf {
     /// sky radiance).
     pub pass: FilterPass,
     pixel_values: Vec<Rgb>,
+    /// With bridges: the pass's bridge ends (node indices), set when its nodes are
+    /// gathered.
+    bridge_ends: Vec<u32>,
     cursor: Cursor,
 }
+
+/// The phase id of the bridges (after `paths`; the later phases keep their ids).
+const BRIDGES: u8 = 200;
 
 impl Bpf {
     /// The estimator for a film of `pixels` pixels (r₀ is set by the setup phase).
     pub fn new(params: RenderParams, config: FilterConfig, pixels: u32) -> Self {
         let segments = config.segments(params.max_depth);
         let sweeps = segments.saturating_sub(1) as u8;
-        Self { params, config, r0: 0.0, segments, pixels, pass: FilterPass::default(), pixel_values: Vec::new(), cursor: Cursor::new(1, 3 + sweeps) }
+        let stages = 3 + sweeps + config.bridges() as u8;
+        Self {
+            params,
+            config,
+            r0: 0.0,
+            segments,
+            pixels,
+            pass: FilterPass::default(),
+            pixel_values: Vec::new(),
+            bridge_ends: Vec::new(),
+            cursor: Cursor::new(1, stages),
+        }
+    }
+
+    /// The phase id of stage `i` of a pass: 1 the paths, [`BRIDGES`], then 2 the
+    /// denominators, 3 the rows, 4 … the sweeps.
+    fn phase_id(&self, i: u8) -> u8 {
+        match (self.config.bridges(), i) {
+            (_, 0) => 1,
+            (true, 1) => BRIDGES,
+            (true, i) => i,
+            (false, i) => i.saturating_add(1),
+        }
     }
 
     /// The kernel radius of global pass `pass`.
@@ -84,6 +122,7 @@ impl Bpf {
             hood: self.pass.neighbourhood(scene),
             light_paths: self.light_paths() as f64,
             merges_only: self.config.reuse == crate::render::FilterReuse::Merges,
+            bridge_choice: (self.config.bridges() && !self.bridge_ends.is_empty()).then(|| 1.0 / self.bridge_ends.len() as f64),
         }
     }
 }
@@ -96,13 +135,15 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
                 let items = if self.config.radius.needs_footprint() { self.pixels } else { 0 };
                 Phase { name: "footprint", id: 0, pass: None, items, chunk: CHUNK, samples: false }
             }
-            Stage::Pass(pass, 0) => {
-                Phase { name: "paths", id: 1, pass: Some(pass), items: self.pixels.saturating_add(self.light_paths()), chunk: CHUNK, samples: true }
-            }
-            Stage::Pass(pass, 1) => Phase { name: "denominators", id: 2, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
-            Stage::Pass(pass, 2) => Phase { name: "filter", id: 3, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
             Stage::Pass(pass, i) => {
-                Phase { name: "propagate", id: i.saturating_add(1), pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false }
+                let (name, id) = match self.phase_id(i) {
+                    1 => return Some(Phase { name: "paths", id: 1, pass: Some(pass), items: paths, chunk: CHUNK, samples: true }),
+                    BRIDGES => ("bridges", BRIDGES),
+                    2 => ("denominators", 2),
+                    3 => ("filter", 3),
+                    id => ("propagate", id),
+                };
+                Phase { name, id, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false }
             }
         })
     }
@@ -134,6 +175,10 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
                 scale_kernels(scene, self.config.glossy_alpha, &mut chunk.nodes);
                 out.counters = c;
             }
+            BRIDGES => {
+                chunk.nodes.clear();
+                out.counters = trace_bridges(scene, tracer, self.params.seed, pass, &self.pass.nodes, &self.bridge_ends, range, &mut chunk.nodes);
+            }
             2 => {
                 let w = self.weights(scene);
                 self.pass.map_denominators(scene, range, chunk, |_, i| w.denominators(i));
@@ -148,7 +193,14 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         match phase.id {
             0 => self.r0 = self.config.radius.initial_radius(ctx.scene, &Footprint::reduce_chunks(outputs)),
-            id => self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0))),
+            BRIDGES => self.pass.append_nodes(outputs),
+            id => {
+                self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0)));
+                if id == 1 && self.config.bridges() {
+                    self.bridge_ends.clear();
+                    self.bridge_ends.extend(self.pass.nodes.iter().enumerate().filter(|(_, n)| bridge_end(n)).map(|(i, _)| i as u32));
+                }
+            }
         }
         if self.cursor.advance() {
             self.pass.commit_pixels(&ctx.scene.camera, self.params.seed, phase.pass.unwrap_or(0), &mut self.pixel_values, film);

@@ -51,7 +51,7 @@ pub use bidir::Bidirectional;
 pub use bpf::Bpf;
 pub use graph::{FilterGraph, Real};
 pub use mvf::Mvf;
-pub use nodes::{Node, scale_kernels, trace_camera_nodes, trace_light_nodes};
+pub use nodes::{Node, scale_kernels, trace_bridges, trace_camera_nodes, trace_light_nodes};
 pub use pass::{FilterChunk, FilterPass};
 pub use phf::Phf;
 pub use weights::{Denominators, KernelPoint, Neighbourhood, kernel_points};

@@ -243,6 +243,20 @@ impl FilterPass {
         self.points.extend(self.nodes.iter().map(KernelPoint::of));
     }
 
+    /// Append the chunks' nodes (bridges, whose links are already global) after the
+    /// gathered ones, and rebuild the grid over all of them at the pass's radius.
+    pub fn append_nodes(&mut self, outputs: &mut [ChunkOutput]) {
+        let more = outputs.iter_mut().map(|out| out.filter_chunk().nodes.len()).sum();
+        reserve_headroom(&mut self.nodes, more);
+        reserve_headroom(&mut self.points, more);
+        for out in outputs.iter_mut() {
+            let chunk = out.filter_chunk();
+            self.nodes.extend_from_slice(&chunk.nodes);
+            self.points.extend(chunk.nodes.iter().map(KernelPoint::of));
+        }
+        self.grid.build(self.nodes.iter().map(grid_point), self.r * core::f32::consts::SQRT_2);
+    }
+
     /// Rebuild the grid for kernel radius `r` (PhF's gather, which keeps the progressive
     /// radius whatever the neighbour budget did to the pass's reuse kernel).
     pub fn rebuild_grid(&mut self, r: f32) {
@@ -381,6 +395,7 @@ mod tests {
             delta: false,
             kernel_scale: 1.0,
             kind,
+            bridge: false,
             pred,
             source: LightEnd::default(),
             next: Continuation { node: next, ..Continuation::default() },

@@ -100,6 +100,9 @@ pub struct Denominators {
     /// of the light node whose continuation drew the arriving segment, K(0) q p*
     /// |n_x·ŝ| / |n_y·ŝ|; 0 where the emission drew it.
     pub arrive_self: f64,
+    /// Bidirectional filtering with bridges: Σ K(c → x) over the camera nodes c that start
+    /// bridges, x this node (the start of each of its reusable segments).
+    pub starts: f64,
     /// Bidirectional filtering: the emission technique's part of `next`, `light` and
     /// `arrive` (all N_L light paths'), which a light junction counts without its own
     /// path's.
