@@ -492,7 +492,7 @@ impl Bidirectional<'_> {
     }
 
     /// This row's segment a for the pair correction, or `None` where it does not apply
-    /// (merges only, no light paths, the primary ray, Dirac chains).
+    /// (no light paths, the primary ray, Dirac chains, a light row with merges only).
     fn pair_segment(&self, index: u32, dens: &[Denominators]) -> Option<PairSegment> {
         if !self.light_side_owns_dirac() {
             return None;
