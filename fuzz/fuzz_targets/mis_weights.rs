@@ -40,7 +40,7 @@ use ember_core::merge::HashGrid;
 use ember_core::scene::Scene;
 use ember_core::segment::Kernel;
 use ember_core::segment::filter::nodes::{NONE, NodeKind};
-use ember_core::segment::filter::bidir::bridge_end;
+use ember_core::segment::filter::bridge::bridge_end;
 use ember_core::segment::filter::{Bidirectional, FilterGraph, Neighbourhood, kernel_points, trace_bridges, trace_camera_nodes, trace_light_nodes};
 use ember_core::spectrum::Rgb;
 use ember_fuzz::Bytes;

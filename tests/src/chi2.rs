@@ -25,6 +25,15 @@ pub fn sidak(alpha_family: f64, tests: usize) -> f64 {
     1.0 - (1.0 - alpha_family).powf(1.0 / tests.max(1) as f64)
 }
 
+/// Pearson's χ² over discrete outcomes: `counts` holds (observed, expected) per outcome,
+/// outcomes expecting fewer than 5 pooled as for the continuous tests. Returns (statistic,
+/// degrees of freedom, p-value).
+pub fn chi2_counts(counts: &[(f64, f64)]) -> (f64, usize, f64) {
+    let bins = counts.iter().enumerate().map(|(b, &(o, e))| (b, o, e)).collect();
+    let (statistic, dof, _) = pooled_statistic(bins);
+    (statistic, dof, if dof == 0 { 1.0 } else { chi2_survival(statistic, dof as f64) })
+}
+
 /// How directions are binned: in (θ', φ') around `axis`, with θ' = π·s^concentration for
 /// s uniform over the θ bins. Concentration 1 is uniform in θ'; larger values give finer
 /// bins near the axis (point it at a narrow lobe).

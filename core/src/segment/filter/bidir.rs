@@ -127,6 +127,7 @@
 
 use alloc::vec::Vec;
 
+use super::bridge::{self, bridge_end, bridges_from};
 use super::graph::{REFLECTED, Real, Rgb3, add3, mul3, rgb, scale3};
 use super::nodes::{LightEnd, NONE, Node, NodeKind};
 use super::weights::{Denominators, KernelPoint, Neighbourhood};
@@ -147,40 +148,6 @@ pub struct Bidirectional<'a> {
     /// With bridge segments ([`crate::render::FilterReuse::Bridges`]): 1 / M, the chance
     /// that a camera node's bridge goes to a given one of the pass's M bridge ends.
     pub bridge_choice: Option<f64>,
-}
-
-/// Can a camera node start a bridge (the depth allows another segment, as for its light
-/// sample)?
-#[inline]
-pub fn bridges_from(n: &Node) -> bool {
-    n.kind == NodeKind::Camera && !n.delta && n.light.attempted
-}
-
-/// The least |n_y·ŝ| at a bridge's end. A bridge between two points of one plane (two
-/// nodes on the same wall) runs along it: its density per solid angle, d² / |n_y·ŝ|, is
-/// unbounded, and where rounding makes the cosine 0 a sampled bridge would enter with no
-/// term of its own in D, counted as though the BSDF had drawn it (the built-in Cornell
-/// box 1.4 % too bright at 0.1 footprints). Such bridges are neither traced nor counted:
-/// the technique's support leaves them out, and the other techniques cover them.
-pub const MIN_BRIDGE_COS: f64 = 1e-4;
-
-/// (d², |n_y·ŝ|) of a bridge from `x` to `y` (normal `ny`), or `None` where there is no
-/// bridge ([`MIN_BRIDGE_COS`]): the one test both the sampler and the density make.
-#[inline]
-pub fn bridge_geometry(x: Vec3, y: Vec3, ny: Vec3) -> Option<(f64, f64)> {
-    let v = y - x;
-    let d2 = v.length_squared() as f64;
-    if !(d2 > 1e-12) {
-        return None;
-    }
-    let cos_y = ny.dot(v).abs() as f64 / libm::sqrt(d2);
-    (cos_y > MIN_BRIDGE_COS).then_some((d2, cos_y))
-}
-
-/// Can a bridge end at this node (a non-Dirac light node, not itself a bridge)?
-#[inline]
-pub fn bridge_end(n: &Node) -> bool {
-    n.kind == NodeKind::Light && !n.delta && !n.bridge
 }
 
 /// The segment a whose row reuses b, as the pair correction reads it.
@@ -370,12 +337,7 @@ impl Bidirectional<'_> {
     /// bridge ends around y: (1 / M) Σ K_start Σ K_end d² / |n_y·ŝ| (area at y to solid
     /// angle at x).
     fn bridge_density(&self, x: &Node, py: Vec3, ny: Vec3, starts: f64, ends: f64) -> f64 {
-        let Some(choice) = self.bridge_choice else { return 0.0 };
-        if !(starts > 0.0 && ends > 0.0) {
-            return 0.0;
-        }
-        let Some((d2, cos_y)) = bridge_geometry(x.hit.p, py, ny) else { return 0.0 };
-        choice * starts * ends * d2 / cos_y
+        self.bridge_choice.map_or(0.0, |choice| bridge::density(choice, starts, ends, x.hit.p, py, ny))
     }
 
     /// One light node t's K(t → y) q_t p*_σ(−dir | t) for a segment along `dir` ending at

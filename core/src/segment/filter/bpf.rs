@@ -42,8 +42,9 @@
 
 use alloc::vec::Vec;
 
-use super::bidir::{Bidirectional, bridge_end};
-use super::nodes::{scale_kernels, trace_bridges, trace_camera_nodes, trace_light_nodes};
+use super::bidir::Bidirectional;
+use super::bridge::{bridge_end, trace_bridges};
+use super::nodes::{scale_kernels, trace_camera_nodes, trace_light_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk};
 use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;

@@ -40,6 +40,7 @@
 // camera and light segments together: docs/bidirectional-filtering.md.
 pub mod bidir;
 pub mod bpf;
+pub mod bridge;
 pub mod graph;
 pub mod mvf;
 pub mod nodes;
@@ -49,9 +50,10 @@ pub mod weights;
 
 pub use bidir::Bidirectional;
 pub use bpf::Bpf;
+pub use bridge::trace_bridges;
 pub use graph::{FilterGraph, Real};
 pub use mvf::Mvf;
-pub use nodes::{Node, scale_kernels, trace_bridges, trace_camera_nodes, trace_light_nodes};
+pub use nodes::{Node, scale_kernels, trace_camera_nodes, trace_light_nodes};
 pub use pass::{FilterChunk, FilterPass};
 pub use phf::Phf;
 pub use weights::{Denominators, KernelPoint, Neighbourhood, kernel_points};

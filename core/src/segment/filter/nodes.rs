@@ -154,65 +154,6 @@ impl Node {
     }
 }
 
-/// Bridge segments for camera nodes `range` of `nodes` (bidirectional filtering with
-/// bridges, the segment paper's §6.4): each camera node that may take another segment
-/// ([`super::bidir::bridges_from`]) joins one of the pass's bridge ends `ends`, drawn
-/// uniformly, by a shadow ray. A visible bridge becomes a light-kind node at the camera
-/// node's point whose `pred` is the end: its radiance is the end's reflection toward
-/// the camera node, found by the end's row like a light node's. Appended to `out`.
-/// Its random number derives from (seed, pass, camera node).
-#[allow(clippy::too_many_arguments)]
-pub fn trace_bridges<Q: RayQuery + ?Sized>(
-    scene: &Scene,
-    tracer: &Q,
-    seed: u64,
-    pass: u32,
-    nodes: &[Node],
-    ends: &[u32],
-    range: core::ops::Range<usize>,
-    out: &mut Vec<Node>,
-) -> Counters {
-    let mut counters = Counters::default();
-    if ends.is_empty() {
-        return counters;
-    }
-    for (i, c) in nodes[range.clone()].iter().enumerate() {
-        if !super::bidir::bridges_from(c) {
-            continue;
-        }
-        let index = (range.start + i) as u32;
-        let mut rng = SampleStream::for_sample(seed, Stream::Camera, index, BRIDGE_SAMPLE, pass);
-        let pick = ((rng.next_f32() * ends.len() as f32) as usize).min(ends.len() - 1);
-        let end = ends[pick];
-        let l = &nodes[end as usize];
-        if super::bidir::bridge_geometry(c.hit.p, l.hit.p, l.hit.ng).is_none() {
-            continue;
-        }
-        let to = l.hit.p - c.hit.p;
-        let dir = to / to.length();
-        let sp = SurfacePoint::new(c.hit, c.wo);
-        counters.rays += 1;
-        if tracer.occluded(&sp.spawn_to(l.hit.p, l.hit.ng)) {
-            continue;
-        }
-        let mut node = *c;
-        node.kind = NodeKind::Light;
-        node.bridge = true;
-        node.wo = dir;
-        node.pred = end;
-        node.source = LightEnd::at_surface(&l.hit);
-        node.emitted = l.hit.emitter.map_or(Rgb::ZERO, |id| scene.lights[id as usize].radiance(l.hit.p, l.hit.ng, -dir));
-        node.next = Continuation { node: NONE, ..Continuation::default() };
-        node.light = LightSegment::default();
-        out.push(node);
-    }
-    counters
-}
-
-/// The `sample` field of a bridge's random-number key (camera streams use their pass's
-/// samples below it).
-const BRIDGE_SAMPLE: u32 = u32::MAX - 1;
-
 /// Give each node on a glossy material a kernel of its own, narrower than the pass's:
 /// radius scale α / `glossy_alpha` for a microfacet roughness α below `glossy_alpha`
 /// (floored at 10⁻³), 1 elsewhere; `glossy_alpha` = 0 leaves every scale at 1.
