@@ -482,9 +482,13 @@ pub struct CacheArgs {
     /// the public code's 0.01-0.02 within the paper's step budget, docs/spcbpt-training.md).
     #[arg(long, value_name = "ALPHA", default_value_t = SpcbptConfig::DEFAULT.learning_rate)]
     pub learning_rate: f32,
-    /// SPCBPT: Adam mini-batch size.
+    /// SPCBPT: Adam mini-batch size at most (a small D gets smaller batches, see --steps).
     #[arg(long, value_name = "PATHS", default_value_t = SpcbptConfig::DEFAULT.batch)]
     pub batch: u32,
+    /// SPCBPT: Adam steps at least (the paper's 10⁶ paths / 10⁴ per batch × 2 epochs); a
+    /// D smaller than batch × steps / epochs is cut into smaller batches. 0: batch as given.
+    #[arg(long, value_name = "N", default_value_t = SpcbptConfig::DEFAULT.steps)]
+    pub steps: u32,
     /// SPCBPT: training epochs.
     #[arg(long, value_name = "N", default_value_t = SpcbptConfig::DEFAULT.epochs)]
     pub epochs: u32,
@@ -555,6 +559,7 @@ impl Default for CacheArgs {
             subspaces: d.subspaces,
             learning_rate: d.learning_rate,
             batch: d.batch,
+            steps: d.steps,
             epochs: d.epochs,
             mixture: d.mixture,
             reuse: d.reuse,
@@ -588,6 +593,7 @@ impl CacheArgs {
             subspaces: self.subspaces,
             learning_rate: self.learning_rate,
             batch: self.batch,
+            steps: self.steps,
             epochs: self.epochs,
             mixture: self.mixture,
             reuse: self.reuse,

@@ -390,7 +390,7 @@ pub fn make_core_renderer_at(args: &RenderArgs, start: Instant) -> Result<CoreRe
             rep.light_source_bins,
             if rep.light_source_bins > 0 { ", s = 1 through the cache" } else { ", s = 1 by NEE" }
         );
-        eprintln!("spcbpt     losses per epoch {:?}", rep.losses);
+        eprintln!("spcbpt     training: {} Adam steps in batches of {}; losses per epoch {:?}", rep.steps, rep.batch, rep.losses);
         eprintln!(
             "spcbpt     memory: D {:.1} MiB ({} paths, freed after training), trees {:.1} KiB, Γ {:.1} KiB",
             rep.dataset_bytes as f64 / 1048576.0,

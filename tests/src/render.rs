@@ -68,6 +68,7 @@ pub fn spcbpt_config(subspaces: u32, light_source_bins: u32, dataset: u32, q_pat
         subspaces: Some(subspaces),
         learning_rate: 0.1,
         batch: 200,
+        steps: 0,
         epochs: 2,
         mixture,
         reuse: 0,

@@ -509,7 +509,10 @@ fn check_radius(rule: RadiusRule) -> Result<(), ConfigError> {
 /// min(1 000 000, W·H), M' to min(2 000 000, 2·W·H) and N_S to min(1000, ⌊√|D|⌋) (at
 /// least 16), which keeps the paper's one training path per entry of the N_S × N_S
 /// matrix Γ (measured on ajar at 320×240: N_S = 256 instead of 1000 gave 13.5 % instead
-/// of 15.3 % MAPE in 40 s, docs/results-spcbpt.md).
+/// of 15.3 % MAPE in 40 s, docs/results-spcbpt.md). The paper's training takes
+/// 10⁶ / 10⁴ × 2 = 200 Adam steps; a smaller D keeps that budget with smaller batches
+/// ([`SpcbptConfig::batch_for`]), since a fixed batch of 10 000 left Γ near uniform
+/// (8 steps on ajar at 320×240, docs/spcbpt.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SpcbptConfig {
     /// Light paths per pass, M [default: min(100 000, W·H)].
@@ -524,8 +527,11 @@ pub struct SpcbptConfig {
     /// Adam learning rate α (the paper's 0.1: measured 4-40× less excess loss than the
     /// public code's 0.01-0.02 within the paper's step budget, docs/spcbpt-training.md).
     pub learning_rate: f32,
-    /// Adam mini-batch size (default 10 000).
+    /// Adam mini-batch size at most (default 10 000, the paper's).
     pub batch: u32,
+    /// Adam steps at least (default 200, the paper's |D| / batch × epochs): a smaller
+    /// dataset is cut into smaller batches; 0 keeps `batch` whatever the dataset's size.
+    pub steps: u32,
     /// Training epochs (default 2).
     pub epochs: u32,
     /// Weight of the uniform distribution mixed into Γ (default 0.1).
@@ -551,6 +557,7 @@ impl SpcbptConfig {
         subspaces: None,
         learning_rate: 0.1,
         batch: 10_000,
+        steps: 200,
         epochs: 2,
         mixture: 0.1,
         reuse: 200,
@@ -570,6 +577,11 @@ impl SpcbptConfig {
     /// N_S for a training set of `dataset` paths.
     pub fn subspaces_for(&self, dataset: u32) -> u32 {
         self.subspaces.unwrap_or_else(|| (crate::math::sqrt_f64(dataset as f64) as u32).clamp(16, 1000))
+    }
+    /// The Adam batch for a training set of `paths` paths: `batch`, or smaller so that
+    /// `epochs` passes over the set take at least `steps` steps (never below 1).
+    pub fn batch_for(&self, paths: usize) -> usize {
+        crate::subspace::batch_for_steps(paths, self.batch as usize, self.epochs, self.steps)
     }
     /// M' for a film of `pixels` pixels.
     pub fn q_paths_for(&self, pixels: u32) -> u32 {
@@ -593,6 +605,7 @@ impl SpcbptConfig {
         }
         check_f32("learning-rate", self.learning_rate, self.learning_rate > 0.0 && self.learning_rate <= 10.0, "(0, 10]")?;
         check_u32("batch", self.batch, 1..=10_000_000, "1..=10000000")?;
+        check_u32("steps", self.steps, 0..=1_000_000, "0..=1000000")?;
         check_u32("epochs", self.epochs, 0..=1000, "0..=1000")?;
         check_f32("mixture", self.mixture, (0.0..=1.0).contains(&self.mixture), "[0, 1]")?;
         check_u32("reuse", self.reuse, 0..=100_000, "0..=100000")?;

@@ -42,4 +42,4 @@ pub use classify::{DecisionTree, DistanceParams, LightSourceBins, TreeParams, ne
 pub use features::SubpathFeature;
 pub use loss::{TrainingSet, TrainingSplit, loss_and_gradient, loss_and_gradient_indexed, loss_only};
 pub use subspace_matrix::{SubspaceMatrix, gamma_from_theta};
-pub use train::{TrainParams, train};
+pub use train::{TrainParams, batch_for_steps, train};

@@ -41,6 +41,22 @@ impl Default for TrainParams {
     }
 }
 
+/// The batch size for `paths` paths: `max_batch`, or smaller so that `epochs` passes
+/// take at least `steps` Adam steps. SPCBPT's paper trains |D| = 10⁶ paths in batches of
+/// 10⁴ for 2 epochs: 200 steps. A dataset scaled down with the image (|D| = W·H here)
+/// and cut into the same batches of 10⁴ takes a handful of steps, and Adam moves each
+/// Θ by about α per step: with 8 steps Γ stays within a factor of about 2 of uniform,
+/// whatever the data say. `steps = 0` or `epochs = 0` keeps `max_batch`.
+pub fn batch_for_steps(paths: usize, max_batch: usize, epochs: u32, steps: u32) -> usize {
+    let max_batch = max_batch.max(1);
+    if steps == 0 || epochs == 0 || paths == 0 {
+        return max_batch;
+    }
+    // Batches per epoch needed: ⌈steps / epochs⌉; each holds ⌊paths / that⌋ paths.
+    let per_epoch = (steps as usize).div_ceil(epochs as usize);
+    (paths / per_epoch).clamp(1, max_batch)
+}
+
 /// A permutation of 0..n, deterministic in (seed, epoch).
 pub fn shuffled_order(n: usize, seed: u64, epoch: u32) -> Vec<u32> {
     let mut order: Vec<u32> = (0..n as u32).collect();
@@ -85,4 +101,26 @@ pub fn train(set: &TrainingSet, theta: &mut [f32], n_light: usize, n_eye: usize,
         losses.push(if counted > 0 { epoch_loss / counted as f64 } else { 0.0 });
     }
     losses
+}
+
+#[cfg(test)]
+mod tests {
+    use super::batch_for_steps;
+
+    #[test]
+    fn batches_shrink_to_keep_the_step_budget() {
+        // The paper's scale: 10⁶ paths, batches of 10⁴, 2 epochs: 100 batches an epoch.
+        assert_eq!(batch_for_steps(1_000_000, 10_000, 2, 200), 10_000);
+        // Larger D keeps the batch (more steps than asked).
+        assert_eq!(batch_for_steps(5_000_000, 10_000, 2, 200), 10_000);
+        // ajar at 320×240: 33 065 paths with a contribution → 100 batches of 330.
+        assert_eq!(batch_for_steps(33_065, 10_000, 2, 200), 330);
+        // Odd step counts round the batches per epoch up; tiny sets go down to 1.
+        assert_eq!(batch_for_steps(1_000, 10_000, 3, 200), 14);
+        assert_eq!(batch_for_steps(10, 10_000, 2, 200), 1);
+        // 0 steps, 0 epochs or an empty set keep the configured batch.
+        assert_eq!(batch_for_steps(33_065, 10_000, 2, 0), 10_000);
+        assert_eq!(batch_for_steps(33_065, 10_000, 0, 200), 10_000);
+        assert_eq!(batch_for_steps(0, 0, 2, 200), 1);
+    }
 }

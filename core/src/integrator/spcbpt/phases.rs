@@ -36,6 +36,10 @@ const FIT_CAP: usize = 200_000;
 pub struct SpcbptReport {
     /// Mean training loss per epoch.
     pub losses: Vec<f64>,
+    /// Adam's batch size (the configured batch, or smaller for a small D).
+    pub batch: usize,
+    /// Adam steps taken over all epochs.
+    pub steps: usize,
     /// Paths in the training set D.
     pub dataset_paths: usize,
     /// Bytes D held (freed after training).
@@ -317,11 +321,13 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
                 let mut theta = vec![0.0f32; nl * ne];
                 let train = TrainParams {
                     adam: AdamParams { learning_rate: self.config.learning_rate, ..AdamParams::default() },
-                    batch: self.config.batch.max(1) as usize,
+                    batch: self.config.batch_for(set.len()),
                     epochs: self.config.epochs,
                     mixture: self.config.mixture,
                     seed: self.params.seed ^ 0x33,
                 };
+                self.report.batch = train.batch;
+                self.report.steps = set.len().div_ceil(train.batch) * train.epochs as usize;
                 self.report.losses = crate::subspace::train(&set, &mut theta, nl, ne, &train);
                 drop(set); // D is freed once Γ is trained.
                 let gamma = SubspaceMatrix::from_theta(&theta, nl, ne, self.config.mixture);
