@@ -9,14 +9,20 @@
 //! occluded value share are compared. Deterministic (fixed seed, counts summed in chunk
 //! order), so the thresholds are margins on one measured pair, not statistics.
 //!
-//! Measured: LVCBPT 76.8 % occluded (61.0 % of the value), SPCBPT 42.7 % (22.9 %);
-//! 1.7 s in release on 2 cores. (At 80×60, |D| = 4 800, SPCBPT reaches only 55 % / 41 %:
-//! a smaller D teaches Γ less.)
+//! Measured: LVCBPT 76.8 % occluded (61.0 % of the value), SPCBPT 34.0 % (14.7 %);
+//! 1.3 s in release on 2 cores. Thresholds: SPCBPT below half LVCBPT's occluded share
+//! and below 0.3 of its occluded value share. (At 80×60, |D| = 4 800, SPCBPT reached
+//! only 55 % / 41 % with the old light features: a smaller D teaches Γ less.)
 //!
-//! Injected bug seen failing (made once, reverted): the renderer training in fixed
-//! batches of `batch` = 10 000 paths whatever |D| (`SpcbptConfig::batch_for` returning
-//! `self.batch`, as before this test: 2 Adam steps on this D): SPCBPT 78.1 % occluded
-//! (59.7 % of the value), no better than uniform.
+//! Injected bugs seen failing (each made once, reverted):
+//! - the light tree's centroids and training set drawn from light paths traced from the
+//!   lights, weighted by their own f_y/p (what `prepare::light_features` did before),
+//!   instead of the dataset's light prefixes weighted by the full path's f/p (section
+//!   7.2.2): SPCBPT 42.7 % occluded (22.9 % of the value);
+//! - the renderer training in fixed batches of `batch` = 10 000 paths whatever |D|
+//!   (`SpcbptConfig::batch_for` returning `self.batch`, as before this test: 2 Adam
+//!   steps on this D): SPCBPT 78.1 % occluded (59.7 % of the value) with the old light
+//!   features (no better than uniform), 60.9 % (31.3 %) with the new ones.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -50,6 +56,6 @@ fn trained_gamma_halves_occluded_connections_on_ajar() {
     println!("LVCBPT: {u:.3} occluded, {uv:.3} by value ({uniform:?})\nSPCBPT: {g:.3} occluded, {gv:.3} by value ({guided:?})");
     assert!(uniform.traced > 10_000 && guided.traced > 10_000, "too few connections");
     assert!(u > 0.6, "ajar's uniform connections should mostly be occluded: {u}");
-    assert!(g < 0.75 * u, "Γ-guided connections occluded {g:.3} against uniform {u:.3}: Γ did not learn the walls");
-    assert!(gv < 0.6 * uv, "Γ-guided occluded value {gv:.3} against uniform {uv:.3}");
+    assert!(g < 0.5 * u, "Γ-guided connections occluded {g:.3} against uniform {u:.3}: Γ did not learn the walls");
+    assert!(gv < 0.3 * uv, "Γ-guided occluded value {gv:.3} against uniform {uv:.3}");
 }

@@ -73,6 +73,7 @@
 
 pub mod counts;
 pub mod model_file;
+pub mod oracle;
 mod phases;
 pub mod prepare;
 
