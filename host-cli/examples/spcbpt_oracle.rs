@@ -91,7 +91,7 @@ fn main() {
     let Renderer::Spcbpt(s) = &renderer.renderer else { unreachable!() };
     let model = s.model.as_ref().expect("trained");
     let sums = total.expect("at least one pass");
-    let d = distance(model, &sums);
+    let d = distance(&model.gamma, &sums);
     println!(
         "steps {} batch {} losses {:?}\nKL(oracle||Γ) {:.3} nats, KL(oracle||uniform) {:.3} nats, Γ mass on light subspaces with no contribution {:.3}, {} eye subspaces with a contribution",
         s.report.steps, s.report.batch, s.report.losses, d.kl, d.kl_uniform, d.wasted, d.columns

@@ -470,12 +470,12 @@ pub struct CacheArgs {
     /// Connections per camera vertex, N.
     #[arg(long, value_name = "N", default_value_t = SpcbptConfig::DEFAULT.connections)]
     pub connections: u32,
-    /// SPCBPT: training paths, |D| [default: min(1000000, W·H)].
+    /// SPCBPT: training paths, |D| [default: min(1000000, 16·W·H)].
     #[arg(long, value_name = "PATHS", value_parser = clap::value_parser!(u32).range(1..))]
     pub dataset: Option<u32>,
     /// SPCBPT: subspaces per side, N_S, on the light side shared with the light-source
-    /// bins [default: min(1000, ⌊√|D|⌋), at least 16: the paper's |D|/N_S² = 1 training
-    /// path per Γ entry].
+    /// bins [default: min(1000, ⌊√(W·H)⌋), at least 16: Γ has about one entry per pixel,
+    /// D at least 16 paths per entry].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..))]
     pub subspaces: Option<u32>,
     /// SPCBPT: Adam learning rate α (the paper's 0.1: measured 4-40x less excess loss than

@@ -294,7 +294,7 @@ impl EstimatorConfig {
             Self::Spcbpt(c) => {
                 let paths = c.light_paths_for(pixels) as u64 * VERTICES_PER_PATH * (vertex + 32);
                 let dataset = c.dataset_for(pixels) as u64 * 2 * VERTICES_PER_PATH * 48;
-                let n = c.subspaces_for(c.dataset_for(pixels)) as u64;
+                let n = c.subspaces_for(pixels) as u64;
                 let gamma = n * n * 4 * 2;
                 if dataset >= paths {
                     (paths + dataset + gamma, "the training dataset", "--dataset")
@@ -504,25 +504,26 @@ fn check_radius(rule: RadiusRule) -> Result<(), ConfigError> {
 }
 
 /// SPCBPT's settings, with the paper's defaults. Scaling rule for small images: the
-/// paper renders about 1280×720 with M = 100 000 light paths per pass and
-/// |D| = 1 000 000 dataset paths; here M defaults to min(100 000, W·H), |D| to
-/// min(1 000 000, W·H), M' to min(2 000 000, 2·W·H) and N_S to min(1000, ⌊√|D|⌋) (at
-/// least 16), which keeps the paper's one training path per entry of the N_S × N_S
-/// matrix Γ (measured on ajar at 320×240: N_S = 256 instead of 1000 gave 13.5 % instead
-/// of 15.3 % MAPE in 40 s, docs/results-spcbpt.md). The paper's training takes
-/// 10⁶ / 10⁴ × 2 = 200 Adam steps; a smaller D keeps that budget with smaller batches
-/// ([`SpcbptConfig::batch_for`]), since a fixed batch of 10 000 left Γ near uniform
-/// (8 steps on ajar at 320×240, docs/spcbpt.md).
+/// paper renders about 1280×720 with M = 100 000 light paths per pass, |D| = 1 000 000
+/// dataset paths and N_S = 1000; here M defaults to min(100 000, W·H), |D| to
+/// min(1 000 000, 16·W·H), M' to min(2 000 000, 2·W·H) and N_S to min(1000, ⌊√(W·H)⌋)
+/// (at least 16), so Γ's N_S² entries number about the pixels and D holds at least 16
+/// paths per entry (measured on ajar, enclosed and a door-like scene at 320×240 and
+/// 320×168, 3 seeds: |D| = 10⁶ instead of W·H needs 1.17-1.41x fewer passes to the same
+/// relMSE, docs/spcbpt.md; N_S = 1000 instead of ⌊√(W·H)⌋ made passes slower). The
+/// paper's training takes 10⁶ / 10⁴ × 2 = 200 Adam steps; a smaller D keeps that budget
+/// with smaller batches ([`SpcbptConfig::batch_for`]), since a fixed batch of 10 000 left
+/// Γ near uniform (8 steps on ajar at 320×240, docs/spcbpt.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SpcbptConfig {
     /// Light paths per pass, M [default: min(100 000, W·H)].
     pub light_paths: Option<u32>,
     /// Connections per camera vertex, N (default 3).
     pub connections: u32,
-    /// Training paths, |D| [default: min(1 000 000, W·H)].
+    /// Training paths, |D| [default: min(1 000 000, 16·W·H)].
     pub dataset: Option<u32>,
     /// Subspaces per side, N_S, on the light side shared with the light-source bins
-    /// [default: min(1000, ⌊√|D|⌋), at least 16].
+    /// [default: min(1000, ⌊√(W·H)⌋), at least 16].
     pub subspaces: Option<u32>,
     /// Adam learning rate α (the paper's 0.1: measured 4-40× less excess loss than the
     /// public code's 0.01-0.02 within the paper's step budget, docs/spcbpt-training.md).
@@ -572,11 +573,11 @@ impl SpcbptConfig {
     }
     /// |D| for a film of `pixels` pixels.
     pub fn dataset_for(&self, pixels: u32) -> u32 {
-        self.dataset.unwrap_or(pixels.clamp(1, 1_000_000))
+        self.dataset.unwrap_or(pixels.saturating_mul(16).clamp(1, 1_000_000))
     }
-    /// N_S for a training set of `dataset` paths.
-    pub fn subspaces_for(&self, dataset: u32) -> u32 {
-        self.subspaces.unwrap_or_else(|| (crate::math::sqrt_f64(dataset as f64) as u32).clamp(16, 1000))
+    /// N_S for a film of `pixels` pixels.
+    pub fn subspaces_for(&self, pixels: u32) -> u32 {
+        self.subspaces.unwrap_or_else(|| (crate::math::sqrt_f64(pixels as f64) as u32).clamp(16, 1000))
     }
     /// The Adam batch for a training set of `paths` paths: `batch`, or smaller so that
     /// `epochs` passes over the set take at least `steps` steps (never below 1).
@@ -705,8 +706,10 @@ mod tests {
         let c = SpcbptConfig::DEFAULT;
         assert_eq!(c.light_paths_for(64 * 48), 64 * 48);
         assert_eq!(c.light_paths_for(1280 * 720), 100_000);
-        assert_eq!(c.dataset_for(1280 * 720), 921_600);
-        assert_eq!(c.subspaces_for(921_600), 960);
+        assert_eq!(c.dataset_for(1280 * 720), 1_000_000);
+        assert_eq!(c.dataset_for(160 * 120), 307_200);
+        assert_eq!(c.subspaces_for(1280 * 720), 960);
+        assert_eq!(c.subspaces_for(2000 * 1000), 1000);
         assert_eq!(c.subspaces_for(100), 16);
         assert_eq!(c.q_paths_for(1280 * 720), 1_843_200);
     }

@@ -31,6 +31,7 @@ use crate::integrator::{Counters, RenderParams};
 use crate::path::{self, LightPointSample, VertexKind};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::{Context, Scene};
+use crate::subspace::SubspaceMatrix;
 
 /// Per (eye, light) subspace pair, the summed unweighted connection value (luminance),
 /// eye-major: `sums[e · n_light + l]`; and per eye subspace the eye vertices seen.
@@ -163,8 +164,8 @@ pub struct OracleDistance {
     pub columns: usize,
 }
 
-/// Compare `model`'s Γ with the oracle `sums`.
-pub fn distance(model: &Model, sums: &ConnectionSums) -> OracleDistance {
+/// Compare Γ (a model's `gamma`) with the oracle `sums`.
+pub fn distance(gamma: &SubspaceMatrix, sums: &ConnectionSums) -> OracleDistance {
     let totals: Vec<f64> = (0..sums.n_eye).map(|e| sums.sums[e * sums.n_light..(e + 1) * sums.n_light].iter().sum()).collect();
     let all: f64 = totals.iter().sum();
     let mut out = OracleDistance::default();
@@ -177,7 +178,7 @@ pub fn distance(model: &Model, sums: &ConnectionSums) -> OracleDistance {
         let w = total / all;
         out.columns += 1;
         for (l, &o) in column.iter().enumerate() {
-            let g = model.gamma.get(l as u32, e as u32) as f64;
+            let g = gamma.get(l as u32, e as u32) as f64;
             if o > 0.0 {
                 out.kl += w * o * libm::log(o / g.max(1e-30));
                 out.kl_uniform += w * o * libm::log(o / uniform);
@@ -187,4 +188,40 @@ pub fn distance(model: &Model, sums: &ConnectionSums) -> OracleDistance {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sums(n_light: usize, values: &[f64]) -> ConnectionSums {
+        let n_eye = values.len() / n_light;
+        ConnectionSums { n_light, n_eye, sums: values.to_vec(), eye_vertices: vec![1; n_eye], eye_positions: vec![[0.0; 3]; n_eye] }
+    }
+
+    #[test]
+    fn distance_against_closed_forms() {
+        // One eye subspace, O = (3/4, 1/4) against a uniform Γ = (1/2, 1/2).
+        let d = distance(&SubspaceMatrix::uniform(2, 1), &sums(2, &[3.0, 1.0]));
+        let kl = 0.75 * libm::log(1.5) + 0.25 * libm::log(0.5);
+        assert!((d.kl - kl).abs() < 1e-6 && (d.kl_uniform - kl).abs() < 1e-12, "{d:?}");
+        assert_eq!((d.wasted, d.columns), (0.0, 1));
+        // A light subspace that gave nothing: Γ's mass there is wasted; KL only over O > 0.
+        let d = distance(&SubspaceMatrix::uniform(4, 1), &sums(4, &[1.0, 0.0, 0.0, 1.0]));
+        assert!((d.wasted - 0.5).abs() < 1e-6 && (d.kl - libm::log(2.0)).abs() < 1e-6, "{d:?}");
+        // Eye subspaces weigh by their share of the total; an empty one is skipped.
+        let d = distance(&SubspaceMatrix::uniform(2, 3), &sums(2, &[1.0, 1.0, 0.0, 0.0, 2.0, 0.0]));
+        assert_eq!(d.columns, 2);
+        assert!((d.kl - 0.5 * libm::log(2.0)).abs() < 1e-6 && (d.wasted - 0.25).abs() < 1e-6, "{d:?}");
+    }
+
+    #[test]
+    fn columns_normalise_and_sums_add() {
+        let mut a = sums(2, &[1.0, 3.0, 0.0, 0.0]);
+        assert_eq!(a.column(0), Some(vec![0.25, 0.75]));
+        assert_eq!(a.column(1), None);
+        a.add(&sums(2, &[1.0, 1.0, 2.0, 2.0]));
+        assert_eq!(a.sums, vec![2.0, 4.0, 2.0, 2.0]);
+        assert_eq!(a.eye_vertices, vec![2, 2]);
+    }
 }

@@ -106,7 +106,7 @@ impl Spcbpt {
             light_paths: config.light_paths_for(pixels),
             dataset,
             q_paths: config.q_paths_for(pixels),
-            subspaces: config.subspaces_for(dataset),
+            subspaces: config.subspaces_for(pixels),
             width,
             height,
             setup: Setup::default(),
