@@ -1,9 +1,10 @@
 //! Issue 18's diagnostic: what SPCBPT's Γ learned against the oracle Γ of a run.
 //!
-//!     cargo run --release -p ember-cli --example spcbpt_oracle -- SCENE W H PASSES OUT_DIR [STEPS]
+//!     cargo run --release -p ember-cli --example spcbpt_oracle -- SCENE W H PASSES OUT_DIR [STEPS [REUSE]]
 //!
 //! Trains SPCBPT with the default settings (STEPS: Adam steps at least, default the
-//! core's; 0 gives the old fixed batch of 10 000), renders PASSES passes, and after each
+//! core's; 0 gives the old fixed batch of 10 000; REUSE: M0, default the core's),
+//! renders PASSES passes, and after each
 //! pass sums every connection's unweighted value by (eye subspace, light subspace)
 //! (`ember_core::integrator::spcbpt::oracle`). Prints the contribution-weighted
 //! KL(oracle ‖ Γ), the same for a uniform Γ, and Γ's mass on light subspaces that gave
@@ -12,6 +13,12 @@
 //! vertices (on ajar and door the wall is at x = 1; grey lines mark it), colour
 //! log10(n_light · value) from −2 (blue) through 0 (white, uniform) to +2 (red), black
 //! where the oracle is zero.
+//!
+//! Also printed: the spread of stage 2 (per non-empty light subspace, the effective
+//! share 1 / (n Σ P_r²) of its n candidates under P_r ∝ f_y/p, and n · max P_r, averaged
+//! with the subspace's total f_y/p as weight), and with REUSE = 0 a check of Q (eq. 19):
+//! the passes' mean Σ f_y/p per subspace over M against the preprocessing's Q (totals
+//! and the relative L1 distance Σ|Q̂ − Q| / ΣQ, which the passes' noise keeps above 0).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -39,6 +46,9 @@ fn main() {
     if args.len() > 5 {
         cache.steps = num(5);
     }
+    if args.len() > 6 {
+        cache.reuse = num(6);
+    }
     std::fs::create_dir_all(&out).expect("output directory");
     let prepared = prepare_file(&scene, Some(w), Some(h), Vec::new()).expect("scene loads");
     let depth = prepared.max_depth.unwrap_or(-1);
@@ -50,6 +60,10 @@ fn main() {
     let params = RenderParams { max_depth: MaxDepth(depth), seed, heuristic: Heuristic::Power, ..RenderParams::default() };
     let mut total: Option<ConnectionSums> = None;
     let mut light_x: Vec<(f64, u32)> = Vec::new();
+    // Stage-2 spread (weighted sums of the effective share and of n·max P_r, the weight)
+    // and Q's check (Σ|Q̂ − Q|, ΣQ).
+    let (mut ess, mut peak, mut spread_weight) = (0.0f64, 0.0f64, 0.0f64);
+    let mut q_sum: Vec<f64> = Vec::new();
     for pass in 0..passes {
         let limits = Limits { spp: pass + 1, deadline: None, interrupt: None, first_pass: 0 };
         renderer.render(&mut film, limits, config, start).expect("render");
@@ -69,6 +83,25 @@ fn main() {
         let sum = total.get_or_insert_with(|| ConnectionSums::new(model));
         for p in &parts {
             sum.add(p);
+        }
+        for (l, table) in s.cache.vertex_tables.iter().enumerate() {
+            let total = table.as_ref().map_or(0.0, |t| t.total_weight());
+            if let Some(t) = table {
+                let n = t.len();
+                let (sum2, max) = (0..n).fold((0.0f64, 0.0f32), |(a, m), i| (a + (t.pmf(i) as f64).powi(2), m.max(t.pmf(i))));
+                if sum2 > 0.0 && total > 0.0 {
+                    ess += total / (n as f64 * sum2);
+                    peak += total * n as f64 * max as f64;
+                    spread_weight += total;
+                }
+            }
+            if cache.reuse == 0 {
+                q_sum.resize(model.q.len(), 0.0);
+                let m = s.cache.effective_paths.get(l).copied().unwrap_or(0.0);
+                if let Some(slot) = q_sum.get_mut(l) {
+                    *slot += if m > 0.0 { total / m } else { 0.0 };
+                }
+            }
         }
         // Light subspaces' mean x over this pass's cached vertices.
         if light_x.is_empty() {
@@ -96,6 +129,22 @@ fn main() {
         "steps {} batch {} losses {:?}\nKL(oracle||Γ) {:.3} nats, KL(oracle||uniform) {:.3} nats, Γ mass on light subspaces with no contribution {:.3}, {} eye subspaces with a contribution",
         s.report.steps, s.report.batch, s.report.losses, d.kl, d.kl_uniform, d.wasted, d.columns
     );
+    println!(
+        "stage 2: effective share of candidates {:.3}, n·max P_r {:.1} (weighted by f_y/p)",
+        ess / spread_weight.max(1e-300),
+        peak / spread_weight.max(1e-300)
+    );
+    if cache.reuse == 0 {
+        let q: Vec<f64> = model.q.iter().map(|&q| q as f64).collect();
+        let mean: Vec<f64> = q_sum.iter().map(|v| v / passes as f64).collect();
+        let (diff, total): (f64, f64) = mean.iter().zip(&q).fold((0.0, 0.0), |(d, t), (m, q)| (d + (m - q).abs(), t + q));
+        println!(
+            "Q: the passes' mean Σ f_y/p / M per subspace against Q: totals {:.4} / {:.4}, relative L1 distance {:.4}",
+            mean.iter().sum::<f64>(),
+            total,
+            diff / total.max(1e-300)
+        );
+    }
     // Orders: eye subspaces by their vertices' mean x, light subspaces by their cached vertices' mean x.
     let mean = |(sx, n): (f64, u64)| if n > 0 { sx / n as f64 } else { f64::INFINITY };
     let mut eye: Vec<usize> = (0..sums.n_eye).collect();

@@ -293,7 +293,12 @@ impl EstimatorConfig {
             #[cfg(feature = "spcbpt")]
             Self::Spcbpt(c) => {
                 let paths = c.light_paths_for(pixels) as u64 * VERTICES_PER_PATH * (vertex + 32);
-                let dataset = c.dataset_for(pixels) as u64 * 2 * VERTICES_PER_PATH * 48;
+                // D's records (weight, fixed part, split start: 20 B; a 16 B split per
+                // connectible vertex) for every sample, and the light-side features of
+                // the first 200 000 samples (one 40 B feature per prefix) before the fit
+                // keeps 200 000: a bound; ajar at 10⁶ samples holds 40 MiB of D.
+                let samples = c.dataset_for(pixels) as u64;
+                let dataset = samples * (20 + 16 * VERTICES_PER_PATH) + samples.min(200_000) * VERTICES_PER_PATH * 40;
                 let n = c.subspaces_for(pixels) as u64;
                 let gamma = n * n * 4 * 2;
                 if dataset >= paths {
