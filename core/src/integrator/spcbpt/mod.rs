@@ -578,6 +578,31 @@ pub fn splat_light_paths<Q: RayQuery + ?Sized>(
     counters
 }
 
+/// One of the N two-stage draws of an eye vertex whose stage-1 table is `stage1`
+/// (eq. 9): the light subspace, the candidate light prefix and its memo, and the
+/// probability N · M_eff · Γ'(l | e) · P_r(y | l) its connection divides by.
+#[derive(Clone, Copy, Debug)]
+pub struct Draw<'a> {
+    pub subspace: usize,
+    pub light: &'a [Vertex],
+    pub memo: &'a [PrefixMemo],
+    pub probability: f32,
+}
+
+/// Draw a light sub-path for one connection from `u1` (stage 1) and `u2` (stage 2);
+/// `None` where the chosen subspace or candidate is missing or the probability is not
+/// positive. The renderer and the oracle diagnostic draw through this one function.
+#[inline]
+pub fn draw<'a>(model: &Model, cache: &'a PassCache, stage1: &AliasTable, u1: f32, u2: f32) -> Option<Draw<'a>> {
+    let pick = stage1.sample(u1);
+    let stage2 = cache.vertex_tables.get(pick.index)?.as_ref()?;
+    let chosen = stage2.sample(u2);
+    let (light, memo) = cache.candidate(pick.index, chosen.index)?;
+    let paths = cache.effective_paths.get(pick.index).copied().unwrap_or(0.0) as f32;
+    let probability = model.connections as f32 * paths * pick.pmf * chosen.pmf;
+    (probability > 0.0).then_some(Draw { subspace: pick.index, light, memo, probability })
+}
+
 /// One SPCBPT sample for each pixel of `pixels` into `out` (t ≥ 2 strategies).
 pub fn render_pixels<Q: RayQuery + ?Sized>(
     scene: &Scene,
@@ -624,17 +649,9 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
             let Some(Some(stage1)) = cache.gamma_tables.get(e as usize) else { continue };
             for _ in 0..model.connections {
                 let (u1, u2) = (aux.next_f32(), aux.next_f32());
-                let pick = stage1.sample(u1);
-                let Some(Some(stage2)) = cache.vertex_tables.get(pick.index) else { continue };
-                let chosen = stage2.sample(u2);
-                let Some((light, memo)) = cache.candidate(pick.index, chosen.index) else { continue };
+                let Some(Draw { light, memo, probability, .. }) = draw(model, cache, stage1, u1, u2) else { continue };
                 let s = light.len();
                 if !params.max_depth.allows((s + t - 1) as u32) {
-                    continue;
-                }
-                let paths = cache.effective_paths.get(pick.index).copied().unwrap_or(0.0) as f32;
-                let probability = model.connections as f32 * paths * pick.pmf * chosen.pmf;
-                if !(probability > 0.0) {
                     continue;
                 }
                 if let Some(c) = strategies.evaluate_labelled(light, &camera[..t], Some(&labels), memo, s, t, LightPointSample::default(), &mut counters) {

@@ -25,7 +25,7 @@ use alloc::vec;
 use alloc::vec::Vec;
 use core::ops::Range;
 
-use super::{CameraLabels, Model, PassCache};
+use super::{CameraLabels, Draw, Model, PassCache, draw};
 use crate::geometry::RayQuery;
 use crate::integrator::{Counters, RenderParams};
 use crate::path::{self, LightPointSample, VertexKind};
@@ -119,17 +119,9 @@ pub fn connection_sums<Q: RayQuery + ?Sized>(
             }
             for _ in 0..model.connections {
                 let (u1, u2) = (aux.next_f32(), aux.next_f32());
-                let pick = stage1.sample(u1);
-                let Some(Some(stage2)) = cache.vertex_tables.get(pick.index) else { continue };
-                let chosen = stage2.sample(u2);
-                let Some((light, _)) = cache.candidate(pick.index, chosen.index) else { continue };
+                let Some(Draw { subspace, light, probability, .. }) = draw(model, cache, stage1, u1, u2) else { continue };
                 let s = light.len();
                 if !params.max_depth.allows((s + t - 1) as u32) {
-                    continue;
-                }
-                let paths = cache.effective_paths.get(pick.index).copied().unwrap_or(0.0);
-                let probability = model.connections as f64 * paths * pick.pmf as f64 * chosen.pmf as f64;
-                if !(probability > 0.0) {
                     continue;
                 }
                 let connection = if s == 1 && model.caches_light_sources() {
@@ -138,9 +130,9 @@ pub fn connection_sums<Q: RayQuery + ?Sized>(
                     path::connect(&ctx, light, &camera[..t], s, t, LightPointSample::default(), &mut counters)
                 };
                 let Some(c) = connection else { continue };
-                let value = c.value.luminance() as f64 / probability;
+                let value = c.value.luminance() as f64 / probability as f64;
                 if value.is_finite() && value > 0.0 {
-                    if let Some(slot) = sums.sums.get_mut(e * sums.n_light + pick.index) {
+                    if let Some(slot) = sums.sums.get_mut(e * sums.n_light + subspace) {
                         *slot += value;
                     }
                 }
