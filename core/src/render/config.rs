@@ -586,6 +586,7 @@ impl SpcbptConfig {
     }
     /// The Adam batch for a training set of `paths` paths: `batch`, or smaller so that
     /// `epochs` passes over the set take at least `steps` steps (never below 1).
+    #[cfg(feature = "subspace")]
     pub fn batch_for(&self, paths: usize) -> usize {
         crate::subspace::batch_for_steps(paths, self.batch as usize, self.epochs, self.steps)
     }
