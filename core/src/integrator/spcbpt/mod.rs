@@ -523,17 +523,10 @@ impl<Q: RayQuery + ?Sized> Strategies<'_, Q> {
         counters: &mut Counters,
     ) -> Option<Weighted> {
         let (scene, model) = (self.ctx.scene, self.model);
-        // s = 1 with the light path's own first vertex (a cached light-source vertex), not
-        // a fresh light sample.
-        let cached_source = s == 1 && light.len() == 1 && model.caches_light_sources();
         // The memo describes light[..s]; a resampled light endpoint (NEE) is not in it.
-        let memo_applies = light_memo.len() == s && (s != 1 || cached_source);
+        let memo_applies = light_memo.len() == s && (s != 1 || cached_source(model, light, s));
         let labels = KnownLabels { camera: if t >= 2 { labels } else { None }, light: if memo_applies { light_memo } else { &[] }, s };
-        let c = if cached_source {
-            path::connect_light_source(&self.ctx, &light[0], camera, t, counters)?
-        } else {
-            path::connect(&self.ctx, light, camera, s, t, u, counters)?
-        };
+        let c = connect_unweighted(&self.ctx, model, light, camera, s, t, u, counters)?;
         let mut x = FullPath::new();
         join_into(&mut x, light, camera, c.sampled, s, t);
         let mut counts = [0.0f64; 2 * path::MAX_VERTICES + 1];
@@ -576,6 +569,36 @@ pub fn splat_light_paths<Q: RayQuery + ?Sized>(
         }
     }
     counters
+}
+
+/// Is strategy s = 1 on `light` the light path's own first vertex (a cached light-source
+/// vertex, s = 1 through the cache) rather than a fresh light sample?
+#[inline]
+fn cached_source(model: &Model, light: &[Vertex], s: usize) -> bool {
+    s == 1 && light.len() == 1 && model.caches_light_sources()
+}
+
+/// Connect strategy (s, t) without its MIS weight: a cached light-source vertex through
+/// [`path::connect_light_source`], anything else through [`path::connect`] (`u` drives
+/// a fresh light sample for s = 1 by next-event estimation). The renderer and the oracle
+/// diagnostic connect through this one function.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn connect_unweighted<Q: RayQuery + ?Sized>(
+    ctx: &Context<'_, Q>,
+    model: &Model,
+    light: &[Vertex],
+    camera: &[Vertex],
+    s: usize,
+    t: usize,
+    u: LightPointSample,
+    counters: &mut Counters,
+) -> Option<path::Connection> {
+    if cached_source(model, light, s) {
+        path::connect_light_source(ctx, &light[0], camera, t, counters)
+    } else {
+        path::connect(ctx, light, camera, s, t, u, counters)
+    }
 }
 
 /// One of the N two-stage draws of an eye vertex whose stage-1 table is `stage1`

@@ -25,7 +25,7 @@ use alloc::vec;
 use alloc::vec::Vec;
 use core::ops::Range;
 
-use super::{CameraLabels, Draw, Model, PassCache, draw};
+use super::{CameraLabels, Draw, Model, PassCache, connect_unweighted, draw};
 use crate::geometry::RayQuery;
 use crate::integrator::{Counters, RenderParams};
 use crate::path::{self, LightPointSample, VertexKind};
@@ -124,12 +124,7 @@ pub fn connection_sums<Q: RayQuery + ?Sized>(
                 if !params.max_depth.allows((s + t - 1) as u32) {
                     continue;
                 }
-                let connection = if s == 1 && model.caches_light_sources() {
-                    path::connect_light_source(&ctx, &light[0], &camera[..t], t, &mut counters)
-                } else {
-                    path::connect(&ctx, light, &camera[..t], s, t, LightPointSample::default(), &mut counters)
-                };
-                let Some(c) = connection else { continue };
+                let Some(c) = connect_unweighted(&ctx, model, light, &camera[..t], s, t, LightPointSample::default(), &mut counters) else { continue };
                 let value = c.value.luminance() as f64 / probability as f64;
                 if value.is_finite() && value > 0.0 {
                     if let Some(slot) = sums.sums.get_mut(e * sums.n_light + subspace) {
@@ -165,12 +160,14 @@ pub fn distance(gamma: &SubspaceMatrix, sums: &ConnectionSums) -> OracleDistance
         return out;
     }
     let uniform = 1.0 / sums.n_light as f64;
-    for (e, total) in totals.iter().enumerate() {
-        let Some(column) = sums.column(e) else { continue };
+    for (e, &total) in totals.iter().enumerate() {
+        if !(total > 0.0) {
+            continue;
+        }
         let w = total / all;
         out.columns += 1;
-        for (l, &o) in column.iter().enumerate() {
-            let g = gamma.get(l as u32, e as u32) as f64;
+        for (l, &v) in sums.sums[e * sums.n_light..(e + 1) * sums.n_light].iter().enumerate() {
+            let (o, g) = (v / total, gamma.get(l as u32, e as u32) as f64);
             if o > 0.0 {
                 out.kl += w * o * libm::log(o / g.max(1e-30));
                 out.kl_uniform += w * o * libm::log(o / uniform);
