@@ -13,12 +13,18 @@
 //! instead of s′ in `spcbpt::Strategies::evaluate` fails (1) ((1, 2): 0.670 vs 0.934); reading
 //! the camera-label memo at the wrong camera index (`n − j` instead of `n − 1 − j` for
 //! κ_E in `path_counts_labelled`) fails (1) ((6, 2): 0.0411 vs 0.0277).
+//! The memoized count tables (`spcbpt::counts` with a light memo and camera labels, the
+//! render loop's path) equal `path_counts` of the joined path bit for bit; each of these
+//! injected bugs fails that check: a camera vertex's prefix-weight factor taken with its
+//! neighbours swapped ((1, 5): 1.3084742 vs 1.3084739, only bits differ), the light
+//! memo's count read for the split next to the connection (`s2 + 1 <= memo.len()`:
+//! (7, 1) reads NaN), and the camera split read one vertex off (`n − s2`: (4, 4)).
 //! Not caught: taking W from the stored β of x_{s′−1} instead of
 //! `light_prefix_weights` — (2) rebuilds every split from copies of the same vertices,
 //! so their β agree; the end-to-end test (`spcbpt_agreement.rs`) is what guards that
 //! the counts do not depend on how a path was sampled (it fails on this bug at z = −25.4).
 
-use ember_core::integrator::spcbpt::{self, KnownLabels, Model, join, memoize_light_path, path_counts, path_counts_labelled};
+use ember_core::integrator::spcbpt::{self, Model, join, memoize_light_path, path_counts};
 use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::measure::VertexPdf;
 use ember_core::path::mis::mis_weight_counted;
@@ -62,7 +68,7 @@ fn check_weights(scene: &Scene, tracer: &BruteForce, params: &RenderParams, mode
         let light = light_subpath(scene, tracer, &params, 8, &mut lrng, &mut counters);
         let mut light_memo = Vec::new();
         memoize_light_path(scene, model, &light, &mut light_memo);
-        let labels_all = Some(spcbpt::CameraLabels::new(model, &cam));
+        let labels_all = spcbpt::CameraLabels::new(scene, model, &cam);
         for t in 1..=cam.len() {
             for s in 0..=light.len() {
                 if (s == 1 && t == 1) || s + t < 3 || s + t > 9 {
@@ -71,7 +77,7 @@ fn check_weights(scene: &Scene, tracer: &BruteForce, params: &RenderParams, mode
                 // Odd paths go through the memos of the render loop: labels of the whole
                 // camera path (read for the prefix `cam[..t]`) and the light path's
                 // per-vertex memo (read for `light[..s]`).
-                let labels = (i % 2 == 1).then(|| spcbpt::CameraLabels::new(model, &cam));
+                let labels = (i % 2 == 1).then(|| spcbpt::CameraLabels::new(scene, model, &cam));
                 let memo = if i % 2 == 1 { &light_memo[..s] } else { &[][..] };
                 let strategies = spcbpt::Strategies { ctx: Context { scene, tracer }, model, light_tracing: LIGHT_TRACING };
                 let u = LightPointSample { u_light: lrng.next_f32(), u_point: lrng.next_2d() };
@@ -84,9 +90,11 @@ fn check_weights(scene: &Scene, tracer: &BruteForce, params: &RenderParams, mode
                 // some evaluated with memos and some without, would not sum to one).
                 {
                     let fresh_light = c.sampled.is_none() || t == 1;
-                    let known = KnownLabels { camera: labels_all.as_ref().filter(|_| t >= 2), light: if fresh_light { &light_memo[..s] } else { &[] }, s };
                     let (mut with, mut without) = ([0.0f64; 70], [0.0f64; 70]);
-                    path_counts_labelled(scene, model, LIGHT_TRACING, &x, known, &mut with);
+                    let light_x = if s == 1 && c.sampled.is_some() { &x[..1] } else { &light[..s] };
+                    let cam_x: Vec<Vertex> = x[s..].iter().rev().copied().collect();
+                    let memo = if fresh_light { &light_memo[..s] } else { &[][..] };
+                    spcbpt::counts(scene, model, LIGHT_TRACING, light_x, memo, &cam_x, Some(&labels_all), &mut with);
                     path_counts(scene, model, LIGHT_TRACING, &x, &mut without);
                     assert!(
                         with.iter().zip(&without).all(|(a, b)| a.to_bits() == b.to_bits()),

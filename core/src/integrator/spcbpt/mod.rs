@@ -47,14 +47,16 @@
 //! prefix's f/p. W is recomputed for every split from the path itself ([`light_prefix_weights`];
 //! Dirac vertices count 1, no Russian roulette) so that all strategies of one path
 //! see the same counts and the weights sum to one exactly. Ratios of the sub-path
-//! densities come from BDPT's O(n) walk ([`path::mis::mis_weight_counted`]); the count
-//! table of a path costs O(n) density evaluations and tree look-ups. It is built lazily
-//! inside the one connection of a strategy with no sampled endpoint (nothing for an
-//! occluded connection); the labels of the camera sub-path's own vertices are
-//! classified once per camera path ([`CameraLabels`]) and the labels and prefix weights
-//! of every light vertex once per pass ([`PrefixMemo`], computed with the light paths),
-//! so a connection computes only the two labels and the weights that involve both
-//! sub-paths (the memos changed no count and no pixel; −22 % render time on enclosed).
+//! densities come from BDPT's O(n) walk ([`path::mis::mis_weight_counted`]). The count
+//! table is built only for a connection that carries light (nothing for an occluded
+//! one), in place from the two sub-paths (no joined copy). Everything of a split that
+//! lies on one sub-path is computed once: the labels, prefix-weight factors and
+//! N·Γ/Q of the camera sub-path's splits once per camera path ([`CameraLabels`]), the
+//! labels, prefix weights and whole counts of every light vertex once per pass
+//! ([`PrefixMemo`], with the light paths). A connection then classifies two vertices,
+//! evaluates two prefix-weight factors and looks Γ up for the three splits around it;
+//! the other entries are reads and one multiplication ([`counts`]). The memos change no
+//! count and no pixel (`tests/tests/spcbpt_mis.rs` compares the tables bit for bit).
 //!
 //! Cross-iteration reuse (section 7.4, [`Retained`]): with M0 > 0 each light subspace k
 //! keeps a FIFO of the last M0 of its cacheable vertices (with their light prefixes:
@@ -80,7 +82,7 @@ pub mod prepare;
 pub use phases::{Spcbpt, SpcbptReport};
 
 use counts::finite;
-pub use counts::{CameraLabels, KnownLabels, PrefixMemo, light_prefix_weights, memoize_light_path, path_counts, path_counts_labelled, scalar};
+pub use counts::{CameraLabels, CameraSplit, Factor, PrefixMemo, counts, light_prefix_weights, memoize_light_path, path_counts, scalar};
 
 use alloc::boxed::Box;
 use alloc::collections::VecDeque;
@@ -523,15 +525,26 @@ impl<Q: RayQuery + ?Sized> Strategies<'_, Q> {
         counters: &mut Counters,
     ) -> Option<Weighted> {
         let (scene, model) = (self.ctx.scene, self.model);
+        let c = connect_unweighted(&self.ctx, model, light, camera, s, t, u, counters)?;
+        // The full path: the sub-paths as they are, a resampled endpoint replacing its own.
+        let one: [Vertex; 1];
+        let (light, camera) = (light.get(..s).unwrap_or(light), camera.get(..t).unwrap_or(camera));
+        let (light_x, camera_x) = match c.sampled {
+            Some(v) if s == 1 => {
+                one = [v];
+                (&one[..], camera)
+            }
+            Some(v) if t == 1 => {
+                one = [v];
+                (light, &one[..])
+            }
+            _ => (light, camera),
+        };
         // The memo describes light[..s]; a resampled light endpoint (NEE) is not in it.
         let memo_applies = light_memo.len() == s && (s != 1 || cached_source(model, light, s));
-        let labels = KnownLabels { camera: if t >= 2 { labels } else { None }, light: if memo_applies { light_memo } else { &[] }, s };
-        let c = connect_unweighted(&self.ctx, model, light, camera, s, t, u, counters)?;
-        let mut x = FullPath::new();
-        join_into(&mut x, light, camera, c.sampled, s, t);
-        let mut counts = [0.0f64; 2 * path::MAX_VERTICES + 1];
-        path_counts_labelled(scene, model, self.light_tracing, &x, labels, &mut counts);
-        let count = |s2: usize, _t2: usize| counts.get(s2).copied().unwrap_or(0.0);
+        let mut table = [0.0f64; 2 * path::MAX_VERTICES + 1];
+        counts(scene, model, self.light_tracing, light_x, if memo_applies { light_memo } else { &[] }, camera_x, labels, &mut table);
+        let count = |s2: usize, _t2: usize| table.get(s2).copied().unwrap_or(0.0);
         let weight = path::mis::mis_weight_counted(scene, light, camera, c.sampled.as_ref(), s, t, &count);
         Some(c.weighted(weight))
     }
@@ -646,7 +659,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
     let (max_camera, _) = path::vertex_budgets(params);
     for (slot, pixel) in out.iter_mut().zip(pixels) {
         let camera = path::pixel_camera_subpath(scene, tracer, params, pixel, pass, max_camera, &mut counters);
-        let labels = CameraLabels::new(model, &camera);
+        let labels = CameraLabels::new(scene, model, &camera);
         let mut aux = SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, 0);
         let mut l = Rgb::ZERO;
         for t in 2..=camera.len() {

@@ -95,7 +95,7 @@ pub fn connection_sums<Q: RayQuery + ?Sized>(
     let (max_camera, _) = path::vertex_budgets(params);
     for pixel in pixels {
         let camera = path::pixel_camera_subpath(scene, tracer, params, pixel, pass, max_camera, &mut counters);
-        let labels = CameraLabels::new(model, &camera);
+        let labels = CameraLabels::new(scene, model, &camera);
         let mut aux = SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, 0);
         for t in 2..=camera.len() {
             if !params.max_depth.allows(t as u32 - 1) {
