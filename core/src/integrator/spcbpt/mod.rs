@@ -336,7 +336,7 @@ impl PassCache {
     }
     pub fn size_bytes(&self) -> usize {
         let tables = |t: &Vec<Option<AliasTable>>| {
-            t.iter().map(|a| a.as_ref().map_or(0, |a| a.len() * 12)).sum::<usize>() + t.capacity() * core::mem::size_of::<Option<AliasTable>>()
+            t.iter().map(|a| a.as_ref().map_or(0, AliasTable::size_bytes)).sum::<usize>() + t.capacity() * core::mem::size_of::<Option<AliasTable>>()
         };
         self.paths.size_bytes()
             + self.memo.capacity() * core::mem::size_of::<PrefixMemo>()
