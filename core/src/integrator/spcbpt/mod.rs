@@ -526,6 +526,8 @@ impl<Q: RayQuery + ?Sized> Strategies<'_, Q> {
     ) -> Option<Weighted> {
         let (scene, model) = (self.ctx.scene, self.model);
         let c = connect_unweighted(&self.ctx, model, light, camera, s, t, u, counters)?;
+        // The memo describes light[..s]; a resampled light endpoint (NEE) is not in it.
+        let memo_applies = light_memo.len() == s && (s != 1 || cached_source(model, light, s));
         // The full path: the sub-paths as they are, a resampled endpoint replacing its own.
         let one: [Vertex; 1];
         let (light, camera) = (light.get(..s).unwrap_or(light), camera.get(..t).unwrap_or(camera));
@@ -540,8 +542,6 @@ impl<Q: RayQuery + ?Sized> Strategies<'_, Q> {
             }
             _ => (light, camera),
         };
-        // The memo describes light[..s]; a resampled light endpoint (NEE) is not in it.
-        let memo_applies = light_memo.len() == s && (s != 1 || cached_source(model, light, s));
         let mut table = [0.0f64; 2 * path::MAX_VERTICES + 1];
         counts(scene, model, self.light_tracing, light_x, if memo_applies { light_memo } else { &[] }, camera_x, labels, &mut table);
         let count = |s2: usize, _t2: usize| table.get(s2).copied().unwrap_or(0.0);
