@@ -12,7 +12,8 @@
 //! Injected-bug checks (each done once, reverted): indexing the count table by t′
 //! instead of s′ in `spcbpt::Strategies::evaluate` fails (1) ((1, 2): 0.670 vs 0.934); reading
 //! the camera-label memo at the wrong camera index (`n − j` instead of `n − 1 − j` for
-//! κ_E in `path_counts_labelled`) fails (1) ((6, 2): 0.0411 vs 0.0277).
+//! κ_E in what was `path_counts_labelled`, now `counts::Labels::eye`) fails (1) ((6, 2):
+//! 0.0411 vs 0.0277).
 //! The memoized count tables (`spcbpt::counts` with a light memo and camera labels, the
 //! render loop's path) equal `path_counts` of the joined path bit for bit; each of these
 //! injected bugs fails that check: a camera vertex's prefix-weight factor taken with its
