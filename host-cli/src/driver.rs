@@ -32,7 +32,7 @@ use rayon::prelude::*;
 
 use ember_core::geometry::RayQuery;
 use ember_core::integrator::ConnectionStats;
-use ember_core::render::{ChunkOutput, Context, Film, Phase, PhaseBuffers, Phased};
+use ember_core::render::{Band, ChunkOutput, Context, Film, Phase, PhaseBuffers, Phased};
 
 /// A contribution at a continuous film position: the core's type.
 pub use ember_core::integrator::Splat;
@@ -110,9 +110,17 @@ where
     if phase.samples {
         stats.samples += phase.items as u64;
     }
+    // A pass's splats are committed on the pool too (the same bits as on one thread).
+    film.set_parallel_splats(Some(commit_bands));
     est.reduce(ctx, phase, outputs, film);
     add_time(times, phase.name, start.elapsed().as_secs_f64());
     stats
+}
+
+/// Commit a pass's splats band by band on the current rayon pool, each band its own task
+/// ([`ember_core::render::ParallelBands`]).
+fn commit_bands(bands: &mut [Band<'_>], work: &(dyn Fn(&mut Band<'_>) + Sync)) {
+    bands.par_iter_mut().with_max_len(1).for_each(work);
 }
 
 /// Run `est`'s setup phases (preprocessing) on `threads` threads; returns each phase's

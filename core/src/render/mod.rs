@@ -46,7 +46,7 @@ pub use config::{
     ConfigError, DEFAULT_FILTER_SEGMENTS, EstimatorConfig, EstimatorKind, FILM_BYTES_PER_PIXEL, FilterConfig, FilterReuse, FilterSide, KernelChoice,
     LvcbptConfig, MAX_DATASET, MAX_FILTER_SEGMENTS, MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig, SegmentAlgorithm, SegmentConfig, SpcbptConfig,
 };
-pub use film::{Film, FilmError, QUANTUM_BITS, Tallies};
+pub use film::{Band, Film, FilmError, ParallelBands, QUANTUM_BITS, Tallies};
 pub use renderer::{Renderer, RendererError};
 
 use alloc::vec::Vec;
