@@ -27,8 +27,9 @@
 //!    for a pass's last chunk, as a share of worker time, and the longest wait), a
 //!    number that other processes on the machine hardly move. Two controls frame the
 //!    speedups: the same driver over pure arithmetic (`spin`: what the machine gives
-//!    right now), and the reductions (the serial per-pass merge) timed within the runs (the
-//!    Amdahl bound they set).
+//!    right now), and the reductions (the per-pass merge) timed within the runs: at one
+//!    thread, with the Amdahl bound they would set if they stayed serial, and at every
+//!    thread count (the splat commit runs on the pool since issue 24's second session).
 //!
 //! Run: `cargo bench -p ember-cli --bench render_throughput` (1–2.5 minutes on 2 cores,
 //! longer while other processes load the machine).
@@ -371,14 +372,19 @@ fn scaling() {
         let merge = of(&|r| r[0].merge);
         let f = (merge * SCALE_SPP as f64 / of(&|r| r[0].wall)).min(1.0);
         let bounds: Vec<String> = counts[1..].iter().map(|&n| format!("{:.2}", 1.0 / (f + (1.0 - f) / n as f64))).collect();
+        // Since the splat commit runs on the pool (Film::set_parallel_splats), the
+        // reductions shrink with threads: the bound above assumes they stay serial.
+        let merges: Vec<String> = (0..counts.len()).map(|k| format!("{:.1}", 1e3 * of(&|r| r[k].merge))).collect();
         println!(
             "    {:<6} film bits across thread counts: {}; merge {:.1} ms/pass = {:.1} % of a \
-             1-thread pass; Amdahl bound {}",
+             1-thread pass; Amdahl bound if serial {}; merge ms/pass at {} threads: {}",
             "",
             if identical { "identical" } else { "DIFFER" },
             merge * 1e3,
             100.0 * f,
-            bounds.join(" / ")
+            bounds.join(" / "),
+            counts.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(" / "),
+            merges.join(" / ")
         );
     }
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();

@@ -136,50 +136,17 @@ impl Default for TreeParams {
 
 const LEAF: u8 = u8::MAX;
 
-/// A node while the tree is grown: inner nodes keep their majority label too (their
-/// children inherit it when they carry no weight).
+/// One node: a leaf (`axis == LEAF`) holds `label`; an inner node sends a feature with
+/// `x[axis] < threshold` to `first_child` and the rest to `first_child + 1`.
 #[derive(Clone, Copy, Debug)]
-struct GrowNode {
+struct Node {
     threshold: f32,
     first_child: u32,
     label: u32,
     axis: u8,
 }
 
-/// Low bits of [`Node::link`] holding the axis; [`LEAF_AXIS`] there marks a leaf.
-const AXIS_BITS: u32 = 4;
-const LEAF_AXIS: u32 = (1 << AXIS_BITS) - 1;
-/// Largest first-child index or label a [`Node`] can hold.
-const LINK_MAX: u32 = u32::MAX >> AXIS_BITS;
-
-/// One node of the tree as `classify` reads it, 8 bytes: an inner node sends a feature
-/// with `x[axis] < threshold` to child `link >> 4` and the rest to the one after it; a
-/// leaf (`axis` = 15) holds its label in `link >> 4`. Half the size of [`GrowNode`], so a
-/// descent touches half as many cache lines: the trees are read twice per connection and
-/// twice per camera vertex, and at SPCBPT's sizes they do not fit in L2.
-#[derive(Clone, Copy, Debug)]
-struct Node {
-    threshold: f32,
-    link: u32,
-}
-
-impl Node {
-    #[inline]
-    fn axis(self) -> u32 {
-        self.link & LEAF_AXIS
-    }
-    #[inline]
-    fn target(self) -> u32 {
-        self.link >> AXIS_BITS
-    }
-    fn leaf(label: u32) -> Self {
-        Self { threshold: 0.0, link: (label.min(LINK_MAX) << AXIS_BITS) | LEAF_AXIS }
-    }
-}
-
-/// A decision tree reproducing subspace labels; a flat node array, read by a loop. The
-/// nodes lie depth first with siblings adjacent (the order they were grown in), so a
-/// descent often finds its next pair in the cache line it just read.
+/// A decision tree reproducing subspace labels; a flat node array, read by a loop.
 #[derive(Clone, Debug)]
 pub struct DecisionTree {
     nodes: Vec<Node>,
@@ -207,11 +174,6 @@ impl DecisionTree {
     /// the shortest, non-finite or negative weights count as 0. Deterministic in
     /// `params.seed`.
     pub fn fit(samples: &[SubpathFeature], labels: &[u32], weights: &[f32], params: &TreeParams) -> Self {
-        Self::compact(&Self::grow(samples, labels, weights, params))
-    }
-
-    /// The tree as grown, before [`Self::compact`]: the paper's splitting rule.
-    fn grow(samples: &[SubpathFeature], labels: &[u32], weights: &[f32], params: &TreeParams) -> Vec<GrowNode> {
         let n = samples.len().min(labels.len()).min(weights.len());
         let weight_of = |i: u32| -> f64 {
             let w = weights[i as usize];
@@ -222,7 +184,7 @@ impl DecisionTree {
         let mut left = Histogram { weight: vec![0.0; n_labels] };
         let mut right = Histogram { weight: vec![0.0; n_labels] };
         let mut indices: Vec<u32> = (0..n as u32).collect();
-        let mut nodes = vec![GrowNode { threshold: 0.0, first_child: 0, label: 0, axis: LEAF }];
+        let mut nodes = vec![Node { threshold: 0.0, first_child: 0, label: 0, axis: LEAF }];
         // Work items: (node, start, end, depth, parent label).
         let mut stack: Vec<(u32, usize, usize, u32, u32)> = vec![(0, 0, n, 0, 0)];
 
@@ -311,31 +273,13 @@ impl DecisionTree {
                 }
             }
             let first_child = nodes.len() as u32;
-            nodes[node as usize] = GrowNode { threshold, first_child, label, axis: axis as u8 };
-            nodes.push(GrowNode { threshold: 0.0, first_child: 0, label, axis: LEAF });
-            nodes.push(GrowNode { threshold: 0.0, first_child: 0, label, axis: LEAF });
+            nodes[node as usize] = Node { threshold, first_child, label, axis: axis as u8 };
+            nodes.push(Node { threshold: 0.0, first_child: 0, label, axis: LEAF });
+            nodes.push(Node { threshold: 0.0, first_child: 0, label, axis: LEAF });
             stack.push((first_child + 1, start + split, end, depth + 1, label));
             stack.push((first_child, start, start + split, depth + 1, label));
         }
-        nodes
-    }
-
-    /// The tree `classify` reads, from a grown one (`grown[0]` the root, which `fit` and
-    /// [`Self::from_raw_nodes`] guarantee): the same nodes in the same order, 8 bytes each.
-    fn compact(grown: &[GrowNode]) -> Self {
-        let mut nodes: Vec<Node> = grown
-            .iter()
-            .map(|n| {
-                if n.axis == LEAF {
-                    Node::leaf(n.label)
-                } else {
-                    Node { threshold: n.threshold, link: (n.first_child.min(LINK_MAX) << AXIS_BITS) | n.axis as u32 }
-                }
-            })
-            .collect();
-        if nodes.is_empty() {
-            nodes.push(Node::leaf(0));
-        }
+        nodes.shrink_to_fit();
         Self { nodes }
     }
 
@@ -345,15 +289,14 @@ impl DecisionTree {
         let coords = x.to_array();
         let mut index = 0usize;
         loop {
-            let Some(&node) = self.nodes.get(index) else { return 0 };
-            let axis = node.axis();
-            if axis == LEAF_AXIS {
-                return node.target();
+            let Some(node) = self.nodes.get(index) else { return 0 };
+            if node.axis == LEAF {
+                return node.label;
             }
             // NaN goes right, like every value that is not below the threshold.
-            let value = coords.get(axis as usize).copied().unwrap_or(0.0);
+            let value = coords.get(node.axis as usize).copied().unwrap_or(0.0);
             let left = value < node.threshold;
-            index = node.target() as usize + (!left) as usize;
+            index = node.first_child as usize + (!left) as usize;
         }
     }
 
@@ -368,11 +311,11 @@ impl DecisionTree {
         let mut stack = vec![(0usize, 0u32)];
         while let Some((i, d)) = stack.pop() {
             let node = self.nodes[i];
-            if node.axis() == LEAF_AXIS {
+            if node.axis == LEAF {
                 deepest = deepest.max(d);
             } else {
-                stack.push((node.target() as usize, d + 1));
-                stack.push((node.target() as usize + 1, d + 1));
+                stack.push((node.first_child as usize, d + 1));
+                stack.push((node.first_child as usize + 1, d + 1));
             }
         }
         deepest
@@ -383,11 +326,10 @@ impl DecisionTree {
         self.nodes.capacity() * core::mem::size_of::<Node>()
     }
 
-    /// The nodes as (axis, threshold, first child, label), axis 255 marking a leaf (inner
-    /// nodes give label 0, leaves first child 0): what a stored model keeps
-    /// ([`DecisionTree::from_raw_nodes`] reads it back).
+    /// The nodes as (axis, threshold, first child, label), axis 255 marking a leaf: what
+    /// a stored model keeps ([`DecisionTree::from_raw_nodes`] reads it back).
     pub fn raw_nodes(&self) -> impl Iterator<Item = (u8, f32, u32, u32)> + '_ {
-        self.nodes.iter().map(|n| if n.axis() == LEAF_AXIS { (LEAF, 0.0, 0, n.target()) } else { (n.axis() as u8, n.threshold, n.target(), 0) })
+        self.nodes.iter().map(|n| (n.axis, n.threshold, n.first_child, n.label))
     }
 
     /// A tree from [`DecisionTree::raw_nodes`], refused unless it is one `classify` walks
@@ -400,7 +342,7 @@ impl DecisionTree {
         }
         let mut nodes = Vec::with_capacity(raw.len());
         for (i, &(axis, threshold, first_child, label)) in raw.iter().enumerate() {
-            if label >= labels || (axis == LEAF && label > LINK_MAX) {
+            if label >= labels {
                 return Err("a tree label past the subspace count");
             }
             if axis != LEAF {
@@ -410,13 +352,13 @@ impl DecisionTree {
                 if threshold.is_nan() {
                     return Err("a tree node with a NaN threshold");
                 }
-                if first_child as usize <= i || first_child as usize + 1 >= raw.len() || first_child >= LINK_MAX {
+                if first_child as usize <= i || first_child as usize + 1 >= raw.len() {
                     return Err("a tree node whose children are missing or come before it");
                 }
             }
-            nodes.push(GrowNode { threshold, first_child, label, axis });
+            nodes.push(Node { threshold, first_child, label, axis });
         }
-        Ok(Self::compact(&nodes))
+        Ok(Self { nodes })
     }
 }
 
@@ -556,65 +498,5 @@ impl LightSourceBins {
         }
         first_id.checked_add(light_first[lights]).ok_or("light-source bin ids past 2^32")?;
         Ok(Self { first_id, light_first, light_rows })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::{DecisionTree, GrowNode, LEAF, SubpathFeature, TreeParams};
-    use crate::math::Vec3;
-    use crate::rng::{SampleStream, Stream};
-    use alloc::vec::Vec;
-
-    /// The grown tree read the way `classify` read it before collapsing.
-    fn classify_grown(nodes: &[GrowNode], x: &SubpathFeature) -> u32 {
-        let coords = x.to_array();
-        let mut i = 0usize;
-        loop {
-            let n = nodes[i];
-            if n.axis == LEAF {
-                return n.label;
-            }
-            i = n.first_child as usize + (coords[n.axis as usize] >= n.threshold || coords[n.axis as usize].is_nan()) as usize;
-        }
-    }
-
-    fn point(rng: &mut SampleStream) -> SubpathFeature {
-        let mut v = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - Vec3::ONE;
-        SubpathFeature::new(v(), v().normalize_or_zero(), v().normalize_or_zero())
-    }
-
-    /// The compact 8-byte nodes answer as the grown tree, also after a round trip through
-    /// the stored form. Seen to fail on injected bugs: the axis kept in 3 bits (axes 8 = the
-    /// incident direction's z read as 0), and `raw_nodes` giving leaves' labels from the
-    /// wrong field.
-    #[test]
-    fn compact_tree_answers_as_the_grown_tree() {
-        let mut rng = SampleStream::for_sample(3, Stream::Preprocess, 0, 0, 0);
-        let samples: Vec<SubpathFeature> = (0..20_000).map(|_| point(&mut rng)).collect();
-        let label = |x: &SubpathFeature| ((x.position.x * 3.0 + 3.0) as u32 % 4) + 4 * ((x.position.y > 0.3) as u32) + ((x.incident.z > 0.9) as u32);
-        let mut labels: Vec<u32> = samples.iter().map(label).collect();
-        // Label noise, so the 99 % rule stops at leaves of mixed content.
-        for (k, l) in labels.iter_mut().enumerate() {
-            if k % 53 == 0 {
-                *l = (*l + 3) % 9;
-            }
-        }
-        let weights: Vec<f32> = (0..samples.len()).map(|k| 1.0 + (k % 7) as f32).collect();
-        let params = TreeParams { seed: 1, ..TreeParams::default() };
-        let grown = DecisionTree::grow(&samples, &labels, &weights, &params);
-        let tree = DecisionTree::fit(&samples, &labels, &weights, &params);
-        assert_eq!(tree.node_count(), grown.len());
-        let raw: Vec<_> = tree.raw_nodes().collect();
-        let reloaded = DecisionTree::from_raw_nodes(&raw, 9).expect("a compact tree reloads");
-        assert_eq!(reloaded.node_count(), tree.node_count());
-        let mut queries: Vec<SubpathFeature> = (0..20_000).map(|_| point(&mut rng)).collect();
-        queries.extend_from_slice(&samples);
-        queries.push(SubpathFeature::new(Vec3::splat(f32::NAN), Vec3::ZERO, Vec3::ZERO));
-        for q in &queries {
-            let expected = classify_grown(&grown, q);
-            assert_eq!(tree.classify(q), expected);
-            assert_eq!(reloaded.classify(q), expected);
-        }
     }
 }
