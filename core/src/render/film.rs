@@ -540,11 +540,15 @@ mod tests {
             assert!(one.splats_outside() > 0 && one.discarded() == 2, "{:?}", one.tallies());
             assert_eq!(one.tallies(), banded.tallies(), "{filter:?}");
             assert!(one.exact_sums() == banded.exact_sums(), "{filter:?}");
-            // Too few splats to cut: the same sequential path.
+            // Too few splats to cut: committed on the calling thread, the same film.
             let mut few = Film::with_filter(w, h, filter);
-            few.set_parallel_splats(Some(reversed));
-            few.push_splats(&splats[..100]);
-            few.end_pass(1.0);
+            let mut few_banded = Film::with_filter(w, h, filter);
+            few_banded.set_parallel_splats(Some(reversed));
+            for film in [&mut few, &mut few_banded] {
+                film.push_splats(&splats[..100]);
+                film.end_pass(1.0);
+            }
+            assert!(few.exact_sums() == few_banded.exact_sums() && few.tallies() == few_banded.tallies(), "{filter:?}");
         }
     }
 

@@ -450,21 +450,11 @@ pub fn build_gamma_tables(model: &Model, cache: &PassCache, eyes: Range<u32>, ta
     }
 }
 
-/// Join sub-paths into a full path, light end first (`sampled` replaces an endpoint).
+/// Join sub-paths into a full path, light end first (`sampled` replaces an endpoint). The
+/// render loop does not join ([`counts`] reads the sub-paths in place); the training set
+/// and the tests do.
 pub fn join(light: &[Vertex], camera: &[Vertex], sampled: Option<Vertex>, s: usize, t: usize) -> FullPath {
     let mut x = FullPath::new();
-    join_into(&mut x, light, camera, sampled, s, t);
-    x
-}
-
-/// [`join`] into `x` (cleared first). A `FullPath` is a fixed-capacity array of 68
-/// vertices, about 11 KB, and returning one by value copies all of it, once per
-/// strategy evaluated; filling one in place writes only the vertices used. (callgrind
-/// put that copy at 44 % of an SPCBPT pass's instructions on enclosed, but it is one
-/// `rep movsb`, which valgrind counts byte by byte: in wall time the change was within
-/// the ±10 % noise of 1-thread runs.)
-pub fn join_into(x: &mut FullPath, light: &[Vertex], camera: &[Vertex], sampled: Option<Vertex>, s: usize, t: usize) {
-    x.clear();
     for i in 0..s {
         let v = match sampled {
             Some(v) if s == 1 && i == 0 => Some(v),
@@ -483,6 +473,7 @@ pub fn join_into(x: &mut FullPath, light: &[Vertex], camera: &[Vertex], sampled:
             let _ = x.push(v);
         }
     }
+    x
 }
 
 /// What SPCBPT's strategies read: the scene and ray queries, the model, and the light
