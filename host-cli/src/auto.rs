@@ -406,6 +406,9 @@ mod tests {
     use super::*;
     use ember_core::rng::{SampleStream, Stream};
 
+    /// A batch's pass count and mean image.
+    type Batch = (u32, Vec<[f32; 3]>);
+
     const W: u32 = 128;
     const H: u32 = 128;
 
@@ -413,7 +416,7 @@ mod tests {
     /// pixel p is truth(p)·(1 + bias) plus noise of standard deviation `sigma`; with
     /// `shared` the noise is one draw per block per pass (as a light path splats into
     /// many pixels), otherwise one per pixel.
-    fn pilot(seed: u64, bias: f64, sigma: f64, shared: bool, batches: usize, n: u32) -> (Vec<(u32, Vec<[f32; 3]>)>, Vec<[f32; 3]>) {
+    fn pilot(seed: u64, bias: f64, sigma: f64, shared: bool, batches: usize, n: u32) -> (Vec<Batch>, Vec<[f32; 3]>) {
         let truth = |p: u32| 0.2 + 0.8 * ((p % W) as f64 / W as f64);
         let mut out = Vec::new();
         let mut total = vec![[0.0f64; 3]; (W * H) as usize];
