@@ -19,7 +19,8 @@
 //!
 //! The predicted relMSE (the suite's metric, (x − r)²/(r² + 0.01)) after the remaining
 //! time T is mean_p σ²(p)/(r² + 0.01) · t_pass / (T − t_setup) + bias², and the
-//! candidate with the smallest one renders. Without `--time` the race assumes
+//! candidate with the smallest one renders, among those that fit [`MIN_PASSES`] full
+//! passes in the remaining time where any does. Without `--time` the race assumes
 //! [`NOMINAL_SECONDS`] of rendering.
 //!
 //! The merging candidates keep their radius in pixel footprints and one light path per
@@ -52,6 +53,9 @@ pub const SHARE: f64 = 0.02;
 pub const NOMINAL_SECONDS: f64 = 10.0;
 /// The pilot's resolution divisor per axis.
 const DOWNSCALE: u32 = 4;
+/// The fewest full passes a candidate must fit in the remaining time to be chosen over
+/// one that fits them (see [`Entry::fits`]).
+pub const MIN_PASSES: f64 = 4.0;
 /// Bias blocks, in pilot pixels per side.
 const BLOCK: u32 = 8;
 
@@ -72,6 +76,14 @@ pub struct Entry {
     pub bias: f64,
     /// Predicted relMSE after the remaining time.
     pub predicted: f64,
+    /// Whether [`MIN_PASSES`] full passes fit in the remaining time. A candidate that
+    /// fits fewer renders a handful of passes: the driver finishes the pass in progress
+    /// at the deadline, so the render overshoots its budget by up to a pass, and the
+    /// pilot gave such a candidate one or two passes, whose variance is a one-degree-of-
+    /// freedom guess (spot_mirror, seed 3: BPM's 5.2 s passes in 7.7 s left, predicted
+    /// 1.1e-2 from two pilot passes, measured 4.8e-2 against PPM's 0.5–1.3e-2). It is
+    /// chosen only where no candidate fits.
+    pub fits: bool,
 }
 
 /// One candidate's pilot: what the race reads from it.
@@ -118,14 +130,15 @@ impl Choice {
         )];
         for e in &self.entries {
             lines.push(format!(
-                "auto         {:<5} {:>4} passes, {:.3e} s/pass at full size, setup {:.2} s, variance {:.3e}, bias² {:.3e} -> relMSE {:.3e}",
+                "auto         {:<5} {:>4} passes, {:.3e} s/pass at full size, setup {:.2} s, variance {:.3e}, bias² {:.3e} -> relMSE {:.3e}{}",
                 e.kind.name(),
                 e.passes,
                 e.pass_seconds,
                 e.setup_seconds,
                 e.variance,
                 e.bias,
-                e.predicted
+                e.predicted,
+                if e.fits { "" } else { " (fewer than 4 passes fit)" }
             ));
         }
         lines.push(format!("auto       renders with {}", self.kind.name()));
@@ -265,10 +278,18 @@ pub fn choose(
             variance,
             bias,
             predicted: if predicted.is_nan() { f64::INFINITY } else { predicted },
+            fits: left >= MIN_PASSES * pass_seconds,
         });
     }
-    let best = entries.iter().min_by(|a, b| a.predicted.total_cmp(&b.predicted)).map_or(EstimatorKind::Pt, |e| e.kind);
+    let best = choose_entry(&entries);
     Ok((Choice { kind: best, entries, seconds: race_start.elapsed().as_secs_f64(), size: (w, h), overhead }, full))
+}
+
+/// The candidate with the smallest predicted relMSE among those that fit
+/// [`MIN_PASSES`] passes, or among all where none does.
+fn choose_entry(entries: &[Entry]) -> EstimatorKind {
+    let any_fits = entries.iter().any(|e| e.fits);
+    entries.iter().filter(|e| e.fits || !any_fits).min_by(|a, b| a.predicted.total_cmp(&b.predicted)).map_or(EstimatorKind::Pt, |e| e.kind)
 }
 
 /// Per pixel and channel, the variance of one pass, Σ_b n_b (X_b − X̄)² / (B − 1), from
@@ -495,6 +516,18 @@ mod tests {
         let v = pass_variance(&batches, &mean);
         let avg = v.iter().map(|x| x[0]).sum::<f64>() / v.len() as f64;
         assert!((avg / 0.09 - 1.0).abs() < 0.1, "per-pass variance {avg:.4e}, expected 0.09");
+    }
+
+    /// A candidate that fits too few passes loses to one that fits, however small its
+    /// prediction; where none fits, the smallest prediction wins. Seen to fail with
+    /// `fits` ignored (BPM chosen) and with the fallback left out (PT chosen by default).
+    #[test]
+    fn a_candidate_must_fit_its_passes() {
+        let entry = |kind, predicted, fits| Entry { kind, passes: 4, pass_seconds: 1.0, setup_seconds: 0.0, variance: 1.0, bias: 0.0, predicted, fits };
+        let race = [entry(EstimatorKind::Bpm, 1e-2, false), entry(EstimatorKind::Ppm, 2e-2, true), entry(EstimatorKind::Lt, 3e-2, true)];
+        assert_eq!(choose_entry(&race), EstimatorKind::Ppm);
+        let none = [entry(EstimatorKind::Bpm, 1e-2, false), entry(EstimatorKind::Ppm, 2e-2, false)];
+        assert_eq!(choose_entry(&none), EstimatorKind::Bpm);
     }
 
     #[test]
