@@ -139,7 +139,7 @@ impl Choice {
                 e.variance,
                 e.bias,
                 e.predicted,
-                if e.fits { "" } else { " (fewer than 4 passes fit)" }
+                if e.fits { String::new() } else { format!(" (fewer than {MIN_PASSES} passes fit)") }
             ));
         }
         lines.push(format!("auto       renders with {}", self.kind.name()));
