@@ -156,3 +156,41 @@ fn define_overrides_a_scene_default() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--estimator auto` races every candidate, names its choice, and renders the full
+/// film with it inside the time budget. A smoke test of the whole path (the race's
+/// estimates have unit tests in `auto.rs`): seen to fail when `describe` leaves a
+/// candidate out, and when the choice renders the pilot's quarter-size scene (the
+/// prepared scene not handed back).
+#[test]
+fn auto_races_every_candidate_and_renders_the_full_film() {
+    let dir = temp_dir("auto");
+    let out = dir.join("auto.exr");
+    let o = ember(&[
+        "render",
+        "--builtin",
+        "cornell-box",
+        "-e",
+        "auto",
+        "--time",
+        "2",
+        "--width",
+        "64",
+        "--height",
+        "64",
+        "--threads",
+        "2",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    for name in ["pt", "lt", "bdpt", "ppm", "bpm"] {
+        assert!(err.lines().any(|l| l.starts_with("auto") && l.split_whitespace().nth(1) == Some(name)), "no race line for {name}:\n{err}");
+    }
+    let chosen = err.lines().find_map(|l| l.strip_prefix("auto       renders with ")).unwrap_or_else(|| panic!("no choice:\n{err}"));
+    assert!(["pt", "lt", "bdpt", "ppm", "bpm"].contains(&chosen.trim()), "{chosen}");
+    let image = ember_cli::image_io::read_exr(&out).unwrap();
+    assert_eq!((image.width, image.height), (64, 64));
+    let _ = std::fs::remove_dir_all(&dir);
+}
