@@ -2,7 +2,7 @@
 //!
 //! `render`: check the options that can fail cheaply (scene file, output path) before
 //! any work; build the renderer ([`crate::estimators::make_built`]: scene, ray
-//! queries, estimator); run the [`driver`] into a [`Film`]; write the
+//! queries, estimator); run the [`driver`](crate::driver) into a [`Film`]; write the
 //! EXR and the PNG; print a summary. A split render (`--passes`, `--task-*`) renders
 //! its range and writes a partial image instead ([`crate::distributed`]).
 //!

@@ -7,15 +7,16 @@
 //!
 //! - the variance of one pass per pixel, σ²(p) = Σ_b n_b (X_b − X̄)² / (B − 1), from the
 //!   batch means X_b of n_b passes each (an unbiased estimate for independent passes);
-//! - a bias: the candidates' per-pixel median image is the reference r; over blocks of
-//!   8×8 pixels, what the squared difference of a candidate's block mean to the
-//!   reference's exceeds its own variance counts as squared bias. This is what exposes
-//!   a path tracer that never finds a light seen through a mirror: its variance is
-//!   small because its image is black;
-//! - the time of a pass at full resolution: the pilot's pass time times the pixel
-//!   ratio, but for a fixed part of a pass (dispatch, staging, commit) that does not
-//!   scale, found by timing PT's pass at both sizes (up to three passes of PT on the
-//!   render's own scene first); the setup's time times the ratio.
+//! - a bias, over blocks of 8×8 pixels: what the squared difference of a candidate's
+//!   block mean to the median of the *other* candidates' block means exceeds the
+//!   variance of both (`block_bias`, `block_estimate`). This is what exposes a path
+//!   tracer that never finds a light seen through a mirror: its variance is small
+//!   because its image is black;
+//! - the time of a pass at full resolution: the pilot's pass time (its fastest batch
+//!   after the first) times the pixel ratio, but for a fixed part of a pass (dispatch,
+//!   staging, commit) that does not scale, found by timing PT's pass at both sizes (one
+//!   untimed and two timed passes of PT on the render's own scene first); the setup's
+//!   time times the ratio.
 //!
 //! The predicted relMSE (the suite's metric, (x − r)²/(r² + 0.01)) after the remaining
 //! time T is mean_p σ²(p)/(r² + 0.01) · t_pass / (T − t_setup) + bias², and the
