@@ -8,8 +8,9 @@
 //! - the variance of one pass per pixel, σ²(p) = Σ_b n_b (X_b − X̄)² / (B − 1), from the
 //!   batch means X_b of n_b passes each (an unbiased estimate for independent passes);
 //! - a bias, over blocks of 8×8 pixels: what the squared difference of a candidate's
-//!   block mean to the median of the *other* candidates' block means exceeds the
-//!   variance of both (`block_bias`, `block_estimate`). This is what exposes a path
+//!   block mean to the median of the *other* unbiased candidates' block means (PT, LT,
+//!   BDPT; all others where fewer than two are there) exceeds the variance of both
+//!   (`reference`, `block_bias`, `block_estimate`). This is what exposes a path
 //!   tracer that never finds a light seen through a mirror: its variance is small
 //!   because its image is black;
 //! - the time of a pass at full resolution: the pilot's pass time (its fastest batch
@@ -173,7 +174,7 @@ pub fn choose(
     let threads = args.thread_count();
     // A pass has a fixed cost (dispatch, staging, commit) besides its pixels', which the
     // pixel ratio would scale too: PT's pass time at full size, measured on the render's
-    // own scene for up to three passes, gives it (o below).
+    // own scene, gives it (o below).
     let mut pt = CoreRenderer::with_config(full, args.cache.config_for(EstimatorKind::Pt), max_depth, args.seed ^ 0x5eed_a071, threads)?;
     let mut film = Film::with_filter(fw, fh, pt.camera_filter());
     // One pass first, untimed: the first pass at full size pays for the film's first
@@ -216,7 +217,7 @@ pub fn choose(
             let summary =
                 r.render(&mut film, limits, DriverConfig { progress: false, ..DriverConfig::with_threads(threads) }, start).map_err(|e| e.to_string())?;
             render_seconds += summary.render_seconds;
-            if (b >= 1 || BATCHES == 1) && summary.passes > 0 {
+            if b >= 1 && summary.passes > 0 {
                 fastest = fastest.min(summary.render_seconds / summary.passes as f64);
             }
             // The batch's own mean from the running means before and after it.
@@ -253,13 +254,14 @@ pub fn choose(
     // t_low = o + b, t_full = o + ratio·b for PT: the fixed part o of a pass.
     let pt_low = runs.iter().find(|r| r.kind == EstimatorKind::Pt).map_or(0.0, |r| r.pass_seconds);
     let overhead = if ratio > 1.0 { ((pt_low * ratio - pt_full) / (ratio - 1.0)).clamp(0.0, pt_low) } else { 0.0 };
+    // Every candidate's blocks, flagged whether it is unbiased (merging is not).
+    let candidates: Vec<(&Estimate, bool)> = runs.iter().map(|r| (&r.blocks, !matches!(r.config, EstimatorConfig::Merging(..)))).collect();
     let mut entries = Vec::new();
     for (c, run) in runs.iter().enumerate() {
         let Run { kind, config, variance: variance_px, pass_seconds: low, passes, setup, .. } = run;
         let (kind, config, low, passes, setup) = (*kind, *config, *low, *passes, *setup);
         let rel = |p: usize, k: usize| (scale[p][k] as f64).powi(2) + 0.01;
         let variance = (0..pixels).map(|p| (0..3).map(|k| variance_px[p][k] / rel(p, k)).sum::<f64>()).sum::<f64>() / (3 * pixels.max(1)) as f64;
-        let candidates: Vec<(&Estimate, bool)> = runs.iter().map(|r| (&r.blocks, !matches!(r.config, EstimatorConfig::Merging(..)))).collect();
         let bias = block_bias(&run.blocks, &reference(&candidates, c));
         // The fixed part is a difference of two timings: where it would be most of a
         // candidate's pilot pass, its noise would decide that candidate's full pass time,
