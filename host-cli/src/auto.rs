@@ -180,16 +180,22 @@ pub fn choose(
     // One pass first, untimed: the first pass at full size pays for the film's first
     // touch and the pool's start (measured: 70 ms against 50 ms on the Cornell box),
     // which the render's hundreds of passes do not; then two passes timed one by one,
-    // of which the faster counts (see `fastest` below).
+    // of which the faster counts (see `fastest` below). Past the slice no further pass
+    // starts (each call renders at least one), and the untimed pass's time stands in.
     let config = DriverConfig { progress: false, ..DriverConfig::with_threads(threads) };
-    let deadline = Some(Instant::now() + Duration::from_secs_f64(slice));
-    let mut pt_full = f64::INFINITY;
+    let deadline = Instant::now() + Duration::from_secs_f64(slice);
+    let (mut cold, mut pt_full) = (f64::INFINITY, f64::INFINITY);
     for spp in 1..=3 {
-        let limits = Limits { spp, deadline, interrupt: Some(crate::interrupt::flag()), first_pass: 0 };
-        let summary = pt.render(&mut film, limits, config, start).map_err(|e| e.to_string())?;
-        if spp > 1 && summary.passes > 0 {
-            pt_full = pt_full.min(summary.render_seconds / summary.passes as f64);
+        if spp > 1 && Instant::now() >= deadline {
+            break;
         }
+        let limits = Limits { spp, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass: 0 };
+        let summary = pt.render(&mut film, limits, config, start).map_err(|e| e.to_string())?;
+        let per_pass = summary.render_seconds / summary.passes.max(1) as f64;
+        if spp == 1 { cold = per_pass } else { pt_full = pt_full.min(per_pass) }
+    }
+    if !pt_full.is_finite() {
+        pt_full = cold;
     }
     let full = pt.prepared;
     let mut prepared = Some(load(w, h)?);
