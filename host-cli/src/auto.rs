@@ -16,7 +16,7 @@
 //! - the time of a pass at full resolution: the pilot's pass time (its fastest batch
 //!   after the first) times the pixel ratio, but for a fixed part of a pass (dispatch,
 //!   staging, commit) that does not scale, found by timing PT's pass at both sizes (one
-//!   untimed and two timed passes of PT on the render's own scene first); the setup's
+//!   untimed and up to two timed passes of PT on the render's own scene first); the setup's
 //!   time times the ratio.
 //!
 //! The predicted relMSE (the suite's metric, (x − r)²/(r² + 0.01)) after the remaining
