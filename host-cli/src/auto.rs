@@ -51,6 +51,8 @@ pub const CANDIDATES: [EstimatorKind; 5] = [EstimatorKind::Pt, EstimatorKind::Lt
 pub const BATCHES: usize = 4;
 /// The share of the budget each candidate's pilot takes.
 pub const SHARE: f64 = 0.02;
+/// The share of the budget the PT-moment probe takes.
+pub const PROBE_SHARE: f64 = 0.01;
 /// The rendering time the race assumes without `--time`.
 pub const NOMINAL_SECONDS: f64 = 10.0;
 /// The pilot's resolution divisor per axis.
@@ -74,6 +76,11 @@ pub struct Entry {
     pub setup_seconds: f64,
     /// Mean over pixels of σ²/(r² + 0.01) for one pass.
     pub variance: f64,
+    /// For PT, the same from BDPT's samples ([`EstimatorConfig::PtMoment`]); `variance`
+    /// is the larger of the two.
+    pub probed: Option<f64>,
+    /// The variance from the candidate's own passes.
+    pub own: f64,
     /// Squared relative bias against the median image.
     pub bias: f64,
     /// Predicted relMSE after the remaining time.
@@ -133,12 +140,13 @@ impl Choice {
         )];
         for e in &self.entries {
             lines.push(format!(
-                "auto         {:<5} {:>4} passes, {:.3e} s/pass at full size, setup {:.2} s, variance {:.3e}, bias² {:.3e} -> relMSE {:.3e}{}",
+                "auto         {:<5} {:>4} passes, {:.3e} s/pass at full size, setup {:.2} s, variance {:.3e}{}, bias² {:.3e} -> relMSE {:.3e}{}",
                 e.kind.name(),
                 e.passes,
                 e.pass_seconds,
                 e.setup_seconds,
                 e.variance,
+                e.probed.map_or(String::new(), |p| format!(" (own {:.3e}, from BDPT's samples {p:.3e})", e.own)),
                 e.bias,
                 e.predicted,
                 if e.fits { String::new() } else { format!(" (fewer than {MIN_PASSES} passes fit)") }
@@ -253,6 +261,15 @@ pub fn choose(
         runs.push(Run { kind, config, image: prev, variance, blocks, pass_seconds, passes: film.passes(), setup: r.setup_seconds });
         prepared = Some(r.prepared);
     }
+    // PT's second moment per pixel from BDPT's samples, for the rare bright samples that
+    // PT's own few passes miss (`EstimatorConfig::PtMoment`).
+    let scene = prepared.take().ok_or("the pilot scene was lost")?;
+    let mut probe = CoreRenderer::with_config(scene, EstimatorConfig::PtMoment, max_depth, args.seed ^ 0x5eed_a072, threads)?;
+    let mut film = Film::with_filter(w, h, probe.camera_filter());
+    let deadline = Instant::now() + Duration::from_secs_f64(PROBE_SHARE * budget);
+    let limits = Limits { spp: u32::MAX, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass: 0 };
+    probe.render(&mut film, limits, DriverConfig { progress: false, ..DriverConfig::with_threads(threads) }, start).map_err(|e| e.to_string())?;
+    let moment = film.to_rgb_f32();
     // The scale of the relMSE: per pixel and channel, the median of the candidates' images.
     let pixels = (w * h) as usize;
     let scale: Vec<[f32; 3]> = (0..pixels).map(|p| core::array::from_fn(|k| median(runs.iter().map(|r| r.image[p][k] as f64).collect()) as f32)).collect();
@@ -260,15 +277,40 @@ pub fn choose(
     // t_low = o + b, t_full = o + ratio·b for PT: the fixed part o of a pass.
     let pt_low = runs.iter().find(|r| r.kind == EstimatorKind::Pt).map_or(0.0, |r| r.pass_seconds);
     let overhead = if ratio > 1.0 { ((pt_low * ratio - pt_full) / (ratio - 1.0)).clamp(0.0, pt_low) } else { 0.0 };
+    let rel = |p: usize, k: usize| (scale[p][k] as f64).powi(2) + 0.01;
+    let mean_over_pixels =
+        |v: &dyn Fn(usize, usize) -> f64| (0..pixels).map(|p| (0..3).map(|k| v(p, k) / rel(p, k)).sum::<f64>()).sum::<f64>() / (3 * pixels.max(1)) as f64;
+    // Each candidate's variance from its own passes, and PT's also from BDPT's probe: its
+    // second moment less the squared mean, a lower estimate (the cross terms between
+    // path lengths are left out), so the larger of the two counts.
+    let own: Vec<f64> = runs.iter().map(|r| mean_over_pixels(&|p, k| r.variance[p][k])).collect();
+    let probed: Vec<Option<f64>> =
+        runs.iter().map(|r| (r.kind == EstimatorKind::Pt).then(|| mean_over_pixels(&|p, k| moment[p][k] as f64 - (scale[p][k] as f64).powi(2)))).collect();
+    // Where the probe finds PT's variance underestimated, so are PT's block means'
+    // variances, by the same rare samples: they are scaled alike, so that PT's mean,
+    // low where it missed them, does not read as a bias of the candidates it is a
+    // reference for (veach-mis, seed 2: BDPT read a squared bias of 9e-4 and lost to PT).
+    let blocks: Vec<Estimate> = runs
+        .iter()
+        .zip(own.iter().zip(&probed))
+        .map(|(r, (own, probed))| {
+            let under = probed.map_or(1.0, |p| p / own).max(1.0);
+            let mut b = r.blocks.clone();
+            if under.is_finite() {
+                b.variance.iter_mut().for_each(|v| *v = v.map(|x| x * under));
+            }
+            b
+        })
+        .collect();
     // Every candidate's blocks, flagged whether it is unbiased (merging is not).
-    let candidates: Vec<(&Estimate, bool)> = runs.iter().map(|r| (&r.blocks, !matches!(r.config, EstimatorConfig::Merging(..)))).collect();
+    let candidates: Vec<(&Estimate, bool)> = blocks.iter().zip(&runs).map(|(b, r)| (b, !matches!(r.config, EstimatorConfig::Merging(..)))).collect();
     let mut entries = Vec::new();
     for (c, run) in runs.iter().enumerate() {
-        let Run { kind, config, variance: variance_px, pass_seconds: low, passes, setup, .. } = run;
+        let Run { kind, config, pass_seconds: low, passes, setup, .. } = run;
         let (kind, config, low, passes, setup) = (*kind, *config, *low, *passes, *setup);
-        let rel = |p: usize, k: usize| (scale[p][k] as f64).powi(2) + 0.01;
-        let variance = (0..pixels).map(|p| (0..3).map(|k| variance_px[p][k] / rel(p, k)).sum::<f64>()).sum::<f64>() / (3 * pixels.max(1)) as f64;
-        let bias = block_bias(&run.blocks, &reference(&candidates, c));
+        let (own, probed) = (own[c], probed[c]);
+        let variance = own.max(probed.unwrap_or(0.0));
+        let bias = block_bias(&blocks[c], &reference(&candidates, c));
         // The fixed part is a difference of two timings: where it would be most of a
         // candidate's pilot pass, its noise would decide that candidate's full pass time,
         // so it is held to half of it.
@@ -290,6 +332,8 @@ pub fn choose(
             pass_seconds,
             setup_seconds,
             variance,
+            probed,
+            own,
             bias,
             predicted: if predicted.is_nan() { f64::INFINITY } else { predicted },
             fits: left >= MIN_PASSES * pass_seconds,
@@ -572,7 +616,18 @@ mod tests {
     /// `fits` ignored (BPM chosen) and with the fallback left out (PT chosen by default).
     #[test]
     fn a_candidate_must_fit_its_passes() {
-        let entry = |kind, predicted, fits| Entry { kind, passes: 4, pass_seconds: 1.0, setup_seconds: 0.0, variance: 1.0, bias: 0.0, predicted, fits };
+        let entry = |kind, predicted, fits| Entry {
+            kind,
+            passes: 4,
+            pass_seconds: 1.0,
+            setup_seconds: 0.0,
+            variance: 1.0,
+            probed: None,
+            own: 1.0,
+            bias: 0.0,
+            predicted,
+            fits,
+        };
         let race = [entry(EstimatorKind::Bpm, 1e-2, false), entry(EstimatorKind::Ppm, 2e-2, true), entry(EstimatorKind::Lt, 3e-2, true)];
         assert_eq!(choose_entry(&race), EstimatorKind::Ppm);
         let none = [entry(EstimatorKind::Bpm, 1e-2, false), entry(EstimatorKind::Ppm, 2e-2, false)];

@@ -209,6 +209,11 @@ pub enum EstimatorConfig {
     Lt,
     /// BDPT: one light path per pixel sample.
     Bdpt,
+    /// Not an image but a probe: BDPT's samples, each strategy's contribution replaced by
+    /// its term of PT's second moment, so that a pixel's mean over passes estimates the
+    /// second moment of one PT sample there, rare bright samples included
+    /// ([`crate::integrator::bdpt::probe`]; `--estimator auto`'s race). Its kind is BDPT.
+    PtMoment,
     /// LVCBPT.
     Lvcbpt(LvcbptConfig),
     /// SPCBPT.
@@ -227,7 +232,7 @@ impl EstimatorConfig {
         match self {
             Self::Pt => EstimatorKind::Pt,
             Self::Lt => EstimatorKind::Lt,
-            Self::Bdpt => EstimatorKind::Bdpt,
+            Self::Bdpt | Self::PtMoment => EstimatorKind::Bdpt,
             Self::Lvcbpt(_) => EstimatorKind::Lvcbpt,
             Self::Spcbpt(_) => EstimatorKind::Spcbpt,
             Self::Merging(MergeMode::Ppm, _) => EstimatorKind::Ppm,
@@ -245,7 +250,7 @@ impl EstimatorConfig {
     /// Check every field against its range.
     pub fn validate(&self) -> Result<(), ConfigError> {
         match self {
-            Self::Pt | Self::Lt | Self::Bdpt => Ok(()),
+            Self::Pt | Self::Lt | Self::Bdpt | Self::PtMoment => Ok(()),
             Self::Lvcbpt(c) => c.validate(),
             Self::Spcbpt(c) => c.validate(),
             Self::Merging(_, c) => c.validate(),
@@ -287,7 +292,7 @@ impl EstimatorConfig {
         #[cfg(any(feature = "lvcbpt", feature = "spcbpt", feature = "merging"))]
         let vertex = core::mem::size_of::<crate::path::Vertex>() as u64;
         let (part, largest, lower) = match self {
-            Self::Pt | Self::Lt | Self::Bdpt | Self::Segment(..) => (0, "the film", "--width/--height"),
+            Self::Pt | Self::Lt | Self::Bdpt | Self::PtMoment | Self::Segment(..) => (0, "the film", "--width/--height"),
             #[cfg(feature = "lvcbpt")]
             Self::Lvcbpt(c) => (c.light_paths_for(pixels) as u64 * VERTICES_PER_PATH * (vertex + 8), "the light paths of a pass", "--light-paths"),
             #[cfg(feature = "spcbpt")]

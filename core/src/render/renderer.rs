@@ -37,6 +37,8 @@ enum Simple {
     Lt,
     #[cfg(feature = "bdpt")]
     Bdpt,
+    #[cfg(feature = "bdpt")]
+    PtMoment,
 }
 
 /// PT, LT and BDPT: one phase per pass over every pixel (PT, BDPT) or W·H light paths
@@ -74,6 +76,11 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for OnePhase {
             Simple::Bdpt => {
                 let (pixels, splats) = out.pixels_and_splats();
                 bdpt::render_pixels(scene, tracer, params, pass, items, pixels, &mut |s| splats.push(s))
+            }
+            #[cfg(feature = "bdpt")]
+            Simple::PtMoment => {
+                let (pixels, splats) = out.pixels_and_splats();
+                bdpt::probe::render_pixels(scene, tracer, params, pass, items, pixels, &mut |s| splats.push(s))
             }
             Simple::Lt => {
                 let splats = &mut out.splats;
@@ -176,6 +183,8 @@ impl Renderer {
             EstimatorConfig::Lt => Self::OnePhase(OnePhase::new(Simple::Lt, params, pixels)),
             #[cfg(feature = "bdpt")]
             EstimatorConfig::Bdpt => Self::OnePhase(OnePhase::new(Simple::Bdpt, params, pixels)),
+            #[cfg(feature = "bdpt")]
+            EstimatorConfig::PtMoment => Self::OnePhase(OnePhase::new(Simple::PtMoment, params, pixels)),
             #[cfg(feature = "lvcbpt")]
             EstimatorConfig::Lvcbpt(c) => Self::Lvcbpt(Lvcbpt::new(params, c, pixels)),
             #[cfg(feature = "spcbpt")]
@@ -205,7 +214,7 @@ impl Renderer {
                 Simple::Pt => EstimatorKind::Pt,
                 Simple::Lt => EstimatorKind::Lt,
                 #[cfg(feature = "bdpt")]
-                Simple::Bdpt => EstimatorKind::Bdpt,
+                Simple::Bdpt | Simple::PtMoment => EstimatorKind::Bdpt,
             },
             #[cfg(feature = "lvcbpt")]
             Self::Lvcbpt(_) => EstimatorKind::Lvcbpt,

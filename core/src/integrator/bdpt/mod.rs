@@ -19,9 +19,13 @@
 
 use core::ops::Range;
 
+pub mod probe;
+
 use super::{Counters, RenderParams, Splat};
 use crate::geometry::RayQuery;
-use crate::path::{LightPointSample, connect, light_subpath_with_kernel, mis::mis_weight, pixel_camera_subpath_with_kernel, vertex_budgets};
+use crate::path::{
+    Connection, LightPointSample, Vertex, connect, light_subpath_with_kernel, mis::mis_weight, pixel_camera_subpath_with_kernel, vertex_budgets,
+};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Context;
 use crate::scene::Scene;
@@ -55,34 +59,61 @@ pub(crate) fn render_pixels_with_kernel<Q: RayQuery + ?Sized>(
     out: &mut [Rgb],
     splat: &mut dyn FnMut(Splat),
 ) -> Counters {
-    let mut counters = Counters::default();
-    let ctx = Context { scene, tracer };
-    let (max_camera, max_light) = vertex_budgets(params);
-    for (slot, pixel) in out.iter_mut().zip(pixels) {
-        let camera = pixel_camera_subpath_with_kernel(scene, tracer, params, pixel, pass, max_camera, kernel, &mut counters);
-        let mut light_rng = SampleStream::for_sample(params.seed, Stream::Light, pixel, pass, 0);
-        let mut light_junctions = Junctions::for_path(kernel, params.seed, pixel, pass, LIGHT_KERNEL_KEY);
-        let light = light_subpath_with_kernel(scene, tracer, params, max_light, &mut light_rng, light_junctions.as_mut(), &mut counters);
-        let mut connect_rng = SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, 0);
-        let mut l = Rgb::ZERO;
-        for t in 1..=camera.len() {
-            for s in 0..=light.len() {
-                let segments = s + t;
-                if (s == 1 && t == 1) || segments < 2 || !params.max_depth.allows(segments as u32 - 1) {
-                    continue;
-                }
-                let u = LightPointSample { u_light: connect_rng.next_f32(), u_point: connect_rng.next_2d() };
-                let Some(c) = connect(&ctx, &light, &camera, s, t, u, &mut counters) else { continue };
-                // Weighting, a separate step: the balance heuristic over unit counts.
-                let weight = mis_weight(scene, &light, &camera, c.sampled.as_ref(), s, t);
-                let value = counters.sanitize(c.weighted(weight).value);
-                match c.film {
-                    Some(film) => splat(Splat { film, value }),
-                    None => l += value,
+    let sample = Sample { scene, tracer, params, kernel, pass };
+    sample.each_strategy(pixels, out, splat, |light, camera, s, t, c, counters| {
+        // Weighting, a separate step: the balance heuristic over unit counts.
+        let weight = mis_weight(scene, light, camera, c.sampled.as_ref(), s, t);
+        counters.sanitize(c.weighted(weight).value)
+    })
+}
+
+/// What one BDPT sample of a pass needs: its estimator's strategies and the PT-moment
+/// probe ([`probe`]) draw the same paths from it.
+pub(crate) struct Sample<'a, Q: RayQuery + ?Sized> {
+    pub scene: &'a Scene,
+    pub tracer: &'a Q,
+    pub params: &'a RenderParams,
+    pub kernel: Kernel,
+    pub pass: u32,
+}
+
+impl<Q: RayQuery + ?Sized> Sample<'_, Q> {
+    /// For each pixel in `pixels`, trace a camera and a light sub-path, connect every
+    /// strategy (s, t) and pass each connection to `value`, whose result goes to the
+    /// pixel's slot in `out` or, for t = 1, to `splat`.
+    pub(crate) fn each_strategy<V>(&self, pixels: Range<u32>, out: &mut [Rgb], splat: &mut dyn FnMut(Splat), mut value: V) -> Counters
+    where
+        V: FnMut(&[Vertex], &[Vertex], usize, usize, Connection, &mut Counters) -> Rgb,
+    {
+        let Self { scene, tracer, params, kernel, pass } = *self;
+        let mut counters = Counters::default();
+        let ctx = Context { scene, tracer };
+        let (max_camera, max_light) = vertex_budgets(params);
+        for (slot, pixel) in out.iter_mut().zip(pixels) {
+            let camera = pixel_camera_subpath_with_kernel(scene, tracer, params, pixel, pass, max_camera, kernel, &mut counters);
+            let mut light_rng = SampleStream::for_sample(params.seed, Stream::Light, pixel, pass, 0);
+            let mut light_junctions = Junctions::for_path(kernel, params.seed, pixel, pass, LIGHT_KERNEL_KEY);
+            let light = light_subpath_with_kernel(scene, tracer, params, max_light, &mut light_rng, light_junctions.as_mut(), &mut counters);
+            let mut connect_rng = SampleStream::for_sample(params.seed, Stream::Aux, pixel, pass, 0);
+            let mut l = Rgb::ZERO;
+            for t in 1..=camera.len() {
+                for s in 0..=light.len() {
+                    let segments = s + t;
+                    if (s == 1 && t == 1) || segments < 2 || !params.max_depth.allows(segments as u32 - 1) {
+                        continue;
+                    }
+                    let u = LightPointSample { u_light: connect_rng.next_f32(), u_point: connect_rng.next_2d() };
+                    let Some(c) = connect(&ctx, &light, &camera, s, t, u, &mut counters) else { continue };
+                    let film = c.film;
+                    let v = value(&light, &camera, s, t, c, &mut counters);
+                    match film {
+                        Some(film) => splat(Splat { film, value: v }),
+                        None => l += v,
+                    }
                 }
             }
+            *slot = l;
         }
-        *slot = l;
+        counters
     }
-    counters
 }
