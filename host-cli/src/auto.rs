@@ -33,8 +33,20 @@
 //! was underestimated 6× that way on enclosed.) The kernel is 4× wider in world units
 //! than the render's, so the pilot overstates merging's bias.
 //!
-//! Known limit (docs/plan.md): a few batches see no rare fireflies, so variance is
-//! underestimated where they dominate.
+//! PT's own passes underestimate its variance where rare bright samples dominate it (a
+//! caustic on a diffuse wall, found only by BSDF sampling toward a glossy highlight): a
+//! pilot of about 2 % of the render's samples often holds none. So PT's variance is also
+//! estimated from BDPT's samples ([`EstimatorConfig::PtMoment`], [`PROBE_SHARE`] of the
+//! budget at the pilot's size): each strategy's term of PT's second moment, which BDPT
+//! samples with its light-side strategies where PT's densities are small. Less the
+//! squared mean it is a lower estimate of PT's variance (the cross terms between path
+//! lengths are left out), and the larger of the two counts. Where it is the larger, PT's
+//! block variances are scaled alike, so that PT's block means, low where its pilot missed
+//! the bright samples, do not read as a bias of the candidates PT is a reference for.
+//!
+//! Known limit (docs/plan.md): variances are measured at a quarter of the resolution and
+//! normalised by the pilot's pixels; where an estimator's error gathers in small dark
+//! regions (PT's caustic fireflies) the full-size relMSE weighs it more than the pilot's.
 
 use std::time::{Duration, Instant};
 
@@ -264,12 +276,26 @@ pub fn choose(
     // PT's second moment per pixel from BDPT's samples, for the rare bright samples that
     // PT's own few passes miss (`EstimatorConfig::PtMoment`).
     let scene = prepared.take().ok_or("the pilot scene was lost")?;
+    // In batches of their own films, whose estimates are combined by their median: the
+    // probe is heavy-tailed where PT's densities are tiny but BDPT's are not much larger
+    // (on the Cornell box one run in six drew one sample near the light that doubled its
+    // estimate, while PT's measured relMSE matched its own variance on every seed), and
+    // a rare spike must not outvote PT's own passes. PT's caustics on veach-mis, which
+    // BDPT samples well, read alike in every batch.
     let mut probe = CoreRenderer::with_config(scene, EstimatorConfig::PtMoment, max_depth, args.seed ^ 0x5eed_a072, threads)?;
-    let mut film = Film::with_filter(w, h, probe.camera_filter());
-    let deadline = Instant::now() + Duration::from_secs_f64(PROBE_SHARE * budget);
-    let limits = Limits { spp: u32::MAX, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass: 0 };
-    probe.render(&mut film, limits, DriverConfig { progress: false, ..DriverConfig::with_threads(threads) }, start).map_err(|e| e.to_string())?;
-    let moment = film.to_rgb_f32();
+    let mut moments = Vec::new();
+    let mut first_pass = 0;
+    for _ in 0..BATCHES {
+        let mut film = Film::with_filter(w, h, probe.camera_filter());
+        let deadline = Instant::now() + Duration::from_secs_f64(PROBE_SHARE * budget / BATCHES as f64);
+        let limits = Limits { spp: u32::MAX, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass };
+        let summary = probe.render(&mut film, limits, DriverConfig { progress: false, ..DriverConfig::with_threads(threads) }, start).map_err(|e| e.to_string())?;
+        first_pass += film.passes();
+        moments.push(film.to_rgb_f32());
+        if summary.interrupted {
+            break;
+        }
+    }
     // The scale of the relMSE: per pixel and channel, the median of the candidates' images.
     let pixels = (w * h) as usize;
     let scale: Vec<[f32; 3]> = (0..pixels).map(|p| core::array::from_fn(|k| median(runs.iter().map(|r| r.image[p][k] as f64).collect()) as f32)).collect();
@@ -284,8 +310,8 @@ pub fn choose(
     // second moment less the squared mean, a lower estimate (the cross terms between
     // path lengths are left out), so the larger of the two counts.
     let own: Vec<f64> = runs.iter().map(|r| mean_over_pixels(&|p, k| r.variance[p][k])).collect();
-    let probed: Vec<Option<f64>> =
-        runs.iter().map(|r| (r.kind == EstimatorKind::Pt).then(|| mean_over_pixels(&|p, k| moment[p][k] as f64 - (scale[p][k] as f64).powi(2)))).collect();
+    let probe_estimate = median(moments.iter().map(|m| mean_over_pixels(&|p, k| m[p][k] as f64 - (scale[p][k] as f64).powi(2))).collect());
+    let probed: Vec<Option<f64>> = runs.iter().map(|r| (r.kind == EstimatorKind::Pt).then_some(probe_estimate)).collect();
     // Where the probe finds PT's variance underestimated, so are PT's block means'
     // variances, by the same rare samples: they are scaled alike, so that PT's mean,
     // low where it missed them, does not read as a bias of the candidates it is a

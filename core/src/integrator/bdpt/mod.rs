@@ -16,6 +16,10 @@
 //! of reverse and forward area densities ([`crate::path::mis`]). Camera paths and light paths are
 //! traced one each per pixel sample, so every strategy has sample count one; splats
 //! from t = 1 are divided by the number of light paths per pass (W·H) by the host.
+//!
+//! Connecting (the sample loop, [`Sample::each_strategy`]) and weighting (the closure it
+//! calls per connection) are separate: [`probe`] draws the same paths and weights each
+//! connection as a term of PT's second moment instead.
 
 use core::ops::Range;
 
