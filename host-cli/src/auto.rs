@@ -289,7 +289,8 @@ pub fn choose(
         let mut film = Film::with_filter(w, h, probe.camera_filter());
         let deadline = Instant::now() + Duration::from_secs_f64(PROBE_SHARE * budget / BATCHES as f64);
         let limits = Limits { spp: u32::MAX, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass };
-        let summary = probe.render(&mut film, limits, DriverConfig { progress: false, ..DriverConfig::with_threads(threads) }, start).map_err(|e| e.to_string())?;
+        let summary =
+            probe.render(&mut film, limits, DriverConfig { progress: false, ..DriverConfig::with_threads(threads) }, start).map_err(|e| e.to_string())?;
         first_pass += film.passes();
         moments.push(film.to_rgb_f32());
         if summary.interrupted {
