@@ -37,7 +37,8 @@
 //! caustic on a diffuse wall, found only by BSDF sampling toward a glossy highlight): a
 //! pilot of about 2 % of the render's samples often holds none. So PT's variance is also
 //! estimated from BDPT's samples ([`EstimatorConfig::PtMoment`], [`PROBE_SHARE`] of the
-//! budget at the pilot's size): each strategy's term of PT's second moment, which BDPT
+//! budget at the pilot's size, in [`BATCHES`] batches whose estimates are combined by
+//! their median): each strategy's term of PT's second moment, which BDPT
 //! samples with its light-side strategies where PT's densities are small. Less the
 //! squared mean it is a lower estimate of PT's variance (the cross terms between path
 //! lengths are left out), and the larger of the two counts. Where it is the larger, PT's
