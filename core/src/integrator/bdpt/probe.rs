@@ -75,7 +75,7 @@ pub fn pt_moment_factor(scene: &Scene, light: &[Vertex], camera: &[Vertex], samp
     });
     // The path's vertex k counted from its light end.
     let vertex = |k: usize| if k < s { strategy_vertex(light, s, sampled, k) } else { strategy_vertex(camera, t, sampled, n - 1 - k) };
-    if n >= 2 && r1 > 0.0 {
+    if r1 > 0.0 {
         let c = cone_over_position(scene, vertex(0), vertex(1));
         if s == 1 {
             // The strategy's own density is c p̃: every ratio to it divides by c.
@@ -92,16 +92,8 @@ pub fn pt_moment_factor(scene: &Scene, light: &[Vertex], camera: &[Vertex], samp
     if !(total > 0.0) || !total.is_finite() {
         return 0.0;
     }
-    let term = |r: f64| {
-        if r > 0.0 {
-            {
-                let w = h(r) / total;
-                w * w / r
-            }
-        } else {
-            0.0
-        }
-    };
+    // w_i² / r_i, w_i = h(r_i) / Σ_j h(r_j): PT's own MIS weight of strategy i.
+    let term = |r: f64| if r > 0.0 { (h(r) / total) * (h(r) / total) / r } else { 0.0 };
     let m = term(r0) + term(r1);
     if m.is_finite() { m } else { 0.0 }
 }
