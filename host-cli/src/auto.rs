@@ -203,7 +203,7 @@ pub fn choose(
     // which the render's hundreds of passes do not; then two passes timed one by one,
     // of which the faster counts (see `fastest` below). Past the slice no further pass
     // starts (each call renders at least one), and the untimed pass's time stands in.
-    let config = DriverConfig { progress: false, ..DriverConfig::with_threads(threads) };
+    let driver = DriverConfig { progress: false, ..DriverConfig::with_threads(threads) };
     let deadline = Instant::now() + Duration::from_secs_f64(slice);
     let (mut cold, mut pt_full) = (f64::INFINITY, f64::INFINITY);
     for spp in 1..=3 {
@@ -211,7 +211,7 @@ pub fn choose(
             break;
         }
         let limits = Limits { spp, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass: 0 };
-        let summary = pt.render(&mut film, limits, config, start).map_err(|e| e.to_string())?;
+        let summary = pt.render(&mut film, limits, driver, start).map_err(|e| e.to_string())?;
         let per_pass = summary.render_seconds / summary.passes.max(1) as f64;
         if spp == 1 { cold = per_pass } else { pt_full = pt_full.min(per_pass) }
     }
@@ -241,8 +241,7 @@ pub fn choose(
         for b in 0..BATCHES {
             let deadline = Instant::now() + Duration::from_secs_f64(slice / BATCHES as f64);
             let limits = Limits { spp: u32::MAX, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass: 0 };
-            let summary =
-                r.render(&mut film, limits, DriverConfig { progress: false, ..DriverConfig::with_threads(threads) }, start).map_err(|e| e.to_string())?;
+            let summary = r.render(&mut film, limits, driver, start).map_err(|e| e.to_string())?;
             render_seconds += summary.render_seconds;
             if b >= 1 && summary.passes > 0 {
                 fastest = fastest.min(summary.render_seconds / summary.passes as f64);
@@ -290,8 +289,7 @@ pub fn choose(
         let mut film = Film::with_filter(w, h, probe.camera_filter());
         let deadline = Instant::now() + Duration::from_secs_f64(PROBE_SHARE * budget / BATCHES as f64);
         let limits = Limits { spp: u32::MAX, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass };
-        let summary =
-            probe.render(&mut film, limits, DriverConfig { progress: false, ..DriverConfig::with_threads(threads) }, start).map_err(|e| e.to_string())?;
+        let summary = probe.render(&mut film, limits, driver, start).map_err(|e| e.to_string())?;
         first_pass += film.passes();
         moments.push(film.to_rgb_f32());
         if summary.interrupted {
@@ -646,8 +644,6 @@ mod tests {
         assert!(biased > 5e-3, "the biased candidate read {biased:.3e}");
     }
 
-    /// A candidate that fits too few passes loses to one that fits, however small its
-    /// prediction; where none fits, the smallest prediction wins. Seen to fail with
     /// The probe's batches: a spike in one of four (the Cornell box's 0.42 against about
     /// 0.01 in the others) does not move the estimate, while a consistent excess
     /// (veach-mis: 1.3–1.9 in every batch) does. Seen failing with the batches' mean in
@@ -661,6 +657,8 @@ mod tests {
         assert_eq!(probe_variance(vec![f64::NAN, 0.5, 0.5]), 0.5);
     }
 
+    /// A candidate that fits too few passes loses to one that fits, however small its
+    /// prediction; where none fits, the smallest prediction wins. Seen to fail with
     /// `fits` ignored (BPM chosen) and with the fallback left out (PT chosen by default).
     #[test]
     fn a_candidate_must_fit_its_passes() {
