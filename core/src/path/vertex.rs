@@ -332,15 +332,24 @@ impl Vertex {
         VertexPdf::at_point(AreaPdf(pdf as f32))
     }
 
+    /// The light this vertex lies on: a light path's first vertex, or an emitting surface
+    /// a camera path hit. `None` elsewhere, and for infinite lights (no single one).
+    #[inline]
+    pub fn light_id(&self) -> Option<LightId> {
+        match self.kind {
+            VertexKind::Light(id) => Some(id),
+            VertexKind::Surface => self.emitter,
+            VertexKind::InfiniteLight | VertexKind::Camera => None,
+        }
+    }
+
     /// Density of this light vertex as the origin of a light path (light selection ×
     /// position density; for infinite lights, the selection-weighted direction density).
     pub fn pdf_light_origin(&self, scene: &Scene, next: &Vertex) -> VertexPdf {
         let w = self.dir_to(next, TransportMode::Importance);
         match self.kind {
             VertexKind::InfiniteLight => VertexPdf::of_direction(infinite_light_density(scene, -w)),
-            VertexKind::Light(id) => light_origin(scene, id, self.p, self.ng, w),
-            VertexKind::Surface => self.emitter.map_or(VertexPdf::ZERO, |id| light_origin(scene, id, self.p, self.ng, w)),
-            VertexKind::Camera => VertexPdf::ZERO,
+            _ => self.light_id().map_or(VertexPdf::ZERO, |id| light_origin(scene, id, self.p, self.ng, w)),
         }
     }
 

@@ -44,8 +44,8 @@ use core::ops::Range;
 use super::super::{Counters, Heuristic, RenderParams, Splat};
 use super::Sample;
 use crate::geometry::RayQuery;
+use crate::path::Vertex;
 use crate::path::mis::{for_each_strategy_ratio, mis_weight, strategy_vertex};
-use crate::path::{Vertex, VertexKind};
 use crate::scene::Scene;
 use crate::segment::Kernel;
 use crate::spectrum::Rgb;
@@ -103,14 +103,7 @@ pub fn pt_moment_factor(scene: &Scene, light: &[Vertex], camera: &[Vertex], samp
 /// counts for it; 1 where the two agree (triangles, Dirac and infinite lights) or
 /// either is not positive.
 fn cone_over_position(scene: &Scene, at: &Vertex, from: &Vertex) -> f64 {
-    let id = match at.kind {
-        VertexKind::Light(id) => id,
-        VertexKind::Surface => match at.emitter {
-            Some(id) => id,
-            None => return 1.0,
-        },
-        _ => return 1.0,
-    };
+    let Some(id) = at.light_id() else { return 1.0 };
     let light = &scene.lights[id as usize];
     if light.is_delta_position() || light.is_infinite() {
         return 1.0;

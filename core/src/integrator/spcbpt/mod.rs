@@ -143,11 +143,7 @@ impl Classifier {
     #[inline]
     pub fn light_source_of(&self, scene: &Scene, y: &Vertex) -> Option<u32> {
         let bins = self.sources.as_ref()?;
-        let id = match y.kind {
-            VertexKind::Light(id) => id,
-            VertexKind::Surface => y.emitter?,
-            _ => return None,
-        };
+        let id = y.light_id()?;
         let light = scene.lights.get(id as usize)?;
         Some(bins.classify(id, light.position_uv(y.p)))
     }
