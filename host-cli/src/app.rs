@@ -328,6 +328,9 @@ pub struct Built {
     pub max_depth: i32,
     /// The scene file's sample count, used when neither --spp nor --time is given.
     pub file_spp: Option<u32>,
+    /// Passes already rendered with this renderer's configuration and seed, which the
+    /// render continues (`--estimator auto`'s race, when PT wins).
+    pub film: Option<Film>,
 }
 
 impl fmt::Debug for Built {
@@ -372,7 +375,6 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     };
 
     // Render passes until the spp or time limit.
-    let mut film = Film::with_filter(width, height, renderer.filter());
     let deadline = args.time.map(|t| start + Duration::from_secs_f64(t));
     // --spp, else unlimited under --time, else the scene file's sample count, else the default.
     let spp = match (args.spp, args.time, built.file_spp) {
@@ -380,6 +382,16 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         _ => args.spp_limit(),
     };
     let (first_pass, end) = split.map_or((0, spp), |(r, _)| (r.start, r.end));
+    // A film the race began continues (its passes are this render's first), unless the
+    // render is split into pass ranges (refused with auto anyway) or asked for fewer.
+    let mut film = match built.film {
+        Some(f) if split.is_none() && (f.width(), f.height()) == (width, height) && f.passes() <= end => f,
+        _ => Film::with_filter(width, height, renderer.filter()),
+    };
+    let held_before = film.passes();
+    if held_before > 0 {
+        eprintln!("continues  the {held_before} full-size pass{} the race rendered", if held_before == 1 { "" } else { "es" });
+    }
     let limits = Limits { spp: end, deadline, interrupt: Some(crate::interrupt::flag()), first_pass };
     let config = DriverConfig { progress, ..DriverConfig::with_threads(args.thread_count()) };
     if progress && !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
@@ -399,7 +411,9 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
             config.threads
         );
     }
-    let summary = renderer.render(&mut film, limits, config, start).map_err(AppError::Driver)?;
+    let mut summary = renderer.render(&mut film, limits, config, start).map_err(AppError::Driver)?;
+    // The report counts the image's passes, the race's among them.
+    summary.passes += held_before;
     if summary.interrupted && summary.passes == 0 {
         return Err(AppError::Interrupted("interrupted before any pass completed: nothing written".into()));
     }

@@ -73,6 +73,10 @@ const DOWNSCALE: u32 = 4;
 /// The fewest full passes a candidate must fit in the remaining time to be chosen over
 /// one that fits them (see [`Entry::fits`]).
 pub const MIN_PASSES: f64 = 4.0;
+/// A candidate stops after its first batch where its full passes, judged from that
+/// batch, would fit [`MIN_PASSES`] only in this many times the time the race leaves
+/// (the first batch is cold, so it reads slow; this margin keeps borderline ones).
+const SLOW_MARGIN: f64 = 2.0;
 /// Bias blocks, in pilot pixels per side.
 const BLOCK: u32 = 8;
 
@@ -106,6 +110,11 @@ pub struct Entry {
     /// 1.1e-2 from two pilot passes, measured 4.8e-2 against PPM's 0.5–1.3e-2). It is
     /// chosen only where no candidate fits.
     pub fits: bool,
+    /// Seconds the race spent on it (its setup and pilot passes).
+    pub seconds: f64,
+    /// Whether it stopped after its first batch, its passes far too slow to fit
+    /// [`MIN_PASSES`] while an earlier candidate fits them: never chosen then.
+    pub stopped: bool,
 }
 
 /// One candidate's pilot: what the race reads from it.
@@ -124,6 +133,21 @@ struct Run {
     passes: u32,
     /// Seconds its setup took.
     setup: f64,
+    /// Seconds the race spent on it.
+    seconds: f64,
+    /// Whether it stopped after its first batch, too slow to be chosen.
+    dropped: bool,
+}
+
+/// Passes of the chosen estimator at full size that the race already rendered: PT's
+/// timing passes, with the render's seed, when PT wins.
+#[derive(Clone, Debug)]
+pub struct Head {
+    /// The film holding them.
+    pub film: Film,
+    /// The configuration they were rendered with: the render continues the film only
+    /// with the same one (and the same seed, scene and depth).
+    pub config: EstimatorConfig,
 }
 
 /// What the race decided, and its account.
@@ -139,13 +163,19 @@ pub struct Choice {
     pub size: (u32, u32),
     /// Seconds of a pass that do not scale with its pixels (from PT at both sizes).
     pub overhead: f64,
+    /// Seconds spent on PT's passes at full size, on preparing the pilot's scene, and on
+    /// the PT-moment probe.
+    pub stages: [f64; 3],
+    /// Passes the render continues from, if any.
+    pub head: Option<Head>,
 }
 
 impl Choice {
     /// The race in words, one line per candidate and one for the choice.
     pub fn describe(&self) -> Vec<String> {
+        let [timing, scene, probe] = self.stages;
         let mut lines = vec![format!(
-            "auto       pilot race at {}x{} in {:.2} s (fixed cost of a pass {:.1} ms):",
+            "auto       pilot race at {}x{} in {:.2} s (PT at full size {timing:.2} s, pilot scene {scene:.2} s, probe {probe:.2} s; fixed cost of a pass {:.1} ms):",
             self.size.0,
             self.size.1,
             self.seconds,
@@ -153,16 +183,21 @@ impl Choice {
         )];
         for e in &self.entries {
             lines.push(format!(
-                "auto         {:<5} {:>4} passes, {:.3e} s/pass at full size, setup {:.2} s, variance {:.3e}{}, bias² {:.3e} -> relMSE {:.3e}{}",
+                "auto         {:<5} {:>4} passes in {:.2} s, {:.3e} s/pass at full size, setup {:.2} s, variance {:.3e}{}, bias² {:.3e} -> relMSE {:.3e}{}",
                 e.kind.name(),
                 e.passes,
+                e.seconds,
                 e.pass_seconds,
                 e.setup_seconds,
                 e.variance,
                 e.probed.map_or(String::new(), |p| format!(" (own {:.3e}, from BDPT's samples {p:.3e})", e.own)),
                 e.bias,
                 e.predicted,
-                if e.fits { String::new() } else { format!(" (fewer than {MIN_PASSES} passes fit)") }
+                match (e.fits, e.stopped) {
+                    (_, true) => format!(" (stopped after one batch: far fewer than {MIN_PASSES} passes fit)"),
+                    (false, _) => format!(" (fewer than {MIN_PASSES} passes fit)"),
+                    _ => String::new(),
+                }
             ));
         }
         lines.push(format!("auto       renders with {}", self.kind.name()));
@@ -196,8 +231,10 @@ pub fn choose(
     // A pass has a fixed cost (dispatch, staging, commit) besides its pixels', which the
     // pixel ratio would scale too: PT's pass time at full size, measured on the render's
     // own scene, gives it (o below).
-    let mut pt = CoreRenderer::with_config(full, args.cache.config_for(EstimatorKind::Pt), max_depth, args.seed ^ 0x5eed_a071, threads)?;
-    let mut film = Film::with_filter(fw, fh, pt.camera_filter());
+    // With the render's own seed and configuration: where PT wins, these passes are the
+    // render's first ([`Choice::head`]).
+    let mut pt = CoreRenderer::with_config(full, args.cache.config_for(EstimatorKind::Pt), max_depth, args.seed, threads)?;
+    let mut pt_film = Film::with_filter(fw, fh, pt.camera_filter());
     // One pass first, untimed: the first pass at full size pays for the film's first
     // touch and the pool's start (measured: 70 ms against 50 ms on the Cornell box),
     // which the render's hundreds of passes do not; then two passes timed one by one,
@@ -211,17 +248,21 @@ pub fn choose(
             break;
         }
         let limits = Limits { spp, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass: 0 };
-        let summary = pt.render(&mut film, limits, driver, start).map_err(|e| e.to_string())?;
+        let summary = pt.render(&mut pt_film, limits, driver, start).map_err(|e| e.to_string())?;
         let per_pass = summary.render_seconds / summary.passes.max(1) as f64;
         if spp == 1 { cold = per_pass } else { pt_full = pt_full.min(per_pass) }
     }
     if !pt_full.is_finite() {
         pt_full = cold;
     }
-    let full = pt.prepared;
+    let (full, pt_config) = (pt.prepared, pt.config);
+    let timing_seconds = race_start.elapsed().as_secs_f64();
+    let scene_start = Instant::now();
     let mut prepared = Some(load(w, h)?);
+    let scene_seconds = scene_start.elapsed().as_secs_f64();
     let mut runs: Vec<Run> = Vec::new();
-    for kind in CANDIDATES {
+    for (i, kind) in CANDIDATES.into_iter().enumerate() {
+        let candidate_start = Instant::now();
         let scene = prepared.take().ok_or("the pilot scene was lost")?;
         let config = args.cache.config_for(kind);
         let mut r = CoreRenderer::with_config(scene, config, max_depth, args.seed ^ 0x5eed_a070, threads)?;
@@ -237,6 +278,7 @@ pub fn choose(
         // passes see alike whichever candidate renders: two races in a row on veach-mis
         // timed BDPT's pass at 95 and 147 ms from the batches' totals.
         let mut fastest = f64::INFINITY;
+        let mut dropped = false;
         let (mut held, mut prev) = (0u32, vec![[0.0f32; 3]; (w * h) as usize]);
         for b in 0..BATCHES {
             let deadline = Instant::now() + Duration::from_secs_f64(slice / BATCHES as f64);
@@ -265,16 +307,31 @@ pub fn choose(
             if b >= 1 && render_seconds > 2.0 * slice {
                 break;
             }
+            // One whose full passes, judged by its first batch, fit far fewer than
+            // MIN_PASSES in what the race will leave, while an earlier candidate fits
+            // them, cannot be chosen ([`choose_entry`]): it stops here. Its second batch
+            // cost more than the slice (BPM on glossy: two pilot passes of 0.4 s).
+            if b == 0 && summary.passes > 0 {
+                let left = budget - start.elapsed().as_secs_f64() - slice * (CANDIDATES.len() - 1 - i) as f64 - PROBE_SHARE * budget;
+                let full_pass = |pilot: f64| pilot * ratio;
+                let too_slow = full_pass(summary.render_seconds / summary.passes as f64) * MIN_PASSES > SLOW_MARGIN * left;
+                if too_slow && runs.iter().any(|r| !r.dropped && full_pass(r.pass_seconds) * MIN_PASSES <= left) {
+                    dropped = true;
+                    break;
+                }
+            }
         }
         let variance = pass_variance(&batches, &prev);
         let blocks = block_estimate(w, h, &batches, &prev);
         // A candidate stopped after one batch is timed by it.
         let pass_seconds = if fastest.is_finite() { fastest } else { render_seconds / film.passes().max(1) as f64 };
-        runs.push(Run { kind, config, image: prev, variance, blocks, pass_seconds, passes: film.passes(), setup: r.setup_seconds });
+        let seconds = candidate_start.elapsed().as_secs_f64();
+        runs.push(Run { kind, config, image: prev, variance, blocks, pass_seconds, passes: film.passes(), setup: r.setup_seconds, seconds, dropped });
         prepared = Some(r.prepared);
     }
     // PT's second moment per pixel from BDPT's samples, for the rare bright samples that
     // PT's own few passes miss (`EstimatorConfig::PtMoment`).
+    let probe_start = Instant::now();
     let scene = prepared.take().ok_or("the pilot scene was lost")?;
     // In batches of their own films, whose estimates are combined by their median: the
     // probe is heavy-tailed where PT's densities are tiny but BDPT's are not much larger
@@ -285,7 +342,7 @@ pub fn choose(
     let mut probe = CoreRenderer::with_config(scene, EstimatorConfig::PtMoment, max_depth, args.seed ^ 0x5eed_a072, threads)?;
     let mut moments = Vec::new();
     let mut first_pass = 0;
-    for _ in 0..BATCHES {
+    for b in 0..BATCHES {
         let mut film = Film::with_filter(w, h, probe.camera_filter());
         let deadline = Instant::now() + Duration::from_secs_f64(PROBE_SHARE * budget / BATCHES as f64);
         let limits = Limits { spp: u32::MAX, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass };
@@ -295,10 +352,18 @@ pub fn choose(
         if summary.interrupted {
             break;
         }
+        // Where a pass is longer than a batch's share (each batch renders at least one),
+        // the four batches would cost four passes: on glossy 0.5–0.8 s of a 10 s budget
+        // for a 0.1 s share. Past twice the share, three batches give the median.
+        if b >= 2 && probe_start.elapsed().as_secs_f64() > 2.0 * PROBE_SHARE * budget {
+            break;
+        }
     }
+    let probe_seconds = probe_start.elapsed().as_secs_f64();
     // The scale of the relMSE: per pixel and channel, the median of the candidates' images.
     let pixels = (w * h) as usize;
-    let scale: Vec<[f32; 3]> = (0..pixels).map(|p| core::array::from_fn(|k| median(runs.iter().map(|r| r.image[p][k] as f64).collect()) as f32)).collect();
+    let scale: Vec<[f32; 3]> =
+        (0..pixels).map(|p| core::array::from_fn(|k| median(runs.iter().filter(|r| !r.dropped).map(|r| r.image[p][k] as f64).collect()) as f32)).collect();
     let remaining = (budget - start.elapsed().as_secs_f64()).max(0.05 * budget);
     // t_low = o + b, t_full = o + ratio·b for PT: the fixed part o of a pass.
     let pt_low = runs.iter().find(|r| r.kind == EstimatorKind::Pt).map_or(0.0, |r| r.pass_seconds);
@@ -328,15 +393,17 @@ pub fn choose(
             b
         })
         .collect();
-    // Every candidate's blocks, flagged whether it is unbiased (merging is not).
-    let candidates: Vec<(&Estimate, bool)> = blocks.iter().zip(&runs).map(|(b, r)| (b, !matches!(r.config, EstimatorConfig::Merging(..)))).collect();
+    // The blocks of every candidate that ran all its batches, flagged whether it is
+    // unbiased (merging is not).
+    let live: Vec<usize> = (0..runs.len()).filter(|&c| !runs[c].dropped).collect();
+    let candidates: Vec<(&Estimate, bool)> = live.iter().map(|&c| (&blocks[c], !matches!(runs[c].config, EstimatorConfig::Merging(..)))).collect();
     let mut entries = Vec::new();
     for (c, run) in runs.iter().enumerate() {
-        let Run { kind, config, pass_seconds: low, passes, setup, .. } = run;
-        let (kind, config, low, passes, setup) = (*kind, *config, *low, *passes, *setup);
+        let Run { kind, config, pass_seconds: low, passes, setup, seconds, .. } = run;
+        let (kind, config, low, passes, setup, seconds) = (*kind, *config, *low, *passes, *setup, *seconds);
         let (own, probed) = (own[c], probed[c]);
         let variance = own.max(probed.unwrap_or(0.0));
-        let bias = block_bias(&blocks[c], &reference(&candidates, c));
+        let bias = live.iter().position(|&l| l == c).map_or(0.0, |l| block_bias(&blocks[c], &reference(&candidates, l)));
         // The fixed part is a difference of two timings: where it would be most of a
         // candidate's pilot pass, its noise would decide that candidate's full pass time,
         // so it is held to half of it.
@@ -361,12 +428,16 @@ pub fn choose(
             probed,
             own,
             bias,
-            predicted: if predicted.is_nan() { f64::INFINITY } else { predicted },
-            fits: left >= MIN_PASSES * pass_seconds,
+            predicted: if predicted.is_nan() || run.dropped { f64::INFINITY } else { predicted },
+            fits: left >= MIN_PASSES * pass_seconds && !run.dropped,
+            seconds,
+            stopped: run.dropped,
         });
     }
     let best = choose_entry(&entries);
-    Ok((Choice { kind: best, entries, seconds: race_start.elapsed().as_secs_f64(), size: (w, h), overhead }, full))
+    let stages = [timing_seconds, scene_seconds, probe_seconds];
+    let head = (best == EstimatorKind::Pt).then_some(Head { film: pt_film, config: pt_config });
+    Ok((Choice { kind: best, entries, seconds: race_start.elapsed().as_secs_f64(), size: (w, h), overhead, stages, head }, full))
 }
 
 /// The reference a candidate's bias is measured against: the median of the *other*
@@ -673,6 +744,8 @@ mod tests {
             bias: 0.0,
             predicted,
             fits,
+            seconds: 0.1,
+            stopped: false,
         };
         let race = [entry(EstimatorKind::Bpm, 1e-2, false), entry(EstimatorKind::Ppm, 2e-2, true), entry(EstimatorKind::Lt, 3e-2, true)];
         assert_eq!(choose_entry(&race), EstimatorKind::Ppm);

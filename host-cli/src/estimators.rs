@@ -283,8 +283,8 @@ pub fn make_built(args: &RenderArgs) -> Result<Built, String> {
 /// [`make_built`] for a program that started at `start` (`--estimator auto` counts its
 /// pilot race in the `--time` budget that runs from there).
 pub fn make_built_at(args: &RenderArgs, start: Instant) -> Result<Built, String> {
-    let r = make_core_renderer_at(args, start)?;
-    Ok(Built { scene: r.prepared.name.clone(), max_depth: r.renderer.params().max_depth.0, file_spp: r.prepared.spp, renderer: Box::new(r) })
+    let (r, film) = renderer_and_head(args, start)?;
+    Ok(Built { scene: r.prepared.name.clone(), max_depth: r.renderer.params().max_depth.0, file_spp: r.prepared.spp, renderer: Box::new(r), film })
 }
 
 /// What `config` would hold for `prepared`'s film: its estimate, with the bytes at least
@@ -332,7 +332,15 @@ pub fn make_core_renderer(args: &RenderArgs) -> Result<CoreRenderer, String> {
 
 /// [`make_core_renderer`] for a program that started at `start`.
 pub fn make_core_renderer_at(args: &RenderArgs, start: Instant) -> Result<CoreRenderer, String> {
+    renderer_and_head(args, start).map(|(r, _)| r)
+}
+
+/// [`make_core_renderer_at`], with the passes `--estimator auto`'s race already rendered
+/// at full size with the renderer's own configuration and seed, for the render to
+/// continue ([`crate::auto::Head`]).
+fn renderer_and_head(args: &RenderArgs, start: Instant) -> Result<(CoreRenderer, Option<Film>), String> {
     let mut prepared = prepare(args)?;
+    let mut head = None;
     for w in &prepared.warnings {
         eprintln!("warning: {w}");
     }
@@ -350,6 +358,7 @@ pub fn make_core_renderer_at(args: &RenderArgs, start: Instant) -> Result<CoreRe
             for line in choice.describe() {
                 eprintln!("{line}");
             }
+            head = choice.head;
             choice.kind
         }
     };
@@ -399,7 +408,10 @@ pub fn make_core_renderer_at(args: &RenderArgs, start: Instant) -> Result<CoreRe
             rep.gamma_bytes as f64 / 1024.0
         );
     }
-    Ok(r)
+    // The race's passes continue only where they are this render's own: the same
+    // configuration after the plan (and the same seed, scene and depth by construction).
+    let head = head.filter(|h| h.config == r.config).map(|h| h.film);
+    Ok((r, head))
 }
 
 #[cfg(test)]

@@ -79,7 +79,7 @@ fn render_writes_exr_and_png_and_reports() {
     let a = args(&["--spp", "3", "--threads", "2", "--width", "8", "--height", "4", "-o", out.to_str().unwrap()]);
     let report = render(&a, Instant::now(), false, |a| {
         let (w, h) = builtin_resolution(a);
-        Ok(Built { renderer: Box::new(ramp_host(w, h)), scene: "ramp".into(), max_depth: -1, file_spp: None })
+        Ok(Built { renderer: Box::new(ramp_host(w, h)), scene: "ramp".into(), max_depth: -1, file_spp: None, film: None })
     })
     .unwrap();
     assert_eq!(report.summary.passes, 3);
@@ -109,4 +109,40 @@ fn bad_outputs_and_estimator_errors_are_reported() {
     assert!(e.to_string().contains(".exr"), "{e}");
     let e = render(&args(&[]), Instant::now(), false, |_| Err("no lights".into())).unwrap_err();
     assert_eq!(e.to_string(), "cannot set up the renderer: no lights");
+}
+
+/// A film that already holds passes (auto's race, when PT wins: `Built::film`) is
+/// continued: the image equals a render of all its passes from scratch, the report
+/// counts them all, and only the missing passes are rendered. A film holding more
+/// passes than asked for is not used. Seen failing when the driver restarted the pass
+/// indices at 0 for a held film (the two held passes' random numbers repeated: the
+/// images differ), and when `render` ignored the held film (5 passes' samples drawn).
+#[test]
+fn a_held_film_is_continued_not_restarted() {
+    let dir = temp_dir();
+    let render_with = |spp: &str, held: u32, name: &str| {
+        let out = dir.join(name);
+        let a = args(&["--spp", spp, "--threads", "2", "--width", "16", "--height", "12", "--seed", "7", "-o", out.to_str().unwrap()]);
+        let report = render(&a, Instant::now(), false, |a| {
+            let mut r = crate::estimators::make_core_renderer(a)?;
+            let film = (held > 0).then(|| {
+                let mut film = Film::with_filter(16, 12, r.camera_filter());
+                let limits = Limits { spp: held, deadline: None, interrupt: None, first_pass: 0 };
+                r.render(&mut film, limits, DriverConfig { progress: false, ..DriverConfig::with_threads(2) }, Instant::now()).unwrap();
+                film
+            });
+            Ok(Built { scene: "box".into(), max_depth: -1, file_spp: None, renderer: Box::new(r), film })
+        })
+        .unwrap();
+        (report, image_io::read_exr(&out).unwrap().pixels)
+    };
+    let (fresh, fresh_image) = render_with("5", 0, "fresh.exr");
+    let (continued, continued_image) = render_with("5", 2, "continued.exr");
+    assert_eq!(continued_image, fresh_image);
+    assert_eq!((fresh.summary.passes, continued.summary.passes), (5, 5));
+    assert_eq!(continued.summary.stats.samples, 3 * 16 * 12, "only the three missing passes are rendered");
+    let (fewer, fewer_image) = render_with("1", 2, "fewer.exr");
+    let (one, one_image) = render_with("1", 0, "one.exr");
+    assert_eq!((fewer.summary.passes, fewer_image), (1, one_image));
+    assert_eq!(one.summary.passes, 1);
 }
