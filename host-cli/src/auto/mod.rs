@@ -22,6 +22,10 @@
 //! PT's passes at full size have the render's seed: where PT wins, the render continues
 //! their film ([`Head`]).
 //!
+//! The probe runs only where PT, judged by its own passes, is within [`PROBE_WORTH`] of
+//! the best prediction: it can only raise PT's variance, so elsewhere it cannot change
+//! the choice.
+//!
 //! A candidate whose first batch shows full passes far too slow to fit [`MIN_PASSES`]
 //! stops there when an earlier one fits them, and the probe stops after three batches
 //! past twice its share: each batch renders at least one pass, so slow passes otherwise
@@ -81,6 +85,9 @@ pub const BATCHES: usize = 4;
 pub const SHARE: f64 = 0.02;
 /// The share of the budget the PT-moment probe takes.
 pub const PROBE_SHARE: f64 = 0.01;
+/// The probe runs only where PT's prediction from its own passes is within this factor
+/// of the best other candidate's: it can only raise PT's variance.
+pub const PROBE_WORTH: f64 = 2.0;
 /// The rendering time the race assumes without `--time`.
 pub const NOMINAL_SECONDS: f64 = 10.0;
 /// The pilot's resolution divisor per axis.
@@ -187,8 +194,12 @@ impl Choice {
     /// The race in words, one line per candidate and one for the choice.
     pub fn describe(&self) -> Vec<String> {
         let [timing, scene, probe] = self.stages;
+        let probe = match self.entries.iter().any(|e| e.probed.is_some()) {
+            true => format!("probe {probe:.2} s"),
+            false => format!("no probe: PT's own passes put it past {PROBE_WORTH}× the best"),
+        };
         let mut lines = vec![format!(
-            "auto       pilot race at {}x{} in {:.2} s (PT at full size {timing:.2} s, pilot scene {scene:.2} s, probe {probe:.2} s; fixed cost of a pass {:.1} ms):",
+            "auto       pilot race at {}x{} in {:.2} s (PT at full size {timing:.2} s, pilot scene {scene:.2} s, {probe}; fixed cost of a pass {:.1} ms):",
             self.size.0,
             self.size.1,
             self.seconds,
@@ -319,11 +330,13 @@ pub fn choose(
             if summary.interrupted {
                 break;
             }
-            // Two batches give a variance; a further one runs only where it would end
-            // within the slice: each batch renders at least one pass, so where a pass
-            // outlasts a batch's share four batches cost four passes (BPM on glossy:
-            // 0.54 s for a 0.2 s slice, three passes).
-            if b >= 1 && !next_fits(render_seconds, render_seconds / (b + 1) as f64, slice) {
+            // A candidate whose first batch overran its whole slice has passes too slow
+            // for this budget: one more batch gives its variance, no more. (Stopping
+            // every candidate whose next batch would overrun its slice, after two or
+            // three batches, was tried and not kept: on spot_mirror BDPT's two one-pass
+            // batches read a variance of 6e-2 and no bias, and auto picked it, 3.3×
+            // worse than PPM; caustic, ajar and glossy each lost a seed the same way.)
+            if b >= 1 && render_seconds > 2.0 * slice {
                 break;
             }
             // One whose full passes, judged by its first batch, fit far fewer than
@@ -348,116 +361,155 @@ pub fn choose(
         runs.push(Run { kind, config, image: prev, variance, blocks, pass_seconds, passes: film.passes(), setup: r.setup_seconds, seconds, dropped });
         prepared = Some(r.prepared);
     }
-    // PT's second moment per pixel from BDPT's samples, for the rare bright samples that
-    // PT's own few passes miss (`EstimatorConfig::PtMoment`).
-    let probe_start = Instant::now();
-    let scene = prepared.take().ok_or("the pilot scene was lost")?;
-    // In batches of their own films, whose estimates are combined by their median: the
-    // probe is heavy-tailed where PT's densities are tiny but BDPT's are not much larger
-    // (on the Cornell box one run in six drew one sample near the light that doubled its
-    // estimate, while PT's measured relMSE matched its own variance on every seed), and
-    // a rare spike must not outvote PT's own passes. PT's caustics on veach-mis, which
-    // BDPT samples well, read alike in every batch.
-    let mut probe = CoreRenderer::with_config(scene, EstimatorConfig::PtMoment, max_depth, args.seed ^ 0x5eed_a072, threads)?;
-    let mut moments = Vec::new();
-    let mut first_pass = 0;
-    for b in 0..BATCHES {
-        let mut film = Film::with_filter(w, h, probe.camera_filter());
-        let deadline = Instant::now() + Duration::from_secs_f64(PROBE_SHARE * budget / BATCHES as f64);
-        let limits = Limits { spp: u32::MAX, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass };
-        let summary = probe.render(&mut film, limits, driver, start).map_err(|e| e.to_string())?;
-        first_pass += film.passes();
-        moments.push(film.to_rgb_f32());
-        if summary.interrupted {
-            break;
-        }
-        // Where a pass is longer than a batch's share (each batch renders at least one),
-        // the four batches would cost four passes (glossy: 0.26–0.38 s for a 0.1 s
-        // share): three give the median, a fourth runs only where it fits the share.
-        let spent = probe_start.elapsed().as_secs_f64();
-        if b >= 2 && !next_fits(spent, spent / (b + 1) as f64, PROBE_SHARE * budget) {
-            break;
-        }
-    }
-    let probe_seconds = probe_start.elapsed().as_secs_f64();
     // The scale of the relMSE: per pixel and channel, the median of the candidates' images.
     let pixels = (w * h) as usize;
     let scale: Vec<[f32; 3]> =
         (0..pixels).map(|p| core::array::from_fn(|k| median(runs.iter().filter(|r| !r.dropped).map(|r| r.image[p][k] as f64).collect()) as f32)).collect();
-    let remaining = (budget - start.elapsed().as_secs_f64()).max(0.05 * budget);
     // t_low = o + b, t_full = o + ratio·b for PT: the fixed part o of a pass.
     let pt_low = runs.iter().find(|r| r.kind == EstimatorKind::Pt).map_or(0.0, |r| r.pass_seconds);
     let overhead = if ratio > 1.0 { ((pt_low * ratio - pt_full) / (ratio - 1.0)).clamp(0.0, pt_low) } else { 0.0 };
     let rel = |p: usize, k: usize| (scale[p][k] as f64).powi(2) + 0.01;
     let mean_over_pixels =
         |v: &dyn Fn(usize, usize) -> f64| (0..pixels).map(|p| (0..3).map(|k| v(p, k) / rel(p, k)).sum::<f64>()).sum::<f64>() / (3 * pixels.max(1)) as f64;
-    // Each candidate's variance from its own passes, and PT's also from BDPT's probe: its
-    // second moment less the squared mean, a lower estimate (the cross terms between
-    // path lengths are left out), so the larger of the two counts.
     let own: Vec<f64> = runs.iter().map(|r| mean_over_pixels(&|p, k| r.variance[p][k])).collect();
-    let probe_estimate = probe_variance(moments.iter().map(|m| mean_over_pixels(&|p, k| m[p][k] as f64 - (scale[p][k] as f64).powi(2))).collect());
-    let probed: Vec<Option<f64>> = runs.iter().map(|r| (r.kind == EstimatorKind::Pt).then_some(probe_estimate)).collect();
-    // Where the probe finds PT's variance underestimated, so are PT's block means'
-    // variances, by the same rare samples: they are scaled alike, so that PT's mean,
-    // low where it missed them, does not read as a bias of the candidates it is a
-    // reference for (veach-mis, seed 2: BDPT read a squared bias of 9e-4 and lost to PT).
-    let blocks: Vec<Estimate> = runs
-        .iter()
-        .zip(own.iter().zip(&probed))
-        .map(|(r, (own, probed))| {
-            let under = probed.map_or(1.0, |p| p / own).max(1.0);
-            let mut b = r.blocks.clone();
-            if under.is_finite() {
-                b.variance.iter_mut().for_each(|v| *v = v.map(|x| x * under));
+    let race = Race { runs: &runs, own: &own, ratio, overhead, pt_full };
+    // PT's second moment per pixel from BDPT's samples, for the rare bright samples that
+    // PT's own few passes miss (`EstimatorConfig::PtMoment`). It can only raise PT's
+    // variance, so it runs only where PT, on its own passes, is within [`PROBE_WORTH`]
+    // of the best prediction: elsewhere it cannot make PT win (on the suite it is skipped
+    // where PT loses 3–4 000×, as on spot_mirror, where it took 0.37 s of 10).
+    let left_after_probe = budget - start.elapsed().as_secs_f64() - PROBE_SHARE * budget;
+    let probe_worth = pt_is_within(PROBE_WORTH, &race.entries(None, left_after_probe.max(0.05 * budget)));
+    let (probe_estimate, probe_seconds) = if probe_worth {
+        let probe_start = Instant::now();
+        let scene = prepared.take().ok_or("the pilot scene was lost")?;
+        // In batches of their own films, whose estimates are combined by their median: the
+        // probe is heavy-tailed where PT's densities are tiny but BDPT's are not much larger
+        // (on the Cornell box one run in six drew one sample near the light that doubled its
+        // estimate, while PT's measured relMSE matched its own variance on every seed), and
+        // a rare spike must not outvote PT's own passes. PT's caustics on veach-mis, which
+        // BDPT samples well, read alike in every batch.
+        let mut probe = CoreRenderer::with_config(scene, EstimatorConfig::PtMoment, max_depth, args.seed ^ 0x5eed_a072, threads)?;
+        let mut moments = Vec::new();
+        let mut first_pass = 0;
+        for b in 0..BATCHES {
+            let mut film = Film::with_filter(w, h, probe.camera_filter());
+            let deadline = Instant::now() + Duration::from_secs_f64(PROBE_SHARE * budget / BATCHES as f64);
+            let limits = Limits { spp: u32::MAX, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass };
+            let summary = probe.render(&mut film, limits, driver, start).map_err(|e| e.to_string())?;
+            first_pass += film.passes();
+            moments.push(film.to_rgb_f32());
+            if summary.interrupted {
+                break;
             }
-            b
-        })
-        .collect();
-    // The blocks of every candidate that ran all its batches, flagged whether it is
-    // unbiased (merging is not).
-    let live: Vec<usize> = (0..runs.len()).filter(|&c| !runs[c].dropped).collect();
-    let candidates: Vec<(&Estimate, bool)> = live.iter().map(|&c| (&blocks[c], !matches!(runs[c].config, EstimatorConfig::Merging(..)))).collect();
-    let mut entries = Vec::new();
-    for (c, run) in runs.iter().enumerate() {
-        let Run { kind, config, pass_seconds: low, passes, setup, seconds, .. } = run;
-        let (kind, config, low, passes, setup, seconds) = (*kind, *config, *low, *passes, *setup, *seconds);
-        let (own, probed) = (own[c], probed[c]);
-        let variance = own.max(probed.unwrap_or(0.0));
-        let bias = live.iter().position(|&l| l == c).map_or(0.0, |l| block_bias(&blocks[c], &reference(&candidates, l)));
-        // The fixed part is a difference of two timings: where it would be most of a
-        // candidate's pilot pass, its noise would decide that candidate's full pass time,
-        // so it is held to half of it.
-        let fixed = overhead.min(0.5 * low);
-        let pass_seconds = if kind == EstimatorKind::Pt { pt_full } else { (low - fixed) * ratio + fixed };
-        let setup_seconds = setup * ratio;
-        let left = (remaining - setup_seconds).max(pass_seconds).max(1e-3);
-        // A merging radius shrinks as r_i ∝ (i + 1)^((α − 1)/2), so a pass's variance
-        // (∝ 1/r²) grows as (i + 1)^(1 − α): the render's passes, up to N = left / t_pass,
-        // average (N / n_pilot)^(1 − α) times the pilot's first n_pilot.
-        let growth = match config {
-            EstimatorConfig::Merging(_, c) => ((left / pass_seconds) / passes.max(1) as f64).max(1.0).powf(1.0 - c.alpha as f64),
-            _ => 1.0,
-        };
-        let predicted = variance * growth * pass_seconds / left + bias;
-        entries.push(Entry {
-            kind,
-            passes,
-            pass_seconds,
-            setup_seconds,
-            variance,
-            probed,
-            own,
-            bias,
-            predicted: if predicted.is_nan() || run.dropped { f64::INFINITY } else { predicted },
-            fits: left >= MIN_PASSES * pass_seconds && !run.dropped,
-            seconds,
-            stopped: run.dropped,
-        });
-    }
+            // Where a pass is longer than a batch's share (each batch renders at least one),
+            // the four batches would cost four passes (glossy: 0.26–0.38 s for a 0.1 s
+            // share): three give the median, a fourth runs only where it fits the share.
+            let spent = probe_start.elapsed().as_secs_f64();
+            if b >= 2 && !next_fits(spent, spent / (b + 1) as f64, PROBE_SHARE * budget) {
+                break;
+            }
+        }
+        let probe_seconds = probe_start.elapsed().as_secs_f64();
+        let estimate = probe_variance(moments.iter().map(|m| mean_over_pixels(&|p, k| m[p][k] as f64 - (scale[p][k] as f64).powi(2))).collect());
+        (Some(estimate), probe_seconds)
+    } else {
+        (None, 0.0)
+    };
+    let remaining = (budget - start.elapsed().as_secs_f64()).max(0.05 * budget);
+    let entries = race.entries(probe_estimate, remaining);
     let best = choose_entry(&entries);
     let stages = [timing_seconds, scene_seconds, probe_seconds];
     let head = (best == EstimatorKind::Pt).then_some(Head { film: pt_film, config: pt_config });
     Ok((Choice { kind: best, entries, seconds: race_start.elapsed().as_secs_f64(), size: (w, h), overhead, stages, head }, full))
+}
+
+/// What the race's predictions read, past the pilots.
+struct Race<'a> {
+    runs: &'a [Run],
+    /// Each candidate's variance from its own passes (normalised like the relMSE).
+    own: &'a [f64],
+    /// Full pixels per pilot pixel.
+    ratio: f64,
+    /// The fixed part of a pass, and PT's full-size pass time.
+    overhead: f64,
+    pt_full: f64,
+}
+
+impl Race<'_> {
+    /// Every candidate's prediction after `remaining` seconds, with PT's variance from
+    /// the probe where it ran (`probe`, normalised like the variances).
+    fn entries(&self, probe: Option<f64>, remaining: f64) -> Vec<Entry> {
+        let runs = self.runs;
+        let probed: Vec<Option<f64>> = runs.iter().map(|r| if r.kind == EstimatorKind::Pt { probe } else { None }).collect();
+        // Where the probe finds PT's variance underestimated, so are PT's block means'
+        // variances, by the same rare samples: they are scaled alike, so that PT's mean,
+        // low where it missed them, does not read as a bias of the candidates it is a
+        // reference for (veach-mis, seed 2: BDPT read a squared bias of 9e-4 and lost to PT).
+        let blocks: Vec<Estimate> = runs
+            .iter()
+            .zip(self.own.iter().zip(&probed))
+            .map(|(r, (own, probed))| {
+                let under = probed.map_or(1.0, |p| p / own).max(1.0);
+                let mut b = r.blocks.clone();
+                if under.is_finite() {
+                    b.variance.iter_mut().for_each(|v| *v = v.map(|x| x * under));
+                }
+                b
+            })
+            .collect();
+        // The blocks of every candidate that ran all its batches, flagged whether it is
+        // unbiased (merging is not).
+        let live: Vec<usize> = (0..runs.len()).filter(|&c| !runs[c].dropped).collect();
+        let candidates: Vec<(&Estimate, bool)> = live.iter().map(|&c| (&blocks[c], !matches!(runs[c].config, EstimatorConfig::Merging(..)))).collect();
+        let mut entries = Vec::new();
+        for (c, run) in runs.iter().enumerate() {
+            let Run { kind, config, pass_seconds: low, passes, setup, seconds, .. } = run;
+            let (kind, config, low, passes, setup, seconds) = (*kind, *config, *low, *passes, *setup, *seconds);
+            let (own, probed) = (self.own[c], probed[c]);
+            let variance = own.max(probed.unwrap_or(0.0));
+            let bias = live.iter().position(|&l| l == c).map_or(0.0, |l| block_bias(&blocks[c], &reference(&candidates, l)));
+            // The fixed part is a difference of two timings: where it would be most of a
+            // candidate's pilot pass, its noise would decide that candidate's full pass
+            // time, so it is held to half of it.
+            let fixed = self.overhead.min(0.5 * low);
+            let pass_seconds = if kind == EstimatorKind::Pt { self.pt_full } else { (low - fixed) * self.ratio + fixed };
+            let setup_seconds = setup * self.ratio;
+            let left = (remaining - setup_seconds).max(pass_seconds).max(1e-3);
+            // A merging radius shrinks as r_i ∝ (i + 1)^((α − 1)/2), so a pass's variance
+            // (∝ 1/r²) grows as (i + 1)^(1 − α): the render's passes, up to N = left /
+            // t_pass, average (N / n_pilot)^(1 − α) times the pilot's first n_pilot.
+            let growth = match config {
+                EstimatorConfig::Merging(_, c) => ((left / pass_seconds) / passes.max(1) as f64).max(1.0).powf(1.0 - c.alpha as f64),
+                _ => 1.0,
+            };
+            let predicted = variance * growth * pass_seconds / left + bias;
+            entries.push(Entry {
+                kind,
+                passes,
+                pass_seconds,
+                setup_seconds,
+                variance,
+                probed,
+                own,
+                bias,
+                predicted: if predicted.is_nan() || run.dropped { f64::INFINITY } else { predicted },
+                fits: left >= MIN_PASSES * pass_seconds && !run.dropped,
+                seconds,
+                stopped: run.dropped,
+            });
+        }
+        entries
+    }
+}
+
+/// Whether PT's prediction in `entries` is within `factor` of the best of the others,
+/// among those that may be chosen ([`choose_entry`]'s rule).
+fn pt_is_within(factor: f64, entries: &[Entry]) -> bool {
+    let any_fits = entries.iter().any(|e| e.fits);
+    let eligible = |e: &&Entry| e.fits || !any_fits;
+    let best_other = entries.iter().filter(eligible).filter(|e| e.kind != EstimatorKind::Pt).map(|e| e.predicted).fold(f64::INFINITY, f64::min);
+    entries.iter().filter(eligible).any(|e| e.kind == EstimatorKind::Pt && e.predicted <= factor * best_other)
 }
 
 /// Whether one more batch (or pass) of about `per` seconds, after `spent`, ends within
@@ -478,12 +530,9 @@ fn choose_entry(entries: &[Entry]) -> EstimatorKind {
 mod tests {
     use super::*;
 
-    /// A candidate that fits too few passes loses to one that fits, however small its
-    /// prediction; where none fits, the smallest prediction wins. Seen to fail with
-    /// `fits` ignored (BPM chosen) and with the fallback left out (PT chosen by default).
-    #[test]
-    fn a_candidate_must_fit_its_passes() {
-        let entry = |kind, predicted, fits| Entry {
+    /// A race entry with the given prediction.
+    fn entry(kind: EstimatorKind, predicted: f64, fits: bool) -> Entry {
+        Entry {
             kind,
             passes: 4,
             pass_seconds: 1.0,
@@ -496,10 +545,33 @@ mod tests {
             fits,
             seconds: 0.1,
             stopped: false,
-        };
+        }
+    }
+
+    /// A candidate that fits too few passes loses to one that fits, however small its
+    /// prediction; where none fits, the smallest prediction wins. Seen to fail with
+    /// `fits` ignored (BPM chosen) and with the fallback left out (PT chosen by default).
+    #[test]
+    fn a_candidate_must_fit_its_passes() {
         let race = [entry(EstimatorKind::Bpm, 1e-2, false), entry(EstimatorKind::Ppm, 2e-2, true), entry(EstimatorKind::Lt, 3e-2, true)];
         assert_eq!(choose_entry(&race), EstimatorKind::Ppm);
         let none = [entry(EstimatorKind::Bpm, 1e-2, false), entry(EstimatorKind::Ppm, 2e-2, false)];
         assert_eq!(choose_entry(&none), EstimatorKind::Bpm);
+    }
+
+    /// The probe runs only where PT is within the factor of the best other eligible
+    /// candidate. Seen to fail with the factor applied the wrong way round (PT at 9e-3
+    /// against PPM's 4e-3 read as within) and with candidates that do not fit counted
+    /// while others fit (a non-fitting BPM at 1e-3 made PT at 5e-3 look out of reach).
+    #[test]
+    fn the_probe_runs_only_where_pt_can_win() {
+        let race = |pt| [entry(EstimatorKind::Pt, pt, true), entry(EstimatorKind::Ppm, 4e-3, true), entry(EstimatorKind::Bpm, 1e-3, false)];
+        assert!(pt_is_within(PROBE_WORTH, &race(5e-3)));
+        assert!(pt_is_within(PROBE_WORTH, &race(1e-3)));
+        assert!(!pt_is_within(PROBE_WORTH, &race(9e-3)));
+        assert!(
+            !pt_is_within(PROBE_WORTH, &[entry(EstimatorKind::Pt, 1e-3, false), entry(EstimatorKind::Ppm, 4e-3, true)]),
+            "a PT that does not fit is not chosen"
+        );
     }
 }
