@@ -22,14 +22,10 @@
 //! PT's passes at full size have the render's seed: where PT wins, the render continues
 //! their film ([`Head`]).
 //!
-//! The probe runs only where PT, judged by its own passes, is within [`PROBE_WORTH`] of
-//! the best prediction: it can only raise PT's variance, so elsewhere it cannot change
-//! the choice.
-//!
 //! A candidate whose first batch shows full passes far too slow to fit [`MIN_PASSES`]
-//! stops there when an earlier one fits them, and the probe stops after three batches
-//! past twice its share: each batch renders at least one pass, so slow passes otherwise
-//! cost several times their slice.
+//! stops there when an earlier one fits them, and the probe's fourth batch runs only where
+//! it ends within 1.25× the probe's share: each batch renders at least one pass, so slow
+//! passes otherwise cost several times their slice.
 //!
 //! The predicted relMSE (the suite's metric, (x − r)²/(r² + 0.01)) after the remaining
 //! time T is mean_p σ²(p)/(r² + 0.01) · t_pass / (T − t_setup) + bias², and the
@@ -85,9 +81,6 @@ pub const BATCHES: usize = 4;
 pub const SHARE: f64 = 0.02;
 /// The share of the budget the PT-moment probe takes.
 pub const PROBE_SHARE: f64 = 0.01;
-/// The probe runs only where PT's prediction from its own passes is within this factor
-/// of the best other candidate's: it can only raise PT's variance.
-pub const PROBE_WORTH: f64 = 2.0;
 /// The rendering time the race assumes without `--time`.
 pub const NOMINAL_SECONDS: f64 = 10.0;
 /// The pilot's resolution divisor per axis.
@@ -194,12 +187,8 @@ impl Choice {
     /// The race in words, one line per candidate and one for the choice.
     pub fn describe(&self) -> Vec<String> {
         let [timing, scene, probe] = self.stages;
-        let probe = match self.entries.iter().any(|e| e.probed.is_some()) {
-            true => format!("probe {probe:.2} s"),
-            false => format!("no probe: PT's own passes put it past {PROBE_WORTH}× the best"),
-        };
         let mut lines = vec![format!(
-            "auto       pilot race at {}x{} in {:.2} s (PT at full size {timing:.2} s, pilot scene {scene:.2} s, {probe}; fixed cost of a pass {:.1} ms):",
+            "auto       pilot race at {}x{} in {:.2} s (PT at full size {timing:.2} s, pilot scene {scene:.2} s, probe {probe:.2} s; fixed cost of a pass {:.1} ms):",
             self.size.0,
             self.size.1,
             self.seconds,
@@ -262,17 +251,17 @@ pub fn choose(
     // One pass first, untimed: the first pass at full size pays for the film's first
     // touch and the pool's start (measured: 70 ms against 50 ms on the Cornell box),
     // which the render's hundreds of passes do not; then two passes timed one by one,
-    // of which the faster counts (see `fastest` below). Past the slice no timed pass
-    // starts (each call renders at least one), and the untimed pass's time stands in;
-    // the second timed one only where it would end within the slice ([`next_fits`]).
+    // of which the faster counts (see `fastest` below). Past the slice no further pass
+    // starts (each call renders at least one), and the untimed pass's time stands in.
+    // (Skipping the second timed pass where it would end past the slice was tried and
+    // not kept: from one timed pass the fixed part of a pass read 1.7–2.7 ms on ajar
+    // instead of 0–0.8, LT's full pass came out 5–6e-2 s instead of 8e-2, and auto picked
+    // LT on three seeds of eight, 1.5× worse than PPM.)
     let driver = DriverConfig { progress: false, ..DriverConfig::with_threads(threads) };
     let deadline = Instant::now() + Duration::from_secs_f64(slice);
     let (mut cold, mut pt_full) = (f64::INFINITY, f64::INFINITY);
     for spp in 1..=3 {
-        if spp == 2 && Instant::now() >= deadline {
-            break;
-        }
-        if spp == 3 && !next_fits(race_start.elapsed().as_secs_f64(), pt_full, slice) {
+        if spp > 1 && Instant::now() >= deadline {
             break;
         }
         let limits = Limits { spp, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass: 0 };
@@ -374,13 +363,13 @@ pub fn choose(
     let own: Vec<f64> = runs.iter().map(|r| mean_over_pixels(&|p, k| r.variance[p][k])).collect();
     let race = Race { runs: &runs, own: &own, ratio, overhead, pt_full };
     // PT's second moment per pixel from BDPT's samples, for the rare bright samples that
-    // PT's own few passes miss (`EstimatorConfig::PtMoment`). It can only raise PT's
-    // variance, so it runs only where PT, on its own passes, is within [`PROBE_WORTH`]
-    // of the best prediction: elsewhere it cannot make PT win (on the suite it is skipped
-    // where PT loses 3–4 000×, as on spot_mirror, where it took 0.37 s of 10).
-    let left_after_probe = budget - start.elapsed().as_secs_f64() - PROBE_SHARE * budget;
-    let probe_worth = pt_is_within(PROBE_WORTH, &race.entries(None, left_after_probe.max(0.05 * budget)));
-    let (probe_estimate, probe_seconds) = if probe_worth {
+    // PT's own few passes miss (`EstimatorConfig::PtMoment`). It runs even where PT
+    // cannot win: where it finds PT's variance underestimated, PT's block variances are
+    // scaled alike, and without that the other candidates read PT's low block means as
+    // their bias (tried: skipping the probe where PT's own passes put it past twice the
+    // best made BDPT read a squared bias of 2.1e-3 on veach-bidir, seed 2, and auto
+    // picked LT, 1.5× worse).
+    let (probe_estimate, probe_seconds) = {
         let probe_start = Instant::now();
         let scene = prepared.take().ok_or("the pilot scene was lost")?;
         // In batches of their own films, whose estimates are combined by their median: the
@@ -413,8 +402,6 @@ pub fn choose(
         let probe_seconds = probe_start.elapsed().as_secs_f64();
         let estimate = probe_variance(moments.iter().map(|m| mean_over_pixels(&|p, k| m[p][k] as f64 - (scale[p][k] as f64).powi(2))).collect());
         (Some(estimate), probe_seconds)
-    } else {
-        (None, 0.0)
     };
     let remaining = (budget - start.elapsed().as_secs_f64()).max(0.05 * budget);
     let entries = race.entries(probe_estimate, remaining);
@@ -503,16 +490,7 @@ impl Race<'_> {
     }
 }
 
-/// Whether PT's prediction in `entries` is within `factor` of the best of the others,
-/// among those that may be chosen ([`choose_entry`]'s rule).
-fn pt_is_within(factor: f64, entries: &[Entry]) -> bool {
-    let any_fits = entries.iter().any(|e| e.fits);
-    let eligible = |e: &&Entry| e.fits || !any_fits;
-    let best_other = entries.iter().filter(eligible).filter(|e| e.kind != EstimatorKind::Pt).map(|e| e.predicted).fold(f64::INFINITY, f64::min);
-    entries.iter().filter(eligible).any(|e| e.kind == EstimatorKind::Pt && e.predicted <= factor * best_other)
-}
-
-/// Whether one more batch (or pass) of about `per` seconds, after `spent`, ends within
+/// Whether one more batch of about `per` seconds, after `spent`, ends within
 /// the `slice` (give or take a quarter: batches end at the first pass past their own
 /// deadline).
 fn next_fits(spent: f64, per: f64, slice: f64) -> bool {
@@ -557,21 +535,5 @@ mod tests {
         assert_eq!(choose_entry(&race), EstimatorKind::Ppm);
         let none = [entry(EstimatorKind::Bpm, 1e-2, false), entry(EstimatorKind::Ppm, 2e-2, false)];
         assert_eq!(choose_entry(&none), EstimatorKind::Bpm);
-    }
-
-    /// The probe runs only where PT is within the factor of the best other eligible
-    /// candidate. Seen to fail with the factor applied the wrong way round (PT at 9e-3
-    /// against PPM's 4e-3 read as within) and with candidates that do not fit counted
-    /// while others fit (a non-fitting BPM at 1e-3 made PT at 5e-3 look out of reach).
-    #[test]
-    fn the_probe_runs_only_where_pt_can_win() {
-        let race = |pt| [entry(EstimatorKind::Pt, pt, true), entry(EstimatorKind::Ppm, 4e-3, true), entry(EstimatorKind::Bpm, 1e-3, false)];
-        assert!(pt_is_within(PROBE_WORTH, &race(5e-3)));
-        assert!(pt_is_within(PROBE_WORTH, &race(1e-3)));
-        assert!(!pt_is_within(PROBE_WORTH, &race(9e-3)));
-        assert!(
-            !pt_is_within(PROBE_WORTH, &[entry(EstimatorKind::Pt, 1e-3, false), entry(EstimatorKind::Ppm, 4e-3, true)]),
-            "a PT that does not fit is not chosen"
-        );
     }
 }
