@@ -401,7 +401,7 @@ pub fn choose(
         }
         let probe_seconds = probe_start.elapsed().as_secs_f64();
         let estimate = probe_variance(moments.iter().map(|m| mean_over_pixels(&|p, k| m[p][k] as f64 - (scale[p][k] as f64).powi(2))).collect());
-        (Some(estimate), probe_seconds)
+        (estimate, probe_seconds)
     };
     let remaining = (budget - start.elapsed().as_secs_f64()).max(0.05 * budget);
     let entries = race.entries(probe_estimate, remaining);
@@ -424,11 +424,11 @@ struct Race<'a> {
 }
 
 impl Race<'_> {
-    /// Every candidate's prediction after `remaining` seconds, with PT's variance from
-    /// the probe where it ran (`probe`, normalised like the variances).
-    fn entries(&self, probe: Option<f64>, remaining: f64) -> Vec<Entry> {
+    /// Every candidate's prediction after `remaining` seconds, with PT's variance also
+    /// from the probe (`probe`, normalised like the variances).
+    fn entries(&self, probe: f64, remaining: f64) -> Vec<Entry> {
         let runs = self.runs;
-        let probed: Vec<Option<f64>> = runs.iter().map(|r| if r.kind == EstimatorKind::Pt { probe } else { None }).collect();
+        let probed: Vec<Option<f64>> = runs.iter().map(|r| (r.kind == EstimatorKind::Pt).then_some(probe)).collect();
         // Where the probe finds PT's variance underestimated, so are PT's block means'
         // variances, by the same rare samples: they are scaled alike, so that PT's mean,
         // low where it missed them, does not read as a bias of the candidates it is a
