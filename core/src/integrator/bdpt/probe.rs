@@ -37,7 +37,7 @@
 //!   one more 1/(W·H).
 //!
 //! Russian roulette's survival probabilities are left out of both densities (they differ
-//! only from the fifth segment on).
+//! only from the sixth segment on, at the default `rr_depth`).
 
 use core::ops::Range;
 
