@@ -59,8 +59,9 @@ pub(crate) fn refract(w: Vec3, m: Vec3, cos_t: f32, eta_ti: f32) -> Vec3 {
 
 /// Unpolarised Fresnel reflectance of a conductor with complex relative index
 /// η + i·k, for light arriving from outside with cosine `cos_i` ≥ 0 (K. D. Möller,
-/// *Optics*, 1988, as used by Mitsuba's `fresnel_conductor`).
-#[inline]
+/// *Optics*, 1988, as used by Mitsuba's `fresnel_conductor`). The scalar reference form
+/// of [`conductor`], which runs the same operations on three channels at once.
+#[cfg(test)]
 pub(crate) fn conductor_1(cos_i: f32, eta: f32, k: f32) -> f32 {
     let cos2 = cos_i * cos_i;
     let sin2 = 1.0 - cos2;
@@ -79,10 +80,12 @@ pub(crate) fn conductor_1(cos_i: f32, eta: f32, k: f32) -> f32 {
     if r.is_finite() { r.clamp(0.0, 1.0) } else { 1.0 }
 }
 
-/// [`conductor_1`] per RGB channel, the three channels in the lanes of one 4-lane vector:
-/// each lane runs [`conductor_1`]'s operations in its order, all of them correctly
-/// rounded (`+ − × ÷ √`, no fused multiply-add), so each channel is [`conductor_1`]'s
-/// value to the bit (`conductor_lanes_equal_the_scalar_form`), at about a third of the
+/// Unpolarised Fresnel reflectance of a conductor with complex relative index η + i·k
+/// per RGB channel, for light arriving from outside with cosine `cos_i` ≥ 0 (K. D.
+/// Möller, *Optics*, 1988, as used by Mitsuba's `fresnel_conductor`), the three channels
+/// in the lanes of one 4-lane vector: each lane runs the scalar form's operations
+/// (`conductor_1`, kept for the tests) in its order, all of them correctly rounded
+/// (`+ − × ÷ √`, no fused multiply-add), so each channel is the scalar value to the bit (`conductor_lanes_equal_the_scalar_form`), at about a third of the
 /// instructions: the rough conductor calls this once per sample and once per evaluation.
 #[inline]
 pub(crate) fn conductor(cos_i: f32, eta: Rgb, k: Rgb) -> Rgb {
