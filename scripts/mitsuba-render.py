@@ -12,13 +12,12 @@ Mitsuba 3.9.1's shape merging leaves a mesh with an invalid bounding box, after 
 shadow rays toward such an emitter stop short and light leaks into closed rooms.
 Prints `spp N seconds S` (render time, startup excluded) on stdout.
 """
+import os
 import sys
 import time
 
 import drjit as dr
 import mitsuba as mi
-
-import os
 
 scene_path, spp, threads, out = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
 seed = int(sys.argv[5]) if len(sys.argv) > 5 else 0

@@ -85,8 +85,9 @@ pub(crate) fn conductor_1(cos_i: f32, eta: f32, k: f32) -> f32 {
 /// Möller, *Optics*, 1988, as used by Mitsuba's `fresnel_conductor`), the three channels
 /// in the lanes of one 4-lane vector: each lane runs the scalar form's operations
 /// (`conductor_1`, kept for the tests) in its order, all of them correctly rounded
-/// (`+ − × ÷ √`, no fused multiply-add), so each channel is the scalar value to the bit (`conductor_lanes_equal_the_scalar_form`), at about a third of the
-/// instructions: the rough conductor calls this once per sample and once per evaluation.
+/// (`+ − × ÷ √`, no fused multiply-add), so each channel is the scalar value to the bit
+/// (`conductor_lanes_equal_the_scalar_form`), at about a third of the instructions: the
+/// rough conductor calls this once per sample and once per evaluation.
 #[inline]
 pub(crate) fn conductor(cos_i: f32, eta: Rgb, k: Rgb) -> Rgb {
     let (eta, k) = (Vec4::new(eta.r, eta.g, eta.b, 0.0), Vec4::new(k.r, k.g, k.b, 0.0));
