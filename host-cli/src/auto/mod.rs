@@ -508,9 +508,12 @@ fn choose_entry(entries: &[Entry]) -> EstimatorKind {
 mod tests {
     use super::*;
 
-    /// A race entry with the given prediction.
-    fn entry(kind: EstimatorKind, predicted: f64, fits: bool) -> Entry {
-        Entry {
+    /// A candidate that fits too few passes loses to one that fits, however small its
+    /// prediction; where none fits, the smallest prediction wins. Seen to fail with
+    /// `fits` ignored (BPM chosen) and with the fallback left out (PT chosen by default).
+    #[test]
+    fn a_candidate_must_fit_its_passes() {
+        let entry = |kind, predicted, fits| Entry {
             kind,
             passes: 4,
             pass_seconds: 1.0,
@@ -523,14 +526,7 @@ mod tests {
             fits,
             seconds: 0.1,
             stopped: false,
-        }
-    }
-
-    /// A candidate that fits too few passes loses to one that fits, however small its
-    /// prediction; where none fits, the smallest prediction wins. Seen to fail with
-    /// `fits` ignored (BPM chosen) and with the fallback left out (PT chosen by default).
-    #[test]
-    fn a_candidate_must_fit_its_passes() {
+        };
         let race = [entry(EstimatorKind::Bpm, 1e-2, false), entry(EstimatorKind::Ppm, 2e-2, true), entry(EstimatorKind::Lt, 3e-2, true)];
         assert_eq!(choose_entry(&race), EstimatorKind::Ppm);
         let none = [entry(EstimatorKind::Bpm, 1e-2, false), entry(EstimatorKind::Ppm, 2e-2, false)];
