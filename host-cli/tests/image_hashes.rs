@@ -35,7 +35,7 @@
 //! binary, 8 seeds each on independent seeds, Welch z per 8×8 block and channel against a
 //! Bonferroni bound at 1 %: PT on the built-in box, glossy and ajar, LT and BDPT on the
 //! built-in box all agree (max |z| 2.2–3.5; image means within 0.1–0.4 %;
-//! docs/performance.md).
+//! `scripts/agree-blocks.py`, docs/performance.md).
 
 use std::path::PathBuf;
 use std::time::Instant;
