@@ -49,17 +49,23 @@
 //! their median): each strategy's term of PT's second moment, which BDPT
 //! samples with its light-side strategies where PT's densities are small. Less the
 //! squared mean it is a lower estimate of PT's variance (the cross terms between path
-//! lengths are left out), and the larger of the two counts. Where it is the larger, PT's
-//! block variances are scaled alike, so that PT's block means, low where its pilot missed
+//! lengths are left out), and the larger of the two counts. Where the batches' median
+//! exceeds PT's own term their mean counts instead ([`probe_variance`]): a right-skewed
+//! estimate's median reads low. Where the probe's estimate is the larger, PT's block
+//! variances are scaled alike, so that PT's block means, low where its pilot missed
 //! the bright samples, do not read as a bias of the candidates PT is a reference for.
 //!
-//! Known limits (docs/plan.md): variances are normalised by the pilot's pixels; where an
-//! estimator's error gathers in small dark regions (PT's caustic fireflies) the
-//! full-size relMSE weighs it more than the pilot's. A camera-side candidate's variance
-//! at the pilot's size holds the spread of the image within a pilot pixel, which at full
-//! size it does not (BDPT on veach-mis: predicted 1.1e-2, measured 7e-3); estimating
-//! that spread from PT's two or three full-size passes was tried and not kept (their
-//! noise swamps it).
+//! A camera-side candidate's variance at the pilot's size holds the spread of the image
+//! within a pilot pixel, which at full size it does not, and is normalised by the pilot
+//! pixel's mean² where the relMSE divides each full pixel by its own. Both are taken out
+//! ([`spread`]) with the spread estimated from PT's full-size passes (products of
+//! independent passes, shrunk by their noise): BDPT on veach-mis read 0.58 the old way
+//! against 0.49 measured at full size. The probe's estimate is left as it is: PT's rare
+//! bright samples do not follow the image's brightness within a pilot pixel, and the
+//! probe read about the same at both sizes.
+//!
+//! Known limits (docs/plan.md): where an estimator's error gathers in small dark regions
+//! (PT's caustic fireflies) the full-size relMSE weighs it more than the pilot's.
 
 use std::time::{Duration, Instant};
 
@@ -70,7 +76,9 @@ use crate::driver::{DriverConfig, Limits};
 use crate::estimators::{CoreRenderer, PreparedScene};
 
 mod estimates;
+mod spread;
 use estimates::{Estimate, block_bias, block_estimate, median, pass_variance, probe_variance, reference};
+use spread::{full_size_term, pixel_spread};
 
 /// The estimators the race runs: between them the best at equal time on every suite
 /// scene (docs/results.md, docs/results-merging.md).
@@ -181,6 +189,10 @@ pub struct Choice {
     pub stages: [f64; 3],
     /// Passes the render continues from, if any.
     pub head: Option<Head>,
+    /// The spread of the image within a pilot pixel (`spread`) over the image, relative to
+    /// the image's mean² + 0.01 over it, and the number of PT's full-size passes it came
+    /// from.
+    pub spread: (f64, usize),
 }
 
 impl Choice {
@@ -188,11 +200,13 @@ impl Choice {
     pub fn describe(&self) -> Vec<String> {
         let [timing, scene, probe] = self.stages;
         let mut lines = vec![format!(
-            "auto       pilot race at {}x{} in {:.2} s (PT at full size {timing:.2} s, pilot scene {scene:.2} s, probe {probe:.2} s; fixed cost of a pass {:.1} ms):",
+            "auto       pilot race at {}x{} in {:.2} s (PT at full size {timing:.2} s, pilot scene {scene:.2} s, probe {probe:.2} s; fixed cost of a pass {:.1} ms; spread within a pilot pixel {:.3e} from {} full-size passes):",
             self.size.0,
             self.size.1,
             self.seconds,
-            1e3 * self.overhead
+            1e3 * self.overhead,
+            self.spread.0,
+            self.spread.1
         )];
         for e in &self.entries {
             lines.push(format!(
@@ -260,6 +274,9 @@ pub fn choose(
     let driver = DriverConfig { progress: false, ..DriverConfig::with_threads(threads) };
     let deadline = Instant::now() + Duration::from_secs_f64(slice);
     let (mut cold, mut pt_full) = (f64::INFINITY, f64::INFINITY);
+    // Each pass's own image, for the spread of the image within a pilot pixel (`spread`).
+    let mut pt_passes: Vec<Vec<[f32; 3]>> = Vec::new();
+    let mut pt_cumulative: Option<Vec<[f32; 3]>> = None;
     for spp in 1..=3 {
         if spp > 1 && Instant::now() >= deadline {
             break;
@@ -267,7 +284,21 @@ pub fn choose(
         let limits = Limits { spp, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass: 0 };
         let summary = pt.render(&mut pt_film, limits, driver, start).map_err(|e| e.to_string())?;
         let per_pass = summary.render_seconds / summary.passes.max(1) as f64;
-        if spp == 1 { cold = per_pass } else { pt_full = pt_full.min(per_pass) }
+        if spp == 1 {
+            cold = per_pass
+        } else {
+            pt_full = pt_full.min(per_pass)
+        }
+        let n = pt_film.passes();
+        if summary.passes == 1 && n as usize == pt_passes.len() + 1 {
+            let cum = pt_film.to_rgb_f32();
+            let held = (n - 1) as f32;
+            pt_passes.push(match &pt_cumulative {
+                None => cum.clone(),
+                Some(prev) => cum.iter().zip(prev).map(|(c, p)| core::array::from_fn(|k| c[k] * n as f32 - p[k] * held)).collect(),
+            });
+            pt_cumulative = Some(cum);
+        }
     }
     if !pt_full.is_finite() {
         pt_full = cold;
@@ -358,9 +389,24 @@ pub fn choose(
     let pt_low = runs.iter().find(|r| r.kind == EstimatorKind::Pt).map_or(0.0, |r| r.pass_seconds);
     let overhead = if ratio > 1.0 { ((pt_low * ratio - pt_full) / (ratio - 1.0)).clamp(0.0, pt_low) } else { 0.0 };
     let rel = |p: usize, k: usize| (scale[p][k] as f64).powi(2) + 0.01;
-    let mean_over_pixels =
-        |v: &dyn Fn(usize, usize) -> f64| (0..pixels).map(|p| (0..3).map(|k| v(p, k) / rel(p, k)).sum::<f64>()).sum::<f64>() / (3 * pixels.max(1)) as f64;
-    let own: Vec<f64> = runs.iter().map(|r| mean_over_pixels(&|p, k| r.variance[p][k])).collect();
+    let mean_over = |v: &dyn Fn(usize, usize) -> f64| (0..pixels).map(|p| (0..3).map(|k| v(p, k)).sum::<f64>()).sum::<f64>() / (3 * pixels.max(1)) as f64;
+    let mean_over_pixels = |v: &dyn Fn(usize, usize) -> f64| mean_over(&|p, k| v(p, k) / rel(p, k));
+    // Each candidate's variance term at full size: its pilot's per-pass variance with the
+    // spread of the image within a pilot pixel taken out (`spread`), from PT's full-size
+    // passes.
+    let pt_variance = runs.iter().find(|r| r.kind == EstimatorKind::Pt).map_or(&[][..], |r| &r.variance[..]);
+    let spread = pixel_spread(&pt_passes, (fw, fh), (w, h), pt_variance);
+    let spread_passes = pt_passes.len();
+    drop(pt_passes);
+    let own: Vec<f64> = runs
+        .iter()
+        .map(|r| {
+            let camera_side = r.kind != EstimatorKind::Lt;
+            mean_over(&|p, k| full_size_term(r.variance[p][k], (scale[p][k] as f64).powi(2), spread[p][k], camera_side))
+        })
+        .collect();
+    // For the account: the spread relative to the image's mean² + 0.01, both over the image.
+    let spread_term = mean_over(&|p, k| spread[p][k]) / mean_over(&rel);
     let race = Race { runs: &runs, own: &own, ratio, overhead, pt_full };
     // PT's second moment per pixel from BDPT's samples, for the rare bright samples that
     // PT's own few passes miss (`EstimatorConfig::PtMoment`). It runs even where PT
@@ -400,7 +446,8 @@ pub fn choose(
             }
         }
         let probe_seconds = probe_start.elapsed().as_secs_f64();
-        let estimate = probe_variance(moments.iter().map(|m| mean_over_pixels(&|p, k| m[p][k] as f64 - (scale[p][k] as f64).powi(2))).collect());
+        let pt_own = runs.iter().zip(&own).find(|(r, _)| r.kind == EstimatorKind::Pt).map_or(0.0, |(_, o)| *o);
+        let estimate = probe_variance(moments.iter().map(|m| mean_over_pixels(&|p, k| m[p][k] as f64 - (scale[p][k] as f64).powi(2))).collect(), pt_own);
         (estimate, probe_seconds)
     };
     let remaining = (budget - start.elapsed().as_secs_f64()).max(0.05 * budget);
@@ -408,7 +455,8 @@ pub fn choose(
     let best = choose_entry(&entries);
     let stages = [timing_seconds, scene_seconds, probe_seconds];
     let head = (best == EstimatorKind::Pt).then_some(Head { film: pt_film, config: pt_config });
-    Ok((Choice { kind: best, entries, seconds: race_start.elapsed().as_secs_f64(), size: (w, h), overhead, stages, head }, full))
+    let spread = (spread_term, spread_passes);
+    Ok((Choice { kind: best, entries, seconds: race_start.elapsed().as_secs_f64(), size: (w, h), overhead, stages, head, spread }, full))
 }
 
 /// What the race's predictions read, past the pilots.
