@@ -77,7 +77,7 @@ use crate::estimators::{CoreRenderer, PreparedScene};
 
 mod estimates;
 mod spread;
-use estimates::{Estimate, block_bias, block_estimate, median, pass_variance, probe_variance, reference};
+use estimates::{Estimate, block_bias, block_estimate, drift_free_variance, median, pass_variance, probe_variance, reference};
 use spread::{full_size_term, pixel_spread};
 
 /// The estimators the race runs: between them the best at equal time on every suite
@@ -373,7 +373,23 @@ pub fn choose(
                 }
             }
         }
-        let variance = pass_variance(&batches, &prev);
+        // A merging candidate's radius shrinks over the pilot, and its mean drifts with it.
+        let variance = match config {
+            EstimatorConfig::Merging(_, c) => {
+                let mut first = 0u32;
+                let radius = |i: u32| ((i + 1) as f64).powf((c.alpha as f64 - 1.0) / 2.0);
+                let x: Vec<f64> = batches
+                    .iter()
+                    .map(|(n, _)| {
+                        let mean = (first..first + n).map(radius).sum::<f64>() / (*n).max(1) as f64;
+                        first += n;
+                        mean
+                    })
+                    .collect();
+                drift_free_variance(&batches, &x)
+            }
+            _ => pass_variance(&batches, &prev),
+        };
         let blocks = block_estimate(w, h, &batches, &prev);
         // A candidate stopped after one batch is timed by it.
         let pass_seconds = if fastest.is_finite() { fastest } else { render_seconds / film.passes().max(1) as f64 };
