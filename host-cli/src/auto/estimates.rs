@@ -67,29 +67,23 @@ pub(super) fn pass_variance(batches: &[(u32, Vec<[f32; 3]>)], mean: &[[f32; 3]])
 /// mean: read around it, that drift counted as variance, 0.20–0.28 for PPM on enclosed
 /// against 0.049 from independent runs at the pilot's size, which put PPM level with LT
 /// (2.6× worse at equal time) in the race.
-pub(super) fn drift_free_variance(batches: &[(u32, Vec<[f32; 3]>)], x: &[f64]) -> Vec<[f64; 3]> {
+pub(super) fn drift_free_variance(batches: &[(u32, Vec<[f32; 3]>)], x: &[f64], mean: &[[f32; 3]]) -> Vec<[f64; 3]> {
     let b = batches.len();
-    let pixels = batches.first().map_or(0, |(_, im)| im.len());
     if b < 3 || x.len() != b {
-        let mean: Vec<[f32; 3]> = (0..pixels)
-            .map(|p| {
-                let total: f64 = batches.iter().map(|(n, _)| *n as f64).sum();
-                core::array::from_fn(|k| (batches.iter().map(|(n, im)| *n as f64 * im[p][k] as f64).sum::<f64>() / total.max(1.0)) as f32)
-            })
-            .collect();
-        return pass_variance(batches, &mean);
+        return pass_variance(batches, mean);
     }
     let w: Vec<f64> = batches.iter().map(|(n, _)| *n as f64).collect();
     let sw: f64 = w.iter().sum();
     let xm = w.iter().zip(x).map(|(w, x)| w * x).sum::<f64>() / sw;
     let sxx: f64 = w.iter().zip(x).map(|(w, x)| w * (x - xm).powi(2)).sum();
-    (0..pixels)
+    (0..mean.len())
         .map(|p| {
             core::array::from_fn(|k| {
-                let y: Vec<f64> = batches.iter().map(|(_, im)| im[p][k] as f64).collect();
-                let ym = w.iter().zip(&y).map(|(w, y)| w * y).sum::<f64>() / sw;
-                let slope = if sxx > 0.0 { w.iter().zip(x).zip(&y).map(|((w, x), y)| w * (x - xm) * (y - ym)).sum::<f64>() / sxx } else { 0.0 };
-                let rss: f64 = w.iter().zip(x).zip(&y).map(|((w, x), y)| w * (y - ym - slope * (x - xm)).powi(2)).sum();
+                // (weight, x, batch mean) per batch.
+                let points = || w.iter().zip(x).zip(batches).map(move |((w, x), (_, im))| (*w, *x, im[p][k] as f64));
+                let ym = points().map(|(w, _, y)| w * y).sum::<f64>() / sw;
+                let slope = if sxx > 0.0 { points().map(|(w, x, y)| w * (x - xm) * (y - ym)).sum::<f64>() / sxx } else { 0.0 };
+                let rss: f64 = points().map(|(w, x, y)| w * (y - ym - slope * (x - xm)).powi(2)).sum();
                 rss / (b - 2) as f64
             })
         })
@@ -356,10 +350,10 @@ mod tests {
             im.iter_mut().for_each(|v| *v = v.map(|c| c + (1.0 - *x as f32)));
         }
         let avg = |v: Vec<[f64; 3]>| v.iter().map(|x| x[0]).sum::<f64>() / v.len() as f64;
-        let drift_free = avg(drift_free_variance(&batches, &x));
-        assert!((drift_free / 0.09 - 1.0).abs() < 0.1, "drift-free per-pass variance {drift_free:.4e}, expected 0.09");
         let mean: Vec<[f32; 3]> =
             (0..batches[0].1.len()).map(|p| core::array::from_fn(|k| batches.iter().map(|(_, im)| im[p][k]).sum::<f32>() / 4.0)).collect();
+        let drift_free = avg(drift_free_variance(&batches, &x, &mean));
+        assert!((drift_free / 0.09 - 1.0).abs() < 0.1, "drift-free per-pass variance {drift_free:.4e}, expected 0.09");
         let plain = avg(pass_variance(&batches, &mean));
         assert!(plain > 0.12, "the plain estimate read {plain:.4e}: the drift should show in it");
     }

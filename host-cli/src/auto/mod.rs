@@ -386,7 +386,7 @@ pub fn choose(
                         mean
                     })
                     .collect();
-                drift_free_variance(&batches, &x)
+                drift_free_variance(&batches, &x, &prev)
             }
             _ => pass_variance(&batches, &prev),
         };
@@ -402,7 +402,8 @@ pub fn choose(
     let scale: Vec<[f32; 3]> =
         (0..pixels).map(|p| core::array::from_fn(|k| median(runs.iter().filter(|r| !r.dropped).map(|r| r.image[p][k] as f64).collect()) as f32)).collect();
     // t_low = o + b, t_full = o + ratio·b for PT: the fixed part o of a pass.
-    let pt_low = runs.iter().find(|r| r.kind == EstimatorKind::Pt).map_or(0.0, |r| r.pass_seconds);
+    let pt_run = runs.iter().position(|r| r.kind == EstimatorKind::Pt);
+    let pt_low = pt_run.map_or(0.0, |i| runs[i].pass_seconds);
     let overhead = if ratio > 1.0 { ((pt_low * ratio - pt_full) / (ratio - 1.0)).clamp(0.0, pt_low) } else { 0.0 };
     let rel = |p: usize, k: usize| (scale[p][k] as f64).powi(2) + 0.01;
     let mean_over = |v: &dyn Fn(usize, usize) -> f64| (0..pixels).map(|p| (0..3).map(|k| v(p, k)).sum::<f64>()).sum::<f64>() / (3 * pixels.max(1)) as f64;
@@ -410,7 +411,7 @@ pub fn choose(
     // Each candidate's variance term at full size: its pilot's per-pass variance with the
     // spread of the image within a pilot pixel taken out (`spread`), from PT's full-size
     // passes.
-    let pt_variance = runs.iter().find(|r| r.kind == EstimatorKind::Pt).map_or(&[][..], |r| &r.variance[..]);
+    let pt_variance = pt_run.map_or(&[][..], |i| &runs[i].variance[..]);
     let spread = pixel_spread(&pt_passes, (fw, fh), (w, h), pt_variance);
     let spread_passes = pt_passes.len();
     drop(pt_passes);
@@ -418,7 +419,7 @@ pub fn choose(
         .iter()
         .map(|r| {
             let camera_side = r.kind != EstimatorKind::Lt;
-            mean_over(&|p, k| full_size_term(r.variance[p][k], (scale[p][k] as f64).powi(2), spread[p][k], camera_side))
+            mean_over(&|p, k| full_size_term(r.variance[p][k], rel(p, k), spread[p][k], camera_side))
         })
         .collect();
     // For the account: the spread relative to the image's mean² + 0.01, both over the image.
@@ -462,7 +463,7 @@ pub fn choose(
             }
         }
         let probe_seconds = probe_start.elapsed().as_secs_f64();
-        let pt_own = runs.iter().zip(&own).find(|(r, _)| r.kind == EstimatorKind::Pt).map_or(0.0, |(_, o)| *o);
+        let pt_own = pt_run.map_or(0.0, |i| own[i]);
         let estimate = probe_variance(moments.iter().map(|m| mean_over_pixels(&|p, k| m[p][k] as f64 - (scale[p][k] as f64).powi(2))).collect(), pt_own);
         (estimate, probe_seconds)
     };

@@ -100,8 +100,8 @@ fn spread_estimates(passes: &[Vec<[f32; 3]>], full: (u32, u32), pilot: (u32, u32
                 // larger of PT's per-pass variance at the pilot's size less the spread (the
                 // module's formula) and the passes' own variance per full pixel, which
                 // holds the fireflies the pilot may have missed: a firefly in one pass
-                // times the next pass's value otherwise reads as spread (veach-mis: a
-                // normalised spread of 1e3 against 0.05 on other seeds).
+                // times the other passes' deviations otherwise reads as spread
+                // (`a_firefly_in_one_pass_is_not_spread`).
                 let products_sum: f64 = (0..pairs.len()).map(|q| products[p * pairs.len() + q][k]).sum();
                 let own = ((m as f64 - 1.0) / m as f64 * squares[p][k] - 2.0 / m as f64 * products_sum) / ((m as f64 - 1.0) * n);
                 let v = (pt_variance.get(p).map_or(0.0, |v| v[k]) - s.max(0.0)).max(own).max(0.0);
@@ -113,11 +113,11 @@ fn spread_estimates(passes: &[Vec<[f32; 3]>], full: (u32, u32), pilot: (u32, u32
 }
 
 /// One pilot pixel's full-size variance term from its per-pass variance `v` at the pilot's
-/// size, the mean² of the image there `mean2`, and the spread `s`: (v − s)⁺ / (mean2 + s +
-/// 0.01) for a camera-side estimator, v / (mean2 + s + 0.01) for a light tracer.
-pub(super) fn full_size_term(v: f64, mean2: f64, s: f64, camera_side: bool) -> f64 {
+/// size, the relMSE's denominator there `rel` (the image's mean² + 0.01), and the spread
+/// `s`: (v − s)⁺ / (rel + s) for a camera-side estimator, v / (rel + s) for a light tracer.
+pub(super) fn full_size_term(v: f64, rel: f64, s: f64, camera_side: bool) -> f64 {
     let numerator = if camera_side { (v - s).max(0.0) } else { v };
-    numerator / (mean2 + s + 0.01)
+    numerator / (rel + s)
 }
 
 #[cfg(test)]
@@ -218,8 +218,8 @@ mod tests {
     /// a light tracer only gains it in the denominator.
     #[test]
     fn camera_side_and_light_side_terms() {
-        assert!((full_size_term(0.5, 0.25, 0.2, true) - 0.3 / 0.46).abs() < 1e-12);
-        assert!((full_size_term(0.5, 0.25, 0.2, false) - 0.5 / 0.46).abs() < 1e-12);
-        assert_eq!(full_size_term(0.1, 0.25, 0.2, true), 0.0);
+        assert!((full_size_term(0.5, 0.26, 0.2, true) - 0.3 / 0.46).abs() < 1e-12);
+        assert!((full_size_term(0.5, 0.26, 0.2, false) - 0.5 / 0.46).abs() < 1e-12);
+        assert_eq!(full_size_term(0.1, 0.26, 0.2, true), 0.0);
     }
 }
