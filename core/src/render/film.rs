@@ -48,6 +48,11 @@ use crate::integrator::Splat;
 use crate::math;
 use crate::spectrum::Rgb;
 
+mod bands;
+
+pub use bands::{Band, ParallelBands};
+use bands::{Lists, commit_camera_sample};
+
 /// Bits of a sum below the binary point: a sum is an integer count of 2⁻⁶⁴.
 pub const QUANTUM_BITS: u32 = 64;
 const SCALE: f64 = (1u128 << QUANTUM_BITS) as f64;
@@ -69,33 +74,11 @@ pub struct Film {
     splats: Vec<Splat>,
     /// How splats are spread over pixels.
     filter: Filter,
-    /// The host's way of committing splats on several threads, if it has one.
+    /// The host's way of committing a pass on several threads, if it has one.
     workers: Workers,
+    /// Scratch of the parallel commit ([`bands`]).
+    lists: Lists,
 }
-
-/// A worker's share of a pass's splats: rows `rows` of the film's sums and the indices of
-/// the splats that reach them, in staging order (see [`ParallelBands`]).
-#[derive(Debug)]
-pub struct Band<'a> {
-    rows: Range<u32>,
-    sums: &'a mut [[u128; 3]],
-    splats: Vec<u32>,
-    saturated: u64,
-}
-
-/// How a host with threads commits a pass's splats: call `work` once for every band, in
-/// any order, on any threads (e.g. rayon's `par_iter_mut`). The bands are disjoint rows
-/// of the film and each visits its splats in staging order, so every pixel receives the
-/// same additions in the same order as on one thread: the sums and tallies are the
-/// sequential commit's, bit for bit, whatever the runner does. (The driver's sequential
-/// commit of about 10⁶ scattered splats per light-tracing pass bounded LT's scaling:
-/// docs/performance.md.)
-pub type ParallelBands = for<'a, 'b, 'c> fn(&'a mut [Band<'b>], &'c (dyn Fn(&mut Band<'_>) + Sync + 'c));
-
-/// Bands a parallel commit cuts the film into (more than threads, for balance: splats
-/// crowd into some rows), and the fewest splats worth cutting for.
-const BANDS: u32 = 64;
-const PARALLEL_SPLATS: usize = 1 << 14;
 
 /// A [`ParallelBands`] runner held by a film; it never changes the film's contents, so
 /// it takes no part in comparisons.
@@ -185,6 +168,7 @@ impl Film {
             splats: Vec::new(),
             filter,
             workers: Workers(None),
+            lists: Lists::default(),
         }
     }
 
@@ -291,19 +275,12 @@ impl Film {
     /// `splat_scale`, at the pixel containing the splat's continuous film position (pixel
     /// (x, y) covers [x, x+1) × [y, y+1)). The mean then divides by one more.
     pub fn end_pass(&mut self, splat_scale: f64) {
-        if self.has_camera {
-            for (acc, v) in self.sum.iter_mut().zip(&mut self.camera) {
-                if v.is_valid_radiance() {
-                    self.tallies.saturated += add(acc, *v, 1.0);
-                } else {
-                    self.tallies.discarded += 1;
-                }
-                *v = Rgb::ZERO;
-            }
-            self.has_camera = false;
-        }
         let splats = core::mem::take(&mut self.splats);
-        self.add_splats(&splats, splat_scale);
+        match self.workers.0.filter(|_| self.worth_bands(splats.len())) {
+            Some(run) => self.commit_in_bands(run, &splats, splat_scale),
+            None => self.commit_here(&splats, splat_scale),
+        }
+        self.has_camera = false;
         self.splats = splats;
         self.splats.clear();
         self.passes += 1;
@@ -348,73 +325,19 @@ impl Film {
         self.splats.clear();
     }
 
-    fn add_splats(&mut self, splats: &[Splat], scale: f64) {
-        let (width, height, filter) = (self.width, self.height, self.filter);
-        if let Some(run) = self.workers.0.filter(|_| splats.len() >= PARALLEL_SPLATS && height >= 2 && width >= 1) {
-            self.add_splats_parallel(run, splats, scale);
-            return;
+    /// [`Self::end_pass`] on the calling thread.
+    fn commit_here(&mut self, splats: &[Splat], scale: f64) {
+        if self.has_camera {
+            for (acc, v) in self.sum.iter_mut().zip(&mut self.camera) {
+                commit_camera_sample(&mut self.tallies, acc, v);
+            }
         }
+        let (width, height, filter) = (self.width, self.height, self.filter);
         for s in splats {
-            if self.admit(s) {
+            if admit(&mut self.tallies, s, width, height) {
                 self.tallies.saturated += splat_rows(filter, width, height, &mut self.sum, 0..height, s, scale);
             }
         }
-    }
-
-    /// Tally `s` if it is discarded or outside the image; whether it is added.
-    fn admit(&mut self, s: &Splat) -> bool {
-        if !s.value.is_valid_radiance() || !s.film.is_finite() {
-            self.tallies.discarded += 1;
-            return false;
-        }
-        let (x, y) = (math::floor(s.film.x), math::floor(s.film.y));
-        if x < 0.0 || y < 0.0 || x >= self.width as f32 || y >= self.height as f32 {
-            self.tallies.splats_outside += 1;
-            return false;
-        }
-        true
-    }
-
-    /// [`Self::add_splats`] through `run`: the admitted splats bucketed, in staging order,
-    /// into every band of rows they reach.
-    fn add_splats_parallel(&mut self, run: ParallelBands, splats: &[Splat], scale: f64) {
-        let (width, height, filter) = (self.width, self.height, self.filter);
-        let rows_per = height.div_ceil(BANDS.min(height));
-        let n_bands = height.div_ceil(rows_per) as usize;
-        let mut members: Vec<Vec<u32>> = vec![Vec::new(); n_bands];
-        for (i, s) in splats.iter().enumerate() {
-            if !self.admit(s) {
-                continue;
-            }
-            let rows = if filter.is_box() {
-                let y = math::floor(s.film.y) as u32;
-                y..y + 1
-            } else {
-                filter.splat_range(s.film.y, height)
-            };
-            if rows.is_empty() {
-                continue;
-            }
-            for band in members.iter_mut().take(((rows.end - 1) / rows_per + 1) as usize).skip((rows.start / rows_per) as usize) {
-                band.push(i as u32);
-            }
-        }
-        let mut bands: Vec<Band> = self
-            .sum
-            .chunks_mut(rows_per as usize * width as usize)
-            .zip(members)
-            .enumerate()
-            .map(|(b, (sums, splats))| {
-                let first = b as u32 * rows_per;
-                Band { rows: first..(first + rows_per).min(height), sums, splats, saturated: 0 }
-            })
-            .collect();
-        run(&mut bands, &|band: &mut Band| {
-            for &i in &band.splats {
-                band.saturated += splat_rows(filter, width, height, band.sums, band.rows.clone(), &splats[i as usize], scale);
-            }
-        });
-        self.tallies.saturated += bands.iter().map(|b| b.saturated).sum::<u64>();
     }
 
     /// The image: the mean over passes (black before the first pass).
@@ -422,6 +345,21 @@ impl Film {
         let inv = if self.passes == 0 { 0.0 } else { INV_SCALE / self.passes as f64 };
         self.sum.iter().map(|s| s.map(|v| (v as f64 * inv) as f32)).collect()
     }
+}
+
+/// Tally splat `s` if it is discarded or outside a `width × height` image; whether it is
+/// added.
+fn admit(tallies: &mut Tallies, s: &Splat, width: u32, height: u32) -> bool {
+    if !s.value.is_valid_radiance() || !s.film.is_finite() {
+        tallies.discarded += 1;
+        return false;
+    }
+    let (x, y) = (math::floor(s.film.x), math::floor(s.film.y));
+    if x < 0.0 || y < 0.0 || x >= width as f32 || y >= height as f32 {
+        tallies.splats_outside += 1;
+        return false;
+    }
+    true
 }
 
 /// Add admitted splat `s` × `scale` to the pixels of rows `rows` it reaches; `sums` holds
@@ -508,14 +446,18 @@ mod tests {
     }
 
     /// The banded commit equals the sequential one bit for bit (sums and tallies), with a
-    /// box and a wide filter, splats on band edges, outside the image and invalid. Seen to
-    /// fail on injected bugs: a splat bucketed only into the band of its first row (the
-    /// Gaussian's lower rows lost), and a band's rows starting one row late.
+    /// box and a wide filter, camera samples (one invalid) and splats on band edges,
+    /// outside the image and invalid; and a film with camera samples alone. Seen to fail
+    /// on injected bugs: a splat listed only under the band of its first row (the
+    /// Gaussian's lower rows lost), a band's rows starting one row late, the last sort
+    /// segment ending one splat short, and a band skipping its camera samples.
     #[test]
-    fn banded_splat_commit_equals_the_sequential_one() {
+    fn banded_commit_equals_the_sequential_one() {
+        use super::bands::{PARALLEL_PIXELS, PARALLEL_SPLATS};
         let mut rng = crate::rng::SampleStream::for_sample(7, crate::rng::Stream::Aux, 0, 0, 0);
         let (w, h) = (37u32, 131u32);
-        let mut splats: Vec<Splat> = (0..PARALLEL_SPLATS + 999)
+        let n = PARALLEL_SPLATS + 4099;
+        let mut splats: Vec<Splat> = (0..n)
             .map(|_| {
                 let film = Vec2::new(rng.next_f32() * (w as f32 + 2.0) - 1.0, rng.next_f32() * (h as f32 + 2.0) - 1.0);
                 Splat { film, value: Rgb::new(rng.next_f32(), 3.0 * rng.next_f32(), 0.25) }
@@ -523,21 +465,26 @@ mod tests {
             .collect();
         splats[3].value = Rgb::new(f32::NAN, 0.0, 0.0);
         splats[4].film = Vec2::new(0.5, f32::INFINITY);
-        // Exactly on the first rows of bands (3 rows per band at this height).
+        // Exactly on the first rows of bands (3 rows per band at this height), and the
+        // very last splat inside the image.
         for (k, y) in [3.0f32, 6.0, 129.0, 130.999].into_iter().enumerate() {
             splats[10 + k].film = Vec2::new(5.5, y);
         }
+        splats[n - 1] = Splat { film: Vec2::new(1.5, 1.5), value: Rgb::splat(1e3) };
+        let mut camera: Vec<Rgb> = (0..w * h).map(|_| Rgb::new(rng.next_f32(), 0.5, 2.0 * rng.next_f32())).collect();
+        camera[77].g = -1.0;
         for filter in [Filter::Box, Filter::Gaussian { stddev: 1.5 }, Filter::Tent { radius: 2.0 }] {
             let mut one = Film::with_filter(w, h, filter);
             let mut banded = Film::with_filter(w, h, filter);
             banded.set_parallel_splats(Some(reversed));
             for film in [&mut one, &mut banded] {
                 for pass in 0..2 {
+                    film.set_camera_samples(0..w * h, &camera);
                     film.push_splats(&splats[pass * 100..]);
                     film.end_pass(0.125);
                 }
             }
-            assert!(one.splats_outside() > 0 && one.discarded() == 2, "{:?}", one.tallies());
+            assert!(one.splats_outside() > 0 && one.discarded() == 4, "{:?}", one.tallies());
             assert_eq!(one.tallies(), banded.tallies(), "{filter:?}");
             assert!(one.exact_sums() == banded.exact_sums(), "{filter:?}");
             // Too few splats to cut: committed on the calling thread, the same film.
@@ -550,6 +497,20 @@ mod tests {
             }
             assert!(few.exact_sums() == few_banded.exact_sums() && few.tallies() == few_banded.tallies(), "{filter:?}");
         }
+        // Camera samples alone, enough pixels to cut (path tracing's passes).
+        let (w, h) = (128u32, PARALLEL_PIXELS as u32 / 128 + 3);
+        let camera: Vec<Rgb> = (0..w * h).map(|i| Rgb::new(i as f32 * 1e-3, rng.next_f32(), if i == 5 { f32::NAN } else { 1.0 })).collect();
+        let mut one = Film::new(w, h);
+        let mut banded = Film::new(w, h);
+        banded.set_parallel_splats(Some(reversed));
+        for film in [&mut one, &mut banded] {
+            for _ in 0..2 {
+                film.set_camera_samples(0..w * h, &camera);
+                film.end_pass(1.0);
+            }
+        }
+        assert_eq!(one.discarded(), 2);
+        assert!(one.exact_sums() == banded.exact_sums() && one.tallies() == banded.tallies());
     }
 
     #[test]

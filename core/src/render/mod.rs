@@ -47,7 +47,7 @@ pub use config::{
     LvcbptConfig, MAX_DATASET, MAX_FILTER_SEGMENTS, MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig, SegmentAlgorithm, SegmentConfig, SpcbptConfig,
 };
 pub use film::{Band, Film, FilmError, ParallelBands, QUANTUM_BITS, Tallies};
-pub use renderer::{Renderer, RendererError};
+pub use renderer::{CHUNKS, Renderer, RendererError, chunk_for};
 
 use alloc::vec::Vec;
 use core::ops::Range;

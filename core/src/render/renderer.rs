@@ -27,8 +27,19 @@ use crate::segment::filter::{Bpf, Mvf, Phf};
 use super::FilterSide;
 use super::{ChunkOutput, ConfigError, Context, Cursor, EstimatorConfig, EstimatorKind, Film, Phase, Phased, Stage};
 
-/// Pixels per chunk of a camera phase, light paths per chunk of a light phase.
-pub const CHUNK: u32 = 1024;
+/// Pixels per chunk of a camera phase, light paths per chunk of a light phase, for a
+/// phase of `items`: about [`CHUNKS`] chunks, a power of two from 64 to 1024 items each.
+/// A pass ends when its slowest thread does, so chunks must be many per thread: 1024
+/// items gave the 256² suite scenes 64 chunks, 4 per thread on 16 threads, where path
+/// tracing scaled to 10.8× (docs/performance.md, "Thread scaling on 16 cores"). The
+/// size depends on the phase alone, never on the host, and the random numbers on the
+/// item alone, so the image does not depend on it either.
+pub fn chunk_for(items: u32) -> u32 {
+    (items / CHUNKS).max(1).next_power_of_two().clamp(64, 1024)
+}
+
+/// The chunks a large phase is cut into ([`chunk_for`]).
+pub const CHUNKS: u32 = 256;
 
 /// Which of the one-phase estimators.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -61,7 +72,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for OnePhase {
     fn next_phase(&self) -> Option<Phase> {
         let Some(Stage::Pass(pass, 0)) = self.cursor.stage() else { return None };
         let name = if self.which == Simple::Lt { "light paths" } else { "camera" };
-        Some(Phase { name, id: 0, pass: Some(pass), items: self.pixels, chunk: CHUNK, samples: true })
+        Some(Phase { name, id: 0, pass: Some(pass), items: self.pixels, chunk: chunk_for(self.pixels), samples: true })
     }
     fn start_pass(&mut self, pass: u32) {
         self.cursor.start_pass(pass);
@@ -349,6 +360,14 @@ mod tests {
     #[cfg(not(feature = "merging"))]
     use crate::render::{MergeMode, MergingConfig};
     use crate::scene::builtin;
+
+    /// About 256 chunks where the phase is large enough, within 64..=1024 items each.
+    #[test]
+    fn chunks_are_many_and_bounded() {
+        for (items, chunk) in [(0, 64), (1, 64), (4096, 64), (65_536, 256), (76_800, 512), (2_073_600, 1024), (u32::MAX, 1024)] {
+            assert_eq!(chunk_for(items), chunk, "{items} items");
+        }
+    }
 
     /// In every build, whatever its features: an estimator is constructed exactly when it
     /// is compiled, and a refusal names the estimator and the feature that compiles it.

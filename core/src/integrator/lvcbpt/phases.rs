@@ -12,7 +12,7 @@ use super::{PassInputs, StrategyCounts, count_cacheable, render_pixels, trace_li
 use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;
 use crate::path::{CacheEntry, LightPaths};
-use crate::render::{ChunkOutput, Context, Cursor, Film, LvcbptConfig, Phase, PhaseData, Phased, Stage};
+use crate::render::{ChunkOutput, Context, Cursor, Film, LvcbptConfig, Phase, PhaseData, Phased, Stage, chunk_for};
 
 /// Light paths per chunk.
 const CHUNK: u32 = 1024;
@@ -55,8 +55,10 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Lvcbpt {
     fn next_phase(&self) -> Option<Phase> {
         Some(match self.cursor.stage()? {
             Stage::Setup(_) => Phase { name: "c̄ probe", id: 0, pass: None, items: self.config.probe_paths, chunk: CHUNK, samples: false },
-            Stage::Pass(pass, 0) => Phase { name: "light paths", id: 1, pass: Some(pass), items: self.light_paths, chunk: CHUNK, samples: true },
-            Stage::Pass(pass, _) => Phase { name: "camera", id: 2, pass: Some(pass), items: self.pixels, chunk: CHUNK, samples: true },
+            Stage::Pass(pass, 0) => {
+                Phase { name: "light paths", id: 1, pass: Some(pass), items: self.light_paths, chunk: chunk_for(self.light_paths), samples: true }
+            }
+            Stage::Pass(pass, _) => Phase { name: "camera", id: 2, pass: Some(pass), items: self.pixels, chunk: chunk_for(self.pixels), samples: true },
         })
     }
     fn start_pass(&mut self, pass: u32) {

@@ -14,7 +14,7 @@ use crate::geometry::RayQuery;
 use crate::integrator::RenderParams;
 use crate::merge::{Footprint, HashGrid, progressive_radius};
 use crate::path::{CacheEntry, LightPaths};
-use crate::render::{ChunkOutput, Context, Cursor, Film, MergingConfig, Phase, PhaseData, Phased, Stage};
+use crate::render::{ChunkOutput, Context, Cursor, Film, MergingConfig, Phase, PhaseData, Phased, Stage, chunk_for};
 
 /// Items per chunk.
 const CHUNK: u32 = 1024;
@@ -104,8 +104,10 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
                 let items = if self.config.merges(self.mode) && self.config.radius.needs_footprint() { self.pixels } else { 0 };
                 Phase { name: "footprint", id: 0, pass: None, items, chunk: CHUNK, samples: false }
             }
-            Stage::Pass(pass, 0) => Phase { name: "light paths", id: 1, pass: Some(pass), items: self.light_paths, chunk: CHUNK, samples: true },
-            Stage::Pass(pass, _) => Phase { name: "camera", id: 2, pass: Some(pass), items: self.pixels, chunk: CHUNK, samples: true },
+            Stage::Pass(pass, 0) => {
+                Phase { name: "light paths", id: 1, pass: Some(pass), items: self.light_paths, chunk: chunk_for(self.light_paths), samples: true }
+            }
+            Stage::Pass(pass, _) => Phase { name: "camera", id: 2, pass: Some(pass), items: self.pixels, chunk: chunk_for(self.pixels), samples: true },
         })
     }
     fn start_pass(&mut self, pass: u32) {
