@@ -325,6 +325,24 @@ impl Material {
         }
     }
 
+    /// (`eval`, `pdf`, `pdf_rev`) together: the same bits as calling the three, sharing
+    /// what the model's evaluations have in common (the rough conductor's half vector, D
+    /// and both G1). A two-sided material seen from different sides by `wo` and `wi`
+    /// mirrors each call differently, so those calls are made one by one.
+    pub fn eval_pdfs(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (Rgb, SolidAnglePdf, SolidAnglePdf) {
+        if self.mirrored(wo) != self.mirrored(wi) {
+            return (self.eval(wo, wi, mode), self.pdf(wo, wi, mode), self.pdf_rev(wo, wi, mode));
+        }
+        let (wo, wi) = if self.mirrored(wo) { (flip_z(wo), flip_z(wi)) } else { (wo, wi) };
+        match &self.kind {
+            Kind::RoughConductor(b) => {
+                let (f, pdf, pdf_rev) = b.eval_pdfs(wo, wi);
+                (if f.is_finite() { f } else { Rgb::ZERO }, Self::checked_pdf(pdf), Self::checked_pdf(pdf_rev))
+            }
+            _ => (self.eval_front(wo, wi, mode), self.pdf_front(wo, wi), self.pdf_front(wi, wo)),
+        }
+    }
+
     fn pdf_front(&self, wo: Vec3, wi: Vec3) -> SolidAnglePdf {
         let pdf = match &self.kind {
             Kind::Diffuse(b) => b.pdf(wo, wi),

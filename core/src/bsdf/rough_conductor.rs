@@ -64,6 +64,19 @@ impl RoughConductor {
         (f, pdf)
     }
 
+    /// (`eval`, `pdf`, `pdf` reversed) with the half vector, D and both G1 computed once:
+    /// bit-identical to the three calls (a photon merge weighs every photon it finds by
+    /// both densities).
+    #[inline]
+    pub fn eval_pdfs(&self, wo: Vec3, wi: Vec3) -> (Rgb, SolidAnglePdf, SolidAnglePdf) {
+        let Some(m) = reflection_half(wo, wi) else { return (Rgb::ZERO, SolidAnglePdf::ZERO, SolidAnglePdf::ZERO) };
+        let (d, g1_wo, g1_wi) = (self.distr.d(m), self.distr.g1(wo, m), self.distr.g1(wi, m));
+        let f = self.eval_at(wo, wi, m, d, g1_wo, || g1_wi);
+        let pdf = SolidAnglePdf(self.distr.visible_pdf_with(wo, m, || d, || g1_wo) / (4.0 * wo.dot(m)));
+        let pdf_rev = SolidAnglePdf(self.distr.visible_pdf_with(wi, m, || d, || g1_wi) / (4.0 * wi.dot(m)));
+        (f, pdf, pdf_rev)
+    }
+
     /// A visible normal, reflected. The value and both densities share one half vector
     /// (`reflection_half` is symmetric in its arguments, bit for bit), one D and both G1:
     /// the same bits as calling `eval`, `pdf` and `pdf` reversed.

@@ -251,21 +251,22 @@ fn merge_at(
             return;
         }
         let wi = y.frame.to_local(photon.wo);
-        let f = material.eval(wo, wi, TransportMode::Radiance);
+        // The merge weight needs both densities; PPM's weight is 1.
+        let (f, densities) = match mode {
+            MergeMode::Ppm => (material.eval(wo, wi, TransportMode::Radiance), None),
+            _ => {
+                let (f, toward_light, toward_camera) = material.eval_pdfs(wo, wi, TransportMode::Radiance);
+                (f, Some(MergeDensities { toward_light, toward_camera }))
+            }
+        };
         if f.is_black() {
             return;
         }
         let cos_g = y.ng.dot(photon.wo).abs();
         let correction = if cos_g > 0.0 { wi.z.abs() / cos_g } else { 0.0 };
-        let w = match mode {
-            MergeMode::Ppm => 1.0,
-            _ => {
-                let d = MergeDensities {
-                    toward_light: material.pdf(wo, wi, TransportMode::Radiance),
-                    toward_camera: material.pdf(wi, wo, TransportMode::Radiance),
-                };
-                merge_weight_from_sums(&inputs.tech, &photon.sums, &sums, d)
-            }
+        let w = match densities {
+            None => 1.0,
+            Some(d) => merge_weight_from_sums(&inputs.tech, &photon.sums, &sums, d),
         };
         sum += counters.sanitize(y.beta * f * photon.beta * (correction * kernel * w));
     });
