@@ -26,8 +26,9 @@ pub struct HashGrid {
     starts: Vec<u32>,
     indices: Vec<u32>,
     points: Vec<Vec3>,
-    /// Each point's bucket (kept to fill the buckets without hashing twice).
-    buckets_of: Vec<u32>,
+    /// Each input point's bucket while building (kept to fill the buckets without hashing
+    /// twice), then its slot (`u32::MAX` for a point left out).
+    slot_of: Vec<u32>,
     mask: u32,
 }
 
@@ -54,7 +55,7 @@ impl HashGrid {
 
     /// Bytes held (capacity, not length).
     pub fn size_bytes(&self) -> usize {
-        (self.starts.capacity() + self.indices.capacity() + self.buckets_of.capacity()) * 4 + self.points.capacity() * 12
+        (self.starts.capacity() + self.indices.capacity() + self.slot_of.capacity()) * 4 + self.points.capacity() * 12
     }
 
     /// Rebuild over `points` for queries of radius `radius` (> 0 and finite; otherwise
@@ -64,7 +65,7 @@ impl HashGrid {
         self.starts.clear();
         self.indices.clear();
         self.points.clear();
-        self.buckets_of.clear();
+        self.slot_of.clear();
         self.radius = radius;
         let n = points.len();
         if !(radius > 0.0 && radius.is_finite()) || n == 0 || n > u32::MAX as usize / 2 {
@@ -81,11 +82,11 @@ impl HashGrid {
         let mut kept = 0usize;
         for p in points.clone() {
             if !p.is_finite() {
-                self.buckets_of.push(u32::MAX);
+                self.slot_of.push(u32::MAX);
                 continue;
             }
             let b = self.bucket(self.cell_of(p));
-            self.buckets_of.push(b);
+            self.slot_of.push(b);
             self.starts[b as usize] += 1;
             kept += 1;
         }
@@ -99,13 +100,14 @@ impl HashGrid {
         self.indices.resize(kept, 0);
         self.points.resize(kept, Vec3::ZERO);
         for (i, p) in points.enumerate() {
-            if self.buckets_of[i] == u32::MAX {
+            if self.slot_of[i] == u32::MAX {
                 continue;
             }
-            let b = self.buckets_of[i] as usize;
+            let b = self.slot_of[i] as usize;
             let k = self.starts[b] as usize;
             self.indices[k] = i as u32;
             self.points[k] = p;
+            self.slot_of[i] = k as u32;
             self.starts[b] += 1;
         }
         for b in (1..=buckets).rev() {
@@ -118,6 +120,15 @@ impl HashGrid {
     /// data reorder it by this to read it contiguously in [`Self::query_slots`].
     pub fn order(&self) -> &[u32] {
         &self.indices
+    }
+
+    /// Each input point's slot (`u32::MAX` for a point left out): the inverse of
+    /// [`Self::order`]. A host building per-point data in slot order reads its inputs in
+    /// their own order with it and writes each result to its slot: on spot_mirror's
+    /// photons, reading the light vertices in slot order (scattered over a pass's
+    /// 100-200 MiB of light paths) made that loop wait on memory for each photon.
+    pub fn slot_of(&self) -> &[u32] {
+        &self.slot_of
     }
 
     /// Call `visit(i)` for every point i within distance `radius()` of `p`, once each.
@@ -195,6 +206,10 @@ mod tests {
             let mut g = HashGrid::new();
             g.build(pts.iter().copied(), r);
             assert_eq!(g.len(), n);
+            // `slot_of` inverts `order` (seen failing with the slot left at the bucket).
+            for (k, &i) in g.order().iter().enumerate() {
+                assert_eq!(g.slot_of()[i as usize], k as u32);
+            }
             for q in 0..400 {
                 let scale = if q % 4 == 0 { 3.0 } else { 1.0 };
                 let p = (Vec3::new(lcg(&mut s), lcg(&mut s), lcg(&mut s)) * spread - Vec3::splat(0.3)) * scale;
@@ -230,6 +245,7 @@ mod tests {
         let mut g = HashGrid::new();
         g.build([Vec3::ZERO, Vec3::NAN, Vec3::new(0.01, 0.0, 0.0), Vec3::splat(f32::INFINITY)].into_iter(), 0.5);
         assert_eq!(g.len(), 2);
+        assert_eq!((g.slot_of()[1], g.slot_of()[3]), (u32::MAX, u32::MAX));
         let mut found = Vec::new();
         g.query(Vec3::ZERO, |i| found.push(i));
         found.sort();

@@ -162,8 +162,13 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
                     crate::path::cacheable_entries(ctx.scene, &self.paths, &mut self.photons);
                     let paths = &self.paths;
                     self.grid.build(self.photons.iter().map(|e| photon_position(paths, e)), self.radius(pass));
-                    for &i in self.grid.order() {
-                        self.records.push(Photon::new(ctx.scene, &tech, &self.paths, &self.prefix, &self.photons[i as usize]));
+                    // The records in slot order, built in the photons' own (path) order.
+                    let weighted = (self.mode != MergeMode::Ppm).then_some(&tech);
+                    self.records.resize(self.grid.len(), Photon::default());
+                    for (e, &k) in self.photons.iter().zip(self.grid.slot_of()) {
+                        if let Some(record) = self.records.get_mut(k as usize) {
+                            *record = Photon::new(ctx.scene, weighted, &self.paths, &self.prefix, e);
+                        }
                     }
                 }
             }
