@@ -98,10 +98,14 @@ fn per_sample_functions_do_not_allocate() {
 }
 
 /// The render protocol's per-pass phases allocate nothing once the buffers have grown:
-/// PT, LT, BDPT and LVCBPT through the core's serial runner, passes 4..12 after 4 warm-up
-/// passes (fixed seed, so the light-path high-water mark is reproducible). The chunk
-/// outputs, the LVCBPT light-path store and cache and the film's staging all keep their
-/// capacity from pass to pass. SPCBPT is not included: its per-pass stage-1 and stage-2
+/// PT, LT, BDPT and LVCBPT through the core's serial runner, passes 4..12 replayed after
+/// passes 0..12 (a pass's random numbers depend on its index alone, so a replayed pass
+/// needs no more room than it took the first time). The chunk outputs, the LVCBPT
+/// light-path store and cache and the film's staging all keep their capacity from pass
+/// to pass. (Fresh passes may still grow a buffer to a new high-water mark: after the
+/// one-phase estimators' chunks shrank to 64 items at this size, LT's passes 4..12 grew
+/// a chunk's splats twice after 4 warm-up passes. That is growth, not storage thrown
+/// away, which is what this test is for.) SPCBPT is not included: its per-pass stage-1 and stage-2
 /// alias tables and its reuse FIFOs' prefix boxes are allocated anew every pass (see
 /// ARCHITECTURE.md).
 ///
@@ -136,7 +140,7 @@ fn protocol_passes_do_not_allocate_in_steady_state() {
         let mut renderer = Renderer::new(&scene, params, config).unwrap();
         let mut film = Film::new(16, 16);
         let mut buffers = PhaseBuffers::new();
-        for pass in 0..4 {
+        for pass in 0..12 {
             render_pass(&mut renderer, &ctx, &mut film, &mut buffers, pass);
         }
         let n = count_allocations(|| {
@@ -144,8 +148,8 @@ fn protocol_passes_do_not_allocate_in_steady_state() {
                 render_pass(&mut renderer, &ctx, &mut film, &mut buffers, pass);
             }
         });
-        assert_eq!(n, 0, "{:?}: {n} allocations in 8 steady-state passes", config.kind());
-        assert_eq!(film.passes(), 12);
+        assert_eq!(n, 0, "{:?}: {n} allocations in 8 replayed passes", config.kind());
+        assert_eq!(film.passes(), 20);
     }
 }
 
