@@ -93,9 +93,18 @@ pub fn powf(x: f32, y: f32) -> f32 {
 pub fn pow_f64(x: f64, y: f64) -> f64 {
     libm::pow(x, y)
 }
+/// Round toward −∞: the bits of `libm::floorf` without its call (`perf` put 1.4 % of
+/// light tracing's time in that call, from the film's and the hash grid's pixel and cell
+/// indices; callgrind counts 0.4 % fewer instructions for LT and PPM without it). An f32 of magnitude 2²³ or more is an integer already (infinities and NaN
+/// pass through), and below that truncation through i32 is exact; the sign bit keeps
+/// −0 as −0.
 #[inline]
 pub fn floor(x: f32) -> f32 {
-    libm::floorf(x)
+    if !(x.abs() < 8_388_608.0) {
+        return x;
+    }
+    let t = x as i32 as f32;
+    if t > x { t - 1.0 } else { f32::from_bits(t.to_bits() | (x.to_bits() & 0x8000_0000)) }
 }
 #[inline]
 pub fn ceil(x: f32) -> f32 {
@@ -277,5 +286,42 @@ impl Bounds3 {
         }
         let c = 0.5 * (self.min + self.max);
         (c, (self.max - c).length())
+    }
+}
+
+#[cfg(test)]
+mod floor_tests {
+    /// `floor` is `libm::floorf` bit for bit: every 257th f32 bit pattern (both signs,
+    /// subnormals, NaNs and infinities among them) and the edges of the fast path. Seen
+    /// to fail with the sign bit left off (−0 → +0) and with `t >= x` in place of `t > x`.
+    #[test]
+    fn floor_is_libm_floorf_bit_for_bit() {
+        let check = |x: f32| {
+            let (a, b) = (super::floor(x), libm::floorf(x));
+            assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "floor({x:e}) = {a:e}, libm {b:e}");
+        };
+        for bits in (0..=u32::MAX).step_by(257) {
+            check(f32::from_bits(bits));
+        }
+        for x in [0.0f32, -0.0, 0.5, -0.5, 1.0, -1.0, 1.5, -1.5, 8_388_607.5, -8_388_607.5, 8_388_608.0, -8_388_608.0, 8_388_609.0, 16_777_217.0] {
+            for d in [x, f32::from_bits(x.to_bits().wrapping_add(1)), f32::from_bits(x.to_bits().wrapping_sub(1))] {
+                check(d);
+            }
+        }
+        for x in [
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+            1e-45,
+            -1e-45,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            2_147_483_520.0,
+            -2_147_483_648.0,
+        ] {
+            check(x);
+        }
     }
 }
