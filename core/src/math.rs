@@ -95,9 +95,9 @@ pub fn pow_f64(x: f64, y: f64) -> f64 {
 }
 /// Round toward −∞: the bits of `libm::floorf` without its call (`perf` put 1.4 % of
 /// light tracing's time in that call, from the film's and the hash grid's pixel and cell
-/// indices; callgrind counts 0.4 % fewer instructions for LT and PPM without it). An f32 of magnitude 2²³ or more is an integer already (infinities and NaN
-/// pass through), and below that truncation through i32 is exact; the sign bit keeps
-/// −0 as −0.
+/// indices; callgrind counts 0.4 % fewer instructions for LT and PPM without it). An f32
+/// of magnitude 2²³ or more is an integer already (infinities and NaN pass through), and
+/// below that truncation through i32 is exact; the sign bit keeps −0 as −0.
 #[inline]
 pub fn floor(x: f32) -> f32 {
     if !(x.abs() < 8_388_608.0) {

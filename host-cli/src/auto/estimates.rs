@@ -39,6 +39,13 @@ pub(super) fn probe_variance(batches: Vec<f64>, own: f64) -> f64 {
     if middle > own && !batches.is_empty() { batches.iter().sum::<f64>() / batches.len() as f64 } else { middle }
 }
 
+/// The mean image of the passes a film gained between two readings: from its running
+/// mean `before` over `held` passes and `after` over `passes` (in f64, then rounded once).
+pub(super) fn batch_mean(after: &[[f32; 3]], passes: u32, before: &[[f32; 3]], held: u32) -> Vec<[f32; 3]> {
+    let n = passes.saturating_sub(held).max(1) as f64;
+    after.iter().zip(before).map(|(a, b)| core::array::from_fn(|k| ((a[k] as f64 * passes as f64 - b[k] as f64 * held as f64) / n) as f32)).collect()
+}
+
 /// Per pixel and channel, the variance of one pass, Σ_b n_b (X_b − X̄)² / (B − 1), from
 /// the batch means X_b of n_b passes and the mean image X̄ (infinite with one batch).
 pub(super) fn pass_variance(batches: &[(u32, Vec<[f32; 3]>)], mean: &[[f32; 3]]) -> Vec<[f64; 3]> {

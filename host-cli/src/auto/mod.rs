@@ -77,7 +77,7 @@ use crate::estimators::{CoreRenderer, PreparedScene};
 
 mod estimates;
 mod spread;
-use estimates::{Estimate, block_bias, block_estimate, drift_free_variance, median, pass_variance, probe_variance, reference};
+use estimates::{Estimate, batch_mean, block_bias, block_estimate, drift_free_variance, median, pass_variance, probe_variance, reference};
 use spread::{full_size_term, pixel_spread};
 
 /// The estimators the race runs: between them the best at equal time on every suite
@@ -276,7 +276,7 @@ pub fn choose(
     let (mut cold, mut pt_full) = (f64::INFINITY, f64::INFINITY);
     // Each pass's own image, for the spread of the image within a pilot pixel (`spread`).
     let mut pt_passes: Vec<Vec<[f32; 3]>> = Vec::new();
-    let mut pt_cumulative: Option<Vec<[f32; 3]>> = None;
+    let mut pt_cumulative = vec![[0.0f32; 3]; pt_film.pixels()];
     for spp in 1..=3 {
         if spp > 1 && Instant::now() >= deadline {
             break;
@@ -292,12 +292,8 @@ pub fn choose(
         let n = pt_film.passes();
         if summary.passes == 1 && n as usize == pt_passes.len() + 1 {
             let cum = pt_film.to_rgb_f32();
-            let held = (n - 1) as f32;
-            pt_passes.push(match &pt_cumulative {
-                None => cum.clone(),
-                Some(prev) => cum.iter().zip(prev).map(|(c, p)| core::array::from_fn(|k| c[k] * n as f32 - p[k] * held)).collect(),
-            });
-            pt_cumulative = Some(cum);
+            pt_passes.push(batch_mean(&cum, n, &pt_cumulative, n - 1));
+            pt_cumulative = cum;
         }
     }
     if !pt_full.is_finite() {
@@ -338,13 +334,7 @@ pub fn choose(
             }
             // The batch's own mean from the running means before and after it.
             let cum = film.to_rgb_f32();
-            let n = film.passes() - held;
-            let batch: Vec<[f32; 3]> = cum
-                .iter()
-                .zip(&prev)
-                .map(|(c, p)| core::array::from_fn(|k| ((c[k] as f64 * film.passes() as f64 - p[k] as f64 * held as f64) / n.max(1) as f64) as f32))
-                .collect();
-            batches.push((n, batch));
+            batches.push((film.passes() - held, batch_mean(&cum, film.passes(), &prev, held)));
             held = film.passes();
             prev = cum;
             if summary.interrupted {

@@ -249,7 +249,8 @@ fn merge_at(
     let y = &camera[t - 1];
     let material = scene.material(y.material, y.uv);
     let wo = y.frame.to_local(y.wo);
-    let sums = if mode == MergeMode::Ppm { CameraSums::default() } else { CameraSums::new(scene, &inputs.tech, camera, camera_b, t) };
+    // PPM's weight is 1: no sums and no densities.
+    let sums = (mode != MergeMode::Ppm).then(|| CameraSums::new(scene, &inputs.tech, camera, camera_b, t));
     let mut sum = Rgb::ZERO;
     inputs.grid.query_slots(y.p, |k| {
         let photon = &inputs.photons[k as usize];
@@ -257,10 +258,9 @@ fn merge_at(
             return;
         }
         let wi = y.frame.to_local(photon.wo);
-        // The merge weight needs both densities; PPM's weight is 1.
-        let (f, densities) = match mode {
-            MergeMode::Ppm => (material.eval(wo, wi, TransportMode::Radiance), None),
-            _ => {
+        let (f, densities) = match sums {
+            None => (material.eval(wo, wi, TransportMode::Radiance), None),
+            Some(_) => {
                 let (f, toward_light, toward_camera) = material.eval_pdfs(wo, wi, TransportMode::Radiance);
                 (f, Some(MergeDensities { toward_light, toward_camera }))
             }
@@ -270,10 +270,7 @@ fn merge_at(
         }
         let cos_g = y.ng.dot(photon.wo).abs();
         let correction = if cos_g > 0.0 { wi.z.abs() / cos_g } else { 0.0 };
-        let w = match densities {
-            None => 1.0,
-            Some(d) => merge_weight_from_sums(&inputs.tech, &photon.sums, &sums, d),
-        };
+        let w = densities.zip(sums.as_ref()).map_or(1.0, |(d, sums)| merge_weight_from_sums(&inputs.tech, &photon.sums, sums, d));
         sum += counters.sanitize(y.beta * f * photon.beta * (correction * kernel * w));
     });
     sum
