@@ -51,6 +51,7 @@ pub(crate) fn geometric_normal(v: &[Vec3A; 3]) -> Vec3 {
 /// interpolated and turned to the geometric side; texture coordinates as
 /// [`Triangle::texcoords`].
 #[allow(clippy::too_many_arguments)]
+#[inline]
 pub(crate) fn surface_hit(
     v: &[Vec3A; 3],
     ng: Vec3,
