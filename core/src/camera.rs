@@ -315,6 +315,7 @@ impl PerspectiveCamera {
     /// Primary ray through continuous pixel coordinates `film` ((0, 0) = top-left corner
     /// of the image, (W, H) = bottom-right), from the pinhole or the lens centre, unit
     /// direction.
+    #[inline]
     pub fn generate_ray(&self, film: Vec2) -> Ray {
         let dir = self.to_world.transform_vector3(self.film_to_local(film)).normalize_or(self.forward);
         Ray::new(self.position, dir, f32::INFINITY)

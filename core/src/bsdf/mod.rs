@@ -286,6 +286,7 @@ impl Material {
 
     /// BSDF value f(wo, wi) for `mode` (the adjoint in `Importance` mode), without the
     /// cosine. Zero for Dirac materials.
+    #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
         if self.mirrored(wo) {
             return self.eval_front(flip_z(wo), flip_z(wi), mode);
@@ -307,6 +308,7 @@ impl Material {
 
     /// Solid-angle density with which [`Self::sample`] draws `wi` given `wo` (continuous
     /// lobes; 0 for Dirac materials). Independent of the mode.
+    #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> SolidAnglePdf {
         let (wo, wi) = if self.mirrored(wo) { (flip_z(wo), flip_z(wi)) } else { (wo, wi) };
         self.pdf_front(wo, wi)
@@ -314,6 +316,7 @@ impl Material {
 
     /// (`eval`, `pdf`) together: the same bits as calling both, sharing what the model's
     /// two evaluations have in common (the rough conductor's half vector, D and G1).
+    #[inline]
     pub fn eval_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (Rgb, SolidAnglePdf) {
         let (wo, wi) = if self.mirrored(wo) { (flip_z(wo), flip_z(wi)) } else { (wo, wi) };
         match &self.kind {
@@ -362,6 +365,7 @@ impl Material {
     }
 
     /// Density of sampling `wo` given `wi`: `pdf(wi, wo)`.
+    #[inline]
     pub fn pdf_rev(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> SolidAnglePdf {
         self.pdf(wi, wo, mode)
     }
@@ -369,6 +373,7 @@ impl Material {
     /// Draw `wi` given `wo`: `u_lobe` chooses between reflection and refraction
     /// (dielectrics), `u` draws the direction. `None` when nothing is scattered (back side
     /// of a one-sided material, grazing `wo`, an absorbed microfacet sample).
+    #[inline]
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
         if self.mirrored(wo) {
             let mut s = self.sample_front(flip_z(wo), u_lobe, u, mode)?;

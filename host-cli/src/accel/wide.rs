@@ -170,6 +170,10 @@ impl<'a> PacketRay<'a> {
         let positive = e0.cmpgt(zero) | e1.cmpgt(zero) | e2.cmpgt(zero);
         let det = e0 + e1 + e2;
         let mut ok = !(negative & positive) & det.cmpne(zero);
+        // Most packets a ray reaches lie beside it: leave before the distances.
+        if !ok.any() {
+            return None;
+        }
         let t_scaled = e0 * (az * sz) + e1 * (bz * sz) + e2 * (cz * sz);
         let bound = Vec4::splat(t_max) * det;
         let below = det.cmplt(zero) & (t_scaled.cmpge(zero) | t_scaled.cmplt(bound));
