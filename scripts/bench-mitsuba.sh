@@ -21,6 +21,10 @@ mkdir -p "$OUT"
 cargo build --release -p ember-cli >/dev/null 2>&1
 cp target/release/ember "$OUT/ember"
 EMBER="$OUT/ember"
+# Binaries older than the scene plan (e.g. c05c2ce, the one issue 24 was filed on) know
+# no --no-plan.
+BEFORE_FLAGS=""
+if [ -n "${EMBER_BEFORE:-}" ] && "$EMBER_BEFORE" render --help 2>/dev/null | grep -q -- --no-plan; then BEFORE_FLAGS="--no-plan"; fi
 now() { date +%s.%N; }
 metric() { # IMAGE REFERENCE FIELD
   "$EMBER" compare "$1" "$2" | awk -v f="$3" '$1 == f { print $2 }'
@@ -49,7 +53,7 @@ print(max(16, int(rate * max(0.5, $SECONDS_BUDGET - 1.5 - fixed))))")
   sppx=$(python3 -c "print(f'{$ours_spp/$spp:.2f}')")
   line="$line $(printf '%8s %8s' "$ratio" "$sppx")"
   if [ -n "${EMBER_BEFORE:-}" ]; then
-    before=$("$EMBER_BEFORE" render "$scene" -e pt --time "$wall" --threads "$THREADS" --no-plan -o "$OUT/$name-before.exr" 2>/dev/null | awk '$1 == "passes" { print $2 }')
+    before=$("$EMBER_BEFORE" render "$scene" -e pt --time "$wall" --threads "$THREADS" $BEFORE_FLAGS -o "$OUT/$name-before.exr" 2>/dev/null | awk '$1 == "passes" { print $2 }')
     line="$line $(printf ' %9s %9s' "$before" "$(python3 -c "print(f'{$ours_spp/max($before,1):.2f}')")")"
   fi
   echo "$line (wall $wall s)"
