@@ -362,6 +362,17 @@ fn admit(tallies: &mut Tallies, s: &Splat, width: u32, height: u32) -> bool {
     true
 }
 
+/// The rows of a `height`-row image that admitted splat `s` reaches under `filter`: the
+/// rows [`splat_rows`] adds to (its pixel's row for the box).
+fn rows_reached(filter: Filter, s: &Splat, height: u32) -> Range<u32> {
+    if filter.is_box() {
+        let y = math::floor(s.film.y) as u32;
+        y..y + 1
+    } else {
+        filter.splat_range(s.film.y, height)
+    }
+}
+
 /// Add admitted splat `s` × `scale` to the pixels of rows `rows` it reaches; `sums` holds
 /// exactly those rows. Returns how many channels saturated.
 fn splat_rows(filter: Filter, width: u32, height: u32, sums: &mut [[u128; 3]], rows: Range<u32>, s: &Splat, scale: f64) -> u64 {

@@ -32,8 +32,8 @@
 //! Closest hit: the children a ray enters are visited nearest first; the others wait on
 //! a stack with their entry distance and are dropped when popped beyond the closest hit
 //! so far. Occlusion stops at the first hit and does not sort. The stack is a
-//! `heapless::Vec` (nothing to clear per query) of 16 or 64 entries, chosen by the hierarchy's
-//! depth (three entries per level at most); a deeper hierarchy, which only a
+//! `heapless::Vec` (nothing to clear per query) of 16 or 64 entries, chosen by the
+//! hierarchy's depth (three entries per level at most); a deeper hierarchy, which only a
 //! pathological build makes, gets a heap stack.
 //!
 //! Measured (callgrind, PT on the built-in box): about 45 instructions per node test and

@@ -258,11 +258,12 @@ fn merge_at(
             return;
         }
         let wi = y.frame.to_local(photon.wo);
-        let (f, densities) = match sums {
+        // With the camera's sums, the densities that weigh this photon against them.
+        let (f, weighing) = match &sums {
             None => (material.eval(wo, wi, TransportMode::Radiance), None),
-            Some(_) => {
+            Some(sums) => {
                 let (f, toward_light, toward_camera) = material.eval_pdfs(wo, wi, TransportMode::Radiance);
-                (f, Some(MergeDensities { toward_light, toward_camera }))
+                (f, Some((sums, MergeDensities { toward_light, toward_camera })))
             }
         };
         if f.is_black() {
@@ -270,7 +271,7 @@ fn merge_at(
         }
         let cos_g = y.ng.dot(photon.wo).abs();
         let correction = if cos_g > 0.0 { wi.z.abs() / cos_g } else { 0.0 };
-        let w = densities.zip(sums.as_ref()).map_or(1.0, |(d, sums)| merge_weight_from_sums(&inputs.tech, &photon.sums, sums, d));
+        let w = weighing.map_or(1.0, |(sums, d)| merge_weight_from_sums(&inputs.tech, &photon.sums, sums, d));
         sum += counters.sanitize(y.beta * f * photon.beta * (correction * kernel * w));
     });
     sum

@@ -17,7 +17,7 @@
 use alloc::vec::Vec;
 use core::ops::Range;
 
-use super::{Film, Tallies, add, admit, splat_rows};
+use super::{Film, Tallies, add, admit, rows_reached, splat_rows};
 use crate::integrator::Splat;
 use crate::spectrum::Rgb;
 
@@ -104,12 +104,7 @@ impl Film {
                 if !admit(tallies, s, width, height) {
                     continue;
                 }
-                let rows = if filter.is_box() {
-                    let y = crate::math::floor(s.film.y) as u32;
-                    y..y + 1
-                } else {
-                    filter.splat_range(s.film.y, height)
-                };
+                let rows = rows_reached(filter, s, height);
                 if rows.is_empty() {
                     continue;
                 }
