@@ -375,7 +375,8 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     };
 
     // Render passes until the spp or time limit.
-    let deadline = args.time.map(|t| start + Duration::from_secs_f64(t));
+    // (cli::parse_seconds bounds --time; a deadline past what Instant holds would be never.)
+    let deadline = args.time.and_then(|t| Duration::try_from_secs_f64(t).ok().and_then(|d| start.checked_add(d)));
     // --spp, else unlimited under --time, else the scene file's sample count, else the default.
     let spp = match (args.spp, args.time, built.file_spp) {
         (None, None, Some(n)) => n,

@@ -670,9 +670,17 @@ fn parse_share(text: &str) -> Result<f32, String> {
     }
 }
 
+/// The longest time budget: ten years (a larger `--time 1e300` overflowed `Instant`'s
+/// arithmetic and panicked after the scene had loaded).
+pub const MAX_SECONDS: f64 = 10.0 * 365.0 * 86400.0;
+
 fn parse_seconds(s: &str) -> Result<f64, String> {
     let v: f64 = s.parse().map_err(|_| format!("'{s}' is not a number of seconds"))?;
-    if v.is_finite() && v > 0.0 { Ok(v) } else { Err(format!("the time budget must be positive, got {s}")) }
+    if v.is_finite() && v > 0.0 && v <= MAX_SECONDS {
+        Ok(v)
+    } else {
+        Err(format!("the time budget must be positive and at most {MAX_SECONDS} seconds (ten years), got {s}"))
+    }
 }
 
 fn parse_exposure(s: &str) -> Result<f32, String> {
@@ -866,6 +874,7 @@ mod tests {
             &["--time", "-1"],
             &["--time", "inf"],
             &["--time", "NaN"],
+            &["--time", "1e12"],
             &["--threads", "0"],
             &["--max-depth", "-2"],
             &["--width", "0"],

@@ -33,6 +33,9 @@ use crate::image_io::{self, ImageError, ImageErrorKind};
 pub const FORMAT: &str = "ember partial film 1";
 /// The EXR attribute (text) holding a partial image's header, one `key: value` per line.
 pub const ATTRIBUTE: &str = "ember.partial";
+/// The header's last line: FNV-1a 64 of every line before it, so an edited header (a
+/// part claiming other passes merged into a half-bright image) is refused.
+const CHECKSUM_KEY: &str = "checksum";
 
 /// This program's version and build (the `program` field): parts from different builds are
 /// never merged, since any code change may change the passes' bits.
@@ -162,6 +165,27 @@ pub fn expand_output(path: &Path, range: PassRange, task: Option<u32>) -> Result
     }))
 }
 
+/// Where two configuration texts (`Debug` dumps such as `Spcbpt(SpcbptConfig { light_paths:
+/// None, … }); max depth -1, …`) first differ, in words (`"light_paths Some(100) there,
+/// None here"`), instead of both dumps of several hundred characters.
+pub fn first_difference(a: &str, b: &str) -> String {
+    let split = |t: &str| -> Vec<String> { t.split([',', '{', '}', ';']).map(|p| p.trim().to_string()).filter(|p| !p.is_empty()).collect() };
+    let (pa, pb) = (split(a), split(b));
+    match pa.iter().zip(&pb).find(|(x, y)| x != y) {
+        Some((x, y)) => {
+            // The field's name, then the two values.
+            match (x.split_once(": "), y.split_once(": ")) {
+                (Some((kx, vx)), Some((ky, vy))) if kx == ky => format!("{kx} {vx} there, {vy} here"),
+                _ => format!("'{x}' there, '{y}' here"),
+            }
+        }
+        None if pa.len() != pb.len() => {
+            format!("'{}' there, '{}' here", pa.get(pb.len()).map_or("", |s| s.as_str()), pb.get(pa.len()).map_or("", |s| s.as_str()))
+        }
+        None => "they differ only in spacing".into(),
+    }
+}
+
 /// What a partial image says about itself. Parts merge only when everything but `passes`
 /// and `tallies` is equal.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -243,7 +267,8 @@ pub fn write_partial(path: &Path, header: &PartialHeader, film: &Film) -> Result
         ("quantum_bits", QUANTUM_BITS.to_string()),
         ("tallies", format!("{} {} {}", t.discarded, t.splats_outside, t.saturated)),
     ];
-    let lines: String = fields.iter().map(|(k, v)| format!("{k}: {}\n", v.replace('\n', " "))).collect();
+    let mut lines: String = fields.iter().map(|(k, v)| format!("{k}: {}\n", v.replace('\n', " "))).collect();
+    lines.push_str(&format!("{CHECKSUM_KEY}: {:016x}\n", ember_core::fnv::fnv1a(lines.as_bytes())));
     let mut attributes = LayerAttributes::default();
     attributes.other.insert(text(ATTRIBUTE), AttributeValue::Text(text(&lines)));
     let encoding = Encoding { compression: Compression::ZIP16, ..Encoding::default() };
@@ -259,8 +284,8 @@ pub fn write_partial(path: &Path, header: &PartialHeader, film: &Film) -> Result
 /// Read a partial image: its header and its film. A file that is not a partial image,
 /// or whose header or channels are damaged, is an error naming the file and the problem.
 pub fn read_partial(path: &Path) -> Result<(PartialHeader, Film), String> {
-    let image = image_io::read_exr_any(path).map_err(|e| e.to_string())?;
-    partial_from_image(path, &image)
+    let bytes = crate::files::read_bounded(path, crate::files::MAX_INPUT_BYTES).map_err(|e| format!("{}: {e}", path.display()))?;
+    read_partial_from_bytes(path, &bytes)
 }
 
 /// [`read_partial`] on bytes in memory, errors naming `name` (the fuzz target's entry
@@ -273,6 +298,7 @@ pub fn read_partial_from_bytes(name: &Path, bytes: &[u8]) -> Result<(PartialHead
 /// A partial image's header alone (the file's EXR header, not its pixels): what
 /// `merge` checks before it reads any film.
 pub fn read_partial_header(path: &Path) -> Result<PartialHeader, String> {
+    crate::files::open_regular(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| format!("{}: {e}", path.display()))?;
     let header = meta.headers.first().ok_or_else(|| format!("{}: no image layer", path.display()))?;
     header_from(path, &header.own_attributes, header.layer_size)
@@ -282,17 +308,22 @@ pub fn read_partial_header(path: &Path) -> Result<PartialHeader, String> {
 fn header_from(path: &Path, attributes: &exr::meta::header::LayerAttributes, size: exr::math::Vec2<usize>) -> Result<PartialHeader, String> {
     use exr::prelude::AttributeValue;
     let name = path.display();
-    let fields: BTreeMap<String, String> = match attributes.other.get(&text(ATTRIBUTE)) {
-        Some(AttributeValue::Text(t)) => {
-            String::from_utf8_lossy(t.bytes()).lines().filter_map(|l| l.split_once(": ").map(|(k, v)| (k.to_string(), v.to_string()))).collect()
-        }
+    let header_text = match attributes.other.get(&text(ATTRIBUTE)) {
+        Some(AttributeValue::Text(t)) => String::from_utf8_lossy(t.bytes()).into_owned(),
         _ => return Err(format!("{name} is not a partial image (no {ATTRIBUTE} attribute): merge takes the files `render --passes` or `--task-index` writes")),
     };
+    let fields: BTreeMap<String, String> = header_text.lines().filter_map(|l| l.split_once(": ").map(|(k, v)| (k.to_string(), v.to_string()))).collect();
     let get = |key: &str| -> Result<String, String> { fields.get(key).cloned().ok_or_else(|| format!("{name}: no {key} in its {ATTRIBUTE} attribute")) };
     match get("format") {
         Ok(f) if f == FORMAT => {}
         Ok(f) => return Err(format!("{name}: partial-image format '{f}', this program reads '{FORMAT}'")),
         Err(e) => return Err(e),
+    }
+    // The checksum line covers every line before it.
+    let signed = header_text.find(&format!("\n{CHECKSUM_KEY}: ")).map(|at| &header_text[..at + 1]);
+    match (signed, fields.get(CHECKSUM_KEY).and_then(|c| u64::from_str_radix(c, 16).ok())) {
+        (Some(signed), Some(sum)) if ember_core::fnv::fnv1a(signed.as_bytes()) == sum => {}
+        _ => return Err(format!("{name}: its {ATTRIBUTE} header does not match its checksum: the header was edited or the file is damaged")),
     }
     let number = |key: &str| -> Result<u64, String> { get(key)?.parse::<u64>().map_err(|_| format!("{name}: {key} is not a number")) };
     let passes = PassRange::parse(&get("passes")?).map_err(|e| format!("{name}: passes {e}"))?;
@@ -347,6 +378,16 @@ fn partial_from_image(path: &Path, image: &exr::image::FlatImage) -> Result<(Par
         }
     }
     let film = Film::from_exact(width, height, sums, passes.len(), header.tallies).map_err(|e| format!("{name}: {e}"))?;
+    // The R, G, B channels are the film's mean (`write_partial` stores exactly
+    // `to_rgb_f32`): sums over another number of passes than the header's give another mean.
+    let mean = film.to_rgb_f32();
+    for (c, ch) in ["R", "G", "B"].iter().enumerate() {
+        let channel = layer.channel_data.list.iter().find(|x| x.name == text(ch)).ok_or_else(|| format!("{name}: no channel {ch}"))?;
+        let FlatSamples::F32(values) = &channel.sample_data else { return Err(format!("{name}: channel {ch} is not FLOAT")) };
+        if values.len() != pixels || values.iter().zip(&mean).any(|(v, m)| v.to_bits() != m[c].to_bits()) {
+            return Err(format!("{name}: its {ch} channel is not the mean of its sums over its {} passes: the file was edited or is damaged", passes.len()));
+        }
+    }
     Ok((header, film))
 }
 
@@ -383,7 +424,9 @@ pub fn check_parts(parts: &[(PathBuf, PartialHeader)], cover: Cover) -> Result<P
     let reference = identity_fields(first);
     for (path, h) in &parts[1..] {
         for ((field, want), (_, got)) in reference.iter().zip(identity_fields(h)) {
-            if *want != got {
+            if *want != got && *field == "configuration" {
+                problems.push(format!("'{}' has another configuration than '{}': {}", path.display(), first_path.display(), first_difference(&got, want)));
+            } else if *want != got {
                 let scenes = if *field == "scene hash" { format!(" (scenes {} and {})", h.scene, first.scene) } else { String::new() };
                 problems.push(format!("'{}' has {field} {got}, but '{}' has {want}{scenes}", path.display(), first_path.display()));
             }

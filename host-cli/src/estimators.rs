@@ -167,6 +167,7 @@ impl CoreRenderer {
         let ctx = Context { scene: &r.prepared.scene, tracer: &r.prepared.accel };
         r.setup_times = driver::run_setup(&mut r.renderer, &ctx, threads).map_err(|e| e.to_string())?;
         r.setup_seconds = start.elapsed().as_secs_f64();
+        r.check_radius()?;
         Ok(r)
     }
 
@@ -240,6 +241,45 @@ impl CoreRenderer {
         }
     }
 
+    /// The kernel radius r₀ this renderer's setup chose, with the rule that chose it: the
+    /// merging estimators (where the plan keeps merging), the path filters and segment
+    /// kernels of the disk; `None` for the others.
+    pub fn initial_radius(&self) -> Option<(f32, ember_core::merge::RadiusRule)> {
+        match &self.renderer {
+            Renderer::Merging(m) if m.config.merges(m.mode) => Some((m.r0, m.config.radius)),
+            Renderer::Segment(s) => match s.kernel {
+                ember_core::segment::Kernel::Disk { radius } => Some((radius, s.config.radius)),
+                ember_core::segment::Kernel::Dirac => None,
+            },
+            Renderer::Filter(f) => Some((f.r0, f.config.radius)),
+            Renderer::PhotonFilter(f) => Some((f.r0, f.config.radius)),
+            Renderer::BidirectionalFilter(f) => Some((f.r0, f.config.radius)),
+            _ => None,
+        }
+    }
+
+    /// Refuse a kernel radius larger than the scene's bounding-box diagonal: every merge
+    /// or filter kernel would then span the whole scene, and the image came out nearly
+    /// black with exit 0 (`--radius 10` on the 2-unit Cornell box: 2 % of the right mean).
+    pub fn check_radius(&self) -> Result<(), String> {
+        use ember_core::merge::RadiusRule;
+        let Some((r0, rule)) = self.initial_radius() else { return Ok(()) };
+        let bounds = &self.prepared.scene.bounds;
+        let diagonal = if bounds.is_empty() { 0.0 } else { (bounds.max - bounds.min).length() };
+        if !(diagonal > 0.0) || r0 <= diagonal {
+            return Ok(());
+        }
+        let option = match rule {
+            RadiusRule::Footprints(k) => format!("--radius-footprints {k}"),
+            RadiusRule::SceneFraction(f) => format!("--radius-scene {f}"),
+            RadiusRule::Absolute(r) => format!("--radius {r}"),
+        };
+        Err(format!(
+            "{option} gives {} a kernel radius r0 = {r0:.4e}, larger than the scene itself (its bounding box's diagonal is {diagonal:.4e}): every kernel would span the whole scene; lower it",
+            self.renderer.kind().name()
+        ))
+    }
+
     /// The filtering estimators' report line: memory per pass and per pixel, reuse, depth
     /// and kernel.
     fn filter_report(&self, pass: &ember_core::segment::filter::FilterPass, segments: u32, r0: f32) -> Vec<String> {
@@ -305,22 +345,39 @@ pub fn memory_budget(limit: Option<u64>) -> (Option<u64>, &'static str) {
     }
 }
 
+/// Bytes the loaded geometry holds per triangle: the scene's triangle records, the
+/// accelerator's leaf-ordered copies and attributes and its BVH (measured on a
+/// 2 M-triangle mesh: about 435 bytes each).
+pub const GEOMETRY_BYTES_PER_TRIANGLE: u64 = 435;
+
+/// What the loaded scene's geometry holds, by [`GEOMETRY_BYTES_PER_TRIANGLE`].
+pub fn geometry_bytes(prepared: &PreparedScene) -> u64 {
+    (prepared.accel.triangle_count() as u64 + prepared.accel.sphere_count() as u64) * GEOMETRY_BYTES_PER_TRIANGLE
+}
+
 /// Refuse, before anything large is allocated, a render whose estimated memory exceeds
-/// `limit` or, without one, the memory available.
+/// `limit` or, without one, the memory available. Under `--memory-limit` (a budget for the
+/// whole process) the loaded geometry counts too; measured against the memory available
+/// it does not, since it is already allocated and so already missing from that figure.
 pub fn check_memory(prepared: &PreparedScene, config: &EstimatorConfig, limit: Option<u64>) -> Result<(), String> {
     let camera = &prepared.scene.camera;
     let (bytes, estimate) = memory_need(prepared, config);
+    let geometry = if limit.is_some() { geometry_bytes(prepared) } else { 0 };
     match memory_budget(limit) {
-        (Some(a), source) if bytes > a => Err(format!(
-            "{} would need about {} ({} at {}×{} is the largest part), more than the {} of {source}; lower {} or raise --memory-limit",
-            config.kind(),
-            crate::memory::human(bytes),
-            estimate.largest,
-            camera.width(),
-            camera.height(),
-            crate::memory::human(a),
-            estimate.lower
-        )),
+        (Some(a), source) if bytes.saturating_add(geometry) > a => {
+            let (largest, lower) = if geometry > bytes {
+                (format!("the scene's geometry, {} triangles,", prepared.accel.triangle_count()), "the scene's triangle count")
+            } else {
+                (format!("{} at {}×{}", estimate.largest, camera.width(), camera.height()), estimate.lower)
+            };
+            Err(format!(
+                "{} would need about {} ({largest} is the largest part{}), more than the {} of {source}; lower {lower} or raise --memory-limit",
+                config.kind(),
+                crate::memory::human(bytes.saturating_add(geometry)),
+                if geometry > 0 { format!("; the geometry holds {}", crate::memory::human(geometry)) } else { String::new() },
+                crate::memory::human(a),
+            ))
+        }
         _ => Ok(()),
     }
 }
@@ -363,6 +420,9 @@ fn renderer_and_head(args: &RenderArgs, start: Instant) -> Result<(CoreRenderer,
         }
     };
     let asked = args.cache.config_for(kind);
+    // Options are checked before anything is estimated from them (an out-of-range
+    // --subspaces was reported as too much memory rather than as out of range).
+    asked.validate().map_err(|e| format!("{} {e}", asked.kind()))?;
     // The plan is a pure function of the scene, the options and the seed, so `ember
     // train` and the renders that load its model plan alike.
     let config = if args.no_plan {

@@ -12,6 +12,7 @@ pub mod convergence;
 pub mod distributed;
 pub mod driver;
 pub mod estimators;
+pub mod files;
 pub mod image_io;
 pub mod interrupt;
 pub mod memory;

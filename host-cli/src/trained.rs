@@ -19,6 +19,10 @@ use crate::distributed::{RenderIdentity, program_version};
 
 /// The file's first line.
 pub const HEADER: &str = "ember trained model 1";
+/// The header's last field: FNV-1a 64 of the header's text before it.
+const CHECKSUM_KEY: &str = "checksum";
+/// The largest model file read: Γ of 4096² subspaces (134 MB) and the trees, with room.
+const MAX_MODEL_BYTES: u64 = 1 << 30;
 
 /// The header's fields for a render, in file order.
 fn fields(id: &RenderIdentity, width: u32, height: u32) -> Vec<(&'static str, String)> {
@@ -48,6 +52,9 @@ pub fn encode(renderer: &Renderer, id: &RenderIdentity, width: u32, height: u32)
     for (k, v) in fields(id, width, height).into_iter().chain([("scene", id.scene.clone())]) {
         out.push_str(&format!("{k}: {}\n", v.replace('\n', " ")));
     }
+    // The checksum line covers every header line before it (the model's bytes carry
+    // their own checksum).
+    out.push_str(&format!("{CHECKSUM_KEY}: {:016x}\n", ember_core::fnv::fnv1a(out.as_bytes())));
     out.push('\n');
     let mut bytes = out.into_bytes();
     bytes.extend_from_slice(&model.encode());
@@ -58,7 +65,7 @@ pub fn encode(renderer: &Renderer, id: &RenderIdentity, width: u32, height: u32)
 /// model, or an error naming the file and the first field that differs.
 pub fn load(path: &Path, id: &RenderIdentity, width: u32, height: u32, scene: &Scene) -> Result<Model, String> {
     let name = path.display();
-    let bytes = std::fs::read(path).map_err(|e| format!("--model {name}: {e}"))?;
+    let bytes = crate::files::read_bounded(path, MAX_MODEL_BYTES).map_err(|e| format!("--model {name}: {e}"))?;
     let end =
         bytes.windows(2).position(|w| w == b"\n\n").ok_or_else(|| format!("--model {name} is not a model file (no header): write one with `ember train`"))?;
     let header = std::str::from_utf8(&bytes[..end]).map_err(|_| format!("--model {name} is not a model file (its header is not text)"))?;
@@ -67,10 +74,27 @@ pub fn load(path: &Path, id: &RenderIdentity, width: u32, height: u32, scene: &S
         return Err(format!("--model {name} is not a model file of this program (first line is not '{HEADER}')"));
     }
     let stored: Vec<(&str, &str)> = lines.filter_map(|l| l.split_once(": ")).collect();
+    let value = |key: &str| stored.iter().find(|(k, _)| *k == key).map(|(_, v)| *v);
+    let signed = header.find(&format!("\n{CHECKSUM_KEY}: ")).map(|at| &header[..at + 1]);
+    match (signed, value(CHECKSUM_KEY).and_then(|c| u64::from_str_radix(c, 16).ok())) {
+        (Some(signed), Some(sum)) if ember_core::fnv::fnv1a(signed.as_bytes()) == sum => {}
+        _ => return Err(format!("--model {name}: its header does not match its checksum: the header was edited or the file is damaged")),
+    }
     for (key, want) in fields(id, width, height) {
-        let got = stored.iter().find(|(k, _)| *k == key).map(|(_, v)| *v);
-        match got {
+        match value(key) {
             Some(v) if v == want => {}
+            // The configuration is a long dump and the hash means nothing to a person:
+            // name the field that differs and the scenes.
+            Some(v) if key == "config" => {
+                return Err(format!("--model {name} was trained with another configuration: {}", crate::distributed::first_difference(v, &want)));
+            }
+            Some(_) if key == "scene_hash" => {
+                return Err(format!(
+                    "--model {name} was trained on another scene: {} (its content differs from this render's {}); train one for this scene with `ember train`",
+                    value("scene").unwrap_or("(unnamed)"),
+                    id.scene
+                ));
+            }
             Some(v) => return Err(format!("--model {name} was trained with {key} {v}, but this render has {want}")),
             None => return Err(format!("--model {name}: its header has no {key}")),
         }

@@ -306,18 +306,34 @@ impl EstimatorConfig {
                 let dataset = samples * (20 + 16 * VERTICES_PER_PATH) + samples.min(200_000) * VERTICES_PER_PATH * 40;
                 let n = c.subspaces_for(pixels) as u64;
                 let gamma = n * n * 4 * 2;
-                if dataset >= paths {
-                    (paths + dataset + gamma, "the training dataset", "--dataset")
+                // Named after the largest of the three (Γ of 4096² subspaces is 134 MB, more
+                // than the dataset at low resolutions, and was blamed on it).
+                let (largest, lower) = if gamma >= dataset && gamma >= paths {
+                    ("Γ (subspaces² × 8 bytes)", "--subspaces")
+                } else if dataset >= paths {
+                    ("the training dataset", "--dataset")
                 } else {
-                    (paths + dataset + gamma, "the light paths of a pass", "--light-paths")
-                }
+                    ("the light paths of a pass", "--light-paths")
+                };
+                (paths + dataset + gamma, largest, lower)
             }
             #[cfg(feature = "filtering")]
-            Self::Filter(..) => {
+            Self::Filter(side, c) => {
                 // Per node: itself, its denominators, two radiance vectors and its row,
                 // assuming 64 kernel neighbours, the neighbour budget (a pair is a u32 and three f32).
                 let node = core::mem::size_of::<crate::segment::filter::Node>() as u64 + 16 + 24 + FILTER_NEIGHBOURS * 16;
-                (pixels as u64 * VERTICES_PER_PATH * node, "the filtering rows of a pass", "--radius-footprints or --max-segments")
+                // The paths whose nodes a pass holds: MVF's camera paths, PhF's light paths
+                // (one per pixel), BPF's camera paths and round(β · pixels) light paths (at
+                // 128×96 a BPF pass held 98, 190, 467 and 1562 MB at β = 0, 1, 4, 16).
+                let paths = match side {
+                    FilterSide::Camera | FilterSide::Light => pixels as u64,
+                    FilterSide::Both => pixels as u64 + c.light_paths(pixels) as u64,
+                };
+                let lower = match side {
+                    FilterSide::Both if c.beta > 0.0 => "--beta, --radius-footprints or --max-segments",
+                    _ => "--radius-footprints or --max-segments",
+                };
+                (paths * VERTICES_PER_PATH * node, "the filtering rows of a pass", lower)
             }
             #[cfg(feature = "merging")]
             Self::Merging(mode, c) => {
@@ -707,6 +723,21 @@ mod tests {
             let small = EstimatorKind::Vcm.default_config().memory_estimate(64 * 64);
             let large = EstimatorKind::Vcm.default_config().memory_estimate(4096 * 4096);
             assert!(large.bytes > 1000 * small.bytes && large.lower == "--light-paths");
+        }
+        // BPF's light paths scale with β; Γ is named where it dominates. Injected bugs
+        // checked: estimating BPF from the pixels alone (as before issue 51) fails the first
+        // assertion; naming the dataset whenever it outweighs the light paths fails the
+        // second.
+        #[cfg(feature = "filtering")]
+        {
+            let bpf = |beta: f32| EstimatorConfig::Filter(FilterSide::Both, FilterConfig { beta, ..FilterConfig::DEFAULT }).memory_estimate(128 * 96);
+            assert!(bpf(16.0).bytes > 16 * bpf(0.0).bytes && bpf(16.0).lower.contains("--beta"), "{:?} {:?}", bpf(16.0), bpf(0.0));
+        }
+        #[cfg(feature = "spcbpt")]
+        {
+            let c = SpcbptConfig { subspaces: Some(4096), ..SpcbptConfig::DEFAULT };
+            let e = EstimatorConfig::Spcbpt(c).memory_estimate(64 * 48);
+            assert!(e.bytes > 4096 * 4096 * 8 && e.lower == "--subspaces", "{e:?}");
         }
         let film = EstimatorKind::Pt.default_config().memory_estimate(u32::MAX);
         assert_eq!((film.bytes, film.lower), (u32::MAX as u64 * FILM_BYTES_PER_PIXEL, "--width/--height"));

@@ -181,3 +181,36 @@ fn damaged_or_foreign_files_are_refused() {
     let e = merge_parts(&[good.clone(), temp("missing.exr")], Cover::All).unwrap_err();
     assert!(e.contains("missing.exr"), "{e}");
 }
+
+/// An edited header is refused (issue 51: a part whose header claimed 0..8 for four
+/// passes' sums merged into a half-bright image). Injected bugs checked: without the
+/// checksum test in `header_from` the first edit reads as 8 passes; without the mean test
+/// in `partial_from_image` the second file (checksum valid, passes wrong) does.
+#[test]
+fn edited_headers_are_refused() {
+    let path = temp("edited.exr");
+    write_partial(&path, &header(PassRange { start: 0, end: 4 }), &film_with(4, 1.0)).unwrap();
+    let mut bytes = std::fs::read(&path).unwrap();
+    let at = bytes.windows(12).position(|w| w == b"passes: 0..4").expect("the header is stored as text");
+    bytes[at + 11] = b'8';
+    std::fs::write(&path, &bytes).unwrap();
+    for e in [read_partial(&path).unwrap_err(), read_partial_header(&path).unwrap_err()] {
+        assert!(e.contains("edited.exr") && e.contains("checksum"), "{e}");
+    }
+    // A header written with the wrong pass count (its checksum valid): the stored mean
+    // is not the sums' mean over the claimed passes.
+    let wrong = temp("wrong-passes.exr");
+    write_partial(&wrong, &header(PassRange { start: 0, end: 8 }), &film_with(4, 1.0)).unwrap();
+    let e = read_partial(&wrong).unwrap_err();
+    assert!(e.contains("wrong-passes.exr") && e.contains("not the mean of its sums over its 8 passes"), "{e}");
+}
+
+/// Two configuration dumps are reported by their first differing field, not in full
+/// (a model trained with another --dataset printed two 600-character dumps).
+#[test]
+fn configuration_differences_name_the_field() {
+    let a = "Spcbpt(SpcbptConfig { light_paths: None, dataset: Some(1000), subspaces: None }); max depth -1, heuristic Power";
+    let b = "Spcbpt(SpcbptConfig { light_paths: None, dataset: Some(2000), subspaces: None }); max depth -1, heuristic Power";
+    assert_eq!(first_difference(a, b), "dataset Some(1000) there, Some(2000) here");
+    assert_eq!(first_difference("Pt; max depth 5", "Pt; max depth 7"), "'max depth 5' there, 'max depth 7' here");
+}
