@@ -141,6 +141,11 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
 
 /// `ember convergence`: error against time for one scene.
 fn run_convergence(args: &ConvergenceArgs) -> Result<(), AppError> {
+    // The scene first: a missing scene was reported as a missing reference beside it.
+    crate::files::open_regular(&args.scene).map_err(|e| AppError::Estimator(format!("scene {}: {e}", args.scene.display())))?;
+    if let Some(dup) = args.estimators.iter().enumerate().find(|(i, e)| args.estimators[..*i].contains(e)).map(|(_, e)| e) {
+        return Err(AppError::Estimator(format!("-e names {} twice: each estimator runs once per seed (--seeds sets the repeats)", dup.name())));
+    }
     let reference_path = args.reference.clone().unwrap_or_else(|| args.scene.with_file_name("reference.exr"));
     let reference = Reference::load(&reference_path).map_err(AppError::Output)?;
     let threads = crate::cli::thread_count(args.threads);
@@ -356,6 +361,12 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     let (mut exr, png) = args.output_paths().map_err(AppError::Output)?;
     if let Some((range, task)) = split {
         exr = distributed::expand_output(&exr, range, task).map_err(AppError::Output)?;
+    } else if let Some(p) = ["{task}", "{passes}"].into_iter().find(|p| exr.to_string_lossy().contains(p)) {
+        // A whole render wrote a file literally named `p-{task}.exr`.
+        return Err(AppError::Output(format!(
+            "output '{}' names {p}, which only a split render fills in (--task-index, --task-from-env or --passes)",
+            exr.display()
+        )));
     }
     if let Some(dir) = exr.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir()) {
         return Err(AppError::Output(format!("output directory '{}' does not exist", dir.display())));

@@ -43,7 +43,12 @@ pub fn parse_size(text: &str) -> Result<u64, String> {
     };
     let v: f64 = number.parse().map_err(|_| format!("'{text}' is not a size: a number with an optional K, M, G or T suffix"))?;
     let bytes = v * scale as f64;
-    if (1.0..1.8e19).contains(&bytes) { Ok(bytes as u64) } else { Err(format!("memory limit '{text}' must be at least 1 byte")) }
+    match bytes {
+        b if b < 1.0 => Err(format!("memory limit '{text}' must be at least 1 byte")),
+        // (`99999999999T` was told it "must be at least 1 byte".)
+        b if b >= 1.8e19 => Err(format!("memory limit '{text}' is more than any machine has: at most 16 EiB ({}T)", u64::MAX >> 40)),
+        b => Ok(b as u64),
+    }
 }
 
 /// `12345678` → `"11.8 MiB"`.
@@ -69,6 +74,7 @@ mod tests {
         assert!(parse_size("0").is_err());
         assert!(parse_size("nan").is_err());
         assert!(parse_size("12Q").is_err());
+        assert!(parse_size("99999999999T").unwrap_err().contains("at most 16 EiB"));
         assert!(available_bytes().is_none_or(|b| b > 0));
     }
 }

@@ -40,9 +40,14 @@ pub fn scene_folders(dirs: &[PathBuf], only: &[String]) -> Result<Vec<PathBuf>, 
     if let Some(w) = v.windows(2).find(|w| w[0].file_name() == w[1].file_name()) {
         return Err(format!("two scenes are named {:?}: {} and {}", w[0].file_name().unwrap_or_default(), w[0].display(), w[1].display()));
     }
+    let names = || dirs.iter().map(|d| d.display().to_string()).collect::<Vec<_>>().join(", ");
+    // Every --only name must be found (`--only nonexist` said there were no scene folders).
+    let missing: Vec<&str> = only.iter().map(String::as_str).filter(|o| !v.iter().any(|p| p.file_name().is_some_and(|n| n == *o))).collect();
+    if !missing.is_empty() {
+        return Err(format!("--only {}: no such scene folder (with scene.xml) under {}", missing.join(", "), names()));
+    }
     if v.is_empty() {
-        let names: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
-        return Err(format!("no scene folders (with scene.xml) under {}", names.join(", ")));
+        return Err(format!("no scene folders (with scene.xml) under {}", names()));
     }
     Ok(v)
 }
@@ -54,6 +59,9 @@ pub fn mape_target(floor: Option<(f64, f64)>) -> f64 {
 
 /// Run the suite; progress lines go to stderr.
 pub fn run(args: &SuiteArgs, threads: usize) -> Result<Vec<SceneResult>, String> {
+    if let Some(dup) = args.estimators.iter().enumerate().find(|(i, e)| args.estimators[..*i].contains(e)).map(|(_, e)| e) {
+        return Err(format!("-e names {} twice: each estimator runs once per seed (--seeds sets the repeats)", dup.name()));
+    }
     let plots_dir = args.output.with_extension("");
     let mut results = Vec::new();
     for folder in scene_folders(&args.scenes, &args.only)? {

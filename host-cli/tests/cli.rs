@@ -103,6 +103,24 @@ fn bad_input_exits_one_with_a_message() {
             &["suite", "--scenes", scenes, "--only", "cornell-box", "-e", "pt,bdpt", "--budget", "1", "--seeds", "1", "--memory-limit", "1K", "-o", report],
             "run fewer estimators",
         ),
+        // Hostile input (issue 51). Injected bugs checked, one per row: parse_seconds without
+        // its upper bound panics (rc 101) in Instant arithmetic; BPF estimated from the
+        // pixels alone renders under 1 GiB; the estimate before validation blames memory;
+        // check_radius not called renders black with exit 0; trained::load with
+        // std::fs::read reads /dev/zero until killed; parse_size's old range message;
+        // no placeholder check writes 'p-{task}.exr'; scene_folders without the --only
+        // check, convergence without the scene and duplicate checks.
+        (&["render", "--time", "1e300"], "at most 315360000 seconds"),
+        (&["render", "-e", "bpf", "--beta", "16", "--width", "128", "--height", "96", "--memory-limit", "1G", "--spp", "1"], "lower --beta"),
+        (&["render", "-e", "spcbpt", "--subspaces", "100000", "--memory-limit", "1K", "--spp", "1"], "subspaces = 100000 is outside its allowed range"),
+        (&["render", "-e", "ppm", "--radius", "10", "--spp", "1", "--width", "16", "--height", "12"], "--radius 10 gives ppm a kernel radius"),
+        (&["render", "-e", "bpf", "--radius-footprints", "1000", "--spp", "1", "--width", "16", "--height", "12"], "--radius-footprints 1000 gives bpf"),
+        (&["render", "-e", "spcbpt", "--model", "/dev/zero", "--spp", "1", "--width", "16", "--height", "12"], "regular file"),
+        (&["render", "--memory-limit", "99999999999T"], "at most 16 EiB"),
+        (&["render", "--spp", "1", "--width", "8", "--height", "8", "-o", "p-{task}.exr"], "only a split render fills in"),
+        (&["suite", "--scenes", scenes, "--only", "nonexist", "--budget", "1", "-o", report], "--only nonexist: no such scene folder"),
+        (&["convergence", "no-such-scene.xml", "--budget", "1"], "scene no-such-scene.xml"),
+        (&["convergence", cornell, "-e", "pt,pt", "--budget", "1", "-o", out_dir], "names pt twice"),
     ] {
         let o = ember(args);
         let err = stderr(&o);
