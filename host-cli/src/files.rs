@@ -17,14 +17,21 @@ pub const MAX_INPUT_BYTES: u64 = 64 << 30;
 /// Open `path` for reading if it is a regular file (after symbolic links), with its size.
 /// A directory, device (`/dev/zero`), FIFO or socket is refused, naming what it is.
 pub fn open_regular(path: &Path) -> Result<(File, u64), String> {
+    // The type is checked before opening: opening a FIFO for reading blocks until a
+    // writer appears. Checked again on the open file, which may have been replaced.
+    let check = |meta: std::fs::Metadata| {
+        let ft = meta.file_type();
+        if ft.is_file() {
+            Ok(meta.len())
+        } else {
+            let what = if ft.is_dir() { "a directory" } else { "not a regular file (a device, FIFO or socket)" };
+            Err(format!("is {what}: only regular files are read"))
+        }
+    };
+    check(std::fs::metadata(path).map_err(|e| e.to_string())?)?;
     let file = File::open(path).map_err(|e| e.to_string())?;
-    let meta = file.metadata().map_err(|e| e.to_string())?;
-    let ft = meta.file_type();
-    if !ft.is_file() {
-        let what = if ft.is_dir() { "a directory" } else { "not a regular file (a device, FIFO or socket)" };
-        return Err(format!("is {what}: only regular files are read"));
-    }
-    Ok((file, meta.len()))
+    let len = check(file.metadata().map_err(|e| e.to_string())?)?;
+    Ok((file, len))
 }
 
 /// The bytes of the regular file `path`, refused if it holds more than `limit` bytes.
@@ -59,6 +66,13 @@ mod tests {
     fn devices_directories_and_oversized_files_are_refused() {
         let zero = read_bounded(Path::new("/dev/zero"), 1 << 10).unwrap_err();
         assert!(zero.contains("regular file"), "{zero}");
+        // A FIFO is refused without blocking on its open.
+        let fifo = std::env::temp_dir().join(format!("ember-files-fifo-{}", std::process::id()));
+        let _ = std::fs::remove_file(&fifo);
+        if std::process::Command::new("mkfifo").arg(&fifo).status().is_ok_and(|s| s.success()) {
+            assert!(read_bounded(&fifo, 1 << 10).unwrap_err().contains("FIFO"));
+            let _ = std::fs::remove_file(&fifo);
+        }
         let dir = read_bounded(Path::new("/"), 1 << 10).unwrap_err();
         assert!(dir.contains("directory"), "{dir}");
         let path = std::env::temp_dir().join(format!("ember-files-{}.txt", std::process::id()));

@@ -157,8 +157,7 @@ pub fn write_exr_with(path: &Path, width: u32, height: u32, pixels: &[[f32; 3]],
 /// is dropped; half and uint channels are converted).
 pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
     let fail = |e: exr::error::Error| ImageError::new(path, ImageErrorKind::Exr(e));
-    let file = File::open(path).map_err(|e| fail(e.into()))?;
-    let len = file.metadata().map_err(|e| fail(e.into()))?.len();
+    let (file, len) = crate::files::open_regular(path).map_err(|e| fail(std::io::Error::other(e).into()))?;
     decode_exr(std::io::BufReader::new(file), len).map_err(fail)
 }
 
@@ -166,8 +165,7 @@ pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
 /// renders, `crate::distributed`), with the same header checks as [`read_exr`].
 pub fn read_exr_any(path: &Path) -> Result<exr::image::FlatImage, ImageError> {
     let fail = |e: exr::error::Error| ImageError::new(path, ImageErrorKind::Exr(e));
-    let file = File::open(path).map_err(|e| fail(e.into()))?;
-    let len = file.metadata().map_err(|e| fail(e.into()))?.len();
+    let (file, len) = crate::files::open_regular(path).map_err(|e| fail(std::io::Error::other(e).into()))?;
     decode_any(std::io::BufReader::new(file), len).map_err(fail)
 }
 

@@ -117,6 +117,11 @@ fn bad_input_exits_one_with_a_message() {
         (&["render", "-e", "bpf", "--radius-footprints", "1000", "--spp", "1", "--width", "16", "--height", "12"], "--radius-footprints 1000 gives bpf"),
         (&["render", "-e", "spcbpt", "--model", "/dev/zero", "--spp", "1", "--width", "16", "--height", "12"], "regular file"),
         (&["render", "--memory-limit", "99999999999T"], "at most 16 EiB"),
+        (&["compare", "/dev/zero", finite], "not a regular file"),
+        (&["merge", "/dev/zero", "-o", "merged.exr"], "not a regular file"),
+        // The geometry counts under --memory-limit (the 2×2 film needs 240 bytes, the box's
+        // triangles about 15 KiB); without it in check_memory this row renders.
+        (&["render", "--width", "2", "--height", "2", "--memory-limit", "4K", "--spp", "1"], "the scene's geometry"),
         (&["render", "--spp", "1", "--width", "8", "--height", "8", "-o", "p-{task}.exr"], "only a split render fills in"),
         (&["suite", "--scenes", scenes, "--only", "nonexist", "--budget", "1", "-o", report], "--only nonexist: no such scene folder"),
         (&["convergence", "no-such-scene.xml", "--budget", "1"], "scene no-such-scene.xml"),
