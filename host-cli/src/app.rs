@@ -59,7 +59,11 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
             println!("{report}");
             if report.summary.interrupted {
                 let s = if report.summary.passes == 1 { "" } else { "es" };
-                return Err(AppError::Interrupted(format!("interrupted: the image holds the {} completed pass{s}", report.summary.passes)));
+                return Err(AppError::Interrupted(format!(
+                    "interrupted by {}: the image holds the {} completed pass{s}",
+                    crate::interrupt::signal_name(),
+                    report.summary.passes
+                )));
             }
             Ok(())
         }

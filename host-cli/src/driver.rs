@@ -74,15 +74,51 @@ where
     E: Phased<Q> + Sync + ?Sized,
     Q: RayQuery + Sync + ?Sized,
 {
-    let mut stats = PassStats::default();
-    while let Some(phase) = est.next_phase() {
-        stats = stats + run_phase(est, ctx, &phase, film, buffers, times);
-    }
-    stats
+    run_pending_or_abandon(est, ctx, film, buffers, times, never).unwrap_or_default()
 }
 
-/// Map and reduce one phase.
-fn run_phase<E, Q>(est: &mut E, ctx: &Context<'_, Q>, phase: &Phase, film: &mut Film, buffers: &mut PhaseBuffers, times: &mut PhaseTimes) -> PassStats
+fn never() -> bool {
+    false
+}
+
+/// [`run_pending`], dropping the rest of the work when `abandon` turns true: `None` then,
+/// the film's staged pass discarded (its committed passes untouched) and the estimator
+/// left mid-pass, fit only to be dropped.
+fn run_pending_or_abandon<E, Q>(
+    est: &mut E,
+    ctx: &Context<'_, Q>,
+    film: &mut Film,
+    buffers: &mut PhaseBuffers,
+    times: &mut PhaseTimes,
+    abandon: fn() -> bool,
+) -> Option<PassStats>
+where
+    E: Phased<Q> + Sync + ?Sized,
+    Q: RayQuery + Sync + ?Sized,
+{
+    let mut stats = PassStats::default();
+    while let Some(phase) = est.next_phase() {
+        match run_phase(est, ctx, &phase, film, buffers, times, abandon) {
+            Some(s) => stats = stats + s,
+            None => {
+                film.discard_staged();
+                return None;
+            }
+        }
+    }
+    Some(stats)
+}
+
+/// Map and reduce one phase (`None`, and nothing reduced, when `abandon` turned true).
+fn run_phase<E, Q>(
+    est: &mut E,
+    ctx: &Context<'_, Q>,
+    phase: &Phase,
+    film: &mut Film,
+    buffers: &mut PhaseBuffers,
+    times: &mut PhaseTimes,
+    abandon: fn() -> bool,
+) -> Option<PassStats>
 where
     E: Phased<Q> + Sync + ?Sized,
     Q: RayQuery + Sync + ?Sized,
@@ -98,10 +134,16 @@ where
         .par_iter_mut()
         .with_max_len(1)
         .map(|out: &mut ChunkOutput| {
+            if abandon() {
+                return 0;
+            }
             shared.map(ctx, phase, out);
             out.counters.rays
         })
         .sum();
+    if abandon() {
+        return None;
+    }
     stats.rays += rays;
     // In chunk order, so the sums do not depend on the thread count.
     for out in outputs.iter() {
@@ -114,7 +156,7 @@ where
     film.set_parallel_splats(Some(commit_bands));
     est.reduce(ctx, phase, outputs, film);
     add_time(times, phase.name, start.elapsed().as_secs_f64());
-    stats
+    Some(stats)
 }
 
 /// Commit a pass's splats band by band on the current rayon pool, each band its own task
@@ -146,7 +188,7 @@ where
         } else {
             eprintln!("setup: {} ({} items) at {:.1} s", phase.name, phase.items, start.elapsed().as_secs_f64());
         }
-        pool.install(|| run_phase(est, ctx, &phase, &mut film, &mut buffers, &mut times));
+        pool.install(|| run_phase(est, ctx, &phase, &mut film, &mut buffers, &mut times, never));
     }
     spinner.finish_and_clear();
     Ok(times)
@@ -175,7 +217,10 @@ pub struct Limits {
     pub first_pass: u32,
     /// Wall-clock deadline (checked between passes).
     pub deadline: Option<Instant>,
-    /// Set to stop after the pass in progress (checked before every pass).
+    /// Set to stop after the pass in progress (checked before every pass). Where it is
+    /// given, the pass in progress is also dropped unfinished once a termination signal's
+    /// grace has run out ([`crate::interrupt::abandon_pass`], polled before each chunk;
+    /// the film keeps the passes committed before it).
     pub interrupt: Option<&'static AtomicBool>,
 }
 
@@ -303,8 +348,16 @@ where
             break;
         }
         est.start_pass(pass);
-        stats = stats + pool.install(|| run_pending(est, ctx, film, &mut buffers, &mut times));
+        let abandon = if limits.interrupt.is_some() { crate::interrupt::abandon_pass } else { never };
+        match pool.install(|| run_pending_or_abandon(est, ctx, film, &mut buffers, &mut times, abandon)) {
+            Some(s) => stats = stats + s,
+            None => {
+                interrupted = true;
+                break;
+            }
+        }
         passes += 1;
+        crate::interrupt::note_passes(film.passes());
         progress.pass_done(passes);
     }
     progress.finish(passes);

@@ -1,6 +1,7 @@
 //! `ember`: parse the command line, run the command, report errors as text and exit
-//! with 0 (success, `--help`, `--version`), 1 (any error) or 130 (interrupted by Ctrl-C:
-//! the image of the completed passes is written, if there is one).
+//! with 0 (success, `--help`, `--version`), 1 (any error) or 128 + the signal that
+//! stopped a render (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP: the image of the completed
+//! passes is written, if there is one).
 
 use std::process::ExitCode;
 use std::time::Instant;
@@ -24,7 +25,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e @ app::AppError::Interrupted(_)) => {
             eprintln!("{e}");
-            ExitCode::from(ember_cli::interrupt::EXIT_CODE)
+            ExitCode::from(ember_cli::interrupt::exit_code())
         }
         Err(e) => {
             eprintln!("error: {e}");
