@@ -86,6 +86,9 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
             if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir()) {
                 return Err(AppError::Output(format!("output directory '{}' does not exist", dir.display())));
             }
+            // `train X/scene.xml -o X/scene.xml` replaced the scene with the model.
+            let inputs: Vec<&std::path::Path> = args.selection.scene.iter().map(|p| p.as_path()).collect();
+            crate::files::probe_output(out, &inputs).map_err(AppError::Output)?;
             let r = estimators::make_core_renderer(&args.render_args()).map_err(AppError::Estimator)?;
             let bytes = crate::trained::encode(&r.renderer, &r.identity(), r.width(), r.height()).map_err(AppError::Estimator)?;
             image_io::write_atomically(out, |temp| std::fs::write(temp, &bytes), |e| e).map_err(|e| AppError::Output(format!("{}: {e}", out.display())))?;
@@ -129,6 +132,7 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
             Ok(())
         }
         Command::Suite(args) => {
+            crate::files::probe_output(&args.output, &[]).map_err(AppError::Output)?;
             let threads = crate::cli::thread_count(args.threads);
             let results = suite::run(args, threads).map_err(AppError::Estimator)?;
             // As a user would type it from the repository root.
@@ -145,6 +149,13 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
 
 /// `ember convergence`: error against time for one scene.
 fn run_convergence(args: &ConvergenceArgs) -> Result<(), AppError> {
+    // The output folder first (`-o /dev/full` failed after the whole run).
+    let out = &args.output;
+    if out.exists() && !out.is_dir() {
+        return Err(AppError::Output(format!("output folder '{}' exists and is not a folder", out.display())));
+    }
+    std::fs::create_dir_all(out).map_err(|e| AppError::Output(format!("cannot create output folder '{}': {e}", out.display())))?;
+    crate::files::probe_output(&out.join("convergence.md"), &[]).map_err(AppError::Output)?;
     // The scene first: a missing scene was reported as a missing reference beside it.
     crate::files::open_regular(&args.scene).map_err(|e| AppError::Estimator(format!("scene {}: {e}", args.scene.display())))?;
     if let Some(dup) = args.estimators.iter().enumerate().find(|(i, e)| args.estimators[..*i].contains(e)).map(|(_, e)| e) {
@@ -193,6 +204,7 @@ pub fn compare_files(args: &CompareArgs) -> Result<ErrorMetrics, AppError> {
         if [&args.test, &args.reference].iter().any(|input| same_file(png, input)) {
             return Err(AppError::Output(format!("--error-image '{}' is one of the images being compared; choose another file", png.display())));
         }
+        crate::files::probe_output(png, &[]).map_err(AppError::Output)?;
     }
     let test = image_io::read_exr(&args.test).map_err(AppError::Image)?;
     let reference = image_io::read_exr(&args.reference).map_err(AppError::Image)?;
@@ -375,6 +387,11 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     if let Some(dir) = exr.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir()) {
         return Err(AppError::Output(format!("output directory '{}' does not exist", dir.display())));
     }
+    // Both files tried before any work; never over the scene or the model.
+    let inputs: Vec<&std::path::Path> = args.scene.iter().chain(args.model.iter()).map(|p| p.as_path()).collect();
+    for out in [&exr, &png] {
+        crate::files::probe_output(out, &inputs).map_err(AppError::Output)?;
+    }
 
     if args.estimator == crate::cli::EstimatorChoice::Auto && (split.is_some() || args.model.is_some()) {
         // The race depends on timing: tasks of one split render could choose differently.
@@ -499,6 +516,9 @@ pub fn merge(args: &MergeArgs) -> Result<(distributed::PartialHeader, PathBuf, O
     // Never overwrite an input.
     if let Some(part) = args.parts.iter().find(|p| same_file(&exr, p) || same_file(&png, p)) {
         return Err(AppError::Output(format!("output '{}' is one of the parts being merged; choose another file", part.display())));
+    }
+    for out in [&exr, &png] {
+        crate::files::probe_output(out, &[]).map_err(AppError::Output)?;
     }
     let cover = if args.partial { distributed::Cover::Contiguous } else { distributed::Cover::All };
     let (header, film) = distributed::merge_parts(&args.parts, cover).map_err(AppError::Output)?;

@@ -742,6 +742,17 @@ impl RenderArgs {
 
 /// See [`RenderArgs::output_paths`].
 pub fn output_paths(output: &Path) -> Result<(PathBuf, PathBuf), String> {
+    // A trailing slash means "into this directory", with the default name (`-o d1/d2/`
+    // wrote d1/d2.exr beside the directory).
+    let joined;
+    let output = if output.as_os_str().to_string_lossy().ends_with('/') {
+        joined = output.join("out.exr");
+        joined.as_path()
+    } else if output.is_dir() {
+        return Err(format!("output '{}' is a directory: end it with '/' to write out.exr into it, or name a file", output.display()));
+    } else {
+        output
+    };
     let exr = match output.extension().and_then(|e| e.to_str()) {
         None if output.file_name().is_some() => output.with_extension("exr"),
         Some(e) if e.eq_ignore_ascii_case("exr") => output.to_path_buf(),
@@ -893,7 +904,7 @@ mod tests {
         assert_eq!(output_paths(Path::new("a/b")).unwrap(), (PathBuf::from("a/b.exr"), PathBuf::from("a/b.png")));
         assert_eq!(output_paths(Path::new("R.EXR")).unwrap().1, PathBuf::from("R.png"));
         assert!(output_paths(Path::new("x.png")).is_err());
-        assert!(output_paths(Path::new("/")).is_err());
+        assert_eq!(output_paths(Path::new("d1/d2/")).unwrap(), (PathBuf::from("d1/d2/out.exr"), PathBuf::from("d1/d2/out.png")));
     }
 
     #[test]

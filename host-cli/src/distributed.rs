@@ -166,23 +166,15 @@ pub fn expand_output(path: &Path, range: PassRange, task: Option<u32>) -> Result
 }
 
 /// Where two configuration texts (`Debug` dumps such as `Spcbpt(SpcbptConfig { light_paths:
-/// None, … }); max depth -1, …`) first differ, in words (`"light_paths Some(100) there,
-/// None here"`), instead of both dumps of several hundred characters.
-pub fn first_difference(a: &str, b: &str) -> String {
-    let split = |t: &str| -> Vec<String> { t.split([',', '{', '}', ';']).map(|p| p.trim().to_string()).filter(|p| !p.is_empty()).collect() };
+/// None, … }); max depth -1, …`) first differ: the two differing settings as people read
+/// them (`("dataset Some(1000)", "dataset Some(2000)")`, `("max depth 3", "max depth -1")`),
+/// instead of both dumps of several hundred characters.
+pub fn first_difference(a: &str, b: &str) -> (String, String) {
+    let split = |t: &str| -> Vec<String> { t.split([',', '{', '}', ';']).map(|p| p.trim().replacen(": ", " ", 1)).filter(|p| !p.is_empty()).collect() };
     let (pa, pb) = (split(a), split(b));
     match pa.iter().zip(&pb).find(|(x, y)| x != y) {
-        Some((x, y)) => {
-            // The field's name, then the two values.
-            match (x.split_once(": "), y.split_once(": ")) {
-                (Some((kx, vx)), Some((ky, vy))) if kx == ky => format!("{kx} {vx} there, {vy} here"),
-                _ => format!("'{x}' there, '{y}' here"),
-            }
-        }
-        None if pa.len() != pb.len() => {
-            format!("'{}' there, '{}' here", pa.get(pb.len()).map_or("", |s| s.as_str()), pb.get(pa.len()).map_or("", |s| s.as_str()))
-        }
-        None => "they differ only in spacing".into(),
+        Some((x, y)) => (x.clone(), y.clone()),
+        None => (pa.get(pb.len()).cloned().unwrap_or_default(), pb.get(pa.len()).cloned().unwrap_or_default()),
     }
 }
 
@@ -425,7 +417,8 @@ pub fn check_parts(parts: &[(PathBuf, PartialHeader)], cover: Cover) -> Result<P
     for (path, h) in &parts[1..] {
         for ((field, want), (_, got)) in reference.iter().zip(identity_fields(h)) {
             if *want != got && *field == "configuration" {
-                problems.push(format!("'{}' has another configuration than '{}': {}", path.display(), first_path.display(), first_difference(&got, want)));
+                let (theirs, ours) = first_difference(&got, want);
+                problems.push(format!("'{}' has configuration {theirs}, but '{}' has {ours}", path.display(), first_path.display()));
             } else if *want != got {
                 let scenes = if *field == "scene hash" { format!(" (scenes {} and {})", h.scene, first.scene) } else { String::new() };
                 problems.push(format!("'{}' has {field} {got}, but '{}' has {want}{scenes}", path.display(), first_path.display()));

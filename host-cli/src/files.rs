@@ -55,6 +55,44 @@ pub fn read_text_bounded(path: &Path, limit: u64) -> Result<String, String> {
     String::from_utf8(read_bounded(path, limit)?).map_err(|e| format!("is not UTF-8 text (byte {})", e.utf8_error().valid_up_to()))
 }
 
+/// Try `path` as an output before any work (issue 50: an unwritable `-o` failed after
+/// the whole render): refuse, naming the reason, a path that is a directory, exists as
+/// something other than a regular file (`/dev/full`), is one of `inputs` (the same file,
+/// by any path), or lies in a missing or unwritable directory; the last is found by
+/// creating and removing an empty file beside it.
+pub fn probe_output(path: &Path, inputs: &[&Path]) -> Result<(), String> {
+    let name = path.display();
+    if let Ok(meta) = std::fs::metadata(path) {
+        if meta.is_dir() {
+            return Err(format!("output '{name}' is a directory: name a file in it"));
+        }
+        if !meta.is_file() {
+            return Err(format!("output '{name}' is not a regular file (a device, FIFO or socket): nothing is written there"));
+        }
+        if let Ok(out) = std::fs::canonicalize(path)
+            && let Some(input) = inputs.iter().find(|i| std::fs::canonicalize(i).is_ok_and(|c| c == out))
+        {
+            return Err(format!("output '{name}' is one of the inputs ({}): it would be overwritten", input.display()));
+        }
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(format!("output directory '{}' does not exist", dir.display()));
+    }
+    let file = path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
+    let probe = dir.join(format!(".{file}.ember-probe-{}", std::process::id()));
+    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => Err(format!("cannot write output '{name}': {e} (in '{}')", dir.display())),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -81,5 +119,26 @@ mod tests {
         assert!(read_bounded(&path, 4).unwrap_err().contains("more than the 4"));
         assert_eq!(read_text_bounded(&path, 16).unwrap(), "hello");
         let _ = std::fs::remove_file(&path);
+    }
+
+    /// Injected bug checked: without the directory test, the first assertion gets a
+    /// probe that succeeds (the probe file lands beside the directory).
+    #[test]
+    fn outputs_are_tried_before_the_work() {
+        let dir = std::env::temp_dir().join(format!("ember-probe-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        assert!(probe_output(&dir, &[]).unwrap_err().contains("is a directory"));
+        assert!(probe_output(Path::new("/dev/full"), &[]).unwrap_err().contains("not a regular file"));
+        assert!(probe_output(&dir.join("missing/x.exr"), &[]).unwrap_err().contains("does not exist"));
+        let input = dir.join("scene.xml");
+        std::fs::write(&input, "x").unwrap();
+        let via = dir.join(".").join("scene.xml");
+        assert!(probe_output(&via, &[&input]).unwrap_err().contains("is one of the inputs"));
+        assert_eq!(probe_output(&dir.join("out.exr"), &[&input]), Ok(()));
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1, "the probe file is removed");
+        if std::path::Path::new("/proc/self").is_dir() {
+            assert!(probe_output(Path::new("/proc/nope.exr"), &[]).is_err());
+        }
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -86,7 +86,8 @@ pub fn load(path: &Path, id: &RenderIdentity, width: u32, height: u32, scene: &S
             // The configuration is a long dump and the hash means nothing to a person:
             // name the field that differs and the scenes.
             Some(v) if key == "config" => {
-                return Err(format!("--model {name} was trained with another configuration: {}", crate::distributed::first_difference(v, &want)));
+                let (trained, here) = crate::distributed::first_difference(v, &want);
+                return Err(format!("--model {name} was trained with another configuration: {trained}, but this render has {here}"));
             }
             Some(_) if key == "scene_hash" => {
                 return Err(format!(

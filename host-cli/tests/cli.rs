@@ -118,6 +118,15 @@ fn bad_input_exits_one_with_a_message() {
         (&["render", "-e", "spcbpt", "--model", "/dev/zero", "--spp", "1", "--width", "16", "--height", "12"], "regular file"),
         (&["render", "--memory-limit", "99999999999T"], "at most 16 EiB"),
         (&["compare", "/dev/zero", finite], "not a regular file"),
+        // Outputs tried before the work (issue 50): each refused at once. Injected bug
+        // checked: without the probe_output calls in app.rs the first row renders the
+        // default 16 passes and fails only at the write.
+        (&["render", "-o", "/proc/nope.exr"], "cannot write output '/proc/nope.exr'"),
+        (&["render", "-o", scenes], "is a directory: end it with '/'"),
+        (&["train", cornell, "-o", cornell], "is one of the inputs"),
+        (&["suite", "--scenes", scenes, "-o", scenes], "is a directory"),
+        (&["convergence", cornell, "-o", "/dev/full"], "is not a folder"),
+        (&["compare", finite, finite, "--error-image", "/dev/full"], "not a regular file"),
         (&["merge", "/dev/zero", "-o", "merged.exr"], "not a regular file"),
         // The geometry counts under --memory-limit (the 2×2 film needs 240 bytes, the box's
         // triangles about 15 KiB); without it in check_memory this row renders.

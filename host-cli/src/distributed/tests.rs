@@ -211,6 +211,7 @@ fn edited_headers_are_refused() {
 fn configuration_differences_name_the_field() {
     let a = "Spcbpt(SpcbptConfig { light_paths: None, dataset: Some(1000), subspaces: None }); max depth -1, heuristic Power";
     let b = "Spcbpt(SpcbptConfig { light_paths: None, dataset: Some(2000), subspaces: None }); max depth -1, heuristic Power";
-    assert_eq!(first_difference(a, b), "dataset Some(1000) there, Some(2000) here");
-    assert_eq!(first_difference("Pt; max depth 5", "Pt; max depth 7"), "'max depth 5' there, 'max depth 7' here");
+    let pair = |a: &str, b: &str| (a.to_string(), b.to_string());
+    assert_eq!(first_difference(a, b), pair("dataset Some(1000)", "dataset Some(2000)"));
+    assert_eq!(first_difference("Pt; max depth 5", "Pt; max depth 7"), pair("max depth 5", "max depth 7"));
 }
