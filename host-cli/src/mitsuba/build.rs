@@ -16,10 +16,11 @@ use ember_core::light::{EnvMapError, Light};
 use ember_core::scene::{AreaEmission, SceneBuilder};
 use ember_core::spectrum::Rgb;
 
+use super::positions::Positions;
 use super::props::Props;
 use super::transform;
 use super::xml::{Obj, Parsed, Tag};
-use super::{Fail, LoadOptions, LoadedScene, Loc, Res};
+use super::{Fail, LoadOptions, LoadedScene, Loc, Progress, Res};
 
 /// Largest film side accepted (a guard against absurd allocations downstream).
 const MAX_FILM_SIDE: i64 = 1 << 16;
@@ -31,6 +32,8 @@ const DEFAULT_FILM: (u32, u32) = (768, 576);
 #[derive(Debug)]
 pub(crate) struct Ctx<'a> {
     pub parsed: &'a Parsed,
+    /// Resolves places into lines for messages.
+    pub positions: &'a Positions<'a>,
     pub sb: SceneBuilder,
     pub warnings: Vec<String>,
     pub base_dir: &'a Path,
@@ -76,9 +79,10 @@ struct SensorSpec {
     filter: Filter,
 }
 
-pub(crate) fn instantiate(parsed: Parsed, base_dir: &Path, options: &LoadOptions) -> Res<LoadedScene> {
+pub(crate) fn instantiate(parsed: Parsed, positions: &Positions, base_dir: &Path, options: &LoadOptions, progress: &mut Progress) -> Res<LoadedScene> {
     let mut ctx = Ctx {
         parsed: &parsed,
+        positions,
         sb: SceneBuilder::new(),
         warnings: parsed.warnings.clone(),
         base_dir,
@@ -91,23 +95,28 @@ pub(crate) fn instantiate(parsed: Parsed, base_dir: &Path, options: &LoadOptions
     };
     let mut sensor: Option<(SensorSpec, Loc)> = None;
     let mut integrator: Option<(Option<i32>, Loc)> = None;
+    let mut shapes = 0;
     for &idx in &parsed.top {
         let obj = ctx.obj(idx)?;
         if !matches!(obj.tag, Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler | Tag::Texture) {
             ctx.mark(idx);
         }
         match obj.tag {
-            Tag::Shape => ctx.shape(idx)?,
+            Tag::Shape => {
+                ctx.shape(idx)?;
+                shapes += 1;
+                progress.shape_done(shapes);
+            }
             Tag::Emitter => ctx.emitter(idx)?,
             Tag::Sensor => {
                 if let Some((_, first)) = &sensor {
-                    return Err(Fail::at(obj.loc, format!("only one <sensor> is supported (the first is at line {})", first.line)));
+                    return Err(Fail::at(obj.loc, format!("only one <sensor> is supported (the first is at line {})", ctx.line(*first))));
                 }
                 sensor = Some((ctx.sensor(idx)?, obj.loc));
             }
             Tag::Integrator => {
                 if let Some((_, first)) = &integrator {
-                    return Err(Fail::at(obj.loc, format!("only one <integrator> is supported (the first is at line {})", first.line)));
+                    return Err(Fail::at(obj.loc, format!("only one <integrator> is supported (the first is at line {})", ctx.line(*first))));
                 }
                 integrator = Some((ctx.integrator(idx)?, obj.loc));
             }
@@ -119,7 +128,7 @@ pub(crate) fn instantiate(parsed: Parsed, base_dir: &Path, options: &LoadOptions
         let obj = ctx.obj(idx)?;
         if !ctx.used[idx] {
             let id = obj.id.as_deref().map(|i| format!(" id=\"{i}\"")).unwrap_or_default();
-            ctx.warnings.push(format!("line {}: {}{id} is declared but never used", obj.loc.line, obj.label()));
+            ctx.warnings.push(format!("line {}: {}{id} is declared but never used", ctx.line(obj.loc), obj.label()));
         }
     }
     let (spec, _) = sensor.ok_or_else(|| Fail::nowhere("the scene has no <sensor> (a perspective camera is required)"))?;
@@ -135,6 +144,7 @@ pub(crate) fn instantiate(parsed: Parsed, base_dir: &Path, options: &LoadOptions
     let camera = PerspectiveCamera::new(spec.to_world.as_mat4(), spec.fov, spec.fov_axis, width, height).with_lens(spec.lens).with_filter(spec.filter);
     ctx.sb.set_camera(camera);
     let world_origin = -ctx.render_frame.w_axis.truncate();
+    progress.finish();
     Ok(LoadedScene { builder: ctx.sb, max_depth: integrator.and_then(|(d, _)| d), spp: spec.spp, width, height, warnings: ctx.warnings, world_origin })
 }
 
@@ -147,6 +157,11 @@ fn override_side(option: Option<u32>, what: &str) -> Res<()> {
 }
 
 impl<'a> Ctx<'a> {
+    /// The line of `loc`, for a message.
+    pub(crate) fn line(&self, loc: Loc) -> u32 {
+        self.positions.line(loc)
+    }
+
     /// An object by index.
     pub(crate) fn obj(&self, idx: usize) -> Res<&'a Obj> {
         let parsed = self.parsed;
@@ -242,7 +257,7 @@ impl<'a> Ctx<'a> {
                     return Err(Fail::at(p.loc_of("beam_width"), format!("`beam_width` must be non-negative, got {beam}")));
                 }
                 if beam > cutoff {
-                    self.warnings.push(format!("line {}: spot `beam_width` {beam} exceeds `cutoff_angle` {cutoff}; clamped", obj.loc.line));
+                    self.warnings.push(format!("line {}: spot `beam_width` {beam} exceeds `cutoff_angle` {cutoff}; clamped", self.line(obj.loc)));
                     beam = cutoff;
                 }
                 let intensity = nonnegative(&p, "intensity", intensity)?;
@@ -298,7 +313,7 @@ impl<'a> Ctx<'a> {
         if !is_exr {
             return Err(Fail::at(file_loc, format!("envmap \"{}\": only OpenEXR (.exr) environment maps are supported", path.display())));
         }
-        let image = crate::image_io::read_exr(&path).map_err(|e| Fail::at(file_loc, format!("envmap: {e}")))?;
+        let image = super::textures::read_exr(&path).map_err(|e| Fail::at(file_loc, format!("envmap \"{}\": {e}", path.display())))?;
         let texels: Vec<Rgb> = image.pixels.iter().map(|&[r, g, b]| Rgb::new(r, g, b)).collect();
         Light::environment_map(image.width, image.height, &texels, scale as f32, axes).map_err(|e| match e {
             EnvMapError::NotRotation => Fail::at(p.loc_of("to_world"), format!("envmap: {e}")),
@@ -341,14 +356,17 @@ impl<'a> Ctx<'a> {
                 ));
             }
         }
-        let lens = if obj.kind == "thinlens" { self.lens(&mut p, obj.loc)? } else { None };
+        let far_clip = self.clip_planes(&mut p, obj)?;
+        let lens = if obj.kind == "thinlens" { self.lens(&mut p, obj.loc, far_clip)? } else { None };
         p.finish()?;
         let (width, height, filter) = match film {
             Some(f) => self.film(f)?,
             None => {
                 self.warnings.push(format!(
                     "line {}: the sensor has no <film>: using Mitsuba's default size {}×{} and gaussian filter",
-                    obj.loc.line, DEFAULT_FILM.0, DEFAULT_FILM.1
+                    self.line(obj.loc),
+                    DEFAULT_FILM.0,
+                    DEFAULT_FILM.1
                 ));
                 (DEFAULT_FILM.0, DEFAULT_FILM.1, Filter::MITSUBA_DEFAULT)
             }
@@ -360,20 +378,48 @@ impl<'a> Ctx<'a> {
         Ok(SensorSpec { to_world, fov: fov as f32, fov_axis, width, height, spp, lens, filter })
     }
 
+    /// Mitsuba's `near_clip` and `far_clip` (defaults 10⁻² and 10⁴), checked as Mitsuba
+    /// checks them (0 < near < far); returns `far_clip`. Exported scenes nearly always
+    /// give them, but ember's camera does not clip: its rays start at the camera and are
+    /// unbounded (clipping would need a change to the core's camera), so geometry nearer
+    /// than `near_clip` or beyond `far_clip` is visible where Mitsuba hides it. Given
+    /// values are accepted with a warning that says so; `far_clip` is also `thinlens`'s
+    /// default focus distance, as in Mitsuba.
+    fn clip_planes(&mut self, p: &mut Props, obj: &Obj) -> Res<f64> {
+        let near = p.float_opt("near_clip")?;
+        let far = p.float_opt("far_clip")?;
+        let (n, f) = (near.unwrap_or(1e-2), far.unwrap_or(1e4));
+        if !(n > 0.0) {
+            return Err(Fail::at(p.loc_of("near_clip"), format!("`near_clip` must be positive, got {n}")));
+        }
+        if !(n < f) {
+            let at = if far.is_some() { "far_clip" } else { "near_clip" };
+            return Err(Fail::at(p.loc_of(at), format!("`near_clip` ({n}) must be smaller than `far_clip` ({f})")));
+        }
+        if near.is_some() || far.is_some() {
+            self.warnings.push(format!(
+                "line {}: the sensor's near_clip {n} and far_clip {f} are accepted but not modelled: ember's camera does not clip, \
+                 so geometry nearer than near_clip or beyond far_clip is visible (Mitsuba hides it)",
+                self.line(obj.loc)
+            ));
+        }
+        Ok(f)
+    }
+
     /// `thinlens`'s `aperture_radius` (required, as in Mitsuba) and `focus_distance`
-    /// (Mitsuba's default: `far_clip`, 10⁴). A zero aperture is the pinhole (Mitsuba
-    /// substitutes its float epsilon, with a warning).
-    fn lens(&mut self, p: &mut Props, loc: Loc) -> Res<Option<Lens>> {
+    /// (Mitsuba's default: `far_clip`). A zero aperture is the pinhole
+    /// (Mitsuba substitutes its float epsilon, with a warning).
+    fn lens(&mut self, p: &mut Props, loc: Loc, far_clip: f64) -> Res<Option<Lens>> {
         let radius = p.float_opt("aperture_radius")?.ok_or_else(|| Fail::at(loc, "the thinlens sensor needs `aperture_radius`"))?;
         if !(radius >= 0.0 && radius.is_finite()) {
             return Err(Fail::at(p.loc_of("aperture_radius"), format!("`aperture_radius` must be finite and non-negative, got {radius}")));
         }
-        let focus = p.float_opt("focus_distance")?.unwrap_or(1e4);
+        let focus = p.float_opt("focus_distance")?.unwrap_or(far_clip);
         if !(focus > 0.0 && focus.is_finite()) {
             return Err(Fail::at(p.loc_of("focus_distance"), format!("`focus_distance` must be finite and positive, got {focus}")));
         }
         if radius == 0.0 {
-            self.warnings.push(format!("line {}: thinlens with a zero `aperture_radius`: rendered as a pinhole", loc.line));
+            self.warnings.push(format!("line {}: thinlens with a zero `aperture_radius`: rendered as a pinhole", self.line(loc)));
             return Ok(None);
         }
         Lens::new(radius as f32, focus as f32).map(Some).ok_or_else(|| Fail::at(p.loc_of("aperture_radius"), "the lens does not fit in single precision"))
@@ -393,13 +439,13 @@ impl<'a> Ctx<'a> {
             && f != "openexr"
             && f != "exr"
         {
-            self.warnings.push(format!("line {}: film file_format \"{f}\" is not used: the command line chooses the output", obj.loc.line));
+            self.warnings.push(format!("line {}: film file_format \"{f}\" is not used: the command line chooses the output", self.line(obj.loc)));
         }
         if let Some(f) = p.string_opt("pixel_format")?
             && f != "rgb"
             && f != "rgba"
         {
-            self.warnings.push(format!("line {}: film pixel_format \"{f}\" is not used: ember writes RGB", obj.loc.line));
+            self.warnings.push(format!("line {}: film pixel_format \"{f}\" is not used: ember writes RGB", self.line(obj.loc)));
         }
         p.finish()?;
         // No <rfilter>: Mitsuba's default, the gaussian (`src/render/film.cpp`).
@@ -445,8 +491,11 @@ impl<'a> Ctx<'a> {
         };
         p.finish()?;
         if obj.kind != "independent" {
-            self.warnings
-                .push(format!("line {}: sampler type \"{}\" is not modelled: ember uses its own sampler (only sample_count is read)", obj.loc.line, obj.kind));
+            self.warnings.push(format!(
+                "line {}: sampler type \"{}\" is not modelled: ember uses its own sampler (only sample_count is read)",
+                self.line(obj.loc),
+                obj.kind
+            ));
         }
         Ok(spp)
     }
@@ -466,7 +515,8 @@ impl<'a> Ctx<'a> {
         if obj.kind != "path" {
             self.warnings.push(format!(
                 "line {}: integrator type \"{}\" is not used: the command line chooses the estimator (only max_depth is read)",
-                obj.loc.line, obj.kind
+                self.line(obj.loc),
+                obj.kind
             ));
         }
         Ok(depth)

@@ -90,7 +90,7 @@ impl Ctx<'_> {
             return p.color(name, default);
         };
         if p.has(name) {
-            return Err(Fail::at(child.loc, format!("`{name}` is given both as a value (line {}) and as a texture", p.loc_of(name).line)));
+            return Err(Fail::at(child.loc, format!("`{name}` is given both as a value (line {}) and as a texture", self.line(p.loc_of(name)))));
         }
         let (id, mean) = self.texture(child.obj)?;
         bindings.push((slot, id));

@@ -1,12 +1,13 @@
 //! Triangle meshes from files: Wavefront OBJ (through `tobj`) and the data both loaders
 //! share; Mitsuba's vertex-normal reconstruction for files without normals.
 
-use std::fs::File;
-use std::io::BufReader;
+use std::io::{BufReader, Read};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
 use glam::{DVec3, Vec2, Vec3};
+
+use crate::files::{MAX_INPUT_BYTES, open_regular};
 
 /// A mesh in object space.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -23,9 +24,14 @@ pub(crate) struct MeshData {
 
 /// Load an OBJ file: every object and group merged into one mesh (as Mitsuba does),
 /// polygons triangulated as fans, points, lines and materials not read.
+/// Only a regular file is read, and no more of it than its size when opened (see
+/// [`super::read_input`]).
 pub(crate) fn load_obj(path: &Path) -> Result<MeshData, String> {
-    let file = File::open(path).map_err(|e| e.to_string())?;
-    let mut reader = BufReader::new(file);
+    let (file, len) = open_regular(path)?;
+    if len > MAX_INPUT_BYTES {
+        return Err(format!("holds {len} bytes, more than the {MAX_INPUT_BYTES} a mesh may have"));
+    }
+    let mut reader = BufReader::new(file.take(len));
     // `..Default::default()` keeps this compiling if another crate turns on tobj's
     // optional features (which add fields).
     #[allow(clippy::needless_update)]

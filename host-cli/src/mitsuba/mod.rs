@@ -11,7 +11,10 @@
 //! Like Mitsuba, a property no plugin reads is an error ("unreferenced property"), and so
 //! is an unknown element, plugin type or attribute, a malformed number, a broken `ref`, a
 //! missing mesh file or a non-finite mesh vertex. Every error names the file, the line
-//! and column, and what is supported there. Things Mitsuba would do that ember does not
+//! and column, and what is supported there (and the `-D name=value` that supplied a bad
+//! value). Only regular files are read (scene, meshes, images), each at most
+//! [`MAX_INPUT_BYTES`]; places in the text become lines and columns only for messages
+//! ([`positions`]), so loading is linear in the file's size. Things Mitsuba would do that ember does not
 //! model (a non-`independent` sampler, an integrator type
 //! other than `path`, ...) are accepted with a warning in [`LoadedScene::warnings`];
 //! nothing in a file is ignored silently.
@@ -32,10 +35,11 @@
 //!   `color1`, `to_uv`). Meshes carry their texture coordinates (OBJ `vt`, PLY `u`/`v`,
 //!   `flip_tex_coords`).
 //! - Emitters: `area`, `point`, `spot`, `directional`, `constant`.
-//! - `sensor` `perspective` and `thinlens` (`aperture_radius`, `focus_distance`) with
-//!   `hdrfilm` and any `sampler`; `rfilter` `box`, `tent` (`radius`), `gaussian`
-//!   (`stddev`; also a film without `rfilter`, as in Mitsuba); any `integrator` (only
-//!   `max_depth` is read).
+//! - `sensor` `perspective` and `thinlens` (`aperture_radius`, `focus_distance`;
+//!   `near_clip` and `far_clip` are checked but not modelled, with a warning: ember's
+//!   camera does not clip) with `hdrfilm` and any `sampler`; `rfilter` `box`, `tent`
+//!   (`radius`), `gaussian` (`stddev`; also a film without `rfilter`, as in Mitsuba);
+//!   any `integrator` (only `max_depth` is read).
 //! - Values: `float`, `integer`, `boolean`, `string`, `rgb`, `spectrum` (one value),
 //!   `point`, `vector`, `transform` (`translate`, `rotate`, `scale`, `matrix`, `lookat`).
 
@@ -46,6 +50,8 @@ mod build;
 mod materials;
 mod mesh;
 mod ply;
+mod positions;
+mod progress;
 mod props;
 mod shapes;
 mod textures;
@@ -63,6 +69,10 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use ember_core::scene::SceneBuilder;
+
+use crate::files::{MAX_INPUT_BYTES, read_bounded};
+use positions::Positions;
+pub(crate) use progress::Progress;
 
 /// A scene read from a Mitsuba XML file, ready for [`SceneBuilder::build`].
 #[derive(Debug)]
@@ -144,11 +154,13 @@ impl fmt::Display for SceneFileError {
 
 impl std::error::Error for SceneFileError {}
 
-/// A 1-based position in the XML text.
+/// A place in the XML text: a byte offset, turned into a line and column by
+/// [`positions::Positions`] only when a message shows it (resolving every place the
+/// parser records made loading quadratic); or the line and column the XML parser reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct Loc {
-    pub line: u32,
-    pub col: u32,
+pub(crate) enum Loc {
+    Offset(usize),
+    At { line: u32, col: u32 },
 }
 
 /// An error before it is tied to its file.
@@ -170,30 +182,45 @@ impl Fail {
 pub(crate) type Res<T> = Result<T, Fail>;
 
 /// Read a Mitsuba 3 scene file; see the module documentation for the subset accepted.
+/// A scene that takes over a second to load reports its progress on stderr.
 pub fn load_scene(path: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneFileError> {
-    let wrap = |f: Fail| SceneFileError { file: path.to_path_buf(), line: f.loc.map(|l| l.line), column: f.loc.map(|l| l.col), message: f.message };
-    let bytes = std::fs::read(path).map_err(|e| wrap(Fail::nowhere(format!("cannot read the scene file: {e}"))))?;
-    let text =
-        String::from_utf8(bytes).map_err(|e| wrap(Fail::nowhere(format!("the scene file is not valid UTF-8 (byte {})", e.utf8_error().valid_up_to()))))?;
-    let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    load_str(&text, &base_dir, options).map_err(wrap)
+    let mut progress = Progress::stderr(path);
+    let nowhere = |message: String| SceneFileError { file: path.to_path_buf(), line: None, column: None, message };
+    let bytes = read_input(path).map_err(|e| nowhere(format!("cannot read the scene file: {e}")))?;
+    let text = String::from_utf8(bytes).map_err(|e| nowhere(format!("the scene file is not valid UTF-8 (byte {})", e.utf8_error().valid_up_to())))?;
+    load_text(&text, path, options, &mut progress)
 }
 
 /// [`load_scene`] on text already in memory (no file is read except the meshes it
 /// names, relative to `file`'s directory); errors name `file`. The entry point for
 /// callers that hold the XML as a string, and for the parser's fuzz target.
 pub fn load_scene_from_str(text: &str, file: &Path, options: &LoadOptions) -> Result<LoadedScene, SceneFileError> {
+    load_text(text, file, options, &mut Progress::stderr(file))
+}
+
+/// Parse and instantiate `text`, the contents of `file` (relative mesh paths resolve
+/// against its directory); places are resolved into lines and columns only for the error.
+pub(crate) fn load_text(text: &str, file: &Path, options: &LoadOptions, progress: &mut Progress) -> Result<LoadedScene, SceneFileError> {
+    let positions = Positions::new(text);
+    load_positions(&positions, file, options, progress)
+}
+
+/// [`load_text`] with the caller's [`Positions`] (tests count its resolutions).
+pub(crate) fn load_positions(positions: &Positions, file: &Path, options: &LoadOptions, progress: &mut Progress) -> Result<LoadedScene, SceneFileError> {
     let base_dir = file.parent().map(Path::to_path_buf).unwrap_or_default();
-    load_str(text, &base_dir, options).map_err(|f| SceneFileError {
-        file: file.to_path_buf(),
-        line: f.loc.map(|l| l.line),
-        column: f.loc.map(|l| l.col),
-        message: f.message,
+    let result = xml::parse(positions, &options.defaults).and_then(|parsed| {
+        progress.parsed(parsed.objs.iter().filter(|o| o.tag == xml::Tag::Shape).count());
+        build::instantiate(parsed, positions, &base_dir, options, progress)
+    });
+    result.map_err(|f| {
+        let (at, message) = positions.resolve(f);
+        SceneFileError { file: file.to_path_buf(), line: at.map(|a| a.0), column: at.map(|a| a.1), message }
     })
 }
 
-/// [`load_scene`] on text already read; relative mesh paths resolve against `base_dir`.
-pub(crate) fn load_str(text: &str, base_dir: &Path, options: &LoadOptions) -> Res<LoadedScene> {
-    let parsed = xml::parse(text, &options.defaults)?;
-    build::instantiate(parsed, base_dir, options)
+/// The bytes of an input file (scene, mesh, image), refused unless it is a regular file
+/// of at most [`MAX_INPUT_BYTES`] ([`read_bounded`]): `/dev/zero`, a FIFO or a directory
+/// would otherwise be read until memory runs out, or block.
+pub(crate) fn read_input(path: &Path) -> Result<Vec<u8>, String> {
+    read_bounded(path, MAX_INPUT_BYTES)
 }

@@ -1,13 +1,15 @@
 //! Loading tests: the suite's scenes, transforms, parameters, meshes, shapes.
 
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 use glam::Vec3;
 
 use ember_core::scene::builtin;
 use ember_core::scene::{Scene, SceneGeometry, Triangle};
 
-use super::{LoadOptions, LoadedScene, SceneFileError, load_scene};
+use super::positions::Positions;
+use super::{LoadOptions, LoadedScene, Loc, Progress, SceneFileError, load_positions, load_scene};
 
 pub(super) fn suite_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes")
@@ -442,4 +444,116 @@ fn one_film_side_keeps_the_aspect_ratio() {
     }
     let e = load_body(&dir, body, &LoadOptions { height: Some(65536), ..Default::default() }).unwrap_err();
     assert!(e.to_string().contains("the film would be 87381x65536") && e.to_string().contains("give both"), "{e}");
+}
+
+/// A scene of `n` small spheres in a row in front of [`SENSOR`]'s camera, and a light.
+pub(super) fn spheres(n: usize) -> String {
+    let mut text = format!("<scene version=\"3.0.0\">\n{SENSOR}\n<emitter type=\"constant\"/>\n");
+    for i in 0..n {
+        text.push_str(&format!(
+            "<shape type=\"sphere\"><point name=\"center\" x=\"{}\" y=\"0\" z=\"5\"/><float name=\"radius\" value=\"0.01\"/></shape>\n",
+            i as f64 * 0.03
+        ));
+    }
+    text.push_str("</scene>\n");
+    text
+}
+
+/// Issue 51: loading was quadratic in the file's size (10 000 spheres took 22 s), because
+/// every element's and attribute's place was resolved into a line and column (roxmltree's
+/// `text_pos_at`, a scan from the start) although only an error shows one. Places are
+/// byte offsets now, resolved when a message needs them: a valid scene without warnings
+/// resolves none, and an error resolves only its own. Injected bug checked: `Parser::loc`
+/// resolving its offset at once (`self.positions.line_col(..)`, as `text_pos_at` was
+/// called) resolves 14 020 places here and fails.
+#[test]
+fn a_valid_scene_resolves_no_places() {
+    let text = spheres(2000);
+    let path = Path::new("/nowhere/scene.xml");
+    let positions = Positions::new(&text);
+    let mut quiet = Progress::to(path, Duration::from_secs(3600), Duration::from_secs(3600), Box::new(std::io::sink()));
+    let loaded = load_positions(&positions, path, &LoadOptions::default(), &mut quiet).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(positions.resolutions(), 0, "places resolved while loading a valid scene");
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    let (_, g) = build(loaded);
+    assert_eq!(g.spheres.len(), 2000);
+    // The last sphere's radius made invalid: one place resolved, at the right line.
+    let bad = text.replace("value=\"0.01\"/></shape>\n</scene>", "value=\"-1\"/></shape>\n</scene>");
+    let positions = Positions::new(&bad);
+    let e = load_positions(&positions, path, &LoadOptions::default(), &mut quiet).unwrap_err();
+    assert_eq!((e.line, positions.resolutions()), (Some(2004), 1), "{e}");
+    assert!(e.message.contains("sphere `radius` must be positive"), "{e}");
+}
+
+/// The lazily resolved places equal roxmltree's `text_pos_at` (the parser's positions
+/// before issue 51) for every element, attribute, attribute value and text node of a
+/// file with multi-byte characters, CRLF line ends and a long line, and for its end.
+/// Injected bugs checked: counting the column in bytes (`end - start`) fails after a
+/// `☃☃` comment (column 17 for 13); `partition_point(|&s| s < offset)` (a node at the
+/// start of a line counted on the line before) fails at `<scene`, which starts line 2.
+#[test]
+fn lazy_positions_equal_roxmltree_ones() {
+    let cornell = std::fs::read_to_string(suite_dir().join("cornell-box/scene.xml")).unwrap();
+    let text = cornell.replacen("<scene", "<!-- é€😀 -->\r\n<scene", 1).replacen("<shape", "<!-- ☃☃ --><shape", 3).replace("<bsdf", "\r\n  <bsdf");
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    let positions = Positions::new(&text);
+    let mut offsets = vec![0, text.len()];
+    for node in doc.descendants() {
+        offsets.push(node.range().start);
+        for a in node.attributes() {
+            offsets.extend([a.range().start, a.range_value().start]);
+        }
+    }
+    assert!(offsets.len() > 200, "{}", offsets.len());
+    for o in offsets {
+        let p = doc.text_pos_at(o);
+        assert_eq!(positions.line_col(Loc::Offset(o)), (p.row, p.col), "offset {o}");
+        assert_eq!(positions.line(Loc::Offset(o)), p.row, "offset {o}");
+    }
+}
+
+/// A sink that tests can read back.
+#[derive(Clone, Default)]
+struct Shared(std::rc::Rc<std::cell::RefCell<Vec<u8>>>);
+
+impl std::io::Write for Shared {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.borrow_mut().extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// Issue 51: a large scene loaded for many seconds without a word. Past a second,
+/// "loading <file>: N of M shapes" lines appear on stderr (at most one a second); a
+/// scene that loads sooner prints nothing. Injected bugs checked: `Progress::due`
+/// without its `quiet_for` test prints for the quick load below (first assertion);
+/// `shape_done` never called from `instantiate` leaves out the "64 of 130" line.
+#[test]
+fn progress_is_printed_only_for_slow_loads() {
+    let text = spheres(130);
+    let path = Path::new("/nowhere/big.xml");
+    let quiet = Shared::default();
+    let mut progress = Progress::to(path, Duration::from_secs(1), Duration::from_secs(1), Box::new(quiet.clone()));
+    load_positions(&Positions::new(&text), path, &LoadOptions::default(), &mut progress).unwrap();
+    assert!(quiet.0.borrow().is_empty(), "a quick load printed {:?}", String::from_utf8_lossy(&quiet.0.borrow()));
+    // As if every moment were a second past the start.
+    let log = Shared::default();
+    let mut progress = Progress::to(path, Duration::ZERO, Duration::ZERO, Box::new(log.clone()));
+    load_positions(&Positions::new(&text), path, &LoadOptions::default(), &mut progress).unwrap();
+    let printed = String::from_utf8(log.0.borrow().clone()).unwrap();
+    let lines: Vec<&str> = printed.lines().map(|l| l.split(" (").next().unwrap_or("")).collect();
+    assert_eq!(
+        lines,
+        [
+            "loading /nowhere/big.xml: XML read, 130 shapes to build",
+            "loading /nowhere/big.xml: 64 of 130 shapes",
+            "loading /nowhere/big.xml: 128 of 130 shapes",
+            "loading /nowhere/big.xml: done, 130 shapes"
+        ],
+        "{printed}"
+    );
+    assert!(printed.lines().all(|l| l.ends_with(" s)")), "{printed}");
 }

@@ -308,3 +308,156 @@ fn envmap_files_fail_with_their_name() {
     let Err(e) = load_scene(&path, &LoadOptions::default()) else { panic!("a scaled envmap loaded") };
     assert!(e.to_string().contains("must be a rotation") && e.to_string().contains(":5:"), "{e}");
 }
+
+/// Issue 51: `/dev/zero`, a FIFO or a directory given as the scene, a mesh, a texture or
+/// an environment map was read until memory ran out (`std::fs::read`, tobj's reader) or
+/// blocked forever (opening a FIFO waits for a writer). Each is refused, naming the file
+/// and what it is, before it is opened. Injected bugs checked, under `ulimit -v 4000000`:
+/// `std::fs::read` for the scene file again reads `/dev/zero` until it fails with "out of
+/// memory"; `File::open` without a bound in `mesh::load_obj` aborts the test process
+/// ("memory allocation of 4294967296 bytes failed"); `std::fs::read` in
+/// `textures::read_exr` blocks on the FIFO until `timeout` kills the test.
+#[test]
+fn inputs_that_are_not_regular_files_are_refused_by_name() {
+    let dir = temp_dir("not_regular");
+    let fifo = dir.join("pipe.exr");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs");
+    assert!(made.success());
+    std::os::unix::fs::symlink("/dev/zero", dir.join("zero.png")).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", dir.join("zero.ply")).unwrap();
+    std::fs::create_dir(dir.join("folder.exr")).unwrap();
+    // The scene file itself.
+    for (path, what) in [(Path::new("/dev/zero"), "not a regular file"), (dir.as_path(), "is a directory"), (fifo.as_path(), "not a regular file")] {
+        let e = load_scene(path, &LoadOptions::default()).unwrap_err();
+        assert!(e.to_string().starts_with(&format!("{}: cannot read the scene file: ", path.display())), "{e}");
+        assert!(e.message.contains(what), "{e}");
+    }
+    // Files the scene names: each error is at the `filename` property and names the file.
+    let tex = |file: &str| {
+        format!(
+            r#"<shape type="rectangle"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="{file}"/></texture></bsdf></shape>"#
+        )
+    };
+    let cases = [
+        (r#"<shape type="obj"><string name="filename" value="/dev/zero"/></shape>"#.to_string(), "/dev/zero", "not a regular file"),
+        (r#"<shape type="ply"><string name="filename" value="zero.ply"/></shape>"#.to_string(), "zero.ply", "not a regular file"),
+        (tex("zero.png"), "zero.png", "not a regular file"),
+        (tex("pipe.exr"), "pipe.exr", "not a regular file"),
+        (tex("folder.exr"), "folder.exr", "is a directory"),
+        (r#"<emitter type="envmap"><string name="filename" value="pipe.exr"/></emitter>"#.to_string(), "pipe.exr", "not a regular file"),
+        (r#"<emitter type="envmap"><string name="filename" value="folder.exr"/></emitter>"#.to_string(), "folder.exr", "is a directory"),
+    ];
+    for (content, file, what) in cases {
+        let path = dir.join("scene.xml");
+        std::fs::write(&path, format!("<scene version=\"3.0.0\">\n{SENSOR}\n{content}\n</scene>\n")).unwrap();
+        let e = load_scene(&path, &LoadOptions::default()).unwrap_err();
+        check(&e, 4, col(&content, 4, "<string"), &[file, what, "only regular files are read"]);
+    }
+}
+
+/// Issue 51: a `-D` value that does not fit where the scene uses it was reported at the
+/// file's line, which shows `$spp`, not the `abc` at fault. The error now names the
+/// `-D` that supplied the value, for parse errors (at the attribute) and for range errors
+/// found later (at the property). Injected bug checked: without `note_override` in
+/// `Parser::attr` the `-D spp=abc` needle is missing.
+#[test]
+fn a_bad_dash_d_value_names_the_override() {
+    let dir = temp_dir("dash_d");
+    let path = dir.join("scene.xml");
+    let text = "<scene version=\"3.0.0\">\n<default name=\"spp\" value=\"4\"/>\n<default name=\"r\" value=\"1\"/>\n\
+        <sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/>\n  <sampler type=\"independent\"><integer name=\"sample_count\" value=\"$spp\"/></sampler></sensor>\n\
+        <shape type=\"sphere\"><float name=\"radius\" value=\"${r}\"/></shape></scene>\n";
+    std::fs::write(&path, text).unwrap();
+    let with = |k: &str, v: &str| LoadOptions { defaults: vec![(k.into(), v.into())], ..Default::default() };
+    let e = load_scene(&path, &with("spp", "abc")).unwrap_err();
+    check(&e, 5, 67, &["malformed integer \"abc\"", "`-D spp=abc`"]);
+    let e = load_scene(&path, &with("spp", "0")).unwrap_err();
+    check(&e, 5, 31, &["`sample_count` must be in 1..=", "got 0", "`-D spp=0`"]);
+    let e = load_scene(&path, &with("r", "-2")).unwrap_err();
+    check(&e, 6, 22, &["sphere `radius` must be positive", "`-D r=-2`"]);
+    // The file's own bad value names no override.
+    let e = load_scene(&path, &with("r", "1")).map(|_| ()).err();
+    assert!(e.is_none(), "{e:?}");
+    std::fs::write(&path, text.replace("value=\"4\"", "value=\"four\"")).unwrap();
+    let e = load_scene(&path, &LoadOptions::default()).unwrap_err();
+    check(&e, 5, 67, &["malformed integer \"four\""]);
+    assert!(!e.message.contains("-D"), "{e}");
+}
+
+/// Issue 51: `near_clip` and `far_clip`, in nearly every exported scene, were
+/// "unreferenced property" errors. They are checked as Mitsuba checks them, accepted
+/// with a warning (ember's camera does not clip), and `far_clip` is `thinlens`'s default
+/// focus distance. Injected bug checked: with `clip_planes` not called from `sensor`,
+/// the first load fails with "unreferenced property `near_clip`" (as before the fix).
+#[test]
+fn near_and_far_clip_are_accepted_and_checked() {
+    let dir = temp_dir("clip");
+    let path = dir.join("scene.xml");
+    let write = |kind: &str, props: &str| {
+        std::fs::write(
+            &path,
+            format!(
+                "<scene version=\"3.0.0\">\n<sensor type=\"{kind}\"><float name=\"fov\" value=\"45\"/>\n  {props}</sensor>\n<shape type=\"cube\"/></scene>\n"
+            ),
+        )
+        .unwrap()
+    };
+    write("perspective", r#"<float name="near_clip" value="0.1"/><float name="far_clip" value="100"/>"#);
+    let loaded = load_scene(&path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let w = loaded.warnings.join("\n");
+    assert!(w.contains("line 2: the sensor's near_clip 0.1 and far_clip 100 are accepted but not modelled"), "{w}");
+    write("thinlens", r#"<float name="far_clip" value="7"/><float name="aperture_radius" value="0.1"/>"#);
+    let loaded = load_scene(&path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let (scene, _) = super::tests::build(loaded);
+    let lens = format!("{:?}", scene.camera.lens());
+    assert!(lens.contains("focus_distance: 7.0"), "{lens}");
+    for (props, at, needle) in [
+        (r#"<float name="near_clip" value="0"/>"#, "<float", "`near_clip` must be positive, got 0"),
+        (
+            r#"<float name="near_clip" value="1"/><float name="far_clip" value="1"/>"#,
+            "<float name=\"far",
+            "`near_clip` (1) must be smaller than `far_clip` (1)",
+        ),
+        (r#"<float name="near_clip" value="2e4"/>"#, "<float", "`near_clip` (20000) must be smaller than `far_clip` (10000)"),
+    ] {
+        write("perspective", props);
+        let e = load_scene(&path, &LoadOptions::default()).unwrap_err();
+        let c = format!("  {props}").find(at).unwrap() as u32 + 1;
+        assert_eq!((e.line, e.column), (Some(3), Some(c)), "{e}");
+        assert!(e.message.contains(needle), "{e}");
+    }
+}
+
+/// Issue 51: a triangle with 1e38 coordinates, or a scene 3e7 from its camera, was
+/// reported as "zero area" triangles. Each cause is named now: coordinates too large
+/// for f32 (the area overflows), precision lost far from the camera (with the distance
+/// and the f32 spacing there), or a truly flat triangle. Injected bug checked: with
+/// `Dropped::add` counting every drop as degenerate, the first assertion fails on the
+/// old messages ("1 of 2 triangles have zero area and were dropped").
+#[test]
+fn dropped_triangles_say_why() {
+    let dir = temp_dir("dropped");
+    std::fs::write(dir.join("huge.obj"), "v 0 0 0\nv 1e38 0 0\nv 0 1e38 0\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 4 5 6\n").unwrap();
+    let body = r#"<shape type="obj" id="huge"><string name="filename" value="huge.obj"/></shape>
+<shape type="rectangle"><transform name="to_world"><scale value="1e38"/></transform></shape><emitter type="constant"/>"#;
+    let loaded = super::tests::load_body(&dir, body, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let w = loaded.warnings.join("\n");
+    assert!(w.contains("line 4: <shape type=\"obj\" id=\"huge\">: 1 of 2 triangles have coordinates too large for single precision (up to 1.000e38"), "{w}");
+    assert!(w.contains("line 5: <shape type=\"rectangle\">: 2 of 2 triangles have coordinates too large"), "{w}");
+    assert!(!w.contains("have zero area"), "{w}");
+    // The Cornell box seen from 3e7 away: the camera is moved, the scene is not.
+    let path = suite_dir().join("cornell-box/scene.xml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let far = text.replacen("</transform>", "<translate x=\"3e7\"/></transform>", 1);
+    assert!(far.contains("3e7"));
+    let loaded = crate::mitsuba::load_scene_from_str(&far, &path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let w = loaded.warnings.join("\n");
+    assert!(w.contains("precision is lost far from the camera") && w.contains("from the camera, where coordinates are 2.000e0 apart"), "{w}");
+    assert!(!w.contains("have zero area"), "{w}");
+    // A flat triangle is still "zero area".
+    std::fs::write(dir.join("flat.obj"), "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n").unwrap();
+    let body = r#"<shape type="obj"><string name="filename" value="flat.obj"/><transform name="to_world"><rotate x="1" angle="33"/></transform></shape><emitter type="constant"/>"#;
+    let loaded = super::tests::load_body(&dir, body, &LoadOptions::default()).unwrap();
+    assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
+    assert!(loaded.warnings[0].contains("1 of 1 triangles have zero area"), "{:?}", loaded.warnings);
+}

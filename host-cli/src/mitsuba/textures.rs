@@ -8,6 +8,8 @@ use ember_core::spectrum::Rgb;
 use ember_core::texture::{Bitmap, Texture, UvTransform, WrapMode, srgb_decode, srgb_to_linear};
 use glam::DMat4;
 
+use crate::image_io::{ImageErrorKind, RgbImage};
+
 use super::build::Ctx;
 use super::props::Props;
 use super::{Fail, Res};
@@ -91,7 +93,7 @@ fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Rgb>), String> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("exr") => {
-            let image = crate::image_io::read_exr(path).map_err(|e| e.to_string())?;
+            let image = read_exr(path)?;
             Ok((image.width, image.height, image.pixels.iter().map(|&[r, g, b]| Rgb::new(r, g, b)).collect()))
         }
         Some("png") => read_png(path, raw),
@@ -99,9 +101,20 @@ fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Rgb>), String> {
     }
 }
 
+/// An OpenEXR file's first RGB layer, read through [`super::read_input`] (a regular file
+/// only, of bounded size) and decoded from memory.
+pub(crate) fn read_exr(path: &Path) -> Result<RgbImage, String> {
+    let bytes = super::read_input(path).map_err(|e| format!("cannot open: {e}"))?;
+    // The decoder names the file `<memory>`; the caller's message names it.
+    crate::image_io::read_exr_from_bytes(&bytes).map_err(|e| match e.kind {
+        ImageErrorKind::Exr(e) => format!("not a readable OpenEXR file: {e}"),
+        _ => e.to_string(),
+    })
+}
+
 fn read_png(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Rgb>), String> {
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot open: {e}"))?;
-    let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
+    let bytes = super::read_input(path).map_err(|e| format!("cannot open: {e}"))?;
+    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     // Palette and sub-byte grey become 8-bit; 16-bit samples stay 16-bit.
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(|e| format!("not a readable PNG: {e}"))?;

@@ -10,6 +10,7 @@ use std::collections::HashMap;
 use glam::DMat4;
 use roxmltree::{Document, Node, ParsingOptions};
 
+use super::positions::Positions;
 use super::transform;
 use super::{Fail, Loc, Res};
 
@@ -142,21 +143,23 @@ pub(crate) struct Parsed {
     pub warnings: Vec<String>,
 }
 
-/// Parse a document; `overrides` replace `<default>` values (`-D name=value`).
-pub(crate) fn parse(text: &str, overrides: &[(String, String)]) -> Res<Parsed> {
+/// Parse the document of `positions`; `overrides` replace `<default>` values (`-D
+/// name=value`).
+pub(crate) fn parse(positions: &Positions, overrides: &[(String, String)]) -> Res<Parsed> {
+    let text = positions.text();
     let opts = ParsingOptions { allow_dtd: false, ..ParsingOptions::default() };
     let doc = Document::parse_with_options(text, opts).map_err(|e| match e {
         // roxmltree places these at 1:1; the problem is where the text stops.
         roxmltree::Error::UnexpectedEndOfStream | roxmltree::Error::UnclosedRootNode => {
-            Fail::at(end_of(text), format!("malformed XML: {e}: the text ends here with elements left open (is the file truncated?)"))
+            Fail::at(positions.end(), format!("malformed XML: {e}: the text ends here with elements left open (is the file truncated?)"))
         }
         _ => {
             let p = e.pos();
-            Fail::at(Loc { line: p.row, col: p.col }, format!("malformed XML: {e}"))
+            Fail::at(Loc::At { line: p.row, col: p.col }, format!("malformed XML: {e}"))
         }
     })?;
     let mut p = Parser {
-        doc: &doc,
+        positions,
         params: HashMap::new(),
         overrides: overrides.iter().map(|(k, v)| (k.clone(), (v.clone(), false))).collect(),
         ids: HashMap::new(),
@@ -171,16 +174,9 @@ pub(crate) fn parse(text: &str, overrides: &[(String, String)]) -> Res<Parsed> {
     Ok(p.out)
 }
 
-/// The position just past the last character of `text` (1-based; columns count
-/// characters, as roxmltree's do).
-fn end_of(text: &str) -> Loc {
-    let last = text.rsplit('\n').next().unwrap_or("");
-    let line = text.matches('\n').count() + 1;
-    Loc { line: line.min(u32::MAX as usize) as u32, col: (last.chars().count() + 1).min(u32::MAX as usize) as u32 }
-}
-
-struct Parser<'a, 'input> {
-    doc: &'a Document<'input>,
+struct Parser<'a, 't> {
+    /// The text's places, resolved into lines only for messages.
+    positions: &'a Positions<'t>,
     /// `<default>` values.
     params: HashMap<String, String>,
     /// Caller overrides and whether a substitution used them.
@@ -190,18 +186,17 @@ struct Parser<'a, 'input> {
     out: Parsed,
 }
 
-impl<'a, 'input> Parser<'a, 'input> {
+impl Parser<'_, '_> {
+    /// Where `node` starts. Only an offset: [`Positions`] turns it into a line and column
+    /// if a message shows it.
     fn loc(&self, node: Node) -> Loc {
-        let p = self.doc.text_pos_at(node.range().start);
-        Loc { line: p.row, col: p.col }
+        Loc::Offset(node.range().start)
     }
 
+    /// Where attribute `name`'s value starts (the element, when it has none).
     fn attr_loc(&self, node: Node, name: &str) -> Loc {
         match node.attribute_node(name) {
-            Some(a) => {
-                let p = self.doc.text_pos_at(a.range_value().start);
-                Loc { line: p.row, col: p.col }
-            }
+            Some(a) => Loc::Offset(a.range_value().start),
             None => self.loc(node),
         }
     }
@@ -210,10 +205,9 @@ impl<'a, 'input> Parser<'a, 'input> {
     fn check_attrs(&self, node: Node, allowed: &[&str]) -> Res<()> {
         for a in node.attributes() {
             if a.namespace().is_some() || !allowed.contains(&a.name()) {
-                let p = self.doc.text_pos_at(a.range().start);
                 let what = if allowed.is_empty() { "no attributes".to_string() } else { allowed.join(", ") };
                 return Err(Fail::at(
-                    Loc { line: p.row, col: p.col },
+                    Loc::Offset(a.range().start),
                     format!("unexpected attribute `{}` on <{}> (allowed: {what})", a.name(), node.tag_name().name()),
                 ));
             }
@@ -221,12 +215,19 @@ impl<'a, 'input> Parser<'a, 'input> {
         Ok(())
     }
 
-    /// An attribute's value after `$name` substitution.
+    /// An attribute's value after `$name` substitution. A value that takes a `-D`
+    /// override is noted at the attribute and its element, for the messages about it.
     fn attr(&mut self, node: Node, name: &str) -> Res<Option<String>> {
         match node.attribute(name) {
             Some(raw) => {
                 let loc = self.attr_loc(node, name);
-                self.substitute(raw, loc).map(Some)
+                let mut given = Vec::new();
+                let value = self.substitute(raw, loc, &mut given)?;
+                for g in &given {
+                    self.positions.note_override(loc, g);
+                    self.positions.note_override(self.loc(node), g);
+                }
+                Ok(Some(value))
             }
             None => Ok(None),
         }
@@ -238,8 +239,9 @@ impl<'a, 'input> Parser<'a, 'input> {
     }
 
     /// Replace `$name` and `${name}` by the parameter's value (overrides first, then
-    /// `<default>`s). A `$` not followed by a name is kept.
-    fn substitute(&mut self, raw: &str, loc: Loc) -> Res<String> {
+    /// `<default>`s). A `$` not followed by a name is kept. The overrides used are
+    /// pushed to `given` as `name=value`.
+    fn substitute(&mut self, raw: &str, loc: Loc, given: &mut Vec<String>) -> Res<String> {
         if !raw.contains('$') {
             return Ok(raw.to_string());
         }
@@ -264,6 +266,7 @@ impl<'a, 'input> Parser<'a, 'input> {
             }
             let value = if let Some((v, used)) = self.overrides.get_mut(name) {
                 *used = true;
+                given.push(format!("{name}={v}"));
                 v.clone()
             } else if let Some(v) = self.params.get(name) {
                 v.clone()
@@ -312,7 +315,7 @@ impl<'a, 'input> Parser<'a, 'input> {
     }
 
     /// The element in `node`, `None` for comments and whitespace; other text is an error.
-    fn element<'n>(&self, node: Node<'n, 'input>) -> Res<Option<Node<'n, 'input>>> {
+    fn element<'n, 'input>(&self, node: Node<'n, 'input>) -> Res<Option<Node<'n, 'input>>> {
         if node.is_element() {
             if node.tag_name().namespace().is_some() {
                 return Err(Fail::at(self.loc(node), format!("namespaced element <{}> is not supported", node.tag_name().name())));
@@ -373,7 +376,10 @@ impl<'a, 'input> Parser<'a, 'input> {
             } else if is_value_tag(name) {
                 let prop = self.property(elem)?;
                 if let Some(prev) = obj.props.iter().find(|p| p.name == prop.name) {
-                    return Err(Fail::at(prop.loc, format!("property `{}` is given twice in {} (first at line {})", prop.name, obj.label(), prev.loc.line)));
+                    return Err(Fail::at(
+                        prop.loc,
+                        format!("property `{}` is given twice in {} (first at line {})", prop.name, obj.label(), self.positions.line(prev.loc)),
+                    ));
                 }
                 obj.props.push(prop);
             } else {
@@ -384,7 +390,7 @@ impl<'a, 'input> Parser<'a, 'input> {
         self.out.objs.push(obj);
         if let Some(id) = id {
             if let Some((_, prev)) = self.ids.get(&id) {
-                return Err(Fail::at(self.attr_loc(node, "id"), format!("id \"{id}\" is already used at line {}", prev.line)));
+                return Err(Fail::at(self.attr_loc(node, "id"), format!("id \"{id}\" is already used at line {}", self.positions.line(*prev))));
             }
             self.ids.insert(id, (idx, loc));
         }
