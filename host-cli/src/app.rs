@@ -376,7 +376,34 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     };
     let (mut exr, png) = args.output_paths().map_err(AppError::Output)?;
     if let Some((range, task)) = split {
+        let named = ["{task}", "{passes}"].iter().any(|p| exr.to_string_lossy().contains(p));
+        if args.split.task_from_env && !named {
+            // Every task of an array wrote to out.exr, each replacing the last.
+            return Err(AppError::Output(format!(
+                "--task-from-env: the output '{}' names neither {{task}} nor {{passes}}, so every task of the array would write the same file (e.g. -o 'parts/p-{{task}}.exr')",
+                exr.display()
+            )));
+        }
         exr = distributed::expand_output(&exr, range, task).map_err(AppError::Output)?;
+        // A part is only ever replaced by the same passes (a re-run of its own task).
+        if exr.exists() {
+            match distributed::read_partial_header(&exr) {
+                Ok(h) if h.passes == range => {}
+                Ok(h) => {
+                    return Err(AppError::Output(format!(
+                        "'{}' holds passes {} of another task; this render's passes are {range}: give each task its own output (-o 'p-{{task}}.exr')",
+                        exr.display(),
+                        h.passes
+                    )));
+                }
+                Err(_) => {
+                    return Err(AppError::Output(format!(
+                        "'{}' exists and is not a part of passes {range}: a split render writes only new parts or its own",
+                        exr.display()
+                    )));
+                }
+            }
+        }
     } else if let Some(p) = ["{task}", "{passes}"].into_iter().find(|p| exr.to_string_lossy().contains(p)) {
         // A whole render wrote a file literally named `p-{task}.exr`.
         return Err(AppError::Output(format!(

@@ -85,6 +85,14 @@ fn tasks_from_slurm_and_kubernetes_merge_into_the_whole_render_byte_for_byte() {
     std::fs::copy(&parts[1], &before).unwrap();
     ok(&render(&["--task-from-env", "-o", s(&pattern)], &slurm("6")));
     assert!(same_bytes(&parts[1], &before));
+    // Parts never replace each other (issue 50): an array's tasks need {task} or
+    // {passes} in -o, and another range is refused over an existing part. Injected bug
+    // checked: without the header check in app::render the second render replaces part-1.
+    let e = fails(&render(&["--task-from-env", "-o", s(&d.join("same.exr"))], &slurm("6")));
+    assert!(e.contains("names neither {task} nor {passes}"), "{e}");
+    let e = fails(&render(&["--passes", "0..1", "-o", s(&parts[1])], &[]));
+    assert!(e.contains("part-1.exr' holds passes") && e.contains("of another task"), "{e}");
+    assert!(same_bytes(&parts[1], &before));
 
     // Without --task-from-env the scheduler's variables are ignored: a whole render.
     let inside = d.join("inside-array.exr");
