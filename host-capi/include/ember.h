@@ -27,9 +27,17 @@ typedef enum EmberStatus {
   EMBER_STATUS_PANIC = 6,
   // `ember_phase_begin`: no phase is pending (the pass is complete).
   EMBER_STATUS_DONE = 7,
+  // `ember_renderer_create`: the render would need more memory than is available (or
+  // than the `memory-limit` option allows). Nothing was allocated; the message says
+  // what to lower.
+  EMBER_STATUS_OUT_OF_MEMORY = 8,
+  // A ray callback returned a hit that breaks its contract (the message names the
+  // value). The rest of the call treated every ray as a miss, so the film's passes
+  // are not to be trusted: destroy the renderer.
+  EMBER_STATUS_CALLBACK_ERROR = 9,
 } EmberStatus;
 
-// Material kinds of [`EmberMaterial`].
+// Material kinds: the values of [`EmberMaterial`]'s `kind`.
 typedef enum EmberMaterialKind {
   // Lambertian; `color` is the albedo.
   EMBER_MATERIAL_KIND_DIFFUSE = 0,
@@ -41,7 +49,9 @@ typedef enum EmberMaterialKind {
 
 // A material.
 typedef struct EmberMaterial {
-  enum EmberMaterialKind kind;
+  // An `EmberMaterialKind` value; any other is refused (`EMBER_STATUS_INVALID_ARGUMENT`).
+  // An integer rather than the enum type: a C enum may hold any `int`.
+  uint32_t kind;
   float color[3];
   float ior;
 } EmberMaterial;
@@ -95,7 +105,9 @@ typedef struct EmberRenderSettings {
   uint64_t seed;
   // Longest path in segments; -1 unbounded (Russian roulette ends paths).
   int32_t max_depth;
-  // Threads for `ember_render_passes` (0: every core).
+  // Threads for `ember_render_passes` (0: every core). More than 4 × the cores (or
+  // than 1024) are capped there, as `ember render --threads` caps them: more only add
+  // start-up time.
   uint32_t threads;
   // Light paths per pass (LVCBPT, SPCBPT, PPM, BPM, VCM).
   uint32_t light_paths;
@@ -105,7 +117,9 @@ typedef struct EmberRenderSettings {
   float radius_footprints;
   // Null, or further options of the estimator's configuration: space-separated
   // `name=value` with the names of `ember render`'s options, e.g.
-  // "subspaces=64 reuse=0" (SPCBPT) or "kernel=disk beta=1" (segments, filters).
+  // "subspaces=64 reuse=0" (SPCBPT) or "kernel=disk beta=1" (segments, filters); and
+  // "memory-limit=2G" (suffixes K, M, G, T: binary), the bytes the renderer may claim,
+  // checked instead of the memory available (`EMBER_STATUS_OUT_OF_MEMORY`).
   const char *options;
 } EmberRenderSettings;
 
@@ -118,7 +132,10 @@ typedef struct EmberRay {
 
 // The closest hit an engine's tracer found: the distance, the triangle's index in the
 // scene description, and the barycentrics of the hit point
-// `(1 − b1 − b2)·p0 + b1·p1 + b2·p2`.
+// `(1 − b1 − b2)·p0 + b1·p1 + b2·p2`. Checked: t in (0, t_max), the index below the
+// triangle count, and the point in the triangle, `b1 ≥ 0`, `b2 ≥ 0`, `b1 + b2 ≤ 1`, each
+// with a tolerance of 1e-4 for the tracer's rounding; any other hit (NaN included) fails
+// the call with `EMBER_STATUS_CALLBACK_ERROR`.
 typedef struct EmberHit {
   float t;
   uint32_t primitive;
@@ -129,6 +146,8 @@ typedef struct EmberHit {
 // The engine's ray tracer. `intersect` fills `hit` and returns true for the closest hit
 // with t in (0, t_max), false for none; `occluded` returns true if anything is hit in
 // (0, t_max). Both are called from the render threads, concurrently unless `threads` is 1.
+// A callback written in Rust may panic (the call returns `EMBER_STATUS_PANIC`); a C++
+// exception must not leave a callback.
 typedef struct EmberRayCallbacks {
   void *user_data;
   bool (*intersect)(void *user_data, const struct EmberRay *ray, struct EmberHit *hit);

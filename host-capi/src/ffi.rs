@@ -3,7 +3,16 @@
 //! Every function returns an [`EmberStatus`]; on failure, [`ember_last_error`] gives the
 //! message (per thread, valid until the thread's next ember call). Nothing panics across
 //! the boundary: each call runs under `catch_unwind`, and a caught panic is
-//! `EMBER_STATUS_PANIC` with the panic's message.
+//! `EMBER_STATUS_PANIC` with the panic's message, reported there once and not printed:
+//! the first call installs a panic hook that stays silent for panics inside ember's
+//! calls (on the calling thread while it is in one, or on ember's render threads) and
+//! hands every other panic to the hook it replaced, so the host's own panics are
+//! reported as before.
+//!
+//! Every value that crosses from C is checked on entry: counts, indices, sizes, floats,
+//! and enums, which cross as integers (a C enum may hold any `int`; a Rust enum read
+//! from a value it does not name is undefined behaviour) and are converted here. The hits
+//! the ray callbacks return are checked as they come ([`CallbackTracer`]).
 //!
 //! The caller's undefined behaviour, which no check can catch: a pointer that is not
 //! null but does not point to as many valid elements as its count says, a `user_data`
@@ -11,10 +20,10 @@
 //! not safe to call from several threads at once when `threads` is not 1.
 #![allow(unsafe_code)]
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::sync::{Arc, LazyLock, Mutex, MutexGuard, RwLock, RwLockReadGuard, RwLockWriteGuard};
+use std::sync::{Arc, LazyLock, Mutex, MutexGuard, Once, OnceLock, RwLock, RwLockReadGuard, RwLockWriteGuard};
 use std::time::Instant;
 
 use ember_cli::accel::Accel;
@@ -22,14 +31,14 @@ use ember_cli::driver::{self, DriverConfig, Limits};
 use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
 use ember_core::render::{ChunkOutput, Context, EstimatorKind, Film, Phase, Phased, Renderer};
 
-use crate::{EmberStatus, Error, MaterialDesc, Registry, RendererState, Result, SceneData, SceneDesc, Settings};
+use crate::{Config, EmberStatus, Error, MaterialDesc, Registry, RendererState, Result, SceneData, SceneDesc, Settings};
 
 /// A scene handle (0 is never valid).
 pub type EmberScene = u64;
 /// A renderer handle (0 is never valid).
 pub type EmberRenderer = u64;
 
-/// Material kinds of [`EmberMaterial`].
+/// Material kinds: the values of [`EmberMaterial`]'s `kind`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EmberMaterialKind {
@@ -41,11 +50,26 @@ pub enum EmberMaterialKind {
     Glass = 2,
 }
 
+impl EmberMaterialKind {
+    /// Every kind, in value order.
+    const ALL: [Self; 3] = [Self::Diffuse, Self::Mirror, Self::Glass];
+
+    /// The kind whose value is `raw`, or an error naming `field` and the valid range.
+    pub fn from_raw(raw: u32, field: &str) -> Result<Self> {
+        Self::ALL.into_iter().find(|k| *k as u32 == raw).ok_or_else(|| {
+            let last = Self::ALL.len() - 1;
+            Error::new(EmberStatus::InvalidArgument, format!("{field} {raw} is not an EmberMaterialKind (0..={last}: diffuse, mirror, glass)"))
+        })
+    }
+}
+
 /// A material.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct EmberMaterial {
-    pub kind: EmberMaterialKind,
+    /// An `EmberMaterialKind` value; any other is refused (`EMBER_STATUS_INVALID_ARGUMENT`).
+    /// An integer rather than the enum type: a C enum may hold any `int`.
+    pub kind: u32,
     pub color: [f32; 3],
     pub ior: f32,
 }
@@ -104,7 +128,9 @@ pub struct EmberRenderSettings {
     pub seed: u64,
     /// Longest path in segments; -1 unbounded (Russian roulette ends paths).
     pub max_depth: i32,
-    /// Threads for `ember_render_passes` (0: every core).
+    /// Threads for `ember_render_passes` (0: every core). More than 4 × the cores (or
+    /// than 1024) are capped there, as `ember render --threads` caps them: more only add
+    /// start-up time.
     pub threads: u32,
     /// Light paths per pass (LVCBPT, SPCBPT, PPM, BPM, VCM).
     pub light_paths: u32,
@@ -114,7 +140,9 @@ pub struct EmberRenderSettings {
     pub radius_footprints: f32,
     /// Null, or further options of the estimator's configuration: space-separated
     /// `name=value` with the names of `ember render`'s options, e.g.
-    /// "subspaces=64 reuse=0" (SPCBPT) or "kernel=disk beta=1" (segments, filters).
+    /// "subspaces=64 reuse=0" (SPCBPT) or "kernel=disk beta=1" (segments, filters); and
+    /// "memory-limit=2G" (suffixes K, M, G, T: binary), the bytes the renderer may claim,
+    /// checked instead of the memory available (`EMBER_STATUS_OUT_OF_MEMORY`).
     pub options: *const c_char,
 }
 
@@ -129,7 +157,10 @@ pub struct EmberRay {
 
 /// The closest hit an engine's tracer found: the distance, the triangle's index in the
 /// scene description, and the barycentrics of the hit point
-/// `(1 − b1 − b2)·p0 + b1·p1 + b2·p2`.
+/// `(1 − b1 − b2)·p0 + b1·p1 + b2·p2`. Checked: t in (0, t_max), the index below the
+/// triangle count, and the point in the triangle, `b1 ≥ 0`, `b2 ≥ 0`, `b1 + b2 ≤ 1`, each
+/// with a tolerance of 1e-4 for the tracer's rounding; any other hit (NaN included) fails
+/// the call with `EMBER_STATUS_CALLBACK_ERROR`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct EmberHit {
@@ -142,13 +173,23 @@ pub struct EmberHit {
 /// The engine's ray tracer. `intersect` fills `hit` and returns true for the closest hit
 /// with t in (0, t_max), false for none; `occluded` returns true if anything is hit in
 /// (0, t_max). Both are called from the render threads, concurrently unless `threads` is 1.
+/// A callback written in Rust may panic (the call returns `EMBER_STATUS_PANIC`); a C++
+/// exception must not leave a callback.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct EmberRayCallbacks {
     pub user_data: *mut c_void,
-    pub intersect: Option<extern "C" fn(user_data: *mut c_void, ray: *const EmberRay, hit: *mut EmberHit) -> bool>,
-    pub occluded: Option<extern "C" fn(user_data: *mut c_void, ray: *const EmberRay) -> bool>,
+    // "C-unwind", so a Rust callback's panic reaches ember's `catch_unwind` instead of
+    // aborting; for C the ABI is "C"'s. (Spelled out, not as the aliases below: cbindgen
+    // would not see through `Option<alias>`.)
+    pub intersect: Option<extern "C-unwind" fn(user_data: *mut c_void, ray: *const EmberRay, hit: *mut EmberHit) -> bool>,
+    pub occluded: Option<extern "C-unwind" fn(user_data: *mut c_void, ray: *const EmberRay) -> bool>,
 }
+
+/// `EmberRayCallbacks::intersect`.
+type IntersectFn = extern "C-unwind" fn(*mut c_void, *const EmberRay, *mut EmberHit) -> bool;
+/// `EmberRayCallbacks::occluded`.
+type OccludedFn = extern "C-unwind" fn(*mut c_void, *const EmberRay) -> bool;
 
 /// The phase `ember_phase_begin` opened.
 #[repr(C)]
@@ -164,8 +205,8 @@ pub struct EmberPhaseInfo {
 #[derive(Clone, Copy, Debug)]
 pub struct Callbacks {
     user_data: *mut c_void,
-    intersect: extern "C" fn(*mut c_void, *const EmberRay, *mut EmberHit) -> bool,
-    occluded: extern "C" fn(*mut c_void, *const EmberRay) -> bool,
+    intersect: IntersectFn,
+    occluded: OccludedFn,
 }
 
 // SAFETY: the embedder promises (ember.h, docs/embedding.md) that `user_data` and the
@@ -178,32 +219,57 @@ fn c_ray(ray: &Ray) -> EmberRay {
     EmberRay { origin: ray.origin.to_array(), dir: ray.dir.to_array(), t_max: ray.t_max }
 }
 
+/// How far a barycentric coordinate may fall outside [0, 1] (and their sum past 1) for
+/// the tracer's rounding: a hit point off its triangle by at most this fraction of an edge.
+const BARYCENTRIC_TOLERANCE: f32 = 1e-4;
+
+/// The first hit of a call that broke the callback's contract, in words.
+type Fault = OnceLock<String>;
+
 /// The engine's tracer as the core's `RayQuery`: the core builds the surface hit from the
-/// triangle the callback names (as the built-in BVH does).
+/// triangle the callback names (as the built-in BVH does). A hit that breaks the contract
+/// is recorded in `fault` (the first one) and from then on every ray of the call is a
+/// miss without asking the callbacks; the call then fails with `CallbackError`. (The
+/// core's `RayQuery` has no error path: a miss is the answer that shades nothing.)
 struct CallbackTracer<'a> {
     cb: &'a Callbacks,
     scene: &'a SceneData,
+    fault: &'a Fault,
+}
+
+impl CallbackTracer<'_> {
+    /// The triangle `hit` names if the hit keeps the contract for `ray` (`Ok(None)`: a
+    /// triangle dropped as degenerate, which has no area to be hit); else what is wrong.
+    fn check(&self, ray: &Ray, hit: &EmberHit) -> std::result::Result<Option<u32>, String> {
+        let count = self.scene.triangle_index.len();
+        let index = self.scene.triangle_index.get(hit.primitive as usize).ok_or_else(|| format!("primitive {} of {count} triangles", hit.primitive))?;
+        if !(hit.t > 0.0 && hit.t < ray.t_max) {
+            return Err(format!("t = {} outside (0, t_max = {})", hit.t, ray.t_max));
+        }
+        let (b1, b2, e) = (hit.b1, hit.b2, BARYCENTRIC_TOLERANCE);
+        if !(b1 >= -e && b2 >= -e && b1 + b2 <= 1.0 + e) {
+            return Err(format!("barycentrics ({b1}, {b2}) outside the triangle (b1, b2 >= 0 and b1 + b2 <= 1, to within {e})"));
+        }
+        Ok(*index)
+    }
 }
 
 impl RayQuery for CallbackTracer<'_> {
     fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
+        if self.fault.get().is_some() {
+            return None;
+        }
         let mut hit = EmberHit::default();
         if !(self.cb.intersect)(self.cb.user_data, &c_ray(ray), &mut hit) {
             return None;
         }
-        // A hit outside (0, t_max), on a triangle that does not exist, or with
-        // non-finite barycentrics breaks the callback's contract: a panic, caught at the
-        // boundary and returned as EMBER_STATUS_PANIC naming it.
-        let index = self
-            .scene
-            .triangle_index
-            .get(hit.primitive as usize)
-            .unwrap_or_else(|| panic!("the intersect callback returned primitive {} of {} triangles", hit.primitive, self.scene.triangle_index.len()));
-        if !(hit.t > 0.0 && hit.t < ray.t_max && hit.b1.is_finite() && hit.b2.is_finite()) {
-            panic!("the intersect callback returned t = {} (t_max {}) and barycentrics ({}, {})", hit.t, ray.t_max, hit.b1, hit.b2);
-        }
-        // A degenerate triangle was dropped from the scene: it has no area to be hit.
-        let tri = &self.scene.geometry.triangles[(*index)? as usize];
+        let tri = match self.check(ray, &hit) {
+            Ok(index) => &self.scene.geometry.triangles[index? as usize],
+            Err(what) => {
+                self.fault.get_or_init(|| format!("the intersect callback returned {what}"));
+                return None;
+            }
+        };
         let ng = (tri.p[1] - tri.p[0]).cross(tri.p[2] - tri.p[0]).normalize();
         let b0 = 1.0 - hit.b1 - hit.b2;
         let p = tri.p[0] * b0 + tri.p[1] * hit.b1 + tri.p[2] * hit.b2;
@@ -212,7 +278,7 @@ impl RayQuery for CallbackTracer<'_> {
         Some(SurfaceHit { t: hit.t, p, ng, ns, uv: tri.texcoords(hit.b1, hit.b2), material: tri.material, emitter: tri.emitter })
     }
     fn occluded(&self, ray: &Ray) -> bool {
-        (self.cb.occluded)(self.cb.user_data, &c_ray(ray))
+        self.fault.get().is_none() && (self.cb.occluded)(self.cb.user_data, &c_ray(ray))
     }
 }
 
@@ -237,10 +303,18 @@ impl RayQuery for Tracer<'_> {
     }
 }
 
-fn tracer<'a>(scene: &'a SceneData, callbacks: &'a Option<Callbacks>) -> Tracer<'a> {
+fn tracer<'a>(scene: &'a SceneData, callbacks: &'a Option<Callbacks>, fault: &'a Fault) -> Tracer<'a> {
     match callbacks {
-        Some(cb) => Tracer::Callbacks(CallbackTracer { cb, scene }),
+        Some(cb) => Tracer::Callbacks(CallbackTracer { cb, scene, fault }),
         None => Tracer::Bvh(&scene.accel),
+    }
+}
+
+/// The call's error if a callback broke its contract during it.
+fn fault_error(fault: Fault, then: &str) -> Result<()> {
+    match fault.into_inner() {
+        None => Ok(()),
+        Some(what) => Err(Error::new(EmberStatus::CallbackError, format!("{what}; {then}"))),
     }
 }
 
@@ -289,6 +363,29 @@ fn dead_renderer(handle: EmberRenderer) -> Error {
 
 thread_local! {
     static LAST_ERROR: RefCell<CString> = RefCell::new(CString::default());
+    /// Ember calls in progress on this thread (a callback may call ember again).
+    static IN_CALL: Cell<u32> = const { Cell::new(0) };
+}
+
+/// The names of the threads `ember_cli::driver::render` starts (its pool is named
+/// "ember-render"; the panic test in `tests/panics.rs` fails if the two part).
+const RENDER_THREAD_PREFIX: &str = "ember-render-";
+
+/// Install, once, the panic hook that keeps ember's panics off the host's stderr: silent
+/// for a panic inside an ember call (its thread is in one, or is one of ember's render
+/// threads: `guard` reports it once, as the status and message), the previous hook (the
+/// host's, or the default printer) for every other panic.
+fn install_panic_hook() {
+    static HOOK: Once = Once::new();
+    HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            let inside = IN_CALL.with(Cell::get) > 0 || std::thread::current().name().is_some_and(|n| n.starts_with(RENDER_THREAD_PREFIX));
+            if !inside {
+                previous(info);
+            }
+        }));
+    });
 }
 
 fn set_error(message: &str) {
@@ -299,7 +396,11 @@ fn set_error(message: &str) {
 /// Run `f` at the boundary: its status, the message kept for `ember_last_error`, and any
 /// panic caught and turned into `Panic`.
 fn guard(f: impl FnOnce() -> Result<EmberStatus>) -> EmberStatus {
-    match catch_unwind(AssertUnwindSafe(f)) {
+    install_panic_hook();
+    IN_CALL.with(|n| n.set(n.get() + 1));
+    let result = catch_unwind(AssertUnwindSafe(f));
+    IN_CALL.with(|n| n.set(n.get() - 1));
+    match result {
         Ok(Ok(status)) => {
             set_error("");
             status
@@ -411,12 +512,15 @@ pub unsafe extern "C" fn ember_scene_create(desc: *const EmberSceneDesc, scene: 
             triangle_emission: emission.chunks_exact(3).map(|e| [e[0], e[1], e[2]]).collect(),
             materials: mats
                 .iter()
-                .map(|m| match m.kind {
-                    EmberMaterialKind::Diffuse => MaterialDesc::Diffuse(m.color),
-                    EmberMaterialKind::Mirror => MaterialDesc::Mirror(m.color),
-                    EmberMaterialKind::Glass => MaterialDesc::Glass(m.ior),
+                .enumerate()
+                .map(|(i, m)| {
+                    Ok(match EmberMaterialKind::from_raw(m.kind, &format!("materials[{i}].kind"))? {
+                        EmberMaterialKind::Diffuse => MaterialDesc::Diffuse(m.color),
+                        EmberMaterialKind::Mirror => MaterialDesc::Mirror(m.color),
+                        EmberMaterialKind::Glass => MaterialDesc::Glass(m.ior),
+                    })
                 })
-                .collect(),
+                .collect::<Result<_>>()?,
             point_lights: lights.iter().map(|l| (l.position, l.intensity)).collect(),
             camera: d.camera,
         };
@@ -494,11 +598,10 @@ pub unsafe extern "C" fn ember_renderer_create(
             },
         };
         let out = unsafe { out(renderer, "renderer") }?;
-        let (config, params) = settings.config()?;
-        let r = Renderer::new(&data.scene, params, config).map_err(|e| Error::new(EmberStatus::InvalidConfig, e.to_string()))?;
-        let camera = &data.scene.camera;
-        let film = Film::for_camera(camera);
-        let threads = if settings.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { settings.threads as usize };
+        let Config { estimator, params, memory_limit, threads } = settings.config()?;
+        crate::check_memory(&data, &estimator, memory_limit)?;
+        let r = Renderer::new(&data.scene, params, estimator).map_err(|e| Error::new(EmberStatus::InvalidConfig, e.to_string()))?;
+        let film = Film::for_camera(&data.scene.camera);
         let state = RendererState { scene: data, renderer: r, film, threads, callbacks, ready: false };
         let shared = Arc::new(Shared { state: RwLock::new(state), phase: RwLock::new(None) });
         *out = renderers()?.insert(shared);
@@ -524,13 +627,15 @@ pub extern "C" fn ember_render_passes(renderer: EmberRenderer, passes: u32) -> E
         let mut guard = crate::write(&shared.state)?;
         let st = &mut *guard;
         let end = st.film.passes().checked_add(passes).ok_or_else(|| Error::arg(format!("{passes} more passes would pass 2^32 - 1")))?;
-        let q = tracer(&st.scene, &st.callbacks);
+        let fault = Fault::new();
+        let q = tracer(&st.scene, &st.callbacks, &fault);
         let ctx = Context { scene: &st.scene.scene, tracer: &q };
         let limits = Limits { spp: end, deadline: None, interrupt: None, first_pass: 0 };
         let config = DriverConfig { threads: st.threads, progress: false };
         driver::render(&mut st.renderer, &ctx, &mut st.film, limits, config, Instant::now())
             .map_err(|e| Error::new(EmberStatus::InvalidArgument, e.to_string()))?;
         st.ready = true;
+        fault_error(fault, "the rest of the call's rays were misses, and the film holds its passes: destroy the renderer")?;
         Ok(EmberStatus::Ok)
     })
 }
@@ -654,9 +759,15 @@ pub extern "C" fn ember_phase_map(renderer: EmberRenderer, chunk: u32) -> EmberS
         }
         // The estimator is only read while chunks map: a read lock, shared by the threads.
         let st = crate::read(&shared.state)?;
-        let q = tracer(&st.scene, &st.callbacks);
+        let fault = Fault::new();
+        let q = tracer(&st.scene, &st.callbacks, &fault);
         let ctx = Context { scene: &st.scene.scene, tracer: &q };
         Phased::<Tracer<'_>>::map(&st.renderer, &ctx, phase, &mut slot.0);
+        if fault.get().is_some() {
+            // The chunk stays unmapped, its output cleared: map it again or destroy the renderer.
+            slot.0.reset(phase.chunk_range(chunk as usize));
+            fault_error(fault, &format!("chunk {chunk} was not mapped: map it again or destroy the renderer"))?;
+        }
         slot.1 = true;
         Ok(EmberStatus::Ok)
     })
@@ -688,10 +799,12 @@ pub extern "C" fn ember_phase_end(renderer: EmberRenderer) -> EmberStatus {
         let mut outputs: Vec<ChunkOutput> = slots.into_iter().filter_map(|m| m.into_inner().ok().map(|(o, _)| o)).collect();
         let mut guard = crate::write(&shared.state)?;
         let st = &mut *guard;
-        let q = tracer(&st.scene, &st.callbacks);
+        let fault = Fault::new();
+        let q = tracer(&st.scene, &st.callbacks, &fault);
         let ctx = Context { scene: &st.scene.scene, tracer: &q };
         Phased::<Tracer<'_>>::reduce(&mut st.renderer, &ctx, &phase, &mut outputs, &mut st.film);
         st.ready = true;
+        fault_error(fault, "the rest of the reduction's rays were misses: destroy the renderer")?;
         Ok(EmberStatus::Ok)
     })
 }

@@ -20,7 +20,7 @@ use ember_cli::accel::Accel;
 use ember_core::camera::{FovAxis, PerspectiveCamera};
 use ember_core::integrator::{Heuristic, MaxDepth, RenderParams};
 use ember_core::math::Vec3;
-use ember_core::render::{EstimatorConfig, EstimatorKind, Film, Renderer};
+use ember_core::render::{EstimatorConfig, EstimatorKind, FILM_BYTES_PER_PIXEL, Film, Renderer};
 use ember_core::scene::{AreaEmission, Scene, SceneBuilder, SceneGeometry};
 use ember_core::spectrum::Rgb;
 
@@ -45,6 +45,14 @@ pub enum EmberStatus {
     Panic = 6,
     /// `ember_phase_begin`: no phase is pending (the pass is complete).
     Done = 7,
+    /// `ember_renderer_create`: the render would need more memory than is available (or
+    /// than the `memory-limit` option allows). Nothing was allocated; the message says
+    /// what to lower.
+    OutOfMemory = 8,
+    /// A ray callback returned a hit that breaks its contract (the message names the
+    /// value). The rest of the call treated every ray as a miss, so the film's passes
+    /// are not to be trusted: destroy the renderer.
+    CallbackError = 9,
 }
 
 /// An error: its status and message.
@@ -264,12 +272,27 @@ pub struct Settings {
     pub options: String,
 }
 
+/// [`Settings`] validated: the core's configuration and what the C API itself uses.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Config {
+    pub estimator: EstimatorConfig,
+    pub params: RenderParams,
+    /// The `memory-limit` option: the bytes a renderer may claim (else the memory available).
+    pub memory_limit: Option<u64>,
+    /// Threads for `ember_render_passes`, capped ([`thread_count`]).
+    pub threads: usize,
+}
+
+/// The option that is the C API's own, not an estimator's: `ember render --memory-limit`.
+const MEMORY_LIMIT: &str = "memory-limit";
+
 impl Settings {
-    /// The core's configuration for these settings, validated by the core. The options
-    /// go through the command line's own parser (`ember_cli::cli::CacheArgs`), so every
-    /// configuration field the CLI sets is settable here with the same names, defaults
-    /// and messages; anything but an estimator option is refused.
-    pub fn config(&self) -> Result<(EstimatorConfig, RenderParams)> {
+    /// The settings validated. The options go through the command line's own parser
+    /// (`ember_cli::cli::CacheArgs`), so every configuration field the CLI sets is
+    /// settable here with the same names, defaults and messages, and the core validates
+    /// the result; besides them only `memory-limit` (`ember render`'s, with its parser)
+    /// is accepted.
+    pub fn config(&self) -> Result<Config> {
         use clap::{Args, FromArgMatches};
         let invalid = |m: String| Error::new(EmberStatus::InvalidConfig, m);
         let kind = EstimatorKind::from_name(&self.estimator).ok_or_else(|| {
@@ -291,21 +314,91 @@ impl Settings {
         }
         let command = ember_cli::cli::CacheArgs::augment_args(clap::Command::new("options").no_binary_name(true));
         let known: Vec<String> = command.get_arguments().filter_map(|a| a.get_long().map(str::to_string)).collect();
+        let mut memory_limit = None;
         for option in self.options.split_whitespace() {
             let (name, value) = option.split_once('=').ok_or_else(|| invalid(format!("option '{option}' is not name=value")))?;
+            if name == MEMORY_LIMIT {
+                if memory_limit.is_some() {
+                    return Err(invalid(format!("option '{MEMORY_LIMIT}' is given twice")));
+                }
+                memory_limit = Some(ember_cli::memory::parse_size(value).map_err(|e| invalid(format!("{MEMORY_LIMIT}: {e}")))?);
+                continue;
+            }
             if !known.iter().any(|k| k == name) {
-                return Err(invalid(format!("no estimator option '{name}' (options: {})", known.join(", "))));
+                return Err(invalid(format!("no estimator option '{name}' (options: {}, {MEMORY_LIMIT})", known.join(", "))));
             }
             args.push(format!("--{name}={value}"));
         }
         let matches = command.try_get_matches_from(&args).map_err(|e| invalid(first_line(&e.to_string())))?;
         let cache = ember_cli::cli::CacheArgs::from_arg_matches(&matches).map_err(|e| invalid(first_line(&e.to_string())))?;
-        let config = cache.config_for(kind);
-        config.validate().map_err(|e| invalid(format!("{} {e}", kind.name())))?;
+        let estimator = cache.config_for(kind);
+        estimator.validate().map_err(|e| invalid(format!("{} {e}", kind.name())))?;
         // As `ember render`: PT's two techniques under the power heuristic.
         let params = RenderParams { max_depth: MaxDepth(self.max_depth), seed: self.seed, heuristic: Heuristic::Power, ..RenderParams::default() };
-        Ok((config, params))
+        Ok(Config { estimator, params, memory_limit, threads: thread_count(self.threads) })
     }
+}
+
+/// The threads `ember_render_passes` starts for `requested` (0: every core): capped, not
+/// refused, at 4 × the cores and at 1024, as `ember render --threads` caps them
+/// (`ember_cli::cli::thread_count`, which prints a warning a library must not; a test
+/// checks the two agree). Without the cap `UINT32_MAX` spent 30 s and 240 MB starting
+/// threads before failing.
+pub fn thread_count(requested: u32) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    match requested {
+        0 => cores,
+        n => (n as usize).min((4 * cores).min(1024)),
+    }
+}
+
+/// Refuse, before the film and the estimator's stores are allocated, a renderer whose
+/// estimated memory ([`EstimatorConfig::memory_estimate`], at least the film's) exceeds
+/// `limit` or, without one, the memory available (`ember_cli::memory`): as `ember
+/// render` refuses it. An allocation that fails aborts the process, which no
+/// `catch_unwind` can turn into a status (a 65536×65536 camera did).
+pub fn check_memory(scene: &SceneData, config: &EstimatorConfig, limit: Option<u64>) -> Result<()> {
+    let camera = &scene.scene.camera;
+    let pixels = camera.width() as u64 * camera.height() as u64;
+    let estimate = config.memory_estimate(pixels.min(u32::MAX as u64) as u32);
+    let bytes = estimate.bytes.max(pixels * FILM_BYTES_PER_PIXEL);
+    let (available, source) = match limit {
+        Some(l) => (Some(l), "the memory-limit option"),
+        None => (ember_cli::memory::available_bytes(), "available memory"),
+    };
+    match available {
+        Some(a) if bytes > a => Err(Error::new(
+            EmberStatus::OutOfMemory,
+            format!(
+                "{} would need about {} ({} at {}×{} is the largest part), more than the {} of {source}; lower {}",
+                config.kind(),
+                ember_cli::memory::human(bytes),
+                estimate.largest,
+                camera.width(),
+                camera.height(),
+                ember_cli::memory::human(a),
+                c_spelling(estimate.lower)
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// What to lower, as the core spells it for the command line (`--width/--height`,
+/// `--light-paths`, `--dataset`, …), in this API's words: the camera's size, a field of
+/// `EmberRenderSettings`, or an option of the options string.
+fn c_spelling(lower: &str) -> String {
+    const FIELDS: [&str; 3] = ["light-paths", "connections", "radius-footprints"];
+    lower
+        .replace("--width/--height", "the camera's width and height")
+        .split(' ')
+        .map(|word| match word.strip_prefix("--") {
+            Some(name) if FIELDS.contains(&name) => format!("settings.{}", name.replace('-', "_")),
+            Some(name) => format!("the option {name}"),
+            None => word.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// A clap message's first line, without its `error: ` prefix.
