@@ -420,17 +420,34 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         crate::files::probe_output(out, &inputs).map_err(AppError::Output)?;
     }
 
-    if args.estimator == crate::cli::EstimatorChoice::Auto && (split.is_some() || args.model.is_some()) {
+    if args.estimator == crate::cli::EstimatorChoice::Auto && (split.is_some() || args.model.is_some() || args.resume.is_some()) {
         // The race depends on timing: tasks of one split render could choose differently.
-        return Err(AppError::Estimator("--estimator auto chooses by a timed race: name the estimator for split renders and --model".into()));
+        return Err(AppError::Estimator("--estimator auto chooses by a timed race: name the estimator for split renders, --model and --resume".into()));
     }
+    // The image to continue: read (and its checks) before any work.
+    let resumed = match &args.resume {
+        Some(path) => {
+            let (header, film) = distributed::read_partial(path).map_err(|e| {
+                AppError::Output(format!("--resume: {e} (only images written with --checkpoint or at an interrupt hold the sums a render continues from)"))
+            })?;
+            if header.passes.start != 0 {
+                return Err(AppError::Output(format!(
+                    "--resume {}: it holds passes {}, a part of a split render: merge the parts instead",
+                    path.display(),
+                    header.passes
+                )));
+            }
+            Some((path.clone(), header, film))
+        }
+        None => None,
+    };
     // Build the scene, the ray queries and the estimator.
     let built = make(args).map_err(AppError::Estimator)?;
     let mut renderer = built.renderer;
     let (width, height) = renderer.size();
-    let identity = match split {
-        Some(_) => Some(renderer.identity().ok_or_else(|| AppError::Estimator("this renderer cannot be split into pass ranges".into()))?),
-        None => None,
+    let identity = match split.is_some() || args.resume.is_some() || args.checkpoint.is_some() {
+        true => Some(renderer.identity().ok_or_else(|| AppError::Estimator("this renderer cannot be split into pass ranges".into()))?),
+        false => None,
     };
 
     // Render passes until the spp or time limit.
@@ -441,11 +458,19 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         (None, None, Some(n)) => n,
         _ => args.spp_limit(),
     };
-    let (first_pass, end) = split.map_or((0, spp), |(r, _)| (r.start, r.end));
+    let (mut first_pass, end) = split.map_or((0, spp), |(r, _)| (r.start, r.end));
+    // A resumed render is the split render of the passes the image lacks, merged with it.
+    if let (Some((path, header, _)), Some(identity)) = (&resumed, &identity) {
+        let this = partial_header(identity, width, height, distributed::PassRange { start: 0, end: end.max(1) }, end, Default::default());
+        if let Some(problem) = distributed::identity_mismatch(header, &this) {
+            return Err(AppError::Output(format!("--resume {}: the image is not of this render: {problem}", path.display())));
+        }
+        first_pass = header.passes.end;
+    }
     // A film the race began continues (its passes are this render's first), unless the
     // render is split into pass ranges (refused with auto anyway) or asked for fewer.
     let mut film = match built.film {
-        Some(f) if split.is_none() && (f.width(), f.height()) == (width, height) && f.passes() <= end => f,
+        Some(f) if split.is_none() && resumed.is_none() && (f.width(), f.height()) == (width, height) && f.passes() <= end => f,
         _ => Film::with_filter(width, height, renderer.filter()),
     };
     let held_before = film.passes();
@@ -471,9 +496,32 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
             config.threads
         );
     }
-    let mut summary = renderer.render(&mut film, limits, config, start).map_err(AppError::Driver)?;
-    // The report counts the image's passes, the race's among them.
-    summary.passes += held_before;
+    // With --checkpoint, the render runs in slices ending at a pass boundary after each
+    // period, the output rewritten after each (the driver continues a film that holds
+    // passes, so the slices render the passes one call would).
+    let checkpoint = args.checkpoint.and_then(|t| Duration::try_from_secs_f64(t).ok());
+    let mut summary: Option<crate::driver::RenderSummary> = None;
+    loop {
+        let slice_end = checkpoint.and_then(|c| Instant::now().checked_add(c));
+        let slice = Limits { deadline: [deadline, slice_end].into_iter().flatten().min(), ..limits };
+        let s = renderer.render(&mut film, slice, config, start).map_err(AppError::Driver)?;
+        let done = s.interrupted || first_pass + film.passes() >= end || deadline.is_some_and(|d| Instant::now() >= d) || s.passes == 0;
+        summary = Some(match summary {
+            Some(before) => before.then(s),
+            None => s,
+        });
+        if done {
+            break;
+        }
+        if let Some(identity) = &identity {
+            let (image, header) = whole_so_far(identity, &film, &resumed, first_pass, width, height, end);
+            distributed::write_partial(&exr, &header, &image).map_err(AppError::Image)?;
+            eprintln!("checkpoint {} passes written to {}", header.passes.end, exr.display());
+        }
+    }
+    let mut summary = summary.expect("the loop renders at least once");
+    // The report counts the image's passes, the race's and the resumed image's among them.
+    summary.passes += held_before + resumed.as_ref().map_or(0, |(_, h, _)| h.passes.len());
     if summary.interrupted && summary.passes == 0 {
         return Err(AppError::Interrupted("interrupted before any pass completed: nothing written".into()));
     }
@@ -498,23 +546,29 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         png: None,
         partial: None,
     };
-    if let (Some(identity), Some((range, _))) = (identity, split) {
+    if let (Some(identity), Some((range, _))) = (&identity, split) {
         let held = distributed::PassRange { start: range.start, end: range.start + film.passes() };
-        let header = distributed::PartialHeader {
-            program: distributed::program_version(),
-            scene: identity.scene,
-            scene_hash: identity.scene_hash,
-            estimator: identity.estimator,
-            config: identity.config,
-            seed: identity.seed,
-            width,
-            height,
-            passes: held,
-            total: spp,
-            tallies: film.tallies(),
-        };
+        let header = partial_header(identity, width, height, held, spp, film.tallies());
         distributed::write_partial(&exr, &header, &film).map_err(AppError::Image)?;
         return Ok(RenderReport { partial: Some((held, spp)), ..base });
+    }
+    // A resumed render's image is the resumed one's passes and these, merged exactly.
+    let film = match &identity {
+        Some(identity) if resumed.is_some() => whole_so_far(identity, &film, &resumed, first_pass, width, height, end).0,
+        _ => film,
+    };
+    // With --checkpoint, or at an interrupt, the image keeps its exact sums (--resume
+    // continues it); the PNG is written as usual.
+    if args.checkpoint.is_some() || summary_interrupted(&base) {
+        let identity = match identity {
+            Some(i) => i,
+            None => renderer.identity().ok_or_else(|| AppError::Estimator("this renderer cannot keep its sums".into()))?,
+        };
+        let header =
+            partial_header(&identity, width, height, distributed::PassRange { start: 0, end: film.passes().max(1) }, end.max(film.passes()), film.tallies());
+        distributed::write_partial(&exr, &header, &film).map_err(AppError::Image)?;
+        image_io::write_png(&png, width, height, &film.to_rgb_f32(), args.exposure).map_err(AppError::Image)?;
+        return Ok(RenderReport { png: Some(png), ..base });
     }
     let image = film.to_rgb_f32();
     if args.aov.is_empty() {
@@ -533,6 +587,58 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     }
     image_io::write_png(&png, width, height, &image, args.exposure).map_err(AppError::Image)?;
     Ok(RenderReport { png: Some(png), ..base })
+}
+
+fn summary_interrupted(report: &RenderReport) -> bool {
+    report.summary.interrupted
+}
+
+/// The partial-image header of `identity`'s render holding `passes` of `total`.
+fn partial_header(
+    identity: &distributed::RenderIdentity,
+    width: u32,
+    height: u32,
+    passes: distributed::PassRange,
+    total: u32,
+    tallies: ember_core::render::Tallies,
+) -> distributed::PartialHeader {
+    distributed::PartialHeader {
+        program: distributed::program_version(),
+        scene: identity.scene.clone(),
+        scene_hash: identity.scene_hash,
+        estimator: identity.estimator.clone(),
+        config: identity.config.clone(),
+        seed: identity.seed,
+        width,
+        height,
+        passes,
+        total,
+        tallies,
+    }
+}
+
+/// The whole image so far: `film` (passes `first_pass..`), after the resumed image's
+/// passes `0..first_pass` where there is one, and its header.
+fn whole_so_far(
+    identity: &distributed::RenderIdentity,
+    film: &Film,
+    resumed: &Option<(std::path::PathBuf, distributed::PartialHeader, Film)>,
+    first_pass: u32,
+    width: u32,
+    height: u32,
+    end: u32,
+) -> (Film, distributed::PartialHeader) {
+    let mut whole = match resumed {
+        Some((_, _, before)) => before.clone(),
+        None => Film::new(width, height),
+    };
+    debug_assert_eq!(whole.passes(), first_pass);
+    // Same size (checked against the header) and disjoint ranges: the merge cannot fail
+    // but by a pass count past u32, which the range check excludes.
+    let _ = whole.merge(film);
+    let passes = distributed::PassRange { start: 0, end: whole.passes().max(1) };
+    let header = partial_header(identity, width, height, passes, end.max(whole.passes()), whole.tallies());
+    (whole, header)
 }
 
 /// `ember merge`: check the parts, merge them, write the EXR and the PNG (or, with

@@ -434,6 +434,19 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     pub model: Option<PathBuf>,
 
+    /// Every SECONDS, at the end of a pass, rewrite the output (atomically) with the passes
+    /// so far. An image written with --checkpoint, or at an interrupt, holds its exact
+    /// sums beside the RGB, so --resume can continue it.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    pub checkpoint: Option<f64>,
+
+    /// Continue IMAGE (written with --checkpoint or at an interrupt, by this program with
+    /// this scene, estimator, options and seed): render the passes it lacks up to --spp
+    /// (or for --time, counted afresh) and write an image bit-identical to an
+    /// uninterrupted render of the same total. IMAGE may be the output itself.
+    #[arg(long, value_name = "IMAGE", conflicts_with_all = ["passes", "task_index", "task_from_env"])]
+    pub resume: Option<PathBuf>,
+
     /// Output EXR file (linear RGB, 32-bit float); an sRGB PNG with the same stem is
     /// written beside it. A split render writes only the partial EXR; `{task}` in the
     /// name becomes the task index, `{passes}` the range (e.g. `8-16`).

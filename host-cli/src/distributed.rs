@@ -397,6 +397,21 @@ impl fmt::Display for MergeError {
     }
 }
 
+/// The first identity field (all but the total) in which two headers differ, in words:
+/// what `--resume` checks, so an image continues only the render it came from.
+pub fn identity_mismatch(image: &PartialHeader, this: &PartialHeader) -> Option<String> {
+    identity_fields(image).into_iter().zip(identity_fields(this)).filter(|((field, _), _)| *field != "total passes").find(|((_, a), (_, b))| a != b).map(
+        |((field, a), (_, b))| match field {
+            "configuration" => {
+                let (a, b) = first_difference(&a, &b);
+                format!("it has configuration {a}, this render {b}")
+            }
+            "scene hash" => format!("it is of another scene ({}; this render's is {})", image.scene, this.scene),
+            _ => format!("it has {field} {a}, this render {b}"),
+        },
+    )
+}
+
 /// What a merge must cover.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Cover {

@@ -268,6 +268,33 @@ pub struct RenderSummary {
     pub interrupted: bool,
 }
 
+impl RenderSummary {
+    /// This render followed by `later` on the same film (a render in slices, as
+    /// `--checkpoint` runs it): counts and seconds added, rates recomputed, the later
+    /// one's end time and interruption.
+    pub fn then(self, later: RenderSummary) -> RenderSummary {
+        let render_seconds = self.render_seconds + later.render_seconds;
+        let stats = self.stats + later.stats;
+        let per_second = |n: u64| if render_seconds > 0.0 { n as f64 / render_seconds } else { 0.0 };
+        let mut phase_seconds = self.phase_seconds;
+        for (name, t) in later.phase_seconds {
+            add_time(&mut phase_seconds, name, t);
+        }
+        RenderSummary {
+            passes: self.passes + later.passes,
+            render_seconds,
+            total_seconds: later.total_seconds,
+            stats,
+            samples_per_second: per_second(stats.samples),
+            rays_per_second: per_second(stats.rays),
+            discarded: self.discarded + later.discarded,
+            threads: later.threads,
+            phase_seconds,
+            interrupted: later.interrupted,
+        }
+    }
+}
+
 /// Problems the driver reports.
 #[derive(Debug)]
 pub enum DriverError {

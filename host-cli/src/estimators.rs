@@ -90,9 +90,8 @@ fn finish(
     spp: Option<u32>,
     mut notes: Vec<String>,
 ) -> PreparedScene {
-    if warnings.degenerate_triangles > 0 {
-        notes.push(format!("{} degenerate (zero-area) triangles dropped", warnings.degenerate_triangles));
-    }
+    // Dropped triangles are reported by the scene reader, shape by shape with their
+    // cause (the built-in scenes drop none); a count here repeated them.
     // Only what was really dropped (the core counts no light it keeps). A light of any
     // power, even one too bright for f32, is selectable, so there is no selection only
     // when no emitter is left.
@@ -493,6 +492,18 @@ mod tests {
         let loaded = mitsuba::load_scene_from_str(&xml, Path::new("notes.xml"), &mitsuba::LoadOptions::default()).unwrap();
         let (scene, geometry, warnings) = loaded.builder.build().unwrap();
         finish("notes.xml".into(), scene, &geometry, warnings, None, None, loaded.warnings).warnings
+    }
+
+    /// Dropped triangles are reported once, by the reader, with their cause (issue 51: a
+    /// rectangle scaled by 1e38 was "zero area", and a second count followed the reader's
+    /// line). Injected bug checked: the old count in `finish` makes each case two notes.
+    #[test]
+    fn dropped_triangles_are_reported_once_with_their_cause() {
+        let lit = |shape: &str| notes(&format!(r#"<emitter type="constant"/>{shape}"#));
+        let huge = lit(r#"<shape type="rectangle"><transform name="to_world"><scale value="1e38"/></transform></shape>"#);
+        assert!(huge.len() == 1 && huge[0].contains("too large for single precision"), "{huge:?}");
+        let flat = lit(r#"<shape type="rectangle"><transform name="to_world"><scale x="0" y="1" z="1"/></transform></shape>"#);
+        assert!(flat.len() == 1 && flat[0].contains("2 of 2 triangles have zero area"), "{flat:?}");
     }
 
     /// Regression: every `constant` and `directional` emitter was reported as "emits

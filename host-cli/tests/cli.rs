@@ -118,6 +118,14 @@ fn bad_input_exits_one_with_a_message() {
         (&["render", "-e", "spcbpt", "--model", "/dev/zero", "--spp", "1", "--width", "16", "--height", "12"], "regular file"),
         (&["render", "--memory-limit", "99999999999T"], "at most 16 EiB"),
         (&["compare", "/dev/zero", finite], "not a regular file"),
+        // Hostile scene files (issue 51, the Mitsuba reader; its unit tests name the
+        // injected bugs): non-regular files by name, a bad -D value naming the -D.
+        (&["render", "/dev/zero"], "cannot read the scene file: is not a regular file"),
+        (&["render", scenes], "cannot read the scene file: is a directory"),
+        (&["render", cornell, "-D", "spp=abc"], "malformed integer \"abc\" (the value comes from `-D spp=abc`"),
+        // Checkpoints and resume (issue 50).
+        (&["render", "--checkpoint", "0"], "--checkpoint"),
+        (&["render", "--resume", "/dev/zero"], "--resume: "),
         // Outputs tried before the work (issue 50): each refused at once. Injected bug
         // checked: without the probe_output calls in app.rs the first row renders the
         // default 16 passes and fails only at the write.
