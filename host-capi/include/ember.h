@@ -35,6 +35,14 @@ typedef enum EmberStatus {
   // value). The rest of the call treated every ray as a miss, so the film's passes
   // are not to be trusted: destroy the renderer.
   EMBER_STATUS_CALLBACK_ERROR = 9,
+  // `ember_film_import`: the bytes are not a film this library reads: the magic, the
+  // format version, the size (a truncated buffer) or the checksum (a damaged one) is
+  // wrong (the message names which).
+  EMBER_STATUS_INVALID_FILM = 10,
+  // `ember_film_import`: the film is of another render: another estimator,
+  // configuration, seed, max depth, tracer, size, scene or ember build (the message
+  // names the field and both values).
+  EMBER_STATUS_FILM_MISMATCH = 11,
 } EmberStatus;
 
 // Material kinds: the values of [`EmberMaterial`]'s `kind`.
@@ -218,7 +226,8 @@ enum EmberStatus ember_renderer_create(EmberScene scene,
 enum EmberStatus ember_renderer_destroy(EmberRenderer renderer);
 
 // Render `passes` more passes on the renderer's threads (its setup first, the first
-// time). The image is then the mean of every pass rendered so far.
+// time). The image is then the mean of every pass rendered so far. After
+// `ember_film_import` of N passes, they are passes N, N + 1, …: the bits of one render.
 enum EmberStatus ember_render_passes(EmberRenderer renderer, uint32_t passes);
 
 // The film's size in pixels.
@@ -238,10 +247,13 @@ enum EmberStatus ember_renderer_passes(EmberRenderer renderer, uint32_t *passes)
 //
 // # Safety
 // A non-null `rgb` must point to `floats` writable floats.
-enum EmberStatus ember_renderer_image(EmberRenderer renderer, float *rgb, uintptr_t floats);
+enum EmberStatus ember_renderer_image(EmberRenderer renderer, float *rgb, size_t floats);
 
 // For a host that brings its own threads: queue pass `pass` (after any pending setup),
-// then open its phases one by one with `ember_phase_begin`.
+// then open its phases one by one with `ember_phase_begin`. Refused on a renderer that
+// imported a film (its passes continue with `ember_render_passes`, which replays what
+// the passes before them left behind). A pass other than the next of one render (pass
+// `ember_renderer_passes` reports) is rendered, but the film can then not be exported.
 enum EmberStatus ember_pass_start(EmberRenderer renderer, uint32_t pass);
 
 // Open the next pending phase (setup or pass): `*info` gets its chunk count. Returns
@@ -257,6 +269,34 @@ enum EmberStatus ember_phase_map(EmberRenderer renderer, uint32_t chunk);
 
 // Reduce the open phase (every chunk mapped) into the estimator and the film.
 enum EmberStatus ember_phase_end(EmberRenderer renderer);
+
+// The film's state as bytes, to continue the render later with `ember_film_import` (in
+// this process or another): the passes, their exact sums, and what they depend on
+// (estimator, configuration, seed, max depth, tracer, scene, size, ember build;
+// docs/embedding.md). With `bytes` null, `*written` gets the size needed and nothing is
+// written; else `capacity` must be at least that size (if not: `*written` gets it and
+// the call fails) and `*written` gets the bytes written.
+//
+// # Safety
+// A non-null `bytes` must point to `capacity` writable bytes, a non-null `written` to a
+// writable `size_t` (null is refused).
+enum EmberStatus ember_film_export(EmberRenderer renderer,
+                                   uint8_t *bytes,
+                                   size_t capacity,
+                                   size_t *written);
+
+// Continue the film `ember_film_export` wrote: `len` bytes at `bytes`. Only on a
+// renderer that has rendered (or started) no pass yet, of the same render: the same
+// estimator, configuration, seed, max depth, tracer (BVH or callbacks), scene, size and
+// ember build. Checked first: the magic, format version, size and checksum
+// (`EMBER_STATUS_INVALID_FILM`), then each of those fields (`EMBER_STATUS_FILM_MISMATCH`);
+// the message names the field. Afterwards `ember_renderer_passes` counts the imported
+// passes, the image is the mean over all, and `ember_render_passes` renders the next
+// passes as one render would have (bit for bit). The phase calls are refused.
+//
+// # Safety
+// A non-null `bytes` must point to `len` readable bytes.
+enum EmberStatus ember_film_import(EmberRenderer renderer, const uint8_t *bytes, size_t len);
 
 #ifdef __cplusplus
 }  // extern "C"

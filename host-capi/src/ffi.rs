@@ -31,7 +31,7 @@ use ember_cli::driver::{self, DriverConfig, Limits};
 use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
 use ember_core::render::{ChunkOutput, Context, EstimatorKind, Film, Phase, Phased, Renderer};
 
-use crate::{Config, EmberStatus, Error, MaterialDesc, Registry, RendererState, Result, SceneData, SceneDesc, Settings};
+use crate::{Config, EmberStatus, Error, MaterialDesc, Registry, RenderIdentity, RendererState, Result, SceneData, SceneDesc, Settings};
 
 /// A scene handle (0 is never valid).
 pub type EmberScene = u64;
@@ -598,11 +598,24 @@ pub unsafe extern "C" fn ember_renderer_create(
             },
         };
         let out = unsafe { out(renderer, "renderer") }?;
-        let Config { estimator, params, memory_limit, threads } = settings.config()?;
+        let config = settings.config()?;
+        let identity = RenderIdentity::of(&config);
+        let Config { estimator, params, memory_limit, threads } = config;
         crate::check_memory(&data, &estimator, memory_limit)?;
         let r = Renderer::new(&data.scene, params, estimator).map_err(|e| Error::new(EmberStatus::InvalidConfig, e.to_string()))?;
         let film = Film::for_camera(&data.scene.camera);
-        let state = RendererState { scene: data, renderer: r, film, threads, callbacks, ready: false };
+        let state = RendererState {
+            scene: data,
+            renderer: r,
+            film,
+            imported: None,
+            identity,
+            threads,
+            callbacks,
+            ready: false,
+            pass_started: false,
+            out_of_order: None,
+        };
         let shared = Arc::new(Shared { state: RwLock::new(state), phase: RwLock::new(None) });
         *out = renderers()?.insert(shared);
         Ok(EmberStatus::Ok)
@@ -616,7 +629,8 @@ pub extern "C" fn ember_renderer_destroy(renderer: EmberRenderer) -> EmberStatus
 }
 
 /// Render `passes` more passes on the renderer's threads (its setup first, the first
-/// time). The image is then the mean of every pass rendered so far.
+/// time). The image is then the mean of every pass rendered so far. After
+/// `ember_film_import` of N passes, they are passes N, N + 1, …: the bits of one render.
 #[unsafe(no_mangle)]
 pub extern "C" fn ember_render_passes(renderer: EmberRenderer, passes: u32) -> EmberStatus {
     guard(|| {
@@ -626,11 +640,18 @@ pub extern "C" fn ember_render_passes(renderer: EmberRenderer, passes: u32) -> E
         }
         let mut guard = crate::write(&shared.state)?;
         let st = &mut *guard;
-        let end = st.film.passes().checked_add(passes).ok_or_else(|| Error::arg(format!("{passes} more passes would pass 2^32 - 1")))?;
+        let end = st.passes().checked_add(passes).ok_or_else(|| Error::arg(format!("{passes} more passes would pass 2^32 - 1")))?;
+        // After an import, the film holds passes `first_pass..`. The driver replays passes
+        // `0..first_pass` (SPCBPT's reuse) while the film is empty: a call of no passes
+        // would replay them, and the next call again, so it renders nothing at all.
+        let first_pass = st.imported.as_ref().map_or(0, Film::passes);
+        if passes == 0 && first_pass > 0 && st.film.passes() == 0 {
+            return Ok(EmberStatus::Ok);
+        }
         let fault = Fault::new();
         let q = tracer(&st.scene, &st.callbacks, &fault);
         let ctx = Context { scene: &st.scene.scene, tracer: &q };
-        let limits = Limits { spp: end, deadline: None, interrupt: None, first_pass: 0 };
+        let limits = Limits { spp: end, deadline: None, interrupt: None, first_pass };
         let config = DriverConfig { threads: st.threads, progress: false };
         driver::render(&mut st.renderer, &ctx, &mut st.film, limits, config, Instant::now())
             .map_err(|e| Error::new(EmberStatus::InvalidArgument, e.to_string()))?;
@@ -664,7 +685,7 @@ pub unsafe extern "C" fn ember_renderer_passes(renderer: EmberRenderer, passes: 
     guard(|| {
         let shared = renderer_of(renderer)?;
         let st = crate::read(&shared.state)?;
-        *unsafe { out(passes, "passes") }? = st.film.passes();
+        *unsafe { out(passes, "passes") }? = st.passes();
         Ok(EmberStatus::Ok)
     })
 }
@@ -688,7 +709,7 @@ pub unsafe extern "C" fn ember_renderer_image(renderer: EmberRenderer, rgb: *mut
         }
         // SAFETY: `floats` writable floats at a non-null `rgb`, by the caller's contract.
         let dst = unsafe { std::slice::from_raw_parts_mut(rgb, floats) };
-        for (d, p) in dst.chunks_exact_mut(3).zip(st.film.to_rgb_f32()) {
+        for (d, p) in dst.chunks_exact_mut(3).zip(st.whole()?.to_rgb_f32()) {
             d.copy_from_slice(&p);
         }
         Ok(EmberStatus::Ok)
@@ -696,7 +717,10 @@ pub unsafe extern "C" fn ember_renderer_image(renderer: EmberRenderer, rgb: *mut
 }
 
 /// For a host that brings its own threads: queue pass `pass` (after any pending setup),
-/// then open its phases one by one with `ember_phase_begin`.
+/// then open its phases one by one with `ember_phase_begin`. Refused on a renderer that
+/// imported a film (its passes continue with `ember_render_passes`, which replays what
+/// the passes before them left behind). A pass other than the next of one render (pass
+/// `ember_renderer_passes` reports) is rendered, but the film can then not be exported.
 #[unsafe(no_mangle)]
 pub extern "C" fn ember_pass_start(renderer: EmberRenderer, pass: u32) -> EmberStatus {
     guard(|| {
@@ -705,6 +729,16 @@ pub extern "C" fn ember_pass_start(renderer: EmberRenderer, pass: u32) -> EmberS
             return Err(Error::arg("a phase is open: map its chunks and end it first"));
         }
         let mut st = crate::write(&shared.state)?;
+        if st.imported.is_some() {
+            return Err(Error::arg(
+                "the renderer continues an imported film: render its passes with ember_render_passes (the phase calls do not replay the passes before them)",
+            ));
+        }
+        let next = st.film.passes();
+        if pass != next && st.out_of_order.is_none() {
+            st.out_of_order = Some((pass, next));
+        }
+        st.pass_started = true;
         Phased::<Tracer<'_>>::start_pass(&mut st.renderer, pass);
         Ok(EmberStatus::Ok)
     })
@@ -805,6 +839,82 @@ pub extern "C" fn ember_phase_end(renderer: EmberRenderer) -> EmberStatus {
         Phased::<Tracer<'_>>::reduce(&mut st.renderer, &ctx, &phase, &mut outputs, &mut st.film);
         st.ready = true;
         fault_error(fault, "the rest of the reduction's rays were misses: destroy the renderer")?;
+        Ok(EmberStatus::Ok)
+    })
+}
+
+/// The film's state as bytes, to continue the render later with `ember_film_import` (in
+/// this process or another): the passes, their exact sums, and what they depend on
+/// (estimator, configuration, seed, max depth, tracer, scene, size, ember build;
+/// docs/embedding.md). With `bytes` null, `*written` gets the size needed and nothing is
+/// written; else `capacity` must be at least that size (if not: `*written` gets it and
+/// the call fails) and `*written` gets the bytes written.
+///
+/// # Safety
+/// A non-null `bytes` must point to `capacity` writable bytes, a non-null `written` to a
+/// writable `size_t` (null is refused).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn ember_film_export(renderer: EmberRenderer, bytes: *mut u8, capacity: usize, written: *mut usize) -> EmberStatus {
+    guard(|| {
+        let shared = renderer_of(renderer)?;
+        let st = crate::read(&shared.state)?;
+        let written = unsafe { out(written, "written") }?;
+        if let Some((pass, next)) = st.out_of_order {
+            return Err(Error::arg(format!(
+                "ember_pass_start started pass {pass} where one render's next pass was {next}: the film holds no passes 0..N to export"
+            )));
+        }
+        let identity = st.film_identity();
+        let need = crate::film_state::encoded_len(&identity).ok_or_else(|| Error::arg("the film's bytes would not fit a size_t"))?;
+        *written = need;
+        if bytes.is_null() {
+            return Ok(EmberStatus::Ok);
+        }
+        if capacity < need {
+            return Err(Error::arg(format!("capacity {capacity} is below the {need} bytes the film needs (*written has the size)")));
+        }
+        // SAFETY: `capacity` (at least `need`) writable bytes at a non-null `bytes`, by the
+        // caller's contract.
+        let dst = unsafe { std::slice::from_raw_parts_mut(bytes, need) };
+        let whole = st.whole()?;
+        crate::film_state::encode(&identity, &whole, dst);
+        Ok(EmberStatus::Ok)
+    })
+}
+
+/// Continue the film `ember_film_export` wrote: `len` bytes at `bytes`. Only on a
+/// renderer that has rendered (or started) no pass yet, of the same render: the same
+/// estimator, configuration, seed, max depth, tracer (BVH or callbacks), scene, size and
+/// ember build. Checked first: the magic, format version, size and checksum
+/// (`EMBER_STATUS_INVALID_FILM`), then each of those fields (`EMBER_STATUS_FILM_MISMATCH`);
+/// the message names the field. Afterwards `ember_renderer_passes` counts the imported
+/// passes, the image is the mean over all, and `ember_render_passes` renders the next
+/// passes as one render would have (bit for bit). The phase calls are refused.
+///
+/// # Safety
+/// A non-null `bytes` must point to `len` readable bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn ember_film_import(renderer: EmberRenderer, bytes: *const u8, len: usize) -> EmberStatus {
+    guard(|| {
+        let shared = renderer_of(renderer)?;
+        if bytes.is_null() {
+            return Err(null("bytes"));
+        }
+        if shared.phase_read()?.is_some() {
+            return Err(Error::arg("a phase is open: a film is imported only before the first pass"));
+        }
+        let mut st = crate::write(&shared.state)?;
+        if st.passes() > 0 || st.pass_started {
+            return Err(Error::arg(format!(
+                "the renderer has rendered {} passes{}: a film is imported only before the first pass",
+                st.passes(),
+                if st.pass_started { " and started one with ember_pass_start" } else { "" }
+            )));
+        }
+        // SAFETY: `len` readable bytes at a non-null `bytes`, by the caller's contract.
+        let bytes = unsafe { std::slice::from_raw_parts(bytes, len) };
+        let film = crate::film_state::decode(bytes, &st.film_identity())?;
+        st.imported = (film.passes() > 0).then_some(film);
         Ok(EmberStatus::Ok)
     })
 }

@@ -13,8 +13,10 @@
 //! catches every panic at the boundary.
 
 pub mod ffi;
+pub mod film_state;
 
-use std::sync::{Arc, RwLock, RwLockReadGuard, RwLockWriteGuard, TryLockError};
+use std::borrow::Cow;
+use std::sync::{Arc, OnceLock, RwLock, RwLockReadGuard, RwLockWriteGuard, TryLockError};
 
 use ember_cli::accel::Accel;
 use ember_core::camera::{FovAxis, PerspectiveCamera};
@@ -53,6 +55,14 @@ pub enum EmberStatus {
     /// value). The rest of the call treated every ray as a miss, so the film's passes
     /// are not to be trusted: destroy the renderer.
     CallbackError = 9,
+    /// `ember_film_import`: the bytes are not a film this library reads: the magic, the
+    /// format version, the size (a truncated buffer) or the checksum (a damaged one) is
+    /// wrong (the message names which).
+    InvalidFilm = 10,
+    /// `ember_film_import`: the film is of another render: another estimator,
+    /// configuration, seed, max depth, tracer, size, scene or ember build (the message
+    /// names the field and both values).
+    FilmMismatch = 11,
 }
 
 /// An error: its status and message.
@@ -158,6 +168,8 @@ pub struct SceneData {
     pub geometry: SceneGeometry,
     pub accel: Accel,
     pub triangle_index: Vec<Option<u32>>,
+    /// [`SceneData::hash`], computed the first time it is asked for.
+    hash: OnceLock<u64>,
 }
 
 fn finite3(v: [f32; 3], what: &str) -> Result<Vec3> {
@@ -252,7 +264,23 @@ impl SceneData {
 
     fn new(scene: Scene, geometry: SceneGeometry, triangle_index: Vec<Option<u32>>) -> Self {
         let accel = Accel::new(&geometry);
-        Self { scene, geometry, accel, triangle_index }
+        Self { scene, geometry, accel, triangle_index, hash: OnceLock::new() }
+    }
+
+    /// FNV-1a of everything a render reads, as the CLI hashes its scenes
+    /// (`ember_cli::estimators::PreparedScene::hash`): the scene's `Debug` form (camera,
+    /// materials, lights), the BVH's geometry as raw bits, and which triangle of the
+    /// description each is (the callbacks name triangles by it). Computed once, when an
+    /// exported film first needs it.
+    pub fn hash(&self) -> u64 {
+        *self.hash.get_or_init(|| {
+            let mut h = ember_core::fnv::Fnv1a::new();
+            // Writing to the hasher cannot fail.
+            let _ = std::fmt::Write::write_fmt(&mut h, format_args!("{:?}", self.scene));
+            self.accel.hash_geometry(&mut h);
+            let _ = std::fmt::Write::write_fmt(&mut h, format_args!("{:?}", self.triangle_index));
+            h.value()
+        })
     }
 }
 
@@ -408,15 +436,84 @@ fn first_line(message: &str) -> String {
 
 /// A renderer: an estimator bound to a scene (kept alive by the renderer), its film,
 /// and the engine's ray callbacks when it brought some.
+///
+/// After `ember_film_import` the passes are split in two: `imported` holds passes
+/// `0..N`, `film` the passes rendered since, `N..` (the driver's `first_pass` N, as a
+/// resumed `ember render`); the image and an export are their exact merge ([`Self::whole`]).
 #[derive(Debug)]
 pub struct RendererState {
     pub scene: Arc<SceneData>,
     pub renderer: Renderer,
     pub film: Film,
+    /// The passes `0..N` an import brought (`None`: none, `film` holds passes `0..`).
+    pub imported: Option<Film>,
+    /// What the film's passes depend on, less the scene's hash (computed on export).
+    pub identity: RenderIdentity,
     pub threads: usize,
     pub callbacks: Option<ffi::Callbacks>,
     /// Set up (setup phases run).
     pub ready: bool,
+    /// `ember_pass_start` has queued a pass (an import then comes too late).
+    pub pass_started: bool,
+    /// The first `ember_pass_start` (pass, and the pass one render would start there)
+    /// whose index was not the next: the film then holds no passes `0..N` to export.
+    pub out_of_order: Option<(u32, u32)>,
+}
+
+/// The renderer's side of [`film_state::FilmIdentity`], fixed at creation.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RenderIdentity {
+    pub estimator: String,
+    pub config: String,
+    pub seed: u64,
+    pub max_depth: i32,
+}
+
+impl RenderIdentity {
+    /// The identity of a render with `config` (the CLI's configuration text for a
+    /// partial image, less the max depth, which is a field of its own).
+    pub fn of(config: &Config) -> Self {
+        let p = &config.params;
+        Self {
+            estimator: config.estimator.kind().name().to_string(),
+            config: format!("{:?}; heuristic {:?}, rr depth {}", config.estimator, p.heuristic, p.rr_depth),
+            seed: p.seed,
+            max_depth: p.max_depth.0,
+        }
+    }
+}
+
+impl RendererState {
+    /// Every pass the renderer holds, imported ones included.
+    pub fn passes(&self) -> u32 {
+        self.imported.as_ref().map_or(0, Film::passes).saturating_add(self.film.passes())
+    }
+
+    /// The film of every pass: the imported passes merged (exactly) with those rendered
+    /// since, or the film itself when nothing was imported.
+    pub fn whole(&self) -> Result<Cow<'_, Film>> {
+        let Some(imported) = &self.imported else { return Ok(Cow::Borrowed(&self.film)) };
+        let mut whole = imported.clone();
+        // Same size (checked on import), and `ember_render_passes` keeps the count in u32.
+        whole.merge(&self.film).map_err(|e| Error::arg(format!("the imported film and the passes since cannot be merged: {e}")))?;
+        Ok(Cow::Owned(whole))
+    }
+
+    /// The identity an export records and an import must match.
+    pub fn film_identity(&self) -> film_state::FilmIdentity {
+        let id = &self.identity;
+        film_state::FilmIdentity {
+            build: ember_cli::distributed::program_version(),
+            estimator: id.estimator.clone(),
+            config: id.config.clone(),
+            seed: id.seed,
+            max_depth: id.max_depth,
+            callbacks: self.callbacks.is_some(),
+            scene_hash: self.scene.hash(),
+            width: self.film.width(),
+            height: self.film.height(),
+        }
+    }
 }
 
 /// Lock a renderer for a call that changes it, or say it is busy (or was left broken by
