@@ -21,7 +21,14 @@
  * - "callback error mapping a chunk": with ember_phase_map not looking at the fault,
  *   status OK. Before issue 51 the other "callback" rows returned
  *   EMBER_STATUS_PANIC and printed the panic on stderr; they now return
- *   EMBER_STATUS_CALLBACK_ERROR. */
+ *   EMBER_STATUS_CALLBACK_ERROR.
+ *
+ * Films (issue 50), each "film" row seen to fail with its check removed: status OK
+ * for the damaged byte (checksum), seed, max depth, tracer, scene, capacity (the export
+ * then wrote 3230 bytes into 16), import after a pass, pass start after an import and
+ * export out of order; the next check's message instead for the truncated buffer
+ * ("checksum"), another estimator ("configuration"), another size ("scene") and a
+ * non-film ("format version"); an ASan SEGV for the null bytes and written. */
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -166,6 +173,64 @@ static EmberStatus c_hit_phase_map(void) {
 /* Rounding just outside the triangle is tolerated (1e-4). */
 static EmberStatus c_hit_rounding(void) { return render_with_hit((FixedHit){1.0f, 1, -1e-6f, 1.0f + 1e-6f}); }
 
+/* Films (issue 50): `film` is `exported`'s (pt, seed 1, max depth 4, 8x8, one pass). */
+static EmberRenderer exported;
+static uint8_t film[16384];
+static size_t film_len;
+static uint8_t damaged[sizeof film];
+/* A renderer of `sc` with `st` (and `cb`), then the import of `len` bytes of `bytes`. */
+static EmberStatus import_into(EmberScene sc, EmberRenderSettings st, const EmberRayCallbacks *cb, const uint8_t *bytes, size_t len) {
+    EmberStatus s = ember_renderer_create(sc, &st, cb, &case_renderer);
+    return s == EMBER_STATUS_OK ? ember_film_import(case_renderer, bytes, len) : s;
+}
+static EmberStatus c_export_written_null(void) { return ember_film_export(exported, film, sizeof film, NULL); }
+/* Too small: refused, nothing written past the capacity (ASan), and *written says the size. */
+static EmberStatus c_export_capacity(void) {
+    static uint8_t small[16];
+    size_t written = 0;
+    EmberStatus s = ember_film_export(exported, small, sizeof small, &written);
+    return written == film_len ? s : EMBER_STATUS_PANIC;
+}
+static EmberStatus c_import_null(void) { return import_into(scene, pt(), NULL, NULL, film_len); }
+static EmberStatus c_import_checksum(void) {
+    memcpy(damaged, film, film_len);
+    damaged[film_len / 2] ^= 0x10;
+    return import_into(scene, pt(), NULL, damaged, film_len);
+}
+static EmberStatus c_import_truncated(void) { return import_into(scene, pt(), NULL, film, film_len - 100); }
+static EmberStatus c_import_magic(void) { return import_into(scene, pt(), NULL, (const uint8_t *)"a PNG, perhaps", 14); }
+static EmberStatus c_import_estimator(void) { EmberRenderSettings st = pt(); st.estimator = "bdpt"; return import_into(scene, st, NULL, film, film_len); }
+static EmberStatus c_import_seed(void) { EmberRenderSettings st = pt(); st.seed = 2; return import_into(scene, st, NULL, film, film_len); }
+static EmberStatus c_import_depth(void) { EmberRenderSettings st = pt(); st.max_depth = -1; return import_into(scene, st, NULL, film, film_len); }
+static EmberStatus c_import_size(void) {
+    EmberSceneDesc d = good_desc(); d.camera.width = 16;
+    EmberStatus s = ember_scene_create(&d, &case_scene);
+    return s == EMBER_STATUS_OK ? import_into(case_scene, pt(), NULL, film, film_len) : s;
+}
+static EmberStatus c_import_scene(void) {
+    static const float brighter[] = {0, 0, 0, 6, 6, 6};
+    EmberSceneDesc d = good_desc(); d.triangle_emission = brighter;
+    EmberStatus s = ember_scene_create(&d, &case_scene);
+    return s == EMBER_STATUS_OK ? import_into(case_scene, pt(), NULL, film, film_len) : s;
+}
+static EmberStatus c_import_tracer(void) {
+    static FixedHit hit = {1.0f, 0, 0.2f, 0.2f};
+    EmberRayCallbacks cb = {.user_data = &hit, .intersect = fixed_intersect, .occluded = never};
+    return import_into(scene, pt(), &cb, film, film_len);
+}
+static EmberStatus c_import_after_pass(void) { return ember_film_import(exported, film, film_len); }
+static EmberStatus c_pass_start_after_import(void) {
+    EmberStatus s = import_into(scene, pt(), NULL, film, film_len);
+    return s == EMBER_STATUS_OK ? ember_pass_start(case_renderer, 1) : s;
+}
+static EmberStatus c_export_out_of_order(void) {
+    EmberRenderSettings st = pt();
+    size_t written;
+    EmberStatus s = ember_renderer_create(scene, &st, NULL, &case_renderer);
+    if (s == EMBER_STATUS_OK) s = ember_pass_start(case_renderer, 3);
+    return s == EMBER_STATUS_OK ? ember_film_export(case_renderer, NULL, 0, &written) : s;
+}
+
 typedef struct { const char *name; EmberStatus (*call)(void); EmberStatus want; const char *message; } Case;
 
 int main(void) {
@@ -178,6 +243,12 @@ int main(void) {
     if (ember_renderer_create(scene, &st, NULL, &renderer) != EMBER_STATUS_OK) { fprintf(stderr, "setup: %s\n", ember_last_error()); return 1; }
     if (ember_renderer_create(scene, &st, NULL, &dead_renderer) != EMBER_STATUS_OK || ember_renderer_destroy(dead_renderer) != EMBER_STATUS_OK) return 1;
     if (ember_renderer_create(scene, &st, NULL, &phased) != EMBER_STATUS_OK) return 1;
+    if (ember_renderer_create(scene, &st, NULL, &exported) != EMBER_STATUS_OK || ember_render_passes(exported, 1) != EMBER_STATUS_OK ||
+        ember_film_export(exported, NULL, 0, &film_len) != EMBER_STATUS_OK || film_len > sizeof film ||
+        ember_film_export(exported, film, sizeof film, &film_len) != EMBER_STATUS_OK) {
+        fprintf(stderr, "setup: the film (%zu bytes): %s\n", film_len, ember_last_error());
+        return 1;
+    }
     /* A new scene may reuse the destroyed one's slot: the old handle must stay dead. */
     EmberScene reuse;
     if (ember_scene_create(&d, &reuse) != EMBER_STATUS_OK) return 1;
@@ -229,6 +300,21 @@ int main(void) {
         {"callback barycentrics NaN", c_hit_nan, EMBER_STATUS_CALLBACK_ERROR, "barycentrics (NaN, 0.2)"},
         {"callback error mapping a chunk", c_hit_phase_map, EMBER_STATUS_CALLBACK_ERROR, "(0.8, 0.8) outside the triangle (b1, b2 >= 0 and b1 + b2 <= 1, to within 0.0001); chunk 0 was not mapped"},
         {"callback barycentrics rounded past an edge", c_hit_rounding, EMBER_STATUS_OK, ""},
+        {"film export: written null", c_export_written_null, EMBER_STATUS_NULL_POINTER, "written is null"},
+        {"film export: capacity too small", c_export_capacity, EMBER_STATUS_INVALID_ARGUMENT, "capacity 16 is below the"},
+        {"film import: bytes null", c_import_null, EMBER_STATUS_NULL_POINTER, "bytes is null"},
+        {"film import: a byte damaged", c_import_checksum, EMBER_STATUS_INVALID_FILM, "checksum: the bytes differ from those exported"},
+        {"film import: truncated", c_import_truncated, EMBER_STATUS_INVALID_FILM, "size: a 8x8 film takes"},
+        {"film import: not a film", c_import_magic, EMBER_STATUS_INVALID_FILM, "magic"},
+        {"film import: another estimator's film", c_import_estimator, EMBER_STATUS_FILM_MISMATCH, "estimator: the film's is pt, this renderer's bdpt"},
+        {"film import: another seed's film", c_import_seed, EMBER_STATUS_FILM_MISMATCH, "seed: the film's is 1, this renderer's 2"},
+        {"film import: another max depth's film", c_import_depth, EMBER_STATUS_FILM_MISMATCH, "max depth: the film's is 4, this renderer's unbounded"},
+        {"film import: a film of another size", c_import_size, EMBER_STATUS_FILM_MISMATCH, "size: the film's is 8x8, this renderer's 16x8"},
+        {"film import: another scene's film", c_import_scene, EMBER_STATUS_FILM_MISMATCH, "scene: the film's is hash"},
+        {"film import: the BVH's film, callbacks now", c_import_tracer, EMBER_STATUS_FILM_MISMATCH, "tracer: the film's is the built-in BVH, this renderer's the engine's callbacks"},
+        {"film import after a pass", c_import_after_pass, EMBER_STATUS_INVALID_ARGUMENT, "holds 1 pass:"},
+        {"pass start after a film import", c_pass_start_after_import, EMBER_STATUS_INVALID_ARGUMENT, "continues an imported film"},
+        {"film export after a pass out of order", c_export_out_of_order, EMBER_STATUS_INVALID_ARGUMENT, "started pass 3 where one render's next pass was 0"},
     };
     int failed = 0;
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -246,6 +332,7 @@ int main(void) {
     /* The phase left open above still ends once its chunk is mapped. */
     if (ember_phase_end(phased) != EMBER_STATUS_OK) { printf("the open phase did not end: %s\n", ember_last_error()); failed++; }
     ember_renderer_destroy(phased);
+    ember_renderer_destroy(exported);
     ember_renderer_destroy(renderer);
     ember_scene_destroy(scene);
     ember_scene_destroy(reuse);

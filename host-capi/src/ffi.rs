@@ -905,10 +905,11 @@ pub unsafe extern "C" fn ember_film_import(renderer: EmberRenderer, bytes: *cons
         }
         let mut st = crate::write(&shared.state)?;
         if st.passes() > 0 || st.pass_started {
+            let n = st.passes();
             return Err(Error::arg(format!(
-                "the renderer has rendered {} passes{}: a film is imported only before the first pass",
-                st.passes(),
-                if st.pass_started { " and started one with ember_pass_start" } else { "" }
+                "the renderer holds {n} pass{}{}: a film is imported only before the first pass",
+                if n == 1 { "" } else { "es" },
+                if st.pass_started { " and has started one (ember_pass_start)" } else { "" }
             )));
         }
         // SAFETY: `len` readable bytes at a non-null `bytes`, by the caller's contract.

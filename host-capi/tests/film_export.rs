@@ -164,7 +164,7 @@ fn damaged_and_foreign_films_are_refused_naming_the_field() {
     }
     // After a pass: refused, and the renderer keeps its own.
     let (status, message) = import(&bytes, r);
-    assert!(status == EmberStatus::InvalidArgument && message.contains("has rendered 1 passes"), "{status:?} {message}");
+    assert!(status == EmberStatus::InvalidArgument && message.contains("holds 1 pass:"), "{status:?} {message}");
     assert_eq!(passes(r), 1);
     // The phase calls after an import.
     assert_eq!(import(&bytes, fresh).0, EmberStatus::Ok);
