@@ -865,7 +865,8 @@ pub unsafe extern "C" fn ember_film_export(renderer: EmberRenderer, bytes: *mut 
             )));
         }
         let identity = st.film_identity();
-        let need = crate::film_state::encoded_len(&identity).ok_or_else(|| Error::arg("the film's bytes would not fit a size_t"))?;
+        let need = crate::film_state::encoded_len(&identity)
+            .ok_or_else(|| Error::arg("the film's bytes would not fit a size_t (or its configuration's text is past 65535 bytes)"))?;
         *written = need;
         if bytes.is_null() {
             return Ok(EmberStatus::Ok);

@@ -269,8 +269,9 @@ impl SceneData {
 
     /// FNV-1a of everything a render reads, as the CLI hashes its scenes
     /// (`ember_cli::estimators::PreparedScene::hash`): the scene's `Debug` form (camera,
-    /// materials, lights), the BVH's geometry as raw bits, and which triangle of the
-    /// description each is (the callbacks name triangles by it). Computed once, when an
+    /// materials, lights), the BVH's geometry as raw bits, and each description
+    /// triangle's index in the geometry (the callbacks name triangles by it; `u32::MAX`
+    /// for a dropped one). Computed once, when an
     /// exported film first needs it.
     pub fn hash(&self) -> u64 {
         *self.hash.get_or_init(|| {
@@ -278,7 +279,9 @@ impl SceneData {
             // Writing to the hasher cannot fail.
             let _ = std::fmt::Write::write_fmt(&mut h, format_args!("{:?}", self.scene));
             self.accel.hash_geometry(&mut h);
-            let _ = std::fmt::Write::write_fmt(&mut h, format_args!("{:?}", self.triangle_index));
+            for index in &self.triangle_index {
+                std::hash::Hasher::write_u32(&mut h, index.unwrap_or(u32::MAX));
+            }
             h.value()
         })
     }
