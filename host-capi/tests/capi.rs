@@ -24,7 +24,7 @@ const PASSES: u32 = 3;
 fn cli_image(estimator: EstimatorKind, seed: u64) -> Vec<[f32; 3]> {
     let (scene, geometry, _) = ember_core::scene::builtin::cornell_box(W, H).build().unwrap();
     let accel = ember_cli::accel::Accel::new(&geometry);
-    let prepared = PreparedScene { name: "box".into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new() };
+    let prepared = PreparedScene { name: "box".into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new(), inputs: Vec::new() };
     let mut r = CoreRenderer::with_config(prepared, estimator.default_config(), -1, seed, 2).unwrap();
     let mut film = Film::new(W, H);
     let limits = Limits { spp: PASSES, deadline: None, interrupt: None, first_pass: 0 };

@@ -279,6 +279,10 @@ pub trait Render {
     fn estimator_name(&self) -> Option<&'static str> {
         None
     }
+    /// The files the scene was read from (outputs must not overwrite them).
+    fn inputs(&self) -> Vec<std::path::PathBuf> {
+        Vec::new()
+    }
     /// What a partial image records about the render (`None`: cannot be split).
     fn identity(&self) -> Option<crate::distributed::RenderIdentity> {
         None
@@ -305,6 +309,9 @@ impl Render for estimators::CoreRenderer {
     }
     fn memory_report(&self) -> Vec<String> {
         estimators::CoreRenderer::memory_report(self)
+    }
+    fn inputs(&self) -> Vec<std::path::PathBuf> {
+        self.prepared.inputs.clone()
     }
     fn identity(&self) -> Option<crate::distributed::RenderIdentity> {
         Some(estimators::CoreRenderer::identity(self))
@@ -444,6 +451,13 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     // Build the scene, the ray queries and the estimator.
     let built = make(args).map_err(AppError::Estimator)?;
     let mut renderer = built.renderer;
+    // The files the scene read are known now: never write over one (a texture beside the
+    // scene was overwritten by the PNG written beside `-o T/textures/tiles.exr`).
+    let read = renderer.inputs();
+    let read: Vec<&std::path::Path> = read.iter().map(|p| p.as_path()).collect();
+    for out in [&exr, &png] {
+        crate::files::probe_output(out, &read).map_err(AppError::Output)?;
+    }
     let (width, height) = renderer.size();
     let identity = match split.is_some() || args.resume.is_some() || args.checkpoint.is_some() {
         true => Some(renderer.identity().ok_or_else(|| AppError::Estimator("this renderer cannot be split into pass ranges".into()))?),
@@ -515,8 +529,12 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         }
         if let Some(identity) = &identity {
             let (image, header) = whole_so_far(identity, &film, &resumed, first_pass, width, height, end);
-            distributed::write_partial(&exr, &header, &image).map_err(AppError::Image)?;
-            eprintln!("checkpoint {} passes written to {}", header.passes.end, exr.display());
+            // A checkpoint that cannot be written is not worth the render: warn and go on
+            // (the final write falls back to a rescue location).
+            match distributed::write_partial(&exr, &header, &image) {
+                Ok(()) => eprintln!("checkpoint {} passes written to {}", header.passes.end, exr.display()),
+                Err(e) => eprintln!("warning: checkpoint of {} passes not written: {e}", header.passes.end),
+            }
         }
     }
     let mut summary = summary.expect("the loop renders at least once");
@@ -549,7 +567,7 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     if let (Some(identity), Some((range, _))) = (&identity, split) {
         let held = distributed::PassRange { start: range.start, end: range.start + film.passes() };
         let header = partial_header(identity, width, height, held, spp, film.tallies());
-        distributed::write_partial(&exr, &header, &film).map_err(AppError::Image)?;
+        write_or_rescue(&exr, |p| distributed::write_partial(p, &header, &film))?;
         return Ok(RenderReport { partial: Some((held, spp)), ..base });
     }
     // A resumed render's image is the resumed one's passes and these, merged exactly.
@@ -566,13 +584,13 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         };
         let header =
             partial_header(&identity, width, height, distributed::PassRange { start: 0, end: film.passes().max(1) }, end.max(film.passes()), film.tallies());
-        distributed::write_partial(&exr, &header, &film).map_err(AppError::Image)?;
-        image_io::write_png(&png, width, height, &film.to_rgb_f32(), args.exposure).map_err(AppError::Image)?;
+        write_or_rescue(&exr, |p| distributed::write_partial(p, &header, &film))?;
+        write_or_rescue(&png, |p| image_io::write_png(p, width, height, &film.to_rgb_f32(), args.exposure))?;
         return Ok(RenderReport { png: Some(png), ..base });
     }
     let image = film.to_rgb_f32();
     if args.aov.is_empty() {
-        image_io::write_exr(&exr, width, height, &image).map_err(AppError::Image)?;
+        write_or_rescue(&exr, |p| image_io::write_exr(p, width, height, &image))?;
     } else {
         let (albedo, normal) =
             renderer.guides(GUIDE_SAMPLES, args.seed, args.thread_count()).ok_or_else(|| AppError::Output("this renderer cannot write --aov".into()))?;
@@ -583,10 +601,23 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
                 _ => extra.push(("normal", &normal)),
             }
         }
-        image_io::write_exr_with(&exr, width, height, &image, &extra).map_err(AppError::Image)?;
+        write_or_rescue(&exr, |p| image_io::write_exr_with(p, width, height, &image, &extra))?;
     }
-    image_io::write_png(&png, width, height, &image, args.exposure).map_err(AppError::Image)?;
+    write_or_rescue(&png, |p| image_io::write_png(p, width, height, &image, args.exposure))?;
     Ok(RenderReport { png: Some(png), ..base })
+}
+
+/// Write a render's output with `write`; if that fails after the work (the disk full, the
+/// directory removed meanwhile), write it to a rescue file in the system's temporary
+/// folder instead, and fail naming both (the render is never lost to a failed write).
+fn write_or_rescue(path: &std::path::Path, write: impl Fn(&std::path::Path) -> Result<(), ImageError>) -> Result<(), AppError> {
+    let Err(e) = write(path) else { return Ok(()) };
+    let name = path.file_name().map_or_else(|| "out.exr".into(), |n| n.to_string_lossy().into_owned());
+    let rescue = std::env::temp_dir().join(format!("ember-rescued-{}-{name}", std::process::id()));
+    match write(&rescue) {
+        Ok(()) => Err(AppError::Output(format!("{e}; the image was written to {} instead", rescue.display()))),
+        Err(again) => Err(AppError::Output(format!("{e}; writing it to {} failed too: {again}", rescue.display()))),
+    }
 }
 
 fn summary_interrupted(report: &RenderReport) -> bool {

@@ -25,6 +25,9 @@ pub struct PreparedScene {
     /// The sample count the scene file asks for, if any.
     pub spp: Option<u32>,
     pub warnings: Vec<String>,
+    /// The files the scene was read from: the scene file, its meshes, textures and
+    /// environment maps (outputs never overwrite them); empty for a built-in scene.
+    pub inputs: Vec<std::path::PathBuf>,
 }
 
 impl PreparedScene {
@@ -57,7 +60,9 @@ pub fn prepare_builtin(args: &RenderArgs) -> Result<PreparedScene, String> {
 pub fn prepare_file(path: &Path, width: Option<u32>, height: Option<u32>, defaults: Vec<(String, String)>) -> Result<PreparedScene, String> {
     let loaded = mitsuba::load_scene(path, &mitsuba::LoadOptions { defaults, width, height }).map_err(|e| e.to_string())?;
     let (scene, geometry, warnings) = loaded.builder.build().map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(finish(path.display().to_string(), scene, &geometry, warnings, loaded.max_depth, loaded.spp, loaded.warnings))
+    let mut prepared = finish(path.display().to_string(), scene, &geometry, warnings, loaded.max_depth, loaded.spp, loaded.warnings);
+    prepared.inputs = std::iter::once(path.to_path_buf()).chain(loaded.inputs).collect();
+    Ok(prepared)
 }
 
 /// The scene a `render` command names (a file, or the built-in one).
@@ -102,7 +107,7 @@ fn finish(
         notes.push("the scene has no light: the image will be black".into());
     }
     let accel = Accel::new(geometry);
-    PreparedScene { name, scene, accel, max_depth, spp, warnings: notes }
+    PreparedScene { name, scene, accel, max_depth, spp, warnings: notes, inputs: Vec::new() }
 }
 
 /// One of the core's estimators bound to a prepared scene, its setup (SPCBPT's and

@@ -236,3 +236,68 @@ fn auto_races_every_candidate_and_renders_the_full_film() {
     assert_eq!((image.width, image.height), (64, 64));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Outputs never overwrite a file the scene reads (issue 50: `-o T/textures/tiles.exr`
+/// replaced the scene's texture with the PNG written beside the EXR). Injected bug
+/// checked: without the probe against the renderer's inputs in app::render, the first
+/// render succeeds and the texture is gone.
+#[test]
+fn outputs_never_overwrite_what_the_scene_reads() {
+    let dir = temp_dir("scene-inputs");
+    let tiles = dir.join("tiles.png");
+    ember_cli::image_io::write_png(&tiles, 2, 2, &[[0.5; 3]; 4], 0.0).unwrap();
+    let sky = dir.join("sky.exr");
+    ember_cli::image_io::write_exr(&sky, 4, 2, &[[1.0; 3]; 8]).unwrap();
+    let scene = dir.join("scene.xml");
+    std::fs::write(
+        &scene,
+        r#"<scene version="3.0.0">
+    <sensor type="perspective"><float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0,0,5" target="0,0,0" up="0,1,0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+    </sensor>
+    <emitter type="envmap"><string name="filename" value="sky.exr"/></emitter>
+    <shape type="rectangle"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="tiles.png"/></texture></bsdf></shape>
+</scene>"#,
+    )
+    .unwrap();
+    let before = std::fs::read(&tiles).unwrap();
+    for out in [dir.join("tiles.exr"), sky.clone()] {
+        let o = ember(&["render", scene.to_str().unwrap(), "--spp", "1", "-o", out.to_str().unwrap()]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{out:?}: {err}");
+        assert!(err.contains("is one of the inputs"), "{out:?}: {err}");
+    }
+    assert_eq!(std::fs::read(&tiles).unwrap(), before, "the texture was overwritten");
+    let ok = ember(&["render", scene.to_str().unwrap(), "--spp", "1", "-o", dir.join("image.exr").to_str().unwrap()]);
+    assert_eq!(ok.status.code(), Some(0), "{}", stderr(&ok));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A final write that fails after the work (the output's directory removed meanwhile)
+/// puts the image in a rescue file the error names (issue 50). Injected bug checked:
+/// with write_or_rescue writing only to the path asked for, no rescue file is named.
+#[test]
+fn a_failed_final_write_is_rescued() {
+    let dir = temp_dir("rescue");
+    let gone = dir.join("gone");
+    std::fs::create_dir_all(&gone).unwrap();
+    let out = gone.join("out.exr");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_ember"))
+        .args(["render", "--width", "16", "--height", "16", "--spp", "100000", "--time", "2", "--threads", "1", "-o", out.to_str().unwrap()])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(800));
+    std::fs::remove_dir_all(&gone).unwrap();
+    let o = child.wait_with_output().unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let rescued =
+        err.split("the image was written to ").nth(1).and_then(|t| t.split(" instead").next()).unwrap_or_else(|| panic!("no rescue named: {err}")).to_string();
+    let image = ember_cli::image_io::read_exr(std::path::Path::new(&rescued)).expect("a valid rescued image");
+    assert_eq!((image.width, image.height), (16, 16));
+    let _ = std::fs::remove_file(&rescued);
+    let _ = std::fs::remove_dir_all(&dir);
+}

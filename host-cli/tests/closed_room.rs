@@ -98,7 +98,7 @@ fn render(estimator: EstimatorKind, passes: u32) -> Film {
     let loaded = load_scene_from_str(&text, &path, &LoadOptions { defaults: Vec::new(), width: Some(64), height: Some(48) }).expect("scene loads");
     let (scene, geometry, _) = loaded.builder.build().expect("scene builds");
     let accel = ember_cli::accel::Accel::new(&geometry);
-    let prepared = PreparedScene { name: "closed room".into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new() };
+    let prepared = PreparedScene { name: "closed room".into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new(), inputs: Vec::new() };
     let mut r = CoreRenderer::with_config(prepared, estimator.default_config(), -1, 3, 2).expect("renderer");
     let mut film = Film::new(64, 48);
     let config = DriverConfig { progress: false, ..DriverConfig::with_threads(2) };

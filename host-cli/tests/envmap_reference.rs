@@ -46,7 +46,7 @@ fn renderer() -> CoreRenderer {
     assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
     let (scene, geometry, _) = loaded.builder.build().expect("scene builds");
     let accel = ember_cli::accel::Accel::new(&geometry);
-    let prepared = PreparedScene { name: "envmap".into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new() };
+    let prepared = PreparedScene { name: "envmap".into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new(), inputs: Vec::new() };
     CoreRenderer::new(prepared, EstimatorKind::Pt, -1, 100).expect("renderer")
 }
 

@@ -49,7 +49,7 @@ fn load(name: &str, width: usize, height: usize) -> PreparedScene {
         load_scene_from_str(&text, &path, &LoadOptions { defaults: Vec::new(), width: Some(width as u32), height: Some(height as u32) }).expect("scene loads");
     let (scene, geometry, _) = loaded.builder.build().expect("scene builds");
     let accel = ember_cli::accel::Accel::new(&geometry);
-    PreparedScene { name: name.into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new() }
+    PreparedScene { name: name.into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new(), inputs: Vec::new() }
 }
 
 /// Scene `name`'s reference image.

@@ -48,7 +48,7 @@ fn renderer(kind: EstimatorKind, width: Option<u32>) -> CoreRenderer {
     let (scene, geometry, warnings) = loaded.builder.build().expect("scene builds");
     assert_eq!(warnings, Default::default());
     let accel = ember_cli::accel::Accel::new(&geometry);
-    let prepared = PreparedScene { name: "textured".into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new() };
+    let prepared = PreparedScene { name: "textured".into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new(), inputs: Vec::new() };
     CoreRenderer::new(prepared, kind, -1, 7).expect("renderer")
 }
 

@@ -34,6 +34,9 @@ pub(crate) struct Ctx<'a> {
     pub parsed: &'a Parsed,
     /// Resolves places into lines for messages.
     pub positions: &'a Positions<'a>,
+    /// Every file the scene reads besides itself (meshes, textures, environment maps):
+    /// outputs must not overwrite them.
+    pub inputs: Vec<std::path::PathBuf>,
     pub sb: SceneBuilder,
     pub warnings: Vec<String>,
     pub base_dir: &'a Path,
@@ -84,6 +87,7 @@ pub(crate) fn instantiate(parsed: Parsed, positions: &Positions, base_dir: &Path
         parsed: &parsed,
         positions,
         sb: SceneBuilder::new(),
+        inputs: Vec::new(),
         warnings: parsed.warnings.clone(),
         base_dir,
         materials: HashMap::new(),
@@ -145,7 +149,16 @@ pub(crate) fn instantiate(parsed: Parsed, positions: &Positions, base_dir: &Path
     ctx.sb.set_camera(camera);
     let world_origin = -ctx.render_frame.w_axis.truncate();
     progress.finish();
-    Ok(LoadedScene { builder: ctx.sb, max_depth: integrator.and_then(|(d, _)| d), spp: spec.spp, width, height, warnings: ctx.warnings, world_origin })
+    Ok(LoadedScene {
+        builder: ctx.sb,
+        max_depth: integrator.and_then(|(d, _)| d),
+        spp: spec.spp,
+        width,
+        height,
+        warnings: ctx.warnings,
+        world_origin,
+        inputs: ctx.inputs,
+    })
 }
 
 fn override_side(option: Option<u32>, what: &str) -> Res<()> {
@@ -299,7 +312,7 @@ impl<'a> Ctx<'a> {
 
     /// Mitsuba's `envmap`: a latitude–longitude EXR (linear RGB) at `filename`, relative
     /// to the scene file, times `scale`, in the frame of `to_world` (a rotation).
-    fn envmap(&self, obj: &Obj, p: &mut Props) -> Res<Light> {
+    fn envmap(&mut self, obj: &Obj, p: &mut Props) -> Res<Light> {
         let file_loc = p.loc_of("filename");
         let filename = p.string_opt("filename")?.ok_or_else(|| Fail::at(obj.loc, "the envmap needs a `filename` (a latitude-longitude EXR)"))?;
         let scale = p.float("scale", 1.0)?;
@@ -309,6 +322,7 @@ impl<'a> Ctx<'a> {
         let m = self.render_frame * p.transform("to_world")?;
         let axes = [m.x_axis.truncate().as_vec3(), m.y_axis.truncate().as_vec3(), m.z_axis.truncate().as_vec3()];
         let path = self.base_dir.join(filename);
+        self.inputs.push(path.clone());
         let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
         if !is_exr {
             return Err(Fail::at(file_loc, format!("envmap \"{}\": only OpenEXR (.exr) environment maps are supported", path.display())));

@@ -97,6 +97,8 @@ pub struct LoadedScene {
     /// this, then rounded to f32), so a point `p` of the file is at `p - world_origin`
     /// in the builder. Zero when the camera sits at the origin.
     pub world_origin: glam::DVec3,
+    /// Every file the scene reads besides itself (meshes, textures, environment maps).
+    pub inputs: Vec<std::path::PathBuf>,
 }
 
 /// Caller-side overrides.

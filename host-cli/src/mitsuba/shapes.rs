@@ -148,6 +148,7 @@ impl Ctx<'_> {
             }
             Geometry::Mesh { filename, file_loc, face_normals, flip_uv } => {
                 let path = self.base_dir.join(filename);
+                self.inputs.push(path.clone());
                 let mut data = if obj.kind == "obj" { mesh::load_obj(&path) } else { super::read_input(&path).and_then(|b| ply::parse(&b)) }
                     .map_err(|e| Fail::at(file_loc, format!("cannot load the {} mesh \"{}\": {e}", obj.kind, path.display())))?;
                 if flip_uv {

@@ -59,6 +59,7 @@ impl Ctx<'_> {
                 let raw = p.bool("raw", false)?;
                 let to_uv = to_uv(&mut p)?;
                 let path = self.base_dir.join(filename);
+                self.inputs.push(path.clone());
                 let (w, h, texels) = read_image(&path, raw).map_err(|e| Fail::at(file_loc, format!("bitmap \"{}\": {e}", path.display())))?;
                 let bitmap = Bitmap::new(w, h, texels, wrap, bilinear).map_err(|e| Fail::at(file_loc, format!("bitmap \"{}\": {e}", path.display())))?;
                 Texture::Bitmap { bitmap, to_uv }
