@@ -86,22 +86,11 @@ fn the_first_ctrl_c_writes_the_completed_passes() {
     let mut err = BufReader::new(child.stderr.take().unwrap());
     wait_for(&mut err, "progress: 1 pass");
     sigint(&child);
-    let status = child.wait().expect("wait");
-    let mut rest = String::new();
-    std::io::Read::read_to_string(&mut err, &mut rest).unwrap();
-    let mut stdout = String::new();
-    std::io::Read::read_to_string(child.stdout.as_mut().unwrap(), &mut stdout).unwrap();
-    assert_eq!(status.code(), Some(130), "exit status; stderr: {rest}");
-    let passes: u32 = rest
-        .lines()
-        .find_map(|l| l.strip_prefix("interrupted by Ctrl-C: the image holds the ").and_then(|t| t.split_whitespace().next()).and_then(|n| n.parse().ok()))
-        .unwrap_or_else(|| panic!("no pass count in stderr: {rest}"));
-    assert!(passes >= 1, "{rest}");
-    assert!(stdout.contains(&format!("passes     {passes} ")), "the summary reports another count: {stdout}");
-    let image = ember_cli::image_io::read_exr(&out).expect("a valid partial image");
+    let (status, rest, stdout) = finish(child, err);
+    assert_eq!(status, Some(130), "exit status; stderr: {rest}");
+    passes_written(&rest, &stdout, "Ctrl-C", &out);
+    let image = ember_cli::image_io::read_exr(&out).expect("a valid image");
     assert_eq!((image.width, image.height), (32, 32));
-    assert!(image.pixels.iter().flatten().all(|v| v.is_finite() && *v >= 0.0));
-    assert!(image.pixels.iter().flatten().sum::<f32>() > 0.0, "a black image");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
