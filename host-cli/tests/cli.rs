@@ -283,15 +283,30 @@ fn a_failed_final_write_is_rescued() {
     let gone = dir.join("gone");
     std::fs::create_dir_all(&gone).unwrap();
     let out = gone.join("out.exr");
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_ember"))
-        .args(["render", "--width", "16", "--height", "16", "--spp", "100000", "--time", "2", "--threads", "1", "-o", out.to_str().unwrap()])
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ember"))
+        .args(["render", "--width", "16", "--height", "16", "--spp", "100000", "--time", "3", "--threads", "1", "-o", out.to_str().unwrap()])
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(800));
+    // Removed once the passes run (the outputs were tried before them).
+    let mut lines = std::io::BufRead::lines(std::io::BufReader::new(child.stderr.take().unwrap()));
+    let mut err = String::new();
+    for line in lines.by_ref() {
+        let line = line.unwrap();
+        err.push_str(&line);
+        err.push('\n');
+        if line.starts_with("progress: 1 pass") {
+            break;
+        }
+    }
     std::fs::remove_dir_all(&gone).unwrap();
-    let o = child.wait_with_output().unwrap();
+    for line in lines {
+        err.push_str(&line.unwrap());
+        err.push('\n');
+    }
+    let status = child.wait().unwrap();
+    let o = std::process::Output { status, stdout: Vec::new(), stderr: err.into_bytes() };
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     let rescued =

@@ -73,42 +73,49 @@ fn extending_a_render_equals_one_render() {
 }
 
 /// SIGTERM, then `--resume`: the passes written at the signal and the ones added equal
-/// one render of the total. Injected bug checked: writing the interrupted image without
-/// its sums (as before) makes the resume fail with "not a partial image".
+/// one render of the total, for PT, BDPT, VCM (merging on the caustic scene), SPCBPT and
+/// BPF. Injected bug checked: writing the interrupted image without its sums (as before)
+/// makes every resume fail with "not a partial image".
 #[test]
 fn a_terminated_render_resumes_exactly() {
     let d = dir("term");
-    let out = d.join("out.exr");
-    let base = ["render", "--width", "48", "--height", "36", "--seed", "5", "--threads", "2"];
-    let mut child = Command::new(env!("CARGO_BIN_EXE_ember"))
-        .args(base)
-        .args(["--spp", "100000", "-o", s(&out)])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run ember");
-    let mut err = BufReader::new(child.stderr.take().unwrap());
-    let deadline = Instant::now() + Duration::from_secs(60);
-    let mut line = String::new();
-    while !line.starts_with("progress: 1 pass") {
-        line.clear();
-        assert!(err.read_line(&mut line).unwrap() > 0 && Instant::now() < deadline, "no first pass");
+    let caustic = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes/caustic/scene.xml");
+    for (estimator, scene) in [("pt", None), ("bdpt", None), ("vcm", Some(&caustic)), ("spcbpt", None), ("bpf", None)] {
+        let mut base = vec!["render", "-e", estimator, "--width", "48", "--height", "36", "--seed", "5", "--threads", "2"];
+        if let Some(scene) = scene {
+            base.push(s(scene));
+        }
+        let out = d.join(format!("out-{estimator}.exr"));
+        let mut child = Command::new(env!("CARGO_BIN_EXE_ember"))
+            .args(&base)
+            .args(["--spp", "100000", "-o", s(&out)])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run ember");
+        let mut err = BufReader::new(child.stderr.take().unwrap());
+        let deadline = Instant::now() + Duration::from_secs(60);
+        let mut line = String::new();
+        while !line.starts_with("progress: 1 pass") {
+            line.clear();
+            assert!(err.read_line(&mut line).unwrap() > 0 && Instant::now() < deadline, "{estimator}: no first pass");
+        }
+        assert!(Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap().success());
+        let status = child.wait().unwrap();
+        let mut rest = String::new();
+        std::io::Read::read_to_string(&mut err, &mut rest).unwrap();
+        assert_eq!(status.code(), Some(143), "{estimator}: {rest}");
+        let held: u32 = rest
+            .lines()
+            .find_map(|l| l.strip_prefix("interrupted by SIGTERM: the image holds the ").and_then(|t| t.split_whitespace().next()).and_then(|n| n.parse().ok()))
+            .unwrap_or_else(|| panic!("{estimator}: {rest}"));
+        let total = (held + 2).to_string();
+        let whole = d.join(format!("whole-{estimator}.exr"));
+        ok(&ember(&[&base[..], &["--spp", &total, "-o", s(&whole)]].concat()));
+        let resumed = d.join(format!("resumed-{estimator}.exr"));
+        ok(&ember(&[&base[..], &["--spp", &total, "--resume", s(&out), "-o", s(&resumed)]].concat()));
+        assert!(same_bytes(&resumed, &whole), "{estimator}: {held} passes resumed to {total} differ from one render");
     }
-    assert!(Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap().success());
-    let status = child.wait().unwrap();
-    let mut rest = String::new();
-    std::io::Read::read_to_string(&mut err, &mut rest).unwrap();
-    assert_eq!(status.code(), Some(143), "{rest}");
-    let held: u32 = rest
-        .lines()
-        .find_map(|l| l.strip_prefix("interrupted by SIGTERM: the image holds the ").and_then(|t| t.split_whitespace().next()).and_then(|n| n.parse().ok()))
-        .unwrap_or_else(|| panic!("{rest}"));
-    let total = (held + 3).to_string();
-    let whole = d.join("whole.exr");
-    ok(&ember(&[&base[..], &["--spp", &total, "-o", s(&whole)]].concat()));
-    let resumed = d.join("resumed.exr");
-    ok(&ember(&[&base[..], &["--spp", &total, "--resume", s(&out), "-o", s(&resumed)]].concat()));
-    assert!(same_bytes(&resumed, &whole), "{held} passes resumed to {total} differ from one render");
     let _ = std::fs::remove_dir_all(&d);
 }
 
