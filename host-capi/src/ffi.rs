@@ -12,7 +12,7 @@
 //! Every value that crosses from C is checked on entry: counts, indices, sizes, floats,
 //! and enums, which cross as integers (a C enum may hold any `int`; a Rust enum read
 //! from a value it does not name is undefined behaviour) and are converted here. The hits
-//! the ray callbacks return are checked as they come ([`CallbackTracer`]).
+//! the ray callbacks return are checked as they come (`ray_queries::CallbackTracer`).
 //!
 //! The caller's undefined behaviour, which no check can catch: a pointer that is not
 //! null but does not point to as many valid elements as its count says, a `user_data`
@@ -20,16 +20,21 @@
 //! not safe to call from several threads at once when `threads` is not 1.
 #![allow(unsafe_code)]
 
+mod film;
+mod ray_queries;
+
+pub use film::{ember_film_export, ember_film_import};
+
 use std::cell::{Cell, RefCell};
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::sync::{Arc, LazyLock, Mutex, MutexGuard, Once, OnceLock, RwLock, RwLockReadGuard, RwLockWriteGuard};
+use std::sync::{Arc, LazyLock, Mutex, MutexGuard, Once, RwLock, RwLockReadGuard, RwLockWriteGuard};
 use std::time::Instant;
 
-use ember_cli::accel::Accel;
 use ember_cli::driver::{self, DriverConfig, Limits};
-use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
 use ember_core::render::{ChunkOutput, Context, EstimatorKind, Film, Phase, Phased, Renderer};
+
+use ray_queries::{Fault, Tracer, fault_error, tracer};
 
 use crate::{Config, EmberStatus, Error, MaterialDesc, Registry, RenderIdentity, RendererState, Result, SceneData, SceneDesc, Settings};
 
@@ -214,109 +219,6 @@ pub struct Callbacks {
 unsafe impl Send for Callbacks {}
 // SAFETY: as above.
 unsafe impl Sync for Callbacks {}
-
-fn c_ray(ray: &Ray) -> EmberRay {
-    EmberRay { origin: ray.origin.to_array(), dir: ray.dir.to_array(), t_max: ray.t_max }
-}
-
-/// How far a barycentric coordinate may fall outside [0, 1] (and their sum past 1) for
-/// the tracer's rounding: a hit point off its triangle by at most this fraction of an edge.
-const BARYCENTRIC_TOLERANCE: f32 = 1e-4;
-
-/// The first hit of a call that broke the callback's contract, in words.
-type Fault = OnceLock<String>;
-
-/// The engine's tracer as the core's `RayQuery`: the core builds the surface hit from the
-/// triangle the callback names (as the built-in BVH does). A hit that breaks the contract
-/// is recorded in `fault` (the first one) and from then on every ray of the call is a
-/// miss without asking the callbacks; the call then fails with `CallbackError`. (The
-/// core's `RayQuery` has no error path: a miss is the answer that shades nothing.)
-struct CallbackTracer<'a> {
-    cb: &'a Callbacks,
-    scene: &'a SceneData,
-    fault: &'a Fault,
-}
-
-impl CallbackTracer<'_> {
-    /// The triangle `hit` names if the hit keeps the contract for `ray` (`Ok(None)`: a
-    /// triangle dropped as degenerate, which has no area to be hit); else what is wrong.
-    fn check(&self, ray: &Ray, hit: &EmberHit) -> std::result::Result<Option<u32>, String> {
-        let count = self.scene.triangle_index.len();
-        let index = self.scene.triangle_index.get(hit.primitive as usize).ok_or_else(|| format!("primitive {} of {count} triangles", hit.primitive))?;
-        if !(hit.t > 0.0 && hit.t < ray.t_max) {
-            return Err(format!("t = {} outside (0, t_max = {})", hit.t, ray.t_max));
-        }
-        let (b1, b2, e) = (hit.b1, hit.b2, BARYCENTRIC_TOLERANCE);
-        if !(b1 >= -e && b2 >= -e && b1 + b2 <= 1.0 + e) {
-            return Err(format!("barycentrics ({b1}, {b2}) outside the triangle (b1, b2 >= 0 and b1 + b2 <= 1, to within {e})"));
-        }
-        Ok(*index)
-    }
-}
-
-impl RayQuery for CallbackTracer<'_> {
-    fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
-        if self.fault.get().is_some() {
-            return None;
-        }
-        let mut hit = EmberHit::default();
-        if !(self.cb.intersect)(self.cb.user_data, &c_ray(ray), &mut hit) {
-            return None;
-        }
-        let tri = match self.check(ray, &hit) {
-            Ok(index) => &self.scene.geometry.triangles[index? as usize],
-            Err(what) => {
-                self.fault.get_or_init(|| format!("the intersect callback returned {what}"));
-                return None;
-            }
-        };
-        let ng = (tri.p[1] - tri.p[0]).cross(tri.p[2] - tri.p[0]).normalize();
-        let b0 = 1.0 - hit.b1 - hit.b2;
-        let p = tri.p[0] * b0 + tri.p[1] * hit.b1 + tri.p[2] * hit.b2;
-        // Interpolated shading normals where the triangle has them, on ng's side (as the BVH).
-        let ns = tri.n.map(|n| n[0] * b0 + n[1] * hit.b1 + n[2] * hit.b2).and_then(|n| n.try_normalize()).map_or(ng, |n| if n.dot(ng) < 0.0 { -n } else { n });
-        Some(SurfaceHit { t: hit.t, p, ng, ns, uv: tri.texcoords(hit.b1, hit.b2), material: tri.material, emitter: tri.emitter })
-    }
-    fn occluded(&self, ray: &Ray) -> bool {
-        self.fault.get().is_none() && (self.cb.occluded)(self.cb.user_data, &c_ray(ray))
-    }
-}
-
-/// The built-in BVH or the engine's callbacks.
-enum Tracer<'a> {
-    Bvh(&'a Accel),
-    Callbacks(CallbackTracer<'a>),
-}
-
-impl RayQuery for Tracer<'_> {
-    fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
-        match self {
-            Self::Bvh(a) => a.intersect(ray),
-            Self::Callbacks(c) => c.intersect(ray),
-        }
-    }
-    fn occluded(&self, ray: &Ray) -> bool {
-        match self {
-            Self::Bvh(a) => a.occluded(ray),
-            Self::Callbacks(c) => c.occluded(ray),
-        }
-    }
-}
-
-fn tracer<'a>(scene: &'a SceneData, callbacks: &'a Option<Callbacks>, fault: &'a Fault) -> Tracer<'a> {
-    match callbacks {
-        Some(cb) => Tracer::Callbacks(CallbackTracer { cb, scene, fault }),
-        None => Tracer::Bvh(&scene.accel),
-    }
-}
-
-/// The call's error if a callback broke its contract during it.
-fn fault_error(fault: Fault, then: &str) -> Result<()> {
-    match fault.into_inner() {
-        None => Ok(()),
-        Some(what) => Err(Error::new(EmberStatus::CallbackError, format!("{what}; {then}"))),
-    }
-}
 
 /// One chunk of an open phase: its output and whether it has been mapped.
 type ChunkSlot = Mutex<(ChunkOutput, bool)>;
@@ -839,84 +741,6 @@ pub extern "C" fn ember_phase_end(renderer: EmberRenderer) -> EmberStatus {
         Phased::<Tracer<'_>>::reduce(&mut st.renderer, &ctx, &phase, &mut outputs, &mut st.film);
         st.ready = true;
         fault_error(fault, "the rest of the reduction's rays were misses: destroy the renderer")?;
-        Ok(EmberStatus::Ok)
-    })
-}
-
-/// The film's state as bytes, to continue the render later with `ember_film_import` (in
-/// this process or another): the passes, their exact sums, and what they depend on
-/// (estimator, configuration, seed, max depth, tracer, scene, size, ember build;
-/// docs/embedding.md). With `bytes` null, `*written` gets the size needed and nothing is
-/// written; else `capacity` must be at least that size (if not: `*written` gets it and
-/// the call fails) and `*written` gets the bytes written.
-///
-/// # Safety
-/// A non-null `bytes` must point to `capacity` writable bytes, a non-null `written` to a
-/// writable `size_t` (null is refused).
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn ember_film_export(renderer: EmberRenderer, bytes: *mut u8, capacity: usize, written: *mut usize) -> EmberStatus {
-    guard(|| {
-        let shared = renderer_of(renderer)?;
-        let st = crate::read(&shared.state)?;
-        let written = unsafe { out(written, "written") }?;
-        if let Some((pass, next)) = st.out_of_order {
-            return Err(Error::arg(format!(
-                "ember_pass_start started pass {pass} where one render's next pass was {next}: the film holds no passes 0..N to export"
-            )));
-        }
-        let identity = st.film_identity();
-        let need = crate::film_state::encoded_len(&identity)
-            .ok_or_else(|| Error::arg("the film's bytes would not fit a size_t (or its configuration's text is past 65535 bytes)"))?;
-        *written = need;
-        if bytes.is_null() {
-            return Ok(EmberStatus::Ok);
-        }
-        if capacity < need {
-            return Err(Error::arg(format!("capacity {capacity} is below the {need} bytes the film needs (*written has the size)")));
-        }
-        // SAFETY: `capacity` (at least `need`) writable bytes at a non-null `bytes`, by the
-        // caller's contract.
-        let dst = unsafe { std::slice::from_raw_parts_mut(bytes, need) };
-        let whole = st.whole()?;
-        crate::film_state::encode(&identity, &whole, dst);
-        Ok(EmberStatus::Ok)
-    })
-}
-
-/// Continue the film `ember_film_export` wrote: `len` bytes at `bytes`. Only on a
-/// renderer that has rendered (or started) no pass yet, of the same render: the same
-/// estimator, configuration, seed, max depth, tracer (BVH or callbacks), scene, size and
-/// ember build. Checked first: the magic, format version, size and checksum
-/// (`EMBER_STATUS_INVALID_FILM`), then each of those fields (`EMBER_STATUS_FILM_MISMATCH`);
-/// the message names the field. Afterwards `ember_renderer_passes` counts the imported
-/// passes, the image is the mean over all, and `ember_render_passes` renders the next
-/// passes as one render would have (bit for bit). The phase calls are refused.
-///
-/// # Safety
-/// A non-null `bytes` must point to `len` readable bytes.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn ember_film_import(renderer: EmberRenderer, bytes: *const u8, len: usize) -> EmberStatus {
-    guard(|| {
-        let shared = renderer_of(renderer)?;
-        if bytes.is_null() {
-            return Err(null("bytes"));
-        }
-        if shared.phase_read()?.is_some() {
-            return Err(Error::arg("a phase is open: a film is imported only before the first pass"));
-        }
-        let mut st = crate::write(&shared.state)?;
-        if st.passes() > 0 || st.pass_started {
-            let n = st.passes();
-            return Err(Error::arg(format!(
-                "the renderer holds {n} pass{}{}: a film is imported only before the first pass",
-                if n == 1 { "" } else { "es" },
-                if st.pass_started { " and has started one (ember_pass_start)" } else { "" }
-            )));
-        }
-        // SAFETY: `len` readable bytes at a non-null `bytes`, by the caller's contract.
-        let bytes = unsafe { std::slice::from_raw_parts(bytes, len) };
-        let film = crate::film_state::decode(bytes, &st.film_identity())?;
-        st.imported = (film.passes() > 0).then_some(film);
         Ok(EmberStatus::Ok)
     })
 }
