@@ -435,7 +435,14 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     let resumed = match &args.resume {
         Some(path) => {
             let (header, film) = distributed::read_partial(path).map_err(|e| {
-                AppError::Output(format!("--resume: {e} (only images written with --checkpoint or at an interrupt hold the sums a render continues from)"))
+                AppError::Output(match e.contains("is not a partial image") {
+                    // A plain image: say so in --resume's terms, not merge's.
+                    true => format!(
+                        "--resume {}: the image holds no exact sums; only images written with --checkpoint or at an interrupt hold the sums a render continues from",
+                        path.display()
+                    ),
+                    false => format!("--resume: {e}"),
+                })
             })?;
             if header.passes.start != 0 {
                 return Err(AppError::Output(format!(
