@@ -33,9 +33,25 @@ use crate::image_io::{self, ImageError, ImageErrorKind};
 pub const FORMAT: &str = "ember partial film 1";
 /// The EXR attribute (text) holding a partial image's header, one `key: value` per line.
 pub const ATTRIBUTE: &str = "ember.partial";
-/// The header's last line: FNV-1a 64 of every line before it, so an edited header (a
+/// The key of a text header's last line, FNV-1a 64 of every line before it: partial images
+/// and model files (`crate::trained`) end their headers with it, so an edited header (a
 /// part claiming other passes merged into a half-bright image) is refused.
 const CHECKSUM_KEY: &str = "checksum";
+
+/// Append the checksum line to `header` (`key: value` lines, each ending in `\n`).
+pub fn sign_header(header: &mut String) {
+    let sum = ember_core::fnv::fnv1a(header.as_bytes());
+    header.push_str(&format!("{CHECKSUM_KEY}: {sum:016x}\n"));
+}
+
+/// Does `header` hold a checksum line ([`sign_header`]) matching every line before it?
+pub fn header_is_signed(header: &str) -> bool {
+    let Some(at) = header.find(&format!("\n{CHECKSUM_KEY}: ")) else { return false };
+    let (signed, rest) = header.split_at(at + 1);
+    let stored =
+        rest.lines().next().and_then(|l| l.strip_prefix(CHECKSUM_KEY)).and_then(|l| l.strip_prefix(": ")).and_then(|c| u64::from_str_radix(c, 16).ok());
+    stored == Some(ember_core::fnv::fnv1a(signed.as_bytes()))
+}
 
 /// This program's version and build (the `program` field): parts from different builds are
 /// never merged, since any code change may change the passes' bits.
@@ -260,7 +276,7 @@ pub fn write_partial(path: &Path, header: &PartialHeader, film: &Film) -> Result
         ("tallies", format!("{} {} {}", t.discarded, t.splats_outside, t.saturated)),
     ];
     let mut lines: String = fields.iter().map(|(k, v)| format!("{k}: {}\n", v.replace('\n', " "))).collect();
-    lines.push_str(&format!("{CHECKSUM_KEY}: {:016x}\n", ember_core::fnv::fnv1a(lines.as_bytes())));
+    sign_header(&mut lines);
     let mut attributes = LayerAttributes::default();
     attributes.other.insert(text(ATTRIBUTE), AttributeValue::Text(text(&lines)));
     let encoding = Encoding { compression: Compression::ZIP16, ..Encoding::default() };
@@ -311,11 +327,8 @@ fn header_from(path: &Path, attributes: &exr::meta::header::LayerAttributes, siz
         Ok(f) => return Err(format!("{name}: partial-image format '{f}', this program reads '{FORMAT}'")),
         Err(e) => return Err(e),
     }
-    // The checksum line covers every line before it.
-    let signed = header_text.find(&format!("\n{CHECKSUM_KEY}: ")).map(|at| &header_text[..at + 1]);
-    match (signed, fields.get(CHECKSUM_KEY).and_then(|c| u64::from_str_radix(c, 16).ok())) {
-        (Some(signed), Some(sum)) if ember_core::fnv::fnv1a(signed.as_bytes()) == sum => {}
-        _ => return Err(format!("{name}: its {ATTRIBUTE} header does not match its checksum: the header was edited or the file is damaged")),
+    if !header_is_signed(&header_text) {
+        return Err(format!("{name}: its {ATTRIBUTE} header does not match its checksum: the header was edited or the file is damaged"));
     }
     let number = |key: &str| -> Result<u64, String> { get(key)?.parse::<u64>().map_err(|_| format!("{name}: {key} is not a number")) };
     let passes = PassRange::parse(&get("passes")?).map_err(|e| format!("{name}: passes {e}"))?;

@@ -19,8 +19,6 @@ use crate::distributed::{RenderIdentity, program_version};
 
 /// The file's first line.
 pub const HEADER: &str = "ember trained model 1";
-/// The header's last field: FNV-1a 64 of the header's text before it.
-const CHECKSUM_KEY: &str = "checksum";
 /// The largest model file read: Γ of 4096² subspaces (134 MB) and the trees, with room.
 const MAX_MODEL_BYTES: u64 = 1 << 30;
 
@@ -54,7 +52,7 @@ pub fn encode(renderer: &Renderer, id: &RenderIdentity, width: u32, height: u32)
     }
     // The checksum line covers every header line before it (the model's bytes carry
     // their own checksum).
-    out.push_str(&format!("{CHECKSUM_KEY}: {:016x}\n", ember_core::fnv::fnv1a(out.as_bytes())));
+    crate::distributed::sign_header(&mut out);
     out.push('\n');
     let mut bytes = out.into_bytes();
     bytes.extend_from_slice(&model.encode());
@@ -75,10 +73,8 @@ pub fn load(path: &Path, id: &RenderIdentity, width: u32, height: u32, scene: &S
     }
     let stored: Vec<(&str, &str)> = lines.filter_map(|l| l.split_once(": ")).collect();
     let value = |key: &str| stored.iter().find(|(k, _)| *k == key).map(|(_, v)| *v);
-    let signed = header.find(&format!("\n{CHECKSUM_KEY}: ")).map(|at| &header[..at + 1]);
-    match (signed, value(CHECKSUM_KEY).and_then(|c| u64::from_str_radix(c, 16).ok())) {
-        (Some(signed), Some(sum)) if ember_core::fnv::fnv1a(signed.as_bytes()) == sum => {}
-        _ => return Err(format!("--model {name}: its header does not match its checksum: the header was edited or the file is damaged")),
+    if !crate::distributed::header_is_signed(header) {
+        return Err(format!("--model {name}: its header does not match its checksum: the header was edited or the file is damaged"));
     }
     for (key, want) in fields(id, width, height) {
         match value(key) {
