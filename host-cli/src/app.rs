@@ -158,9 +158,7 @@ fn run_convergence(args: &ConvergenceArgs) -> Result<(), AppError> {
     crate::files::probe_output(&out.join("convergence.md"), &[]).map_err(AppError::Output)?;
     // The scene first: a missing scene was reported as a missing reference beside it.
     crate::files::open_regular(&args.scene).map_err(|e| AppError::Estimator(format!("scene {}: {e}", args.scene.display())))?;
-    if let Some(dup) = args.estimators.iter().enumerate().find(|(i, e)| args.estimators[..*i].contains(e)).map(|(_, e)| e) {
-        return Err(AppError::Estimator(format!("-e names {} twice: each estimator runs once per seed (--seeds sets the repeats)", dup.name())));
-    }
+    convergence::check_distinct(&args.estimators).map_err(AppError::Estimator)?;
     let reference_path = args.reference.clone().unwrap_or_else(|| args.scene.with_file_name("reference.exr"));
     let reference = Reference::load(&reference_path).map_err(AppError::Output)?;
     let threads = crate::cli::thread_count(args.threads);
@@ -201,7 +199,7 @@ fn run_convergence(args: &ConvergenceArgs) -> Result<(), AppError> {
 pub fn compare_files(args: &CompareArgs) -> Result<ErrorMetrics, AppError> {
     // Never overwrite an input.
     if let Some(png) = &args.error_image {
-        if [&args.test, &args.reference].iter().any(|input| same_file(png, input)) {
+        if [&args.test, &args.reference].iter().any(|input| crate::files::same_file(png, input)) {
             return Err(AppError::Output(format!("--error-image '{}' is one of the images being compared; choose another file", png.display())));
         }
         crate::files::probe_output(png, &[]).map_err(AppError::Output)?;
@@ -383,8 +381,7 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     };
     let (mut exr, png) = args.output_paths().map_err(AppError::Output)?;
     if let Some((range, task)) = split {
-        let named = ["{task}", "{passes}"].iter().any(|p| exr.to_string_lossy().contains(p));
-        if args.split.task_from_env && !named {
+        if args.split.task_from_env && distributed::placeholder(&exr).is_none() {
             // Every task of an array wrote to out.exr, each replacing the last.
             return Err(AppError::Output(format!(
                 "--task-from-env: the output '{}' names neither {{task}} nor {{passes}}, so every task of the array would write the same file (e.g. -o 'parts/p-{{task}}.exr')",
@@ -411,7 +408,7 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
                 }
             }
         }
-    } else if let Some(p) = ["{task}", "{passes}"].into_iter().find(|p| exr.to_string_lossy().contains(p)) {
+    } else if let Some(p) = distributed::placeholder(&exr) {
         // A whole render wrote a file literally named `p-{task}.exr`.
         return Err(AppError::Output(format!(
             "output '{}' names {p}, which only a split render fills in (--task-index, --task-from-env or --passes)",
@@ -435,13 +432,14 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     let resumed = match &args.resume {
         Some(path) => {
             let (header, film) = distributed::read_partial(path).map_err(|e| {
-                AppError::Output(match e.contains("is not a partial image") {
+                AppError::Output(if e.contains("is not a partial image") {
                     // A plain image: say so in --resume's terms, not merge's.
-                    true => format!(
+                    format!(
                         "--resume {}: the image holds no exact sums; only images written with --checkpoint or at an interrupt hold the sums a render continues from",
                         path.display()
-                    ),
-                    false => format!("--resume: {e}"),
+                    )
+                } else {
+                    format!("--resume: {e}")
                 })
             })?;
             if header.passes.start != 0 {
@@ -466,9 +464,10 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         crate::files::probe_output(out, &read).map_err(AppError::Output)?;
     }
     let (width, height) = renderer.size();
-    let identity = match split.is_some() || args.resume.is_some() || args.checkpoint.is_some() {
-        true => Some(renderer.identity().ok_or_else(|| AppError::Estimator("this renderer cannot be split into pass ranges".into()))?),
-        false => None,
+    let identity = if split.is_some() || args.resume.is_some() || args.checkpoint.is_some() {
+        Some(renderer.identity().ok_or_else(|| AppError::Estimator("this renderer cannot be split into pass ranges".into()))?)
+    } else {
+        None
     };
 
     // Render passes until the spp or time limit.
@@ -577,23 +576,22 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         write_or_rescue(&exr, |p| distributed::write_partial(p, &header, &film))?;
         return Ok(RenderReport { partial: Some((held, spp)), ..base });
     }
-    // A resumed render's image is the resumed one's passes and these, merged exactly.
-    let film = match &identity {
-        Some(identity) if resumed.is_some() => whole_so_far(identity, &film, &resumed, first_pass, width, height, end).0,
-        _ => film,
-    };
-    // With --checkpoint, or at an interrupt, the image keeps its exact sums (--resume
-    // continues it); the PNG is written as usual.
-    if args.checkpoint.is_some() || summary_interrupted(&base) {
+    // A resumed render's image is the resumed one's passes and these, merged exactly. With
+    // --checkpoint, or at an interrupt, the image keeps its exact sums (--resume continues
+    // it); the PNG is written as usual.
+    let keep_sums = args.checkpoint.is_some() || base.summary.interrupted;
+    if resumed.is_some() || keep_sums {
         let identity = match identity {
             Some(i) => i,
             None => renderer.identity().ok_or_else(|| AppError::Estimator("this renderer cannot keep its sums".into()))?,
         };
-        let header =
-            partial_header(&identity, width, height, distributed::PassRange { start: 0, end: film.passes().max(1) }, end.max(film.passes()), film.tallies());
-        write_or_rescue(&exr, |p| distributed::write_partial(p, &header, &film))?;
-        write_or_rescue(&png, |p| image_io::write_png(p, width, height, &film.to_rgb_f32(), args.exposure))?;
-        return Ok(RenderReport { png: Some(png), ..base });
+        let (whole, header) = whole_so_far(&identity, &film, &resumed, first_pass, width, height, end);
+        if keep_sums {
+            write_or_rescue(&exr, |p| distributed::write_partial(p, &header, &whole))?;
+            write_or_rescue(&png, |p| image_io::write_png(p, width, height, &whole.to_rgb_f32(), args.exposure))?;
+            return Ok(RenderReport { png: Some(png), ..base });
+        }
+        film = whole;
     }
     let image = film.to_rgb_f32();
     if args.aov.is_empty() {
@@ -625,10 +623,6 @@ fn write_or_rescue(path: &std::path::Path, write: impl Fn(&std::path::Path) -> R
         Ok(()) => Err(AppError::Output(format!("{e}; the image was written to {} instead", rescue.display()))),
         Err(again) => Err(AppError::Output(format!("{e}; writing it to {} failed too: {again}", rescue.display()))),
     }
-}
-
-fn summary_interrupted(report: &RenderReport) -> bool {
-    report.summary.interrupted
 }
 
 /// The partial-image header of `identity`'s render holding `passes` of `total`.
@@ -685,7 +679,7 @@ fn whole_so_far(
 pub fn merge(args: &MergeArgs) -> Result<(distributed::PartialHeader, PathBuf, Option<PathBuf>), AppError> {
     let (exr, png) = crate::cli::output_paths(&args.output).map_err(AppError::Output)?;
     // Never overwrite an input.
-    if let Some(part) = args.parts.iter().find(|p| same_file(&exr, p) || same_file(&png, p)) {
+    if let Some(part) = args.parts.iter().find(|p| crate::files::same_file(&exr, p) || crate::files::same_file(&png, p)) {
         return Err(AppError::Output(format!("output '{}' is one of the parts being merged; choose another file", part.display())));
     }
     for out in [&exr, &png] {
@@ -701,11 +695,6 @@ pub fn merge(args: &MergeArgs) -> Result<(distributed::PartialHeader, PathBuf, O
     image_io::write_exr(&exr, header.width, header.height, &image).map_err(AppError::Image)?;
     image_io::write_png(&png, header.width, header.height, &image, args.exposure).map_err(AppError::Image)?;
     Ok((header, exr, Some(png)))
-}
-
-/// Do two paths name the same file (the same path, or the same existing file)?
-fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
-    a == b || matches!((std::fs::canonicalize(a), std::fs::canonicalize(b)), (Ok(x), Ok(y)) if x == y)
 }
 
 /// `1234567.0` → `"1.23 M"`.

@@ -41,6 +41,15 @@ pub struct ConvergenceSetup {
     pub memory_limit: Option<u64>,
 }
 
+/// Refuse an estimator list that names one twice (`-e pt,pt` ran PT twice); `convergence`
+/// and `suite` check it before any work.
+pub fn check_distinct(estimators: &[EstimatorKind]) -> Result<(), String> {
+    match estimators.iter().enumerate().find(|(i, e)| estimators[..*i].contains(e)) {
+        Some((_, dup)) => Err(format!("-e names {} twice: each estimator runs once per seed (--seeds sets the repeats)", dup.name())),
+        None => Ok(()),
+    }
+}
+
 /// Refuse, before building them, estimators whose renderers (all held at once, one per
 /// estimator) would together need more memory than `limit` or the memory available.
 fn check_memory(prepared: &PreparedScene, estimators: &[EstimatorKind], limit: Option<u64>) -> Result<(), String> {

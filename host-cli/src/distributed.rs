@@ -168,6 +168,13 @@ pub fn requested_range(split: &crate::cli::SplitArgs, total: u32) -> Result<Opti
     }
 }
 
+/// The first placeholder (`{task}`, `{passes}`) that `path` names, if any: what only a split
+/// render fills in ([`expand_output`]).
+pub fn placeholder(path: &Path) -> Option<&'static str> {
+    let text = path.to_string_lossy();
+    ["{task}", "{passes}"].into_iter().find(|p| text.contains(p))
+}
+
 /// `{task}` → the task index, `{passes}` → `A-B`, in an output path.
 pub fn expand_output(path: &Path, range: PassRange, task: Option<u32>) -> Result<PathBuf, String> {
     let text = path.to_string_lossy();

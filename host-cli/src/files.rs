@@ -55,6 +55,11 @@ pub fn read_text_bounded(path: &Path, limit: u64) -> Result<String, String> {
     String::from_utf8(read_bounded(path, limit)?).map_err(|e| format!("is not UTF-8 text (byte {})", e.utf8_error().valid_up_to()))
 }
 
+/// Do two paths name the same file (the same path, or the same existing file by any path)?
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    a == b || matches!((std::fs::canonicalize(a), std::fs::canonicalize(b)), (Ok(x), Ok(y)) if x == y)
+}
+
 /// Try `path` as an output before any work (issue 50: an unwritable `-o` failed after
 /// the whole render): refuse, naming the reason, a path that is a directory, exists as
 /// something other than a regular file (`/dev/full`), is one of `inputs` (the same file,
@@ -69,9 +74,7 @@ pub fn probe_output(path: &Path, inputs: &[&Path]) -> Result<(), String> {
         if !meta.is_file() {
             return Err(format!("output '{name}' is not a regular file (a device, FIFO or socket): nothing is written there"));
         }
-        if let Ok(out) = std::fs::canonicalize(path)
-            && let Some(input) = inputs.iter().find(|i| std::fs::canonicalize(i).is_ok_and(|c| c == out))
-        {
+        if let Some(input) = inputs.iter().find(|i| same_file(path, i)) {
             return Err(format!("output '{name}' is one of the inputs ({}): it would be overwritten", input.display()));
         }
     }

@@ -59,9 +59,7 @@ pub fn mape_target(floor: Option<(f64, f64)>) -> f64 {
 
 /// Run the suite; progress lines go to stderr.
 pub fn run(args: &SuiteArgs, threads: usize) -> Result<Vec<SceneResult>, String> {
-    if let Some(dup) = args.estimators.iter().enumerate().find(|(i, e)| args.estimators[..*i].contains(e)).map(|(_, e)| e) {
-        return Err(format!("-e names {} twice: each estimator runs once per seed (--seeds sets the repeats)", dup.name()));
-    }
+    crate::convergence::check_distinct(&args.estimators)?;
     let plots_dir = args.output.with_extension("");
     let mut results = Vec::new();
     for folder in scene_folders(&args.scenes, &args.only)? {

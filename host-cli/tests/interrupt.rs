@@ -9,19 +9,14 @@
 //! (the first test waits out its 60 s limit).
 #![cfg(unix)]
 
-use std::io::{BufRead, BufReader};
+mod common;
+
+use std::io::BufReader;
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command};
 use std::time::{Duration, Instant};
 
-fn spawn(args: &[&str]) -> Child {
-    Command::new(env!("CARGO_BIN_EXE_ember")).args(args).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().expect("run ember")
-}
-
-fn signal(child: &Child, name: &str) {
-    let ok = Command::new("kill").args([&format!("-{name}"), &child.id().to_string()]).status().expect("kill").success();
-    assert!(ok, "kill -{name} failed");
-}
+use common::{finish, passes_held, signal, spawn, wait_for};
 
 fn sigint(child: &Child) {
     signal(child, "INT");
@@ -30,45 +25,13 @@ fn sigint(child: &Child) {
 /// The pass count in the closing line "interrupted by <signal>: the image holds the N
 /// completed passes", checked against the summary on stdout and the image's validity.
 fn passes_written(rest: &str, stdout: &str, by: &str, out: &Path) -> u32 {
-    let prefix = format!("interrupted by {by}: the image holds the ");
-    let passes: u32 = rest
-        .lines()
-        .find_map(|l| l.strip_prefix(prefix.as_str()).and_then(|t| t.split_whitespace().next()).and_then(|n| n.parse().ok()))
-        .unwrap_or_else(|| panic!("no pass count in stderr: {rest}"));
+    let passes = passes_held(rest, by);
     assert!(passes >= 1, "{rest}");
     assert!(stdout.contains(&format!("passes     {passes} ")), "the summary reports another count: {stdout}");
     let image = ember_cli::image_io::read_exr(out).expect("a valid image");
     assert!(image.pixels.iter().flatten().all(|v| v.is_finite() && *v >= 0.0));
     assert!(image.pixels.iter().flatten().sum::<f32>() > 0.0, "a black image");
     passes
-}
-
-/// Wait for `child`, then its exit status, the rest of stderr and stdout.
-fn finish(mut child: Child, mut err: BufReader<std::process::ChildStderr>) -> (Option<i32>, String, String) {
-    let status = child.wait().expect("wait");
-    let mut rest = String::new();
-    std::io::Read::read_to_string(&mut err, &mut rest).unwrap();
-    let mut stdout = String::new();
-    std::io::Read::read_to_string(child.stdout.as_mut().unwrap(), &mut stdout).unwrap();
-    (status.code(), rest, stdout)
-}
-
-/// Read stderr lines until one starts with `prefix` (the lines read so far returned).
-fn wait_for(reader: &mut impl BufRead, prefix: &str) -> Vec<String> {
-    let mut lines = Vec::new();
-    let deadline = Instant::now() + Duration::from_secs(60);
-    while Instant::now() < deadline {
-        let mut line = String::new();
-        if reader.read_line(&mut line).expect("stderr") == 0 {
-            break;
-        }
-        let done = line.starts_with(prefix);
-        lines.push(line);
-        if done {
-            return lines;
-        }
-    }
-    panic!("no line starting with {prefix:?}; stderr so far: {lines:?}");
 }
 
 fn temp_dir(name: &str) -> std::path::PathBuf {

@@ -3,10 +3,13 @@
 //! bytes of one uninterrupted render of the same total.
 #![cfg(unix)]
 
-use std::io::{BufRead, BufReader};
+mod common;
+
+use std::io::BufReader;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::{Command, Output};
+
+use common::{finish, passes_held, signal, spawn, wait_for};
 
 fn ember(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_ember")).args(args).output().expect("run ember")
@@ -37,6 +40,24 @@ fn same_bytes(a: &Path, b: &Path) -> bool {
     std::fs::read(a).unwrap() == std::fs::read(b).unwrap()
 }
 
+/// For each estimator the resume tests cover, the `render` arguments at `size` (W, H) and
+/// `seed`: PT, BDPT, VCM (merging on, on the caustic scene), SPCBPT (whose reuse FIFOs
+/// are replayed) and BPF (whose kernel shrinks with the global pass index).
+fn estimators(size: (&str, &str), seed: &str) -> Vec<(&'static str, Vec<String>)> {
+    let caustic = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes/caustic/scene.xml");
+    ["pt", "bdpt", "vcm", "spcbpt", "bpf"]
+        .into_iter()
+        .map(|e| {
+            let mut args: Vec<String> =
+                ["render", "-e", e, "--width", size.0, "--height", size.1, "--seed", seed, "--threads", "2"].into_iter().map(String::from).collect();
+            if e == "vcm" {
+                args.push(s(&caustic).to_string());
+            }
+            (e, args)
+        })
+        .collect()
+}
+
 /// A finished render extended, and a render written in checkpoint slices, equal one
 /// render of the same total byte for byte (EXR and PNG), for PT, BDPT, VCM (merging on
 /// the caustic scene), SPCBPT (whose reuse FIFOs are replayed) and BPF (whose kernel
@@ -46,12 +67,8 @@ fn same_bytes(a: &Path, b: &Path) -> bool {
 #[test]
 fn extending_a_render_equals_one_render() {
     let d = dir("extend");
-    let caustic = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes/caustic/scene.xml");
-    for (estimator, scene) in [("pt", None), ("bdpt", None), ("vcm", Some(&caustic)), ("spcbpt", None), ("bpf", None)] {
-        let mut base = vec!["render", "-e", estimator, "--width", "40", "--height", "30", "--seed", "3", "--threads", "2"];
-        if let Some(scene) = scene {
-            base.push(s(scene));
-        }
+    for (estimator, base) in estimators(("40", "30"), "3") {
+        let base: Vec<&str> = base.iter().map(String::as_str).collect();
         let run = |extra: &[&str]| ember(&[base.as_slice(), extra].concat());
         let whole = d.join(format!("whole-{estimator}.exr"));
         ok(&run(&["--spp", "4", "-o", s(&whole)]));
@@ -79,36 +96,16 @@ fn extending_a_render_equals_one_render() {
 #[test]
 fn a_terminated_render_resumes_exactly() {
     let d = dir("term");
-    let caustic = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes/caustic/scene.xml");
-    for (estimator, scene) in [("pt", None), ("bdpt", None), ("vcm", Some(&caustic)), ("spcbpt", None), ("bpf", None)] {
-        let mut base = vec!["render", "-e", estimator, "--width", "48", "--height", "36", "--seed", "5", "--threads", "2"];
-        if let Some(scene) = scene {
-            base.push(s(scene));
-        }
+    for (estimator, base) in estimators(("48", "36"), "5") {
+        let base: Vec<&str> = base.iter().map(String::as_str).collect();
         let out = d.join(format!("out-{estimator}.exr"));
-        let mut child = Command::new(env!("CARGO_BIN_EXE_ember"))
-            .args(&base)
-            .args(["--spp", "100000", "-o", s(&out)])
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("run ember");
+        let mut child = spawn(&[&base[..], &["--spp", "100000", "-o", s(&out)]].concat());
         let mut err = BufReader::new(child.stderr.take().unwrap());
-        let deadline = Instant::now() + Duration::from_secs(60);
-        let mut line = String::new();
-        while !line.starts_with("progress: 1 pass") {
-            line.clear();
-            assert!(err.read_line(&mut line).unwrap() > 0 && Instant::now() < deadline, "{estimator}: no first pass");
-        }
-        assert!(Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap().success());
-        let status = child.wait().unwrap();
-        let mut rest = String::new();
-        std::io::Read::read_to_string(&mut err, &mut rest).unwrap();
-        assert_eq!(status.code(), Some(143), "{estimator}: {rest}");
-        let held: u32 = rest
-            .lines()
-            .find_map(|l| l.strip_prefix("interrupted by SIGTERM: the image holds the ").and_then(|t| t.split_whitespace().next()).and_then(|n| n.parse().ok()))
-            .unwrap_or_else(|| panic!("{estimator}: {rest}"));
+        wait_for(&mut err, "progress: 1 pass");
+        signal(&child, "TERM");
+        let (status, rest, _) = finish(child, err);
+        assert_eq!(status, Some(143), "{estimator}: {rest}");
+        let held = passes_held(&rest, "SIGTERM");
         let total = (held + 2).to_string();
         let whole = d.join(format!("whole-{estimator}.exr"));
         ok(&ember(&[&base[..], &["--spp", &total, "-o", s(&whole)]].concat()));
