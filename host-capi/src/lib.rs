@@ -22,7 +22,7 @@ use ember_cli::accel::Accel;
 use ember_core::camera::{FovAxis, PerspectiveCamera};
 use ember_core::integrator::{Heuristic, MaxDepth, RenderParams};
 use ember_core::math::Vec3;
-use ember_core::render::{EstimatorConfig, EstimatorKind, FILM_BYTES_PER_PIXEL, Film, Renderer};
+use ember_core::render::{EstimatorConfig, EstimatorKind, Film, Renderer};
 use ember_core::scene::{AreaEmission, Scene, SceneBuilder, SceneGeometry};
 use ember_core::spectrum::Rgb;
 
@@ -372,15 +372,11 @@ impl Settings {
 
 /// The threads `ember_render_passes` starts for `requested` (0: every core): capped, not
 /// refused, at 4 × the cores and at 1024, as `ember render --threads` caps them
-/// (`ember_cli::cli::thread_count`, which prints a warning a library must not; a test
-/// checks the two agree). Without the cap `UINT32_MAX` spent 30 s and 240 MB starting
-/// threads before failing.
+/// (`ember_cli::cli::capped_threads`: the CLI's rule without its warning, which a library
+/// must not print). Without the cap `UINT32_MAX` spent 30 s and 240 MB starting threads
+/// before failing.
 pub fn thread_count(requested: u32) -> usize {
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    match requested {
-        0 => cores,
-        n => (n as usize).min((4 * cores).min(1024)),
-    }
+    ember_cli::cli::capped_threads((requested != 0).then_some(requested))
 }
 
 /// Refuse, before the film and the estimator's stores are allocated, a renderer whose
@@ -390,9 +386,7 @@ pub fn thread_count(requested: u32) -> usize {
 /// `catch_unwind` can turn into a status (a 65536×65536 camera did).
 pub fn check_memory(scene: &SceneData, config: &EstimatorConfig, limit: Option<u64>) -> Result<()> {
     let camera = &scene.scene.camera;
-    let pixels = camera.width() as u64 * camera.height() as u64;
-    let estimate = config.memory_estimate(pixels.min(u32::MAX as u64) as u32);
-    let bytes = estimate.bytes.max(pixels * FILM_BYTES_PER_PIXEL);
+    let (bytes, estimate) = ember_cli::estimators::memory_need_for(camera, config);
     let (available, source) = match limit {
         Some(l) => (Some(l), "the memory-limit option"),
         None => (ember_cli::memory::available_bytes(), "available memory"),

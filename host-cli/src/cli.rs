@@ -705,15 +705,20 @@ fn parse_exposure(s: &str) -> Result<f32, String> {
 /// threads than that only add start-up time, and a huge count ran for minutes with no
 /// output), else every core.
 pub fn thread_count(option: Option<u32>) -> usize {
+    let threads = capped_threads(option);
+    if let Some(n) = option.filter(|&n| n as usize > threads) {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        eprintln!("warning: --threads {n} capped at {threads} (4 × {cores} cores, at most 1024)");
+    }
+    threads
+}
+
+/// [`thread_count`] without the warning, for library hosts (the C API), which print
+/// nothing: `n` capped at 4 × the cores and at 1024, or every core.
+pub fn capped_threads(option: Option<u32>) -> usize {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     match option {
-        Some(n) => {
-            let cap = (4 * cores).min(1024);
-            if n as usize > cap {
-                eprintln!("warning: --threads {n} capped at {cap} (4 × {cores} cores, at most 1024)");
-            }
-            (n as usize).min(cap)
-        }
+        Some(n) => (n as usize).min((4 * cores).min(1024)),
         None => cores,
     }
 }

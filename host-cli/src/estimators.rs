@@ -334,7 +334,11 @@ pub fn make_built_at(args: &RenderArgs, start: Instant) -> Result<Built, String>
 /// What `config` would hold for `prepared`'s film: its estimate, with the bytes at least
 /// the film's own.
 pub fn memory_need(prepared: &PreparedScene, config: &EstimatorConfig) -> (u64, MemoryEstimate) {
-    let camera = &prepared.scene.camera;
+    memory_need_for(&prepared.scene.camera, config)
+}
+
+/// [`memory_need`] for a film of `camera`'s size (hosts with scenes of their own: the C API).
+pub fn memory_need_for(camera: &ember_core::camera::PerspectiveCamera, config: &EstimatorConfig) -> (u64, MemoryEstimate) {
     let pixels = camera.width() as u64 * camera.height() as u64;
     let estimate = config.memory_estimate(pixels.min(u32::MAX as u64) as u32);
     (estimate.bytes.max(pixels * ember_core::render::FILM_BYTES_PER_PIXEL), estimate)
