@@ -275,10 +275,7 @@ impl SceneData {
     /// exported film first needs it.
     pub fn hash(&self) -> u64 {
         *self.hash.get_or_init(|| {
-            let mut h = ember_core::fnv::Fnv1a::new();
-            // Writing to the hasher cannot fail.
-            let _ = std::fmt::Write::write_fmt(&mut h, format_args!("{:?}", self.scene));
-            self.accel.hash_geometry(&mut h);
+            let mut h = ember_cli::estimators::scene_hasher(&self.scene, &self.accel);
             for index in &self.triangle_index {
                 std::hash::Hasher::write_u32(&mut h, index.unwrap_or(u32::MAX));
             }

@@ -37,12 +37,18 @@ impl PreparedScene {
     /// written, different when any value that reaches the renderer differs. Computed on
     /// demand (split renders and trained models check it), not for every render.
     pub fn hash(&self) -> u64 {
-        let mut h = ember_core::fnv::Fnv1a::new();
-        // Writing to the hasher cannot fail.
-        let _ = std::fmt::Write::write_fmt(&mut h, format_args!("{:?}", self.scene));
-        self.accel.hash_geometry(&mut h);
-        h.value()
+        scene_hasher(&self.scene, &self.accel).value()
     }
+}
+
+/// The hasher behind [`PreparedScene::hash`], fed with `scene` and `accel`'s geometry, for
+/// hosts that add what else their renders read (the C API: its triangle numbering).
+pub fn scene_hasher(scene: &Scene, accel: &Accel) -> ember_core::fnv::Fnv1a {
+    let mut h = ember_core::fnv::Fnv1a::new();
+    // Writing to the hasher cannot fail.
+    let _ = std::fmt::Write::write_fmt(&mut h, format_args!("{scene:?}"));
+    accel.hash_geometry(&mut h);
+    h
 }
 
 /// Build the built-in scene `--builtin` names (the Cornell box by default) at the requested resolution.
