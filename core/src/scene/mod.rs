@@ -140,16 +140,10 @@ impl core::fmt::Display for SceneError {
 }
 
 /// Counts of things `build` dropped, for the host to report as warnings.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct BuildWarnings {
     /// Triangles with zero area (they cannot be hit or sampled).
     pub degenerate_triangles: usize,
-    /// The largest |coordinate| of a zero-area triangle: far from the origin, f32's spacing
-    /// (|x| · 2⁻²³) collapses small triangles, which is then the reason to name.
-    pub degenerate_extent: f32,
-    /// Triangles with finite vertices whose area overflows f32 (coordinates near 1e19 and
-    /// beyond): dropped like zero-area ones, but named apart, since the cause differs.
-    pub overflowing_triangles: usize,
     /// Lights dropped because they emit nothing (zero radiance, intensity or
     /// irradiance); an emitting mesh counts once per triangle. Lights that are kept are
     /// never counted here.
@@ -243,14 +237,8 @@ impl SceneBuilder {
         }
         let cross = (p[1] - p[0]).cross(p[2] - p[0]);
         let len2 = cross.length_squared();
-        if len2.is_infinite() || len2.is_nan() {
-            self.warnings.overflowing_triangles += 1;
-            return false;
-        }
-        if !(len2 > 0.0) {
+        if !(len2 > 0.0) || !len2.is_finite() {
             self.warnings.degenerate_triangles += 1;
-            let extent = p.iter().fold(0.0f32, |m, v| m.max(v.abs().max_element()));
-            self.warnings.degenerate_extent = self.warnings.degenerate_extent.max(extent);
             return false;
         }
         // Shading normals must be finite and usable; otherwise fall back to the face.
