@@ -47,12 +47,12 @@
 //!
 //! # Pixel filter
 //! The camera carries the film's [`Filter`]; [`PerspectiveCamera::sample_ray`] draws a
-//! pixel's film point from it and returns the weight of `crate::filter`'s eq. (3).
+//! pixel's film point from it and returns the weight of `crate::pixel_filter`'s eq. (3).
 
-use crate::filter::Filter;
 use crate::geometry::Ray;
 use crate::math::{Mat3, Mat4, Vec2, Vec3, sqrt, tan};
 use crate::measure::SolidAnglePdf;
+use crate::pixel_filter::Filter;
 use crate::rng::{SampleStream, Stream};
 use crate::warp::sample_concentric_disk;
 
@@ -80,7 +80,7 @@ pub struct PrimaryRay {
     pub ray: Ray,
     /// The film point, continuous pixel coordinates.
     pub film: Vec2,
-    /// The filter weight h_c(x)/p (`crate::filter` eq. 3): exactly 1 for the box.
+    /// The filter weight h_c(x)/p (`crate::pixel_filter` eq. 3): exactly 1 for the box.
     pub weight: f32,
 }
 

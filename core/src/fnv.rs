@@ -1,5 +1,5 @@
 //! FNV-1a, 64-bit: the checksum of stored SPCBPT models
-//! ([`crate::integrator::spcbpt::model_file`]) and the content hash hosts give scenes and
+//! ([`crate::estimators::spcbpt::model_file`]) and the content hash hosts give scenes and
 //! images. Not cryptographic: it catches damage and mismatches, not forgery.
 //!
 //! Integers are hashed as their little-endian bytes, so a value hashes the same on every

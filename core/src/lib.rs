@@ -21,10 +21,9 @@ extern crate alloc;
 pub mod alias;
 pub mod bsdf;
 pub mod camera;
-pub mod filter;
+pub mod estimators;
 pub mod fnv;
 pub mod geometry;
-pub mod integrator;
 pub mod light;
 pub mod math;
 pub mod measure;
@@ -33,6 +32,7 @@ pub mod merge;
 pub mod mmis;
 #[cfg(feature = "path")]
 pub mod path;
+pub mod pixel_filter;
 pub mod plan;
 pub mod render;
 pub mod rng;
@@ -43,8 +43,26 @@ pub mod spectrum;
 #[cfg(feature = "subspace")]
 pub mod subspace;
 pub mod texture;
+pub mod transport;
 pub mod warp;
 
 pub use math::{Vec2, Vec3};
 pub use measure::{AreaPdf, SolidAnglePdf};
 pub use spectrum::Rgb;
+
+/// Old paths, kept while the hosts move to the new ones (issue 49); removed when they have.
+#[doc(hidden)]
+pub mod integrator {
+    #[cfg(feature = "bdpt")]
+    pub use crate::estimators::bdpt;
+    #[cfg(feature = "lvcbpt")]
+    pub use crate::estimators::lvcbpt;
+    #[cfg(feature = "spcbpt")]
+    pub use crate::estimators::spcbpt;
+    #[cfg(feature = "merging")]
+    pub use crate::estimators::vcm;
+    pub use crate::estimators::{lt, pt};
+    pub use crate::transport::*;
+}
+#[doc(hidden)]
+pub use pixel_filter as filter;

@@ -8,7 +8,7 @@
 
 use std::sync::OnceLock;
 
-use ember_core::integrator::spcbpt::Model;
+use ember_core::estimators::spcbpt::Model;
 use ember_core::scene::Scene;
 use ember_core::subspace::SubpathFeature;
 use glam::Vec3;

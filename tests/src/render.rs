@@ -2,11 +2,11 @@
 //! serial runner: one image per pass, so per-pass statistics (independent across passes)
 //! give honest error bars.
 
+use ember_core::estimators::spcbpt::{Model, Spcbpt};
 use ember_core::geometry::RayQuery;
-use ember_core::integrator::spcbpt::{Model, Spcbpt};
-use ember_core::integrator::{Counters, RenderParams};
 use ember_core::render::{Context, EstimatorConfig, EstimatorKind, Film, PhaseBuffers, Renderer, SpcbptConfig, render_pass as serial_pass, run_phases};
 use ember_core::scene::Scene;
+use ember_core::transport::{Counters, RenderParams};
 
 use crate::stats::{MeanVar, normal_two_sided_p};
 
@@ -140,7 +140,7 @@ pub fn cornell_relmse(config: EstimatorConfig, checkpoints: &[u32]) -> Vec<f64> 
     let target: Vec<[f64; 3]> = (0..RES * RES).map(|i| reference.block_mean(i % RES, i / RES, scale, scale)).collect();
     let (scene, geometry, _) = crate::scenes::cornell(RES as u32, RES as u32).build().expect("scene");
     let tracer = crate::tracer::BruteForce::new(geometry);
-    let params = RenderParams { max_depth: ember_core::integrator::MaxDepth(30), seed: 31, ..RenderParams::default() };
+    let params = RenderParams { max_depth: ember_core::transport::MaxDepth(30), seed: 31, ..RenderParams::default() };
     let mut passes = Passes::new(&scene, &tracer, &params, config);
     let mut sum = vec![[0.0f64; 3]; RES * RES];
     let mut errors = Vec::new();
@@ -167,7 +167,7 @@ pub fn cornell_relmse(config: EstimatorConfig, checkpoints: &[u32]) -> Vec<f64> 
 /// Give every fourth node a kernel half the pass's, or a quarter for every eighth (as
 /// `segment::filter::scale_kernels` does to glossy nodes), so that the filters'
 /// propagation-against-recursion tests check that every kernel is its centre's own.
-pub fn vary_kernels(nodes: &mut [ember_core::segment::filter::Node]) {
+pub fn vary_kernels(nodes: &mut [ember_core::estimators::filter::Node]) {
     for (i, n) in nodes.iter_mut().enumerate() {
         n.kernel_scale = if i % 8 == 0 {
             0.25

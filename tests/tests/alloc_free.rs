@@ -10,9 +10,10 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
-use ember_core::integrator::{MaxDepth, RenderParams, Splat, bdpt, lt, pt};
+use ember_core::estimators::{bdpt, lt, pt};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{MaxDepth, RenderParams, Splat};
 use ember_core::warp;
 use ember_tests::scenes::cornell_with_spheres;
 use ember_tests::tracer::BruteForce;

@@ -19,12 +19,12 @@
 //! (0.625 vs 0.639 at (3, 1)).
 
 use ember_core::bsdf::TransportMode;
-use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::path::mis::mis_weight;
 use ember_core::path::{LightPointSample, Vertex, camera_subpath, connect, light_subpath};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::Context;
 use ember_core::scene::Scene;
+use ember_core::transport::{Counters, MaxDepth, RenderParams};
 use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split, full_path};
 use ember_tests::scenes::{cornell_with_delta_lights, cornell_with_spheres};
 use ember_tests::tracer::BruteForce;

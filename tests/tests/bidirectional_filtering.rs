@@ -1,4 +1,4 @@
-//! Bidirectional path filtering (`-e bpf`, `ember_core::segment::filter::Bpf`): its
+//! Bidirectional path filtering (`-e bpf`, `ember_core::estimators::filter::Bpf`): its
 //! propagation against eq. (18)–(19) written out in area measure over camera and light
 //! segments, its denominators, its reduction to MVF without light paths, and convergence
 //! under the shrinking kernel.
@@ -15,14 +15,14 @@
 //! - a light junction's own path counted in the emission's N_L: 1.2e-3.
 
 use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
-use ember_core::integrator::{MaxDepth, RenderParams, SurfacePoint};
+use ember_core::estimators::filter::nodes::{NONE, NodeKind};
+use ember_core::estimators::filter::{Bidirectional, Denominators, FilterGraph, Neighbourhood, Node, kernel_points, trace_camera_nodes, trace_light_nodes};
 use ember_core::math::Frame;
 use ember_core::merge::HashGrid;
 use ember_core::scene::{AreaEmission, Scene};
 use ember_core::segment::Kernel;
-use ember_core::segment::filter::nodes::{NONE, NodeKind};
-use ember_core::segment::filter::{Bidirectional, Denominators, FilterGraph, Neighbourhood, Node, kernel_points, trace_camera_nodes, trace_light_nodes};
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{MaxDepth, RenderParams, SurfacePoint};
 use ember_tests::render::vary_kernels;
 use ember_tests::scenes::{cornell, cornell_with_spheres};
 use ember_tests::tracer::BruteForce;
@@ -524,8 +524,8 @@ fn bpf_with_merges_only_agrees_with_bpm() {
 /// the first segment) and with bridges counted among the ends (0.65).
 #[test]
 fn bridge_terms_equal_the_sum_over_every_pair() {
-    use ember_core::segment::filter::bridge::{bridge_end, bridges_from};
-    use ember_core::segment::filter::{KernelPoint, trace_bridges};
+    use ember_core::estimators::filter::bridge::{bridge_end, bridges_from};
+    use ember_core::estimators::filter::{KernelPoint, trace_bridges};
     let (scene, tracer) = scene_with_reflective_light(8, 6);
     let params = RenderParams { max_depth: MaxDepth(4), seed: 9, ..RenderParams::default() };
     let (mut nodes, _) = bpf_nodes(&scene, &tracer, &params, 4, 48, 24);
@@ -557,7 +557,7 @@ fn bridge_terms_equal_the_sum_over_every_pair() {
         let d2 = v.length_squared() as f64;
         let cos_y = ny.dot(v).abs() as f64 / d2.sqrt();
         // No bridge runs along y's tangent plane (`MIN_BRIDGE_COS`).
-        if !(cos_y > ember_core::segment::filter::bridge::MIN_BRIDGE_COS) {
+        if !(cos_y > ember_core::estimators::filter::bridge::MIN_BRIDGE_COS) {
             return 0.0;
         }
         choice * starts * ends * d2 / cos_y
@@ -602,10 +602,10 @@ fn bridge_terms_equal_the_sum_over_every_pair() {
 /// the geometric test (χ² 158, p = 9e-11).
 #[test]
 fn bridge_ends_are_drawn_uniformly() {
+    use ember_core::estimators::filter::bridge::{bridge_end, bridge_geometry, bridges_from};
+    use ember_core::estimators::filter::trace_bridges;
     use ember_core::geometry::RayQuery;
-    use ember_core::integrator::SurfacePoint;
-    use ember_core::segment::filter::bridge::{bridge_end, bridge_geometry, bridges_from};
-    use ember_core::segment::filter::trace_bridges;
+    use ember_core::transport::SurfacePoint;
     let (scene, tracer) = scene_with_reflective_light(8, 6);
     let params = RenderParams { max_depth: MaxDepth(4), seed: 12, ..RenderParams::default() };
     let (nodes, _) = bpf_nodes(&scene, &tracer, &params, 4, 48, 24);

@@ -6,17 +6,18 @@
 //! many are. Injected-bug check (done once, reverted): `record(v, false)` in
 //! `path::connect` (occlusion never recorded) fails the second half.
 
-use ember_core::integrator::{MaxDepth, RenderParams, bdpt};
+use ember_core::estimators::bdpt;
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::scenes::{cornell_with_spheres, furnace_box};
 use ember_tests::tracer::BruteForce;
 
-fn stats(builder: ember_core::scene::SceneBuilder) -> ember_core::integrator::ConnectionStats {
+fn stats(builder: ember_core::scene::SceneBuilder) -> ember_core::transport::ConnectionStats {
     let (scene, geometry, _) = builder.build().unwrap();
     let tracer = BruteForce::new(geometry);
     let params = RenderParams { max_depth: MaxDepth(6), seed: 2, ..RenderParams::default() };
     let mut out = vec![Rgb::ZERO; 64];
-    let mut total = ember_core::integrator::ConnectionStats::default();
+    let mut total = ember_core::transport::ConnectionStats::default();
     for pass in 0..4 {
         let c = bdpt::render_pixels(&scene, &tracer, &params, pass, 0..64, &mut out, &mut |_| {});
         total += c.connections;

@@ -5,12 +5,12 @@
 //! escaped camera paths, light paths from the scene disk, next-event estimation). The χ²
 //! tests of its sampling are in `light_sampling.rs`.
 
-use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::light::Light;
 use ember_core::math::{PI, Vec3};
 use ember_core::render::EstimatorKind;
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
 use ember_tests::render::{assert_blocks_agree, push_block_means, render_pass};
 use ember_tests::scenes::window_room_lit;

@@ -10,7 +10,7 @@
 //! Russian-roulette compensation (then inline in `pt`, now `survives_roulette`) made PT
 //! read 1.90 (z ≈ −139).
 
-use ember_core::integrator::{MaxDepth, RenderParams};
+use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
 use ember_tests::render::{PT_LT_BDPT, render_pass};
 use ember_tests::scenes::furnace_box;

@@ -1,5 +1,5 @@
 //! Multi-vertex path filtering (`-e mvf`) and photon filtering (`-e phf`,
-//! `ember_core::segment::filter`): each propagation against a naive recursive evaluation
+//! `ember_core::estimators::filter`): each propagation against a naive recursive evaluation
 //! of eq. (18)–(19) (and its adjoint over light segments), the denominators, and
 //! convergence under the shrinking kernel.
 //!
@@ -12,15 +12,15 @@
 //!   propagation differs from its recursion by 2.8e-1 at light node 2.
 
 use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
-use ember_core::integrator::{MaxDepth, RenderParams};
+use ember_core::estimators::filter::nodes::NONE;
+use ember_core::estimators::filter::{Denominators, FilterGraph, Neighbourhood, Node, kernel_points, trace_camera_nodes, trace_light_nodes};
 use ember_core::math::Frame;
 use ember_core::merge::HashGrid;
 use ember_core::render::FilterSide;
 use ember_core::scene::Scene;
 use ember_core::segment::Kernel;
-use ember_core::segment::filter::nodes::NONE;
-use ember_core::segment::filter::{Denominators, FilterGraph, Neighbourhood, Node, kernel_points, trace_camera_nodes, trace_light_nodes};
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::render::{cornell_relmse, vary_kernels};
 use ember_tests::scenes::{cornell, cornell_with_spheres};
 use ember_tests::tracer::BruteForce;

@@ -4,12 +4,12 @@
 //! the filter on the film).
 
 use ember_core::camera::{FovAxis, Lens, PerspectiveCamera};
-use ember_core::filter::Filter;
-use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::math::{Vec2, Vec3};
+use ember_core::pixel_filter::Filter;
 use ember_core::render::EstimatorKind;
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::builtin::look_at;
+use ember_core::transport::{MaxDepth, RenderParams};
 use ember_core::warp::invert_concentric_disk;
 use ember_tests::chi2::sidak;
 use ember_tests::render::{assert_blocks_agree, push_block_means, render_pass};

@@ -13,12 +13,12 @@
 //! - the ratios not divided by the strategy's own count fails (1) ((2, 1): 0.921 vs
 //!   0.812) and (2) (Σw = 0.914).
 
-use ember_core::integrator::lvcbpt::StrategyCounts;
-use ember_core::integrator::{Counters, MaxDepth, RenderParams};
+use ember_core::estimators::lvcbpt::StrategyCounts;
 use ember_core::path::mis::mis_weight_counted;
 use ember_core::path::{LightPointSample, Vertex, camera_subpath, connect, light_subpath};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::Context;
+use ember_core::transport::{Counters, MaxDepth, RenderParams};
 use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split, full_path};
 use ember_tests::scenes::cornell_with_spheres;
 use ember_tests::tracer::BruteForce;

@@ -12,8 +12,8 @@
 //! pbrt-style camera the suite README warns about) fails at the first block, the red
 //! wall's corner (z = −92).
 
-use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::render::EstimatorKind;
+use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
 use ember_tests::reference::{read_exr, scenes_dir};
 use ember_tests::render::{block_means, render_pass};

@@ -19,11 +19,11 @@
 //! density of arriving at the next vertex.
 
 use ember_core::bsdf::{Material, TextureSlot};
-use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::math::{Vec2, Vec3};
 use ember_core::render::{EstimatorConfig, EstimatorKind, LvcbptConfig};
 use ember_core::spectrum::Rgb;
 use ember_core::texture::{Bitmap, Texture, UvTransform, WrapMode};
+use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
 use ember_tests::render::{Passes, assert_blocks_agree, push_block_means, spcbpt_config};
 use ember_tests::scenes::cornell;

@@ -33,12 +33,12 @@
 
 use ember_core::bsdf::{Material, MicrofacetKind};
 use ember_core::camera::{FovAxis, PerspectiveCamera};
-use ember_core::integrator::{Heuristic, MaxDepth, RenderParams};
 use ember_core::light::Light;
 use ember_core::math::Mat4;
 use ember_core::render::EstimatorConfig;
 use ember_core::scene::{AreaEmission, SceneBuilder, builtin};
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{Heuristic, MaxDepth, RenderParams};
 use ember_tests::render::Passes;
 use ember_tests::stats::MeanVar;
 use ember_tests::tracer::BruteForce;

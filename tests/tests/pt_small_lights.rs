@@ -27,13 +27,14 @@
 
 use ember_core::bsdf::Material;
 use ember_core::camera::{FovAxis, PerspectiveCamera};
+use ember_core::estimators::pt;
 use ember_core::geometry::SurfaceHit;
-use ember_core::integrator::{MaxDepth, RenderParams, SurfacePoint, pt};
 use ember_core::light::Light;
 use ember_core::math::{Frame, Mat4};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::{AreaEmission, SceneBuilder, builtin};
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{MaxDepth, RenderParams, SurfacePoint};
 use ember_tests::tracer::BruteForce;
 use glam::{Vec2, Vec3};
 

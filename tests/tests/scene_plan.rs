@@ -19,7 +19,6 @@
 
 use ember_core::bsdf::Material;
 use ember_core::camera::{FovAxis, PerspectiveCamera};
-use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::light::Light;
 use ember_core::math::Mat4;
 use ember_core::merge::RadiusRule;
@@ -27,6 +26,7 @@ use ember_core::plan::{Plan, SceneFacts, Technique};
 use ember_core::render::{EstimatorConfig, MergeMode, MergingConfig};
 use ember_core::scene::{SceneBuilder, builtin};
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::render::{Passes, push_block_means};
 use ember_tests::scenes::{cornell, cornell_with_delta_lights};
 use ember_tests::stats::MeanVar;

@@ -16,7 +16,6 @@
 use ember_core::bsdf::{Material, MicrofacetKind};
 use ember_core::camera::{FovAxis, PerspectiveCamera};
 use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
-use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::light::Light;
 use ember_core::math::{Mat4, Vec2};
 use ember_core::merge::RadiusRule;
@@ -26,6 +25,7 @@ use ember_core::scene::{AreaEmission, SceneBuilder, builtin};
 use ember_core::segment::sampler::{BsdfRaycast, Raycast, SegmentUniforms, Surfaces, Uniform};
 use ember_core::segment::{Kernel, Point, Segment, SurfaceSampler, contribution};
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
 use ember_tests::render::Passes;
 use ember_tests::scenes::cornell_with_spheres;

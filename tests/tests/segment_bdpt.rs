@@ -1,4 +1,4 @@
-//! Segment BDPT (`-e sbdpt`, `ember_core::segment::sbdpt`) with the disk kernel: its MIS
+//! Segment BDPT (`-e sbdpt`, `ember_core::estimators::segment::sbdpt`) with the disk kernel: its MIS
 //! weights against an f64 brute force over segment paths, and its image against segment
 //! PT and segment LT, which estimate the same segment path integral by other samplers.
 //! (The Dirac limit, sbdpt = bdpt bit for bit, is in `segment.rs`.)
@@ -16,7 +16,6 @@
 //! matters only at folds, a small share of these images.
 
 use ember_core::bsdf::{Material, MicrofacetKind};
-use ember_core::integrator::{Counters, MaxDepth, RenderParams};
 use ember_core::merge::RadiusRule;
 use ember_core::path::mis::mis_weight;
 use ember_core::path::{LightPointSample, camera_subpath_with_kernel, connect, light_subpath_with_kernel};
@@ -26,6 +25,7 @@ use ember_core::scene::Context;
 use ember_core::scene::Scene;
 use ember_core::segment::{Junctions, Kernel};
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{Counters, MaxDepth, RenderParams};
 use ember_tests::bdpt_oracle::{brute_force_segment_weights, full_path};
 use ember_tests::chi2::sidak;
 use ember_tests::render::{Passes, assert_blocks_agree, push_block_means};

@@ -28,11 +28,11 @@
 //!   camera throughput for camera vertices) instead of `light_prefix_weights`: fails,
 //!   block 0 at z = −25.4.
 
+use ember_core::estimators::spcbpt::{self, PassCache};
 use ember_core::geometry::RayQuery;
-use ember_core::integrator::spcbpt::{self, PassCache};
-use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::render::{EstimatorConfig, EstimatorKind};
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
 use ember_tests::render::{Passes, assert_blocks_agree, push_block_means, render_pass, spcbpt_config, spcbpt_model};
 use ember_tests::scenes::cornell;

@@ -25,8 +25,7 @@
 //! so their β agree; the end-to-end test (`spcbpt_agreement.rs`) is what guards that
 //! the counts do not depend on how a path was sampled (it fails on this bug at z = −25.4).
 
-use ember_core::integrator::spcbpt::{self, Model, join, memoize_light_path, path_counts};
-use ember_core::integrator::{Counters, MaxDepth, RenderParams};
+use ember_core::estimators::spcbpt::{self, Model, join, memoize_light_path, path_counts};
 use ember_core::measure::VertexPdf;
 use ember_core::path::mis::mis_weight_counted;
 use ember_core::path::{LightPointSample, Vertex, VertexKind, camera_subpath, light_subpath};
@@ -34,6 +33,7 @@ use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::Context;
 use ember_core::scene::Scene;
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{Counters, MaxDepth, RenderParams};
 use ember_tests::bdpt_oracle::{brute_force_weights, for_each_strategy_split};
 use ember_tests::render::{spcbpt_config, spcbpt_model};
 use ember_tests::scenes::cornell_with_spheres;

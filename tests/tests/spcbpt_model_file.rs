@@ -9,11 +9,11 @@
 //! - `decode` without the checksum comparison: byte flips in Γ are accepted as a
 //!   different model.
 
-use ember_core::integrator::spcbpt::Model;
-use ember_core::integrator::spcbpt::model_file::{MAGIC, ModelError, VERSION};
-use ember_core::integrator::{MaxDepth, RenderParams};
+use ember_core::estimators::spcbpt::Model;
+use ember_core::estimators::spcbpt::model_file::{MAGIC, ModelError, VERSION};
 use ember_core::render::EstimatorConfig;
 use ember_core::scene::Scene;
+use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::render::{Passes, spcbpt_config, spcbpt_model};
 use ember_tests::scenes::cornell;
 use ember_tests::tracer::BruteForce;

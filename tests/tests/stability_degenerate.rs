@@ -9,9 +9,9 @@
 
 use ember_core::bsdf::Material;
 use ember_core::camera::{FovAxis, PerspectiveCamera};
-use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::scene::{AreaEmission, Scene, SceneBuilder, SceneError, builtin};
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::render::{PT_LT_BDPT, render_pass};
 use ember_tests::scenes::cornell;
 use ember_tests::tracer::BruteForce;

@@ -17,11 +17,11 @@
 //! Reverting that fix is the injected bug (1) catches.
 
 use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
-use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::render::EstimatorKind;
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::{AreaEmission, SceneBuilder};
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::render::{PT_LT_BDPT, render_pass};
 use ember_tests::scenes::cornell;
 use ember_tests::stats::MeanVar;

@@ -19,13 +19,13 @@
 
 use ember_core::bsdf::Material;
 use ember_core::camera::{FovAxis, PerspectiveCamera};
-use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::light::Light;
 use ember_core::math::Mat4;
 use ember_core::merge::RadiusRule;
 use ember_core::render::{EstimatorConfig, EstimatorKind, MergeMode, MergingConfig};
 use ember_core::scene::{Scene, builtin};
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
 use ember_tests::render::{Passes, assert_blocks_agree, push_block_means, render_pass};
 use ember_tests::scenes::{cornell, cornell_with_delta_lights};

@@ -18,14 +18,14 @@
 //! 2. With η = 0 the connection weights are BDPT's (`path::mis::mis_weight`), to 1e-5.
 
 use ember_core::bsdf::TransportMode;
-use ember_core::integrator::vcm::mis::{MergeDensities, Side, Techniques, connection_weight, merge_weight, prefix};
-use ember_core::integrator::{Counters, MaxDepth, RenderParams};
+use ember_core::estimators::vcm::mis::{MergeDensities, Side, Techniques, connection_weight, merge_weight, prefix};
 use ember_core::merge::RadiusRule;
 use ember_core::path::mis::mis_weight;
 use ember_core::path::{LightPointSample, Vertex, VertexKind, camera_subpath, connect, light_subpath};
 use ember_core::render::{EstimatorConfig, MergeMode, MergingConfig, Renderer};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::{Context, Scene};
+use ember_core::transport::{Counters, MaxDepth, RenderParams};
 use ember_tests::bdpt_oracle::{brute_force_vcm_weights, for_each_strategy_split, split};
 use ember_tests::render::Passes;
 use ember_tests::scenes::cornell_with_delta_lights;

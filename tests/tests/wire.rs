@@ -3,10 +3,10 @@
 //! runner's image bit for bit, and an instance that only receives state parts (never
 //! film parts, never mapping) stays in step with the one that maps.
 
-use ember_core::integrator::RenderParams;
 use ember_core::render::wire::Part;
 use ember_core::render::{ChunkOutput, Context, EstimatorKind, Film, PhaseBuffers, Phased, Renderer, run_phases};
 use ember_core::scene::builtin;
+use ember_core::transport::RenderParams;
 use ember_tests::tracer::BruteForce;
 
 /// Every estimator on the Cornell box, two passes.

@@ -7,12 +7,12 @@ use super::vertex::{Vertex, VertexKind};
 use crate::bsdf::TransportMode;
 use crate::camera::PerspectiveCamera;
 use crate::geometry::{Ray, RayQuery, spawn_ray_to};
-use crate::integrator::Counters;
 use crate::math::{Vec2, Vec3};
 use crate::measure::VertexPdf;
 use crate::rng::SampleStream;
 use crate::scene::Context;
 use crate::spectrum::Rgb;
+use crate::transport::Counters;
 
 /// The random numbers of a resampled endpoint: for strategy s = 1 which light and where
 /// on it; for t = 1 `u_point` picks the lens point (ignored without a lens). Other

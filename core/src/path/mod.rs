@@ -20,10 +20,10 @@ pub mod vertex;
 pub mod walk;
 
 use crate::geometry::RayQuery;
-use crate::integrator::{Counters, RenderParams};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::segment::{CAMERA_KERNEL_KEY, Junctions, Kernel};
+use crate::transport::{Counters, RenderParams};
 
 pub use connect::{Connection, LightPointSample, Weighted, connect, connect_light_source};
 pub use store::{CacheEntry, LightPaths, cacheable_entries, is_cacheable, trace_light_subpath};

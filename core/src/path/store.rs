@@ -5,9 +5,9 @@ use alloc::vec::Vec;
 
 use super::{SubPath, Vertex, VertexKind, light_subpath, vertex_budgets};
 use crate::geometry::RayQuery;
-use crate::integrator::{Counters, RenderParams};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
+use crate::transport::{Counters, RenderParams};
 
 /// Light sub-paths of one pass (or of one chunk of it), vertices stored contiguously.
 #[derive(Clone, Debug, Default)]

@@ -7,13 +7,13 @@ use super::vertex::{Exit, Vertex, VertexKind, infinite_light_density};
 use crate::bsdf::{TransportMode, shading_normal_correction};
 use crate::camera::PrimaryRay;
 use crate::geometry::{Ray, RayQuery, spawn_ray};
-use crate::integrator::{Counters, RenderParams, light_roulette_reference, survives_roulette};
 use crate::math::{Frame, Vec2, Vec3};
 use crate::measure::{AreaPdf, VertexPdf};
 use crate::rng::SampleStream;
 use crate::scene::Scene;
 use crate::segment::{Junctions, KernelSample};
 use crate::spectrum::Rgb;
+use crate::transport::{Counters, RenderParams, light_roulette_reference, survives_roulette};
 
 /// A sub-path: vertices in the order they were generated.
 pub type SubPath = FixedVec<Vertex, MAX_VERTICES>;
@@ -36,7 +36,7 @@ pub fn camera_subpath<Q: RayQuery + ?Sized>(
 }
 
 /// [`camera_subpath`] with the kernel of `junctions` moving each vertex's exit (segment
-/// BDPT, [`crate::segment::sbdpt`]); `None` is the Dirac kernel.
+/// BDPT, [`crate::estimators::estimators::sbdpt`]); `None` is the Dirac kernel.
 pub fn camera_subpath_with_kernel<Q: RayQuery + ?Sized>(
     scene: &Scene,
     tracer: &Q,

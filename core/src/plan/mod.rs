@@ -47,10 +47,10 @@ use alloc::string::String;
 use alloc::vec::Vec;
 use core::fmt::Write;
 
-use crate::integrator::MaxDepth;
 use crate::math::Bounds3;
 use crate::render::{EstimatorConfig, MergeMode};
 use crate::scene::Scene;
+use crate::transport::MaxDepth;
 
 pub use pilot::PilotStats;
 

@@ -32,13 +32,13 @@ use core::ops::Range;
 #[cfg(feature = "path")]
 use crate::geometry::RayQuery;
 #[cfg(feature = "path")]
-use crate::integrator::{Counters, RenderParams};
-#[cfg(feature = "path")]
 use crate::path::{self, LightPointSample, is_cacheable, trace_light_subpath, vertex_budgets};
 #[cfg(feature = "path")]
 use crate::rng::{SampleStream, Stream};
 #[cfg(feature = "path")]
 use crate::scene::Context;
+#[cfg(feature = "path")]
+use crate::transport::{Counters, RenderParams};
 
 /// The pass index the pilot's random streams use (no render reaches it).
 pub const PILOT_PASS: u32 = u32::MAX - 7;

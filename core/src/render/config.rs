@@ -189,7 +189,7 @@ impl fmt::Display for EstimatorKind {
 }
 
 /// Which vertex-merging estimator ([`EstimatorConfig::Merging`]; also
-/// `integrator::vcm::MergeMode`).
+/// `estimators::vcm::MergeMode`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum MergeMode {
     /// Progressive photon mapping: merge at the first non-Dirac camera vertex, no MIS.
@@ -203,7 +203,7 @@ pub enum MergeMode {
 /// An estimator and its settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum EstimatorConfig {
-    /// Path tracing (its MIS heuristic is [`crate::integrator::RenderParams::heuristic`]).
+    /// Path tracing (its MIS heuristic is [`crate::transport::RenderParams::heuristic`]).
     Pt,
     /// Light tracing: W·H light paths per pass.
     Lt,
@@ -212,7 +212,7 @@ pub enum EstimatorConfig {
     /// Not an image but a probe: BDPT's samples, each strategy's contribution replaced by
     /// its term of PT's second moment, so that a pixel's mean over passes estimates the
     /// second moment of one PT sample there, rare bright samples included
-    /// ([`crate::integrator::bdpt::probe`]; `--estimator auto`'s race). Its kind is BDPT.
+    /// ([`crate::estimators::bdpt::probe`]; `--estimator auto`'s race). Its kind is BDPT.
     PtMoment,
     /// LVCBPT.
     Lvcbpt(LvcbptConfig),
@@ -321,7 +321,7 @@ impl EstimatorConfig {
             Self::Filter(side, c) => {
                 // Per node: itself, its denominators, two radiance vectors and its row,
                 // assuming 64 kernel neighbours, the neighbour budget (a pair is a u32 and three f32).
-                let node = core::mem::size_of::<crate::segment::filter::Node>() as u64 + 16 + 24 + FILTER_NEIGHBOURS * 16;
+                let node = core::mem::size_of::<crate::estimators::filter::Node>() as u64 + 16 + 24 + FILTER_NEIGHBOURS * 16;
                 // The paths whose nodes a pass holds: MVF's camera paths, PhF's light paths
                 // (one per pixel), BPF's camera paths and round(β · pixels) light paths (at
                 // 128×96 a BPF pass held 98, 190, 467 and 1562 MB at β = 0, 1, 4, 16).
@@ -338,7 +338,7 @@ impl EstimatorConfig {
             #[cfg(feature = "merging")]
             Self::Merging(mode, c) => {
                 // Photons, their grid and records exist only where merging does.
-                let photon = if c.merges(*mode) { core::mem::size_of::<crate::integrator::vcm::Photon>() as u64 + 4 * 3 + 12 + 8 } else { 0 };
+                let photon = if c.merges(*mode) { core::mem::size_of::<crate::estimators::vcm::Photon>() as u64 + 4 * 3 + 12 + 8 } else { 0 };
                 (c.light_paths_for(pixels) as u64 * VERTICES_PER_PATH * (vertex + 8 + photon), "the light paths and photons of a pass", "--light-paths")
             }
             #[cfg(not(all(feature = "lvcbpt", feature = "spcbpt", feature = "filtering", feature = "merging")))]
@@ -474,11 +474,11 @@ impl Default for MergingConfig {
 /// Which sequential segment estimator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SegmentAlgorithm {
-    /// Segments from the camera ([`crate::segment::spt`]).
+    /// Segments from the camera ([`crate::estimators::estimators::spt`]).
     PathTracing,
-    /// Segments from the lights ([`crate::segment::slt`]).
+    /// Segments from the lights ([`crate::estimators::estimators::slt`]).
     LightTracing,
-    /// Segments from both, joined by bridges ([`crate::segment::sbdpt`]).
+    /// Segments from both, joined by bridges ([`crate::estimators::estimators::sbdpt`]).
     Bidirectional,
 }
 
@@ -760,11 +760,11 @@ mod tests {
 /// Which sub-paths path filtering filters.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FilterSide {
-    /// Camera paths: multi-vertex path filtering ([`crate::segment::filter::Mvf`]).
+    /// Camera paths: multi-vertex path filtering ([`crate::estimators::filter::Mvf`]).
     Camera,
-    /// Light paths: photon filtering ([`crate::segment::filter::Phf`]).
+    /// Light paths: photon filtering ([`crate::estimators::filter::Phf`]).
     Light,
-    /// Both: bidirectional path filtering ([`crate::segment::filter::Bpf`]).
+    /// Both: bidirectional path filtering ([`crate::estimators::filter::Bpf`]).
     Both,
 }
 
@@ -786,7 +786,7 @@ pub struct FilterConfig {
     /// Bidirectional filtering: which segment paths a junction forms (default: every).
     pub reuse: FilterReuse,
     /// Nodes on a material of microfacet roughness α below this get a kernel α / this
-    /// times the pass's (`segment::filter::nodes::scale_kernels`); 0 gives every node
+    /// times the pass's (`estimators::filter::nodes::scale_kernels`); 0 gives every node
     /// the pass's kernel. In [0, 1] (default 0.05).
     pub glossy_alpha: f32,
 }
@@ -834,7 +834,7 @@ impl FilterConfig {
     }
 
     /// Segments per path under `max_depth`.
-    pub fn segments(&self, max_depth: crate::integrator::MaxDepth) -> u32 {
+    pub fn segments(&self, max_depth: crate::transport::MaxDepth) -> u32 {
         let cap = self.max_segments.unwrap_or(if max_depth.0 < 0 { DEFAULT_FILTER_SEGMENTS } else { MAX_FILTER_SEGMENTS });
         max_depth.capped(cap.min(MAX_FILTER_SEGMENTS))
     }

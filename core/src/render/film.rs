@@ -25,10 +25,10 @@
 //! times the built-in box's renders linearly (`tests/tests/stability_extremes.rs`).
 //!
 //! # The pixel filter
-//! Camera samples arrive already weighted by the camera's filter (`crate::filter`, filter
+//! Camera samples arrive already weighted by the camera's filter (`crate::pixel_filter`, filter
 //! importance sampling), so the film adds each to its own pixel whatever the filter.
 //! A splat at x is spread over the pixels c within the filter's radius with the weights
-//! h_c(x) of `crate::filter` (eq. 1–2); each weighted addition is rounded on its own, so
+//! h_c(x) of `crate::pixel_filter` (eq. 1–2); each weighted addition is rounded on its own, so
 //! the sums stay order independent. The box film ([`Film::new`]) adds a splat to the
 //! pixel containing it with weight 1, as it always did. Merged films are not checked for
 //! equal filters: committed sums are already filtered, and a film read back by
@@ -43,10 +43,10 @@ use alloc::vec::Vec;
 use core::ops::Range;
 
 use crate::camera::PerspectiveCamera;
-use crate::filter::Filter;
-use crate::integrator::Splat;
 use crate::math;
+use crate::pixel_filter::Filter;
 use crate::spectrum::Rgb;
+use crate::transport::Splat;
 
 mod bands;
 

@@ -54,8 +54,8 @@ use core::ops::Range;
 
 use crate::alias::AliasTable;
 use crate::geometry::RayQuery;
-use crate::integrator::{Counters, Splat};
 use crate::spectrum::Rgb;
+use crate::transport::{Counters, Splat};
 use payload::{FilterChunk, LightPaths, PrefixMemo, SubpathFeature, TrainingSet};
 
 /// The types [`PhaseData`] carries: the estimators' own where their cargo feature is on,
@@ -73,7 +73,7 @@ pub mod payload {
     pub type LightPaths = Absent;
 
     #[cfg(feature = "spcbpt")]
-    pub use crate::integrator::spcbpt::PrefixMemo;
+    pub use crate::estimators::spcbpt::PrefixMemo;
     /// SPCBPT's per-vertex memos (feature `spcbpt`).
     #[cfg(not(feature = "spcbpt"))]
     pub type PrefixMemo = Absent;
@@ -88,7 +88,7 @@ pub mod payload {
     pub type TrainingSet = Absent;
 
     #[cfg(feature = "filtering")]
-    pub use crate::segment::filter::FilterChunk;
+    pub use crate::estimators::filter::FilterChunk;
     /// Path filtering's chunk buffers (feature `filtering`).
     #[cfg(not(feature = "filtering"))]
     pub type FilterChunk = Absent;

@@ -7,21 +7,22 @@
 
 use core::fmt;
 
-use crate::geometry::RayQuery;
 #[cfg(feature = "bdpt")]
-use crate::integrator::bdpt;
-#[cfg(feature = "lvcbpt")]
-use crate::integrator::lvcbpt::Lvcbpt;
-#[cfg(feature = "spcbpt")]
-use crate::integrator::spcbpt::Spcbpt;
-#[cfg(feature = "merging")]
-use crate::integrator::vcm::Vcm;
-use crate::integrator::{RenderParams, lt, pt};
-use crate::scene::Scene;
-#[cfg(feature = "segments")]
-use crate::segment::Segments;
+use crate::estimators::bdpt;
 #[cfg(feature = "filtering")]
-use crate::segment::filter::{Bpf, Mvf, Phf};
+use crate::estimators::filter::{Bpf, Mvf, Phf};
+#[cfg(feature = "lvcbpt")]
+use crate::estimators::lvcbpt::Lvcbpt;
+#[cfg(feature = "segments")]
+use crate::estimators::segment::Segments;
+#[cfg(feature = "spcbpt")]
+use crate::estimators::spcbpt::Spcbpt;
+#[cfg(feature = "merging")]
+use crate::estimators::vcm::Vcm;
+use crate::estimators::{lt, pt};
+use crate::geometry::RayQuery;
+use crate::scene::Scene;
+use crate::transport::RenderParams;
 
 #[cfg(feature = "filtering")]
 use super::FilterSide;

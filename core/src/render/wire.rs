@@ -40,11 +40,11 @@ use core::ops::Range;
 use serde::{Deserialize, Serialize};
 
 use super::{ChunkOutput, Phase, PhaseData};
-use crate::integrator::{Counters, Splat};
 #[cfg(feature = "path")]
 use crate::path::{LightPaths, VertexKind};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
+use crate::transport::{Counters, Splat};
 
 /// Bumped whenever a type carried in a part changes its fields.
 pub const WIRE_VERSION: u16 = 2;

@@ -13,10 +13,10 @@
 use super::{Kernel, Point, Segment};
 use crate::bsdf::TransportMode;
 use crate::geometry::{RayQuery, spawn_ray_to};
-use crate::integrator::SurfacePoint;
 use crate::math::Vec2;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
+use crate::transport::SurfacePoint;
 
 /// G(s) = |n_x·ŝ| |n_y·ŝ| V(x, y) / |x − y|².
 pub fn geometry_term<Q: RayQuery + ?Sized>(tracer: &Q, x: &Point, y: &crate::geometry::SurfaceHit) -> f32 {

@@ -53,7 +53,7 @@ impl KernelSample {
 
 impl Kernel {
     /// The kernel with its radius times `scale` (a node's own kernel, see
-    /// `segment::filter::nodes::Node::kernel_scale`); the Dirac kernel unchanged.
+    /// `estimators::filter::nodes::Node::kernel_scale`); the Dirac kernel unchanged.
     #[inline]
     pub fn scaled(&self, scale: f32) -> Self {
         match *self {

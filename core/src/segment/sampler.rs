@@ -19,11 +19,11 @@
 use super::{Segment, SegmentPdf, SurfaceSampler};
 use crate::bsdf::TransportMode;
 use crate::geometry::{RayQuery, SurfaceHit, spawn_ray, spawn_ray_to};
-use crate::integrator::SurfacePoint;
 use crate::math::{Frame, Vec2, Vec3};
 use crate::measure::SolidAnglePdf;
 use crate::scene::Scene;
 use crate::shapes::SceneGeometry;
+use crate::transport::SurfacePoint;
 use crate::warp::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 
 /// Random numbers for one segment: the primitive of x, the point on it, and two more for

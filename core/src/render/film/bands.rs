@@ -18,8 +18,8 @@ use alloc::vec::Vec;
 use core::ops::Range;
 
 use super::{Film, Tallies, add, admit, rows_reached, splat_rows};
-use crate::integrator::Splat;
 use crate::spectrum::Rgb;
+use crate::transport::Splat;
 
 /// A worker's share of committing a pass: sorting a segment of its splats by band, or
 /// adding its camera samples and splats to a band of rows (see [`ParallelBands`]).

@@ -1,0 +1,195 @@
+//! Light tracing (particle tracing), splatted to the film.
+//!
+//! Each light path starts on a light chosen ∝ power, at a point and direction drawn by
+//! the light's emission sampler: β₀ = L_e |cos θ| / (P(light) p_A(y₀) p_ω(ω₀)). At every
+//! vertex y_i it is connected to the pinhole (the t = 1 strategy of BDPT alone): the
+//! contribution β_i f(y_{i−1} → y_i → c) |cos θ_i| · W_e |cos θ_c| / d² lands on the pixel
+//! the connection passes through. BSDFs are evaluated in their adjoint form
+//! (`TransportMode::Importance`, Veach 1997 ch. 5) with the shading-normal correction.
+//! With M = W·H paths per pass, the host divides the pass's splats by M.
+//!
+//! Lights at infinity seen directly: a light path cannot connect a vertex at infinity to
+//! the pinhole, so that term is estimated from the camera side, once per light path: a
+//! film position uniform over the whole film (density 1/(W·H) per unit pixel area) and
+//! its camera ray; if the ray escapes, it splats L_∞(ω)·W·H at that position, which the
+//! host's 1/M makes an unbiased estimate of every pixel's directly visible sky
+//! (Mitsuba's particle tracer also renders the visible environment). Its random numbers
+//! come from a stream of their own, so the light paths are unchanged.
+
+use core::ops::Range;
+
+use crate::bsdf::TransportMode;
+use crate::geometry::{RayQuery, spawn_ray_to};
+use crate::math::{Vec2, Vec3};
+use crate::rng::{SampleStream, Stream};
+use crate::scene::Scene;
+use crate::segment::{Junctions, Kernel, KernelSample, LIGHT_KERNEL_KEY};
+use crate::spectrum::Rgb;
+use crate::transport::{Counters, RenderParams, Splat, SurfacePoint, survives_roulette};
+
+const DIMS_PER_BOUNCE: u32 = 4;
+
+/// Trace light paths `paths` of pass `pass`; every camera connection goes to `splat`.
+pub fn trace_paths<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    pass: u32,
+    paths: Range<u32>,
+    splat: &mut dyn FnMut(Splat),
+) -> Counters {
+    trace_paths_with_kernel(scene, tracer, params, Kernel::Dirac, pass, paths, splat)
+}
+
+/// [`trace_paths`] with `kernel` joining consecutive segments: segment LT
+/// ([`crate::estimators::estimators::slt`]); with the Dirac kernel it is LT.
+pub(crate) fn trace_paths_with_kernel<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    kernel: Kernel,
+    pass: u32,
+    paths: Range<u32>,
+    splat: &mut dyn FnMut(Splat),
+) -> Counters {
+    let mut counters = Counters::default();
+    for path in paths {
+        let mut rng = SampleStream::for_sample(params.seed, Stream::Light, path, pass, 0);
+        let mut sky = SampleStream::for_sample(params.seed, Stream::Aux, path, pass, SKY_KEY);
+        let mut junctions = Junctions::for_path(kernel, params.seed, path, pass, LIGHT_KERNEL_KEY);
+        trace_one(scene, tracer, params, &mut rng, &mut sky, junctions.as_mut(), &mut counters, splat);
+    }
+    counters
+}
+
+/// Last key of the visible-sky stream, keeping it apart from every other `Stream::Aux` stream.
+const SKY_KEY: u32 = 0x5c00;
+
+/// The directly visible lights at infinity, from one camera ray through a film position
+/// uniform over the whole film (see the module notes).
+fn visible_sky<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, rng: &mut SampleStream, counters: &mut Counters, splat: &mut dyn FnMut(Splat)) {
+    let (w, h) = (scene.camera.width() as f32, scene.camera.height() as f32);
+    let film = rng.next_2d() * Vec2::new(w, h);
+    let u_lens = scene.camera.lens_u(rng);
+    let ray = scene.camera.generate_ray_lens(film, u_lens);
+    counters.rays += 1;
+    if tracer.intersect(&ray).is_some() {
+        return;
+    }
+    let sky = scene.infinite_lights().fold(Rgb::ZERO, |acc, (_, l)| acc + l.environment_radiance(ray.dir));
+    if !sky.is_black() {
+        splat(Splat { film, value: counters.sanitize(sky * (w * h)) });
+    }
+}
+
+/// One light path of LT, or of segment LT ([`crate::estimators::estimators::slt`]) when `junctions` is
+/// given: then at every surface the path reaches, the next segment starts at a point the
+/// kernel draws around it, and the shading point (BSDF, camera connection, continuation)
+/// moves there, which is where eq. (6) evaluates f_r in light order.
+#[allow(clippy::too_many_arguments)]
+fn trace_one<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    rng: &mut SampleStream,
+    sky_rng: &mut SampleStream,
+    mut junctions: Option<&mut Junctions>,
+    counters: &mut Counters,
+    splat: &mut dyn FnMut(Splat),
+) {
+    let Some(table) = scene.light_selection.as_ref() else { return };
+    if params.max_depth.allows(1) && scene.infinite_lights().next().is_some() {
+        visible_sky(scene, tracer, sky_rng, counters, splat);
+    }
+    // Sample the light path's first vertex and direction.
+    let chosen = table.sample(rng.next_f32());
+    let light = &scene.lights[chosen.index];
+    let (u_pos, u_dir) = (rng.next_2d(), rng.next_2d());
+    let Some(es) = light.sample_le(u_pos, u_dir) else { return };
+    let pdf_pos = chosen.pmf * if es.delta_pos { 1.0 } else { es.pdf_pos.0 };
+    if !(pdf_pos > 0.0) || !es.pdf_dir.is_positive() {
+        return;
+    }
+
+    // Connect the light vertex itself to the camera (a directly visible emitter).
+    if params.max_depth.allows(1) && !light.is_infinite() {
+        let u_lens = scene.camera.lens_u(sky_rng);
+        if let Some(cs) = scene.camera.sample_wi(es.p, u_lens) {
+            let le = light.radiance(es.p, es.n, cs.wi);
+            let cos_light = if es.n == Vec3::ZERO { 1.0 } else { es.n.dot(cs.wi).abs() };
+            let value = le * (cos_light * scene.camera.arriving_importance(&cs) / pdf_pos);
+            if !value.is_black() {
+                counters.rays += 1;
+                if !tracer.occluded(&spawn_ray_to(es.p, es.n, cs.position, Vec3::ZERO)) {
+                    splat(Splat { film: cs.film, value: counters.sanitize(value) });
+                }
+            }
+        }
+    }
+
+    let cos0 = if es.n == Vec3::ZERO { 1.0 } else { es.n.dot(es.dir).abs() };
+    let mut beta = es.radiance * (cos0 / (pdf_pos * es.pdf_dir.0));
+    let reference = crate::transport::light_roulette_reference(beta);
+    let mut ray = if es.n == Vec3::ZERO { crate::geometry::Ray::new(es.p, es.dir, f32::INFINITY) } else { crate::geometry::spawn_ray(es.p, es.n, es.dir) };
+    let first_dim = rng.dimension();
+    let mut segments = 1u32;
+    loop {
+        counters.rays += 1;
+        let Some(arrived) = tracer.intersect(&ray) else { break };
+        // The next segment starts here, or where the kernel puts it.
+        let hit = match junctions.as_deref_mut() {
+            Some(j) => {
+                counters.rays += 1;
+                match j.sample(tracer, &arrived, -ray.dir) {
+                    KernelSample::AtEnd => arrived,
+                    KernelSample::Moved(x) => {
+                        // The integrand's kernel is the camera-direction one.
+                        beta *= j.kernel.reversed_ratio(&arrived, &x);
+                        x
+                    }
+                }
+            }
+            None => arrived,
+        };
+        let sp = SurfacePoint::new(hit, -ray.dir);
+        let material = sp.material(scene);
+        rng.set_dimension(first_dim + segments * DIMS_PER_BOUNCE);
+
+        // Connect this vertex to the camera: segments + 1 segments in all.
+        if !material.is_delta() && params.max_depth.allows(segments + 1) {
+            // The lens point from the auxiliary stream, so the walk's dimensions stay.
+            let u_lens = scene.camera.lens_u(sky_rng);
+            if let Some(cs) = scene.camera.sample_wi(hit.p, u_lens) {
+                let f = sp.f_cos(scene, cs.wi, TransportMode::Importance);
+                let value = beta * f * scene.camera.arriving_importance(&cs);
+                if !value.is_black() {
+                    counters.rays += 1;
+                    if !tracer.occluded(&sp.spawn_to(cs.position, Vec3::ZERO)) {
+                        splat(Splat { film: cs.film, value: counters.sanitize(value) });
+                    }
+                }
+            }
+        }
+        if !params.max_depth.allows(segments + 2) {
+            break;
+        }
+
+        // Sample the adjoint BSDF to continue.
+        let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
+        let Some(bs) = material.sample(sp.frame.to_local(sp.wo), u_lobe, u_dir, TransportMode::Importance) else { break };
+        if !bs.pdf.is_positive() {
+            break;
+        }
+        let wi = sp.frame.to_world(bs.wi);
+        let correction = crate::bsdf::shading_normal_correction(TransportMode::Importance, sp.wo, wi, hit.ng, hit.ns);
+        beta *= bs.f * (bs.wi.z.abs() * correction / bs.pdf.0);
+        if beta.is_black() || !beta.is_finite() {
+            break;
+        }
+        segments += 1;
+        if !survives_roulette(params, segments, &mut beta, reference, rng) {
+            break;
+        }
+        ray = sp.spawn(wi);
+    }
+}
