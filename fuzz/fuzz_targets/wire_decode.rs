@@ -14,7 +14,8 @@
 use std::sync::OnceLock;
 
 use ember_core::render::wire::{Part, peek};
-use ember_core::render::{ChunkOutput, Phase, PhaseData};
+use ember_core::estimators::{ChunkOutput, PhaseData};
+use ember_core::render::{Phase};
 use ember_core::scene::Scene;
 use libfuzzer_sys::fuzz_target;
 

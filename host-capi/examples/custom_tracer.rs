@@ -4,10 +4,11 @@
 //! renders passes into the core's film. (`cargo run --release -p ember-capi --example
 //! custom_tracer`; docs/embedding.md.)
 
+use ember_core::estimators::PhaseBuffers;
 use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
 use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::math::Vec2;
-use ember_core::render::{Context, EstimatorKind, Film, PhaseBuffers, Renderer, render_pass, run_phases};
+use ember_core::render::{Context, EstimatorKind, Film, Renderer, render_pass, run_phases};
 use ember_core::shapes::SceneGeometry;
 
 /// Every triangle for every ray (Möller–Trumbore).

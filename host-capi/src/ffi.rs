@@ -32,7 +32,8 @@ use std::sync::{Arc, LazyLock, Mutex, MutexGuard, Once, RwLock, RwLockReadGuard,
 use std::time::Instant;
 
 use ember_cli::driver::{self, DriverConfig, Limits};
-use ember_core::render::{ChunkOutput, Context, EstimatorKind, Film, Phase, Phased, Renderer};
+use ember_core::estimators::ChunkOutput;
+use ember_core::render::{Context, EstimatorKind, Film, Phase, Phased, Renderer};
 
 use ray_queries::{Fault, Tracer, fault_error, tracer};
 

@@ -46,9 +46,10 @@ use ember_cli::cli::{Cli, Command, RenderArgs};
 use ember_cli::driver::{self, DriverConfig, Limits};
 use ember_cli::estimators::{CoreRenderer, PreparedScene, prepare_builtin};
 use ember_core::Rgb;
+use ember_core::estimators::{ChunkOutput, PhaseData};
 use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
 use ember_core::integrator::pt;
-use ember_core::render::{ChunkOutput, Context, Cursor, Film, Phase, Phased, Stage};
+use ember_core::render::{Context, Cursor, Film, Phase, Phased, Stage};
 
 const HOT_RES: u32 = 256;
 const HOT_PASSES: u32 = 4;
@@ -176,6 +177,7 @@ fn spin(seed: u32) -> Rgb {
 }
 
 impl<Q: RayQuery + ?Sized> Phased<Q> for Spin {
+    type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         let Some(Stage::Pass(p, _)) = self.cursor.stage() else { return None };
         Some(Phase { name: "camera", id: 0, pass: Some(p), items: 512 * 512, chunk: 1024, samples: true })
@@ -210,7 +212,7 @@ fn cpu_seconds() -> f64 {
 /// Logs every work item (chunk) the driver hands out, (pass, worker, start, end) in
 /// seconds, and times the reductions (the serial merge of each phase).
 struct Logged<'a> {
-    inner: &'a mut (dyn Phased<ember_cli::accel::Accel> + Sync + Send),
+    inner: &'a mut (dyn Phased<ember_cli::accel::Accel, Data = PhaseData> + Sync + Send),
     t0: Instant,
     items: Mutex<Vec<(u32, usize, f64, f64)>>,
     reduce_seconds: f64,
@@ -248,6 +250,7 @@ impl Logged<'_> {
 }
 
 impl Phased<ember_cli::accel::Accel> for Logged<'_> {
+    type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         self.inner.next_phase()
     }
@@ -280,7 +283,7 @@ struct Run {
     merge: f64,
 }
 
-fn drive(r: &mut (dyn Phased<ember_cli::accel::Accel> + Sync + Send), scene: &PreparedScene, threads: usize, spp: u32) -> (Run, Film) {
+fn drive(r: &mut (dyn Phased<ember_cli::accel::Accel, Data = PhaseData> + Sync + Send), scene: &PreparedScene, threads: usize, spp: u32) -> (Run, Film) {
     let mut logged = Logged { inner: r, t0: Instant::now(), items: Mutex::new(Vec::new()), reduce_seconds: 0.0 };
     let camera = &scene.scene.camera;
     let mut film = Film::new(camera.width(), camera.height());
@@ -316,7 +319,8 @@ fn scaling() {
     println!("    {:<6} {:>7} {:>8} {:>8} {:>6} {:>7} {:>15}   rounds / speedup per round", "", "threads", "seconds", "speedup", "cores", "CPU s", "tail idle");
 
     let scene = prepare_builtin(&args(&[])).expect("built-in scene");
-    let mut renderers: Vec<(&str, Box<dyn Phased<ember_cli::accel::Accel> + Sync + Send>)> = vec![("spin", Box::new(Spin { cursor: Cursor::new(0, 1) }))];
+    let mut renderers: Vec<(&str, Box<dyn Phased<ember_cli::accel::Accel, Data = PhaseData> + Sync + Send>)> =
+        vec![("spin", Box::new(Spin { cursor: Cursor::new(0, 1) }))];
     for e in ["pt", "lt", "bdpt"] {
         let spp = SCALE_SPP.to_string();
         let a = args(&["--estimator", e, "--spp", &spp]);

@@ -69,9 +69,10 @@ fn add_time(times: &mut PhaseTimes, name: &'static str, seconds: f64) {
 
 /// Map and reduce every pending phase of `est`: chunks in parallel on the current rayon
 /// pool (each chunk its own stealable task), reductions in chunk order on this thread.
-pub fn run_pending<E, Q>(est: &mut E, ctx: &Context<'_, Q>, film: &mut Film, buffers: &mut PhaseBuffers, times: &mut PhaseTimes) -> PassStats
+pub fn run_pending<E, Q>(est: &mut E, ctx: &Context<'_, Q>, film: &mut Film, buffers: &mut PhaseBuffers<E::Data>, times: &mut PhaseTimes) -> PassStats
 where
     E: Phased<Q> + Sync + ?Sized,
+    E::Data: Send,
     Q: RayQuery + Sync + ?Sized,
 {
     run_pending_or_abandon(est, ctx, film, buffers, times, never).unwrap_or_default()
@@ -88,12 +89,13 @@ fn run_pending_or_abandon<E, Q>(
     est: &mut E,
     ctx: &Context<'_, Q>,
     film: &mut Film,
-    buffers: &mut PhaseBuffers,
+    buffers: &mut PhaseBuffers<E::Data>,
     times: &mut PhaseTimes,
     abandon: fn() -> bool,
 ) -> Option<PassStats>
 where
     E: Phased<Q> + Sync + ?Sized,
+    E::Data: Send,
     Q: RayQuery + Sync + ?Sized,
 {
     let mut stats = PassStats::default();
@@ -115,12 +117,13 @@ fn run_phase<E, Q>(
     ctx: &Context<'_, Q>,
     phase: &Phase,
     film: &mut Film,
-    buffers: &mut PhaseBuffers,
+    buffers: &mut PhaseBuffers<E::Data>,
     times: &mut PhaseTimes,
     abandon: fn() -> bool,
 ) -> Option<PassStats>
 where
     E: Phased<Q> + Sync + ?Sized,
+    E::Data: Send,
     Q: RayQuery + Sync + ?Sized,
 {
     let mut stats = PassStats::default();
@@ -133,7 +136,7 @@ where
     let rays: u64 = outputs
         .par_iter_mut()
         .with_max_len(1)
-        .map(|out: &mut ChunkOutput| {
+        .map(|out: &mut ChunkOutput<E::Data>| {
             if abandon() {
                 return 0;
             }
@@ -170,6 +173,7 @@ fn commit_bands(bands: &mut [Band<'_>], work: &(dyn Fn(&mut Band<'_>) + Sync)) {
 pub fn run_setup<E, Q>(est: &mut E, ctx: &Context<'_, Q>, threads: usize) -> Result<PhaseTimes, DriverError>
 where
     E: Phased<Q> + Sync + Send + ?Sized,
+    E::Data: Send,
     Q: RayQuery + Sync + ?Sized,
 {
     let pool = thread_pool(threads, "ember-prepare")?;
@@ -329,6 +333,7 @@ pub fn render<E, Q>(
 ) -> Result<RenderSummary, DriverError>
 where
     E: Phased<Q> + Sync + Send + ?Sized,
+    E::Data: Send,
     Q: RayQuery + Sync + ?Sized,
 {
     let camera = &ctx.scene.camera;

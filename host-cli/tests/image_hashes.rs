@@ -47,7 +47,8 @@ use ember_cli::cli::{CacheArgs, EstimatorKind, RenderArgs};
 use ember_cli::driver::{DriverConfig, Limits};
 use ember_cli::estimators::{CoreRenderer, PreparedScene, prepare_builtin, prepare_file};
 use ember_cli::film::Film;
-use ember_core::render::{Context, PhaseBuffers, Renderer, render_pass};
+use ember_core::estimators::PhaseBuffers;
+use ember_core::render::{Context, Renderer, render_pass};
 
 const PASSES: u32 = 3;
 const SEED: u64 = 11;

@@ -18,9 +18,10 @@
 
 use core::fmt::Write as _;
 
+use ember_core::estimators::{ChunkOutput, PhaseBuffers};
 use ember_core::integrator::{Heuristic, MaxDepth, RenderParams};
 use ember_core::render::wire::Part;
-use ember_core::render::{ChunkOutput, Context, EstimatorKind, Film, Phase, PhaseBuffers, Phased, Renderer};
+use ember_core::render::{Context, EstimatorKind, Film, Phase, Phased, Renderer};
 use ember_core::scene::Scene;
 
 use crate::WasmAccel;

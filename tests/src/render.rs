@@ -2,9 +2,10 @@
 //! serial runner: one image per pass, so per-pass statistics (independent across passes)
 //! give honest error bars.
 
+use ember_core::estimators::PhaseBuffers;
 use ember_core::estimators::spcbpt::{Model, Spcbpt};
 use ember_core::geometry::RayQuery;
-use ember_core::render::{Context, EstimatorConfig, EstimatorKind, Film, PhaseBuffers, Renderer, SpcbptConfig, render_pass as serial_pass, run_phases};
+use ember_core::render::{Context, EstimatorConfig, EstimatorKind, Film, Renderer, SpcbptConfig, render_pass as serial_pass, run_phases};
 use ember_core::scene::Scene;
 use ember_core::transport::{Counters, RenderParams};
 

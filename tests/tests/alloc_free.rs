@@ -115,8 +115,9 @@ fn per_sample_functions_do_not_allocate() {
 /// allocations.
 #[test]
 fn protocol_passes_do_not_allocate_in_steady_state() {
+    use ember_core::estimators::PhaseBuffers;
     use ember_core::render::{
-        Context, EstimatorConfig, EstimatorKind, Film, KernelChoice, LvcbptConfig, PhaseBuffers, Renderer, SegmentAlgorithm, SegmentConfig, render_pass,
+        Context, EstimatorConfig, EstimatorKind, Film, KernelChoice, LvcbptConfig, Renderer, SegmentAlgorithm, SegmentConfig, render_pass,
     };
     let (scene, geometry, _) = cornell_with_spheres(16, 16).build().unwrap();
     let tracer = BruteForce::new(geometry);

@@ -3,8 +3,9 @@
 //! runner's image bit for bit, and an instance that only receives state parts (never
 //! film parts, never mapping) stays in step with the one that maps.
 
+use ember_core::estimators::{ChunkOutput, PhaseBuffers};
 use ember_core::render::wire::Part;
-use ember_core::render::{ChunkOutput, Context, EstimatorKind, Film, PhaseBuffers, Phased, Renderer, run_phases};
+use ember_core::render::{Context, EstimatorKind, Film, Phased, Renderer, run_phases};
 use ember_core::scene::builtin;
 use ember_core::transport::RenderParams;
 use ember_tests::tracer::BruteForce;

@@ -30,3 +30,9 @@ pub mod segment;
 pub mod spcbpt;
 #[cfg(feature = "merging")]
 pub mod vcm;
+
+mod payload;
+
+pub use payload::{Absent, ChunkOutput, PhaseBuffers, PhaseData, types as payload_types};
+#[cfg(any(feature = "merging", feature = "segments", feature = "filtering"))]
+pub(crate) use payload::{map_footprint, reduce_footprint};

@@ -83,23 +83,17 @@ impl Footprint {
         self.hits += other.hits;
     }
 
-    /// Measure a footprint phase's chunk (`out.items`) into its sums.
-    pub fn map_chunk<Q: crate::geometry::RayQuery + ?Sized>(scene: &Scene, tracer: &Q, out: &mut crate::render::ChunkOutput) {
-        let f = Self::measure(scene, tracer, out.items.clone());
-        let sums = out.sums(2);
-        sums[0] = f.distance;
-        sums[1] = f.hits as f64;
+    /// The sums a chunk carries ([`Self::from_sums`] reads them back).
+    pub fn sums(&self) -> [f64; 2] {
+        [self.distance, self.hits as f64]
     }
 
-    /// The footprint of a whole phase, from its chunks' sums ([`Self::map_chunk`]).
-    pub fn reduce_chunks(outputs: &[crate::render::ChunkOutput]) -> Self {
-        let mut f = Self::default();
-        for out in outputs {
-            if let crate::render::PhaseData::Sums(s) = &out.data {
-                f.add(Self { distance: s[0], hits: s[1] as u64 });
-            }
+    /// The footprint whose [`Self::sums`] are `s` (zero when `s` is short).
+    pub fn from_sums(s: &[f64]) -> Self {
+        match s {
+            [distance, hits, ..] => Self { distance: *distance, hits: *hits as u64 },
+            _ => Self::default(),
         }
-        f
     }
 
     /// The mean footprint d̄ · 2 tan θ_x / W, or `None` without hits.

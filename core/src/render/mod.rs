@@ -52,59 +52,20 @@ pub use renderer::{CHUNKS, Renderer, RendererError, chunk_for};
 use alloc::vec::Vec;
 use core::ops::Range;
 
-use crate::alias::AliasTable;
 use crate::geometry::RayQuery;
 use crate::spectrum::Rgb;
 use crate::transport::{Counters, Splat};
-use payload::{FilterChunk, LightPaths, PrefixMemo, SubpathFeature, TrainingSet};
 
-/// The types [`PhaseData`] carries: the estimators' own where their cargo feature is on,
-/// else [`Absent`]. Every build has the same variants in the same order, so the wire
-/// format's variant numbers (`render::wire`) do not depend on the features: a variant
-/// whose payload is absent cannot be made, and its bytes are refused, never misread.
-pub mod payload {
-    #[cfg(not(all(feature = "path", feature = "spcbpt", feature = "subspace", feature = "filtering")))]
-    use super::Absent;
-
-    #[cfg(feature = "path")]
-    pub use crate::path::LightPaths;
-    /// Light sub-paths (feature `path`).
-    #[cfg(not(feature = "path"))]
-    pub type LightPaths = Absent;
-
-    #[cfg(feature = "spcbpt")]
-    pub use crate::estimators::spcbpt::PrefixMemo;
-    /// SPCBPT's per-vertex memos (feature `spcbpt`).
-    #[cfg(not(feature = "spcbpt"))]
-    pub type PrefixMemo = Absent;
-
-    #[cfg(feature = "subspace")]
-    pub use crate::subspace::{SubpathFeature, TrainingSet};
-    /// SPCBPT's classification features (feature `subspace`).
-    #[cfg(not(feature = "subspace"))]
-    pub type SubpathFeature = Absent;
-    /// SPCBPT's training records (feature `subspace`).
-    #[cfg(not(feature = "subspace"))]
-    pub type TrainingSet = Absent;
-
-    #[cfg(feature = "filtering")]
-    pub use crate::estimators::filter::FilterChunk;
-    /// Path filtering's chunk buffers (feature `filtering`).
-    #[cfg(not(feature = "filtering"))]
-    pub type FilterChunk = Absent;
+/// An estimator's own chunk data ([`Phased::Data`]): plain values, cleared in place so
+/// its buffers keep their capacity from pass to pass.
+pub trait Payload: Default + Clone + core::fmt::Debug {
+    /// Empty every buffer, keeping its capacity.
+    fn clear(&mut self);
 }
 
-/// The payload of a [`PhaseData`] variant whose estimators this build leaves out: a type
-/// with no values, so the variant cannot be made (see [`payload`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
-pub enum Absent {}
-
-impl Absent {
-    /// What [`ChunkOutput::reset`] calls on every payload; never runs.
-    pub fn clear(&mut self) {
-        match *self {}
-    }
+/// Nothing beyond camera samples, splats and counters.
+impl Payload for () {
+    fn clear(&mut self) {}
 }
 
 /// One phase: a map over `0..items` in chunks of `chunk`.
@@ -138,60 +99,10 @@ impl Phase {
     }
 }
 
-/// Estimator-specific plain data a chunk produces.
-#[derive(Clone, Debug, Default)]
-#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
-pub enum PhaseData {
-    /// Nothing beyond samples and splats.
-    #[default]
-    None,
-    /// Light sub-paths of the chunk.
-    LightPaths {
-        /// The paths' vertices, contiguous.
-        paths: LightPaths,
-        /// One SPCBPT prefix memo per vertex (empty for LVCBPT).
-        memo: Vec<PrefixMemo>,
-    },
-    /// Light sub-paths with one f64 per vertex (VCM's prefix sums of its MIS weights).
-    PathsWithSums {
-        /// The paths' vertices, contiguous.
-        paths: LightPaths,
-        /// One value per vertex, parallel to `paths.vertices`.
-        sums: Vec<f64>,
-    },
-    /// A count (LVCBPT's cacheable vertices).
-    Count(u64),
-    /// Classification features with their weights, per-block brightness sums and
-    /// sample counts (SPCBPT preprocessing).
-    Features {
-        /// Sub-path end features.
-        features: Vec<SubpathFeature>,
-        /// Their weights (f/p).
-        weights: Vec<f32>,
-        /// Brightness sums per pixel block.
-        blocks: Vec<f64>,
-        /// Samples per pixel block.
-        block_samples: Vec<u32>,
-    },
-    /// Sums per slot (SPCBPT's Q).
-    Sums(Vec<f64>),
-    /// Training records (SPCBPT's dataset).
-    Training(TrainingSet),
-    /// Multi-vertex filtering's per-chunk buffers (nodes, denominators, rows, radiance).
-    Filter(alloc::boxed::Box<FilterChunk>),
-    /// Stage-1 tables and norms for a range of eye subspaces (SPCBPT).
-    GammaTables {
-        /// Γ(· | e) restricted to the pass's non-empty subspaces, per eye subspace.
-        tables: Vec<Option<AliasTable>>,
-        /// The restricted column sums.
-        norms: Vec<f32>,
-    },
-}
-
 /// What mapping one chunk produced. Plain data; cleared and refilled in place.
 #[derive(Clone, Debug, Default)]
 #[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
-pub struct ChunkOutput {
+pub struct ChunkOutput<D> {
     /// The chunk's index range.
     pub items: Range<u32>,
     /// One camera sample per item (pixel phases).
@@ -200,54 +111,18 @@ pub struct ChunkOutput {
     pub splats: Vec<Splat>,
     /// Work counters.
     pub counters: Counters,
-    /// Estimator-specific output.
-    pub data: PhaseData,
+    /// Estimator-specific output: the estimator's own type ([`Phased::Data`]).
+    pub data: D,
 }
 
-impl ChunkOutput {
+impl<D: Payload> ChunkOutput<D> {
     /// Clear for a new map over `items`, keeping every buffer's capacity.
     pub fn reset(&mut self, items: Range<u32>) {
         self.items = items;
         self.pixels.clear();
         self.splats.clear();
         self.counters = Counters::default();
-        match &mut self.data {
-            PhaseData::None => {}
-            PhaseData::LightPaths { paths, memo } => {
-                paths.clear();
-                memo.clear();
-            }
-            PhaseData::PathsWithSums { paths, sums } => {
-                paths.clear();
-                sums.clear();
-            }
-            PhaseData::Count(n) => *n = 0,
-            PhaseData::Features { features, weights, blocks, block_samples } => {
-                features.clear();
-                weights.clear();
-                blocks.clear();
-                block_samples.clear();
-            }
-            PhaseData::Sums(s) => s.clear(),
-            PhaseData::Training(t) => t.clear(),
-            PhaseData::GammaTables { tables, norms } => {
-                tables.clear();
-                norms.clear();
-            }
-            PhaseData::Filter(chunk) => chunk.clear(),
-        }
-    }
-
-    /// The filtering buffers of this chunk (switching the data to them if needed).
-    #[cfg(feature = "filtering")]
-    pub fn filter_chunk(&mut self) -> &mut FilterChunk {
-        if !matches!(self.data, PhaseData::Filter(_)) {
-            self.data = PhaseData::Filter(alloc::boxed::Box::default());
-        }
-        match &mut self.data {
-            PhaseData::Filter(chunk) => chunk,
-            _ => unreachable!("just set"),
-        }
+        self.data.clear();
     }
 
     /// The camera-sample buffer sized to the chunk (zeroed).
@@ -263,103 +138,27 @@ impl ChunkOutput {
         self.pixel_buffer();
         (&mut self.pixels, &mut self.splats)
     }
-
-    /// The light-path store of this chunk (switching the data to it if needed).
-    #[cfg(feature = "path")]
-    pub fn light_paths(&mut self) -> (&mut LightPaths, &mut Vec<PrefixMemo>) {
-        if !matches!(self.data, PhaseData::LightPaths { .. }) {
-            self.data = PhaseData::LightPaths { paths: LightPaths::new(), memo: Vec::new() };
-        }
-        match &mut self.data {
-            PhaseData::LightPaths { paths, memo } => (paths, memo),
-            _ => unreachable!("set just above"),
-        }
-    }
-
-    /// The light paths and per-vertex sums of this chunk (switching the data to them if
-    /// needed).
-    #[cfg(feature = "path")]
-    pub fn paths_with_sums(&mut self) -> (&mut LightPaths, &mut Vec<f64>) {
-        if !matches!(self.data, PhaseData::PathsWithSums { .. }) {
-            self.data = PhaseData::PathsWithSums { paths: LightPaths::new(), sums: Vec::new() };
-        }
-        match &mut self.data {
-            PhaseData::PathsWithSums { paths, sums } => (paths, sums),
-            _ => unreachable!("set just above"),
-        }
-    }
-
-    /// The feature buffers of this chunk (switching the data to them if needed).
-    #[cfg(feature = "subspace")]
-    pub fn features(&mut self) -> (&mut Vec<SubpathFeature>, &mut Vec<f32>, &mut Vec<f64>, &mut Vec<u32>) {
-        if !matches!(self.data, PhaseData::Features { .. }) {
-            self.data = PhaseData::Features { features: Vec::new(), weights: Vec::new(), blocks: Vec::new(), block_samples: Vec::new() };
-        }
-        match &mut self.data {
-            PhaseData::Features { features, weights, blocks, block_samples } => (features, weights, blocks, block_samples),
-            _ => unreachable!("set just above"),
-        }
-    }
-
-    /// The sums of this chunk, `n` slots zeroed (switching the data to them if needed).
-    pub fn sums(&mut self, n: usize) -> &mut Vec<f64> {
-        if !matches!(self.data, PhaseData::Sums(_)) {
-            self.data = PhaseData::Sums(Vec::new());
-        }
-        match &mut self.data {
-            PhaseData::Sums(s) => {
-                s.clear();
-                s.resize(n, 0.0);
-                s
-            }
-            _ => unreachable!("set just above"),
-        }
-    }
-
-    /// The training set of this chunk (switching the data to it if needed).
-    #[cfg(feature = "subspace")]
-    pub fn training(&mut self) -> &mut TrainingSet {
-        if !matches!(self.data, PhaseData::Training(_)) {
-            self.data = PhaseData::Training(TrainingSet::new());
-        }
-        match &mut self.data {
-            PhaseData::Training(t) => t,
-            _ => unreachable!("set just above"),
-        }
-    }
-
-    /// Stage-1 tables of this chunk, one zeroed slot per item (switching if needed).
-    pub fn gamma_tables(&mut self) -> (&mut [Option<AliasTable>], &mut [f32]) {
-        if !matches!(self.data, PhaseData::GammaTables { .. }) {
-            self.data = PhaseData::GammaTables { tables: Vec::new(), norms: Vec::new() };
-        }
-        let n = self.items.len();
-        match &mut self.data {
-            PhaseData::GammaTables { tables, norms } => {
-                tables.clear();
-                tables.resize(n, None);
-                norms.clear();
-                norms.resize(n, 0.0);
-                (tables, norms)
-            }
-            _ => unreachable!("set just above"),
-        }
-    }
 }
 
 /// Chunk outputs kept across phases and passes, one list per phase id.
-#[derive(Clone, Debug, Default)]
-pub struct PhaseBuffers {
-    lists: Vec<Vec<ChunkOutput>>,
+#[derive(Clone, Debug)]
+pub struct PhaseBuffers<D> {
+    lists: Vec<Vec<ChunkOutput<D>>>,
 }
 
-impl PhaseBuffers {
+impl<D> Default for PhaseBuffers<D> {
+    fn default() -> Self {
+        Self { lists: Vec::new() }
+    }
+}
+
+impl<D: Payload> PhaseBuffers<D> {
     /// No buffers yet.
     pub fn new() -> Self {
         Self::default()
     }
     /// The outputs for `phase`, one per chunk, each reset to its chunk's range.
-    pub fn for_phase(&mut self, phase: &Phase) -> &mut [ChunkOutput] {
+    pub fn for_phase(&mut self, phase: &Phase) -> &mut [ChunkOutput<D>] {
         let outputs = self.outputs(phase);
         for (c, out) in outputs.iter_mut().enumerate() {
             out.reset(phase.chunk_range(c));
@@ -368,7 +167,7 @@ impl PhaseBuffers {
     }
     /// The outputs for `phase` as they stand: what [`Self::for_phase`] reset and the host
     /// filled since (a host that receives chunk outputs one message at a time).
-    pub fn outputs(&mut self, phase: &Phase) -> &mut [ChunkOutput] {
+    pub fn outputs(&mut self, phase: &Phase) -> &mut [ChunkOutput<D>] {
         let id = phase.id as usize;
         if self.lists.len() <= id {
             self.lists.resize_with(id + 1, Vec::new);
@@ -384,16 +183,19 @@ impl PhaseBuffers {
 
 /// What an estimator implements to be driven phase by phase (see the module notes).
 pub trait Phased<Q: RayQuery + ?Sized> {
+    /// What a chunk carries beyond camera samples, splats and counters: the estimator's
+    /// own plain data.
+    type Data: Payload;
     /// The phase to map next, or `None` when nothing is pending (setup is done and the
     /// last started pass is committed).
     fn next_phase(&self) -> Option<Phase>;
     /// Queue pass `pass`: its phases follow any pending setup phases.
     fn start_pass(&mut self, pass: u32);
     /// Map `phase` over `out.items` into `out` (which [`PhaseBuffers::for_phase`] reset).
-    fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput);
+    fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput<Self::Data>);
     /// Reduce the phase's outputs, given in chunk order, into the estimator's state and
     /// the film; advances to the next phase.
-    fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film);
+    fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput<Self::Data>], film: &mut Film);
     /// Queue only those phases of pass `pass` that carry state into later passes, and
     /// nothing that touches the film: how a render that starts at a later pass (one task
     /// of a split render, docs/distributed.md) reaches the state a render from pass 0
@@ -499,7 +301,7 @@ pub fn run_phases<Q: RayQuery + ?Sized, E: Phased<Q> + ?Sized>(
     est: &mut E,
     ctx: &Context<'_, Q>,
     film: &mut Film,
-    buffers: &mut PhaseBuffers,
+    buffers: &mut PhaseBuffers<E::Data>,
 ) -> (Counters, u64) {
     let mut counters = Counters::default();
     let mut samples = 0u64;
@@ -522,7 +324,7 @@ pub fn render_pass<Q: RayQuery + ?Sized, E: Phased<Q> + ?Sized>(
     est: &mut E,
     ctx: &Context<'_, Q>,
     film: &mut Film,
-    buffers: &mut PhaseBuffers,
+    buffers: &mut PhaseBuffers<E::Data>,
     pass: u32,
 ) -> (Counters, u64) {
     est.start_pass(pass);

@@ -26,7 +26,8 @@ use crate::transport::RenderParams;
 
 #[cfg(feature = "filtering")]
 use super::FilterSide;
-use super::{ChunkOutput, ConfigError, Context, Cursor, EstimatorConfig, EstimatorKind, Film, Phase, Phased, Stage};
+use super::{ConfigError, Context, Cursor, EstimatorConfig, EstimatorKind, Film, Phase, Phased, Stage};
+use crate::estimators::{ChunkOutput, PhaseData};
 
 /// Pixels per chunk of a camera phase, light paths per chunk of a light phase, for a
 /// phase of `items`: about [`CHUNKS`] chunks, a power of two from 64 to 1024 items each.
@@ -70,6 +71,7 @@ impl OnePhase {
 }
 
 impl<Q: RayQuery + ?Sized> Phased<Q> for OnePhase {
+    type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         let Some(Stage::Pass(pass, 0)) = self.cursor.stage() else { return None };
         let name = if self.which == Simple::Lt { "light paths" } else { "camera" };
@@ -268,6 +270,7 @@ impl Renderer {
 }
 
 impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
+    type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         match self {
             Self::OnePhase(o) => Phased::<Q>::next_phase(o),

@@ -9,8 +9,8 @@
 //! An output travels in two **parts**, because its readers differ:
 //! - [`Part::Film`]: the camera samples, the splats and the counters. Only the instance
 //!   that holds the film reads them.
-//! - [`Part::State`]: the estimator-specific data ([`PhaseData`]: light paths, features,
-//!   sums, training records, filter rows). Every instance that reduces reads it, because
+//! - [`Part::State`]: the estimator-specific data (the estimator's [`WirePayload`]: light
+//!   paths, features, sums, training records, filter rows). Every instance that reduces reads it, because
 //!   each keeps its own copy of the estimator's state (light-vertex caches, Γ, Q) for
 //!   the phases that follow.
 //!
@@ -22,7 +22,7 @@
 //! the chunk's index range: an output of another phase or of an earlier pass is refused) and
 //! then the part's fields in postcard, serde's compact no_std format (integers as varints,
 //! floats as their bits, so values survive exactly). The field layout is the derived one,
-//! so the version goes up whenever a type inside [`PhaseData`] changes; both ends of a
+//! so the version goes up whenever a type inside a payload changes; both ends of a
 //! browser or a cluster run the same build anyway, and a part from another version is
 //! refused, not misread.
 //!
@@ -39,9 +39,7 @@ use core::ops::Range;
 
 use serde::{Deserialize, Serialize};
 
-use super::{ChunkOutput, Phase, PhaseData};
-#[cfg(feature = "path")]
-use crate::path::{LightPaths, VertexKind};
+use super::{ChunkOutput, Payload, Phase};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use crate::transport::{Counters, Splat};
@@ -141,7 +139,22 @@ struct FilmOwned {
     counters: Counters,
 }
 
-impl ChunkOutput {
+/// Chunk data that can travel as bytes: serde's derived layout, and the checks a
+/// reduction needs of data it did not produce (indices it dereferences without a bound
+/// check of its own).
+pub trait WirePayload: Payload + Serialize + for<'de> Deserialize<'de> {
+    /// Refuse data inconsistent with itself or with `scene`.
+    fn validate(&self, scene: &Scene) -> Result<(), WireError>;
+}
+
+/// No data: nothing to check.
+impl WirePayload for () {
+    fn validate(&self, _scene: &Scene) -> Result<(), WireError> {
+        Ok(())
+    }
+}
+
+impl<D: WirePayload> ChunkOutput<D> {
     /// Append part `part` of this output, mapped for `phase`, to `out` (see the module
     /// notes).
     pub fn encode(&self, phase: &Phase, part: Part, out: &mut Vec<u8>) {
@@ -186,8 +199,8 @@ impl ChunkOutput {
                 self.counters = film.counters;
             }
             Part::State => {
-                let data: PhaseData = from_all(rest)?;
-                validate(&data, scene)?;
+                let data: D = from_all(rest)?;
+                data.validate(scene)?;
                 self.data = data;
             }
         }
@@ -207,138 +220,10 @@ pub fn peek(bytes: &[u8]) -> Result<(Part, ChunkId), WireError> {
 }
 
 /// Parse `bytes` whole: trailing bytes are an error too.
-fn from_all<'a, T: Deserialize<'a>>(bytes: &'a [u8]) -> Result<T, WireError> {
+pub(crate) fn from_all<'a, T: Deserialize<'a>>(bytes: &'a [u8]) -> Result<T, WireError> {
     match postcard::take_from_bytes(bytes) {
         Ok((value, [])) => Ok(value),
         Ok(_) => Err(WireError::Invalid("trailing bytes")),
         Err(_) => Err(WireError::Malformed),
-    }
-}
-
-fn validate(data: &PhaseData, scene: &Scene) -> Result<(), WireError> {
-    // Without the `path` feature the light-path variants have no values (`super::Absent`).
-    #[cfg(not(feature = "path"))]
-    let _ = scene;
-    match data {
-        #[cfg(feature = "path")]
-        PhaseData::LightPaths { paths, memo } => {
-            validate_paths(paths, scene)?;
-            if !memo.is_empty() && memo.len() != paths.vertices.len() {
-                return Err(WireError::Invalid("prefix memos are neither one per vertex nor none"));
-            }
-            Ok(())
-        }
-        #[cfg(feature = "path")]
-        PhaseData::PathsWithSums { paths, sums } => {
-            validate_paths(paths, scene)?;
-            if sums.len() != paths.vertices.len() {
-                return Err(WireError::Invalid("vertex sums are not one per vertex"));
-            }
-            Ok(())
-        }
-        _ => Ok(()),
-    }
-}
-
-/// Path starts ascending within the vertices; materials and lights of the scene.
-#[cfg(feature = "path")]
-fn validate_paths(paths: &LightPaths, scene: &Scene) -> Result<(), WireError> {
-    let n = paths.vertices.len() as u64;
-    let mut last = 0u64;
-    for (i, &s) in paths.starts.iter().enumerate() {
-        if (i == 0 && s != 0) || u64::from(s) < last || u64::from(s) > n {
-            return Err(WireError::Invalid("light-path starts out of order"));
-        }
-        last = u64::from(s);
-    }
-    if paths.starts.is_empty() && n > 0 {
-        return Err(WireError::Invalid("light-path vertices without paths"));
-    }
-    let lights = scene.lights.len() as u64;
-    let materials = scene.materials.len() as u64;
-    for v in &paths.vertices {
-        let light_ok = |id: u32| u64::from(id) < lights;
-        let ok = match v.kind {
-            VertexKind::Light(id) => light_ok(id),
-            VertexKind::Surface => u64::from(v.material) < materials,
-            VertexKind::Camera | VertexKind::InfiniteLight => true,
-        } && v.emitter.is_none_or(light_ok);
-        if !ok {
-            return Err(WireError::Invalid("a light-path vertex names a material or light the scene lacks"));
-        }
-    }
-    Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::scene::builtin;
-
-    #[test]
-    fn refuses_what_it_cannot_trust() {
-        let (scene, _, _) = builtin::cornell_box(4, 4).build().expect("builds");
-        let phase = Phase { name: "camera", id: 0, pass: Some(3), items: 8, chunk: 4, samples: true };
-        let mut out = ChunkOutput::default();
-        out.reset(0..4);
-        out.pixel_buffer();
-        let mut film = Vec::new();
-        out.encode(&phase, Part::Film, &mut film);
-        let mut got = ChunkOutput::default();
-        assert_eq!(got.decode(&phase, 0, Part::Film, &film, &scene), Ok(()));
-        assert_eq!(got.decode(&phase, 0, Part::State, &film, &scene), Err(WireError::WrongPart(Part::Film)));
-        assert!(matches!(got.decode(&phase, 1, Part::Film, &film, &scene), Err(WireError::WrongChunk { .. })));
-        // The same chunk of the next pass, or of another phase: stale, refused.
-        let next = Phase { pass: Some(4), ..phase };
-        assert!(matches!(got.decode(&next, 0, Part::Film, &film, &scene), Err(WireError::WrongChunk { .. })));
-        let other = Phase { id: 1, ..phase };
-        assert!(matches!(got.decode(&other, 0, Part::Film, &film, &scene), Err(WireError::WrongChunk { .. })));
-        assert_eq!(got.decode(&phase, 0, Part::Film, &film[..film.len() - 1], &scene), Err(WireError::Malformed));
-        let mut long = film.clone();
-        long.push(0);
-        assert_eq!(got.decode(&phase, 0, Part::Film, &long, &scene), Err(WireError::Invalid("trailing bytes")));
-        let mut old = film.clone();
-        old[4] ^= 1; // the version's varint
-        assert_eq!(got.decode(&phase, 0, Part::Film, &old, &scene), Err(WireError::Header));
-        #[cfg(feature = "path")]
-        refuses_unknown_materials(&scene, &mut got);
-    }
-
-    /// The variant numbers do not move with the core's features (docs/features.md):
-    /// `Count` is variant 3 in every build, and a build without `path` refuses the
-    /// number of `LightPaths`, whose payload it cannot hold, instead of misreading it.
-    #[test]
-    fn variant_numbers_do_not_depend_on_features() {
-        let phase = Phase { name: "probe", id: 0, pass: None, items: 1, chunk: 1, samples: false };
-        let mut out = ChunkOutput::default();
-        out.reset(0..1);
-        out.data = PhaseData::Count(5);
-        let mut bytes = Vec::new();
-        out.encode(&phase, Part::State, &mut bytes);
-        let n = bytes.len();
-        assert_eq!(bytes[n - 2..], [3, 5], "Count(5): variant 3, then 5");
-        #[cfg(not(feature = "path"))]
-        {
-            let (scene, _, _) = builtin::cornell_box(4, 4).build().expect("builds");
-            bytes[n - 2] = 1;
-            let mut got = ChunkOutput::default();
-            assert_eq!(got.decode(&phase, 0, Part::State, &bytes, &scene), Err(WireError::Malformed));
-        }
-    }
-
-    #[cfg(feature = "path")]
-    fn refuses_unknown_materials(scene: &Scene, got: &mut ChunkOutput) {
-        // A light vertex naming a material the scene lacks.
-        let light = Phase { name: "light paths", id: 0, pass: Some(0), items: 1, chunk: 1, samples: true };
-        let mut paths = ChunkOutput::default();
-        paths.reset(0..1);
-        let (store, _) = paths.light_paths();
-        let mut v = crate::path::Vertex::camera(crate::math::Vec3::ZERO, Rgb::ZERO);
-        v.kind = VertexKind::Surface;
-        v.material = scene.materials.len() as u32;
-        store.push(&[v]);
-        let mut state = Vec::new();
-        paths.encode(&light, Part::State, &mut state);
-        assert!(matches!(got.decode(&light, 0, Part::State, &state, scene), Err(WireError::Invalid(_))));
     }
 }

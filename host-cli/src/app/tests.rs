@@ -3,7 +3,8 @@ use super::*;
 use crate::cli::{Cli, Command};
 use clap::Parser;
 use ember_core::Rgb;
-use ember_core::render::{ChunkOutput, Context, Cursor, Phase, Phased, Stage};
+use ember_core::estimators::ChunkOutput;
+use ember_core::render::{Context, Cursor, Phase, Phased, Stage};
 
 /// A renderer drawing a horizontal ramp, one ray per sample.
 struct Ramp {
@@ -13,6 +14,7 @@ struct Ramp {
 }
 
 impl<Q: ember_core::geometry::RayQuery + ?Sized> Phased<Q> for Ramp {
+    type Data = ember_core::estimators::PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         let Some(Stage::Pass(p, _)) = self.cursor.stage() else { return None };
         Some(Phase { name: "camera", id: 0, pass: Some(p), items: self.w * self.h, chunk: 5, samples: true })

@@ -2,7 +2,8 @@ use super::*;
 
 use crate::accel::Accel;
 use ember_core::Rgb;
-use ember_core::render::{ChunkOutput, Cursor, Phase, Stage, render_pass};
+use ember_core::estimators::ChunkOutput;
+use ember_core::render::{Cursor, Phase, Stage, render_pass};
 use ember_core::scene::Scene;
 
 use ember_core::rng::{SampleStream, Stream};
@@ -72,6 +73,7 @@ impl Fake {
 /// Two phases per pass (camera chunks of 13 pixels, then light chunks of 7 paths), so
 /// chunk boundaries fall everywhere; splats scaled by 1/7.
 impl<Q: RayQuery + ?Sized> Phased<Q> for Fake {
+    type Data = ember_core::estimators::PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         match self.cursor.stage()? {
             Stage::Pass(p, 0) => Some(Phase { name: "camera", id: 0, pass: Some(p), items: self.w * self.h, chunk: 13, samples: true }),

@@ -46,9 +46,10 @@ use super::bidir::Bidirectional;
 use super::bridge::{bridge_end, trace_bridges};
 use super::nodes::{scale_kernels, trace_camera_nodes, trace_light_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk};
+use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
-use crate::merge::{Footprint, progressive_radius};
-use crate::render::{ChunkOutput, Context, Cursor, Film, FilterConfig, Phase, Phased, Stage};
+use crate::merge::progressive_radius;
+use crate::render::{Context, Cursor, Film, FilterConfig, Phase, Phased, Stage};
 use crate::spectrum::Rgb;
 use crate::transport::RenderParams;
 
@@ -129,6 +130,7 @@ impl Bpf {
 }
 
 impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
+    type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         let (nodes, paths) = (self.pass.nodes.len() as u32, self.pixels.saturating_add(self.light_paths()));
         Some(match self.cursor.stage()? {
@@ -155,12 +157,12 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
         let (scene, tracer) = (ctx.scene, ctx.tracer);
         let items = out.items.clone();
         if phase.id == 0 {
-            Footprint::map_chunk(scene, tracer, out);
+            crate::estimators::map_footprint(scene, tracer, out);
             return;
         }
         let Some(pass) = phase.pass else { return };
         let range = items.start as usize..items.end as usize;
-        let chunk = out.filter_chunk();
+        let chunk = out.data.filter_chunk();
         match phase.id {
             1 => {
                 // Items below W·H are pixels, the rest light paths.
@@ -193,7 +195,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         match phase.id {
-            0 => self.r0 = self.config.radius.initial_radius(ctx.scene, &Footprint::reduce_chunks(outputs)),
+            0 => self.r0 = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs)),
             BRIDGES => self.pass.append_nodes(outputs),
             id => {
                 self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0)));

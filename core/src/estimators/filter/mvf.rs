@@ -14,9 +14,10 @@ use alloc::vec::Vec;
 
 use super::nodes::{scale_kernels, trace_camera_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk};
+use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
-use crate::merge::{Footprint, progressive_radius};
-use crate::render::{ChunkOutput, Context, Cursor, Film, FilterConfig, Phase, Phased, Stage};
+use crate::merge::progressive_radius;
+use crate::render::{Context, Cursor, Film, FilterConfig, Phase, Phased, Stage};
 use crate::spectrum::Rgb;
 use crate::transport::RenderParams;
 
@@ -53,6 +54,7 @@ impl Mvf {
 }
 
 impl<Q: RayQuery + ?Sized> Phased<Q> for Mvf {
+    type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         let (nodes, paths) = (self.pass.nodes.len() as u32, self.pixels);
         Some(match self.cursor.stage()? {
@@ -75,12 +77,12 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Mvf {
         let (scene, tracer) = (ctx.scene, ctx.tracer);
         let items = out.items.clone();
         if phase.id == 0 {
-            Footprint::map_chunk(scene, tracer, out);
+            crate::estimators::map_footprint(scene, tracer, out);
             return;
         }
         let Some(pass) = phase.pass else { return };
         let range = items.start as usize..items.end as usize;
-        let chunk = out.filter_chunk();
+        let chunk = out.data.filter_chunk();
         match phase.id {
             1 => {
                 let c = trace_camera_nodes(scene, tracer, &self.params, self.segments, pass, items, &mut chunk.nodes, &mut chunk.links, &mut chunk.values);
@@ -94,7 +96,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Mvf {
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         match phase.id {
-            0 => self.r0 = self.config.radius.initial_radius(ctx.scene, &Footprint::reduce_chunks(outputs)),
+            0 => self.r0 = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs)),
             id => self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0))),
         }
         // The pass ends after `filter` (no sweep) or after the last sweep: L is final.

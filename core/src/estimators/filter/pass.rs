@@ -8,8 +8,9 @@ use super::graph::{FilterGraph, Rgb3};
 use super::nodes::{NONE, Node};
 use super::weights::{Denominators, KernelPoint, Neighbourhood};
 use crate::camera::PerspectiveCamera;
+use crate::estimators::ChunkOutput;
 use crate::merge::HashGrid;
-use crate::render::{ChunkOutput, Film};
+use crate::render::Film;
 use crate::scene::Scene;
 use crate::segment::Kernel;
 use crate::spectrum::Rgb;
@@ -152,7 +153,7 @@ impl FilterPass {
         self.values.clear();
         let (mut nodes, mut links) = (0, 0);
         for out in outputs.iter_mut() {
-            let chunk = out.filter_chunk();
+            let chunk = out.data.filter_chunk();
             nodes += chunk.nodes.len();
             links += chunk.links.len();
         }
@@ -160,7 +161,7 @@ impl FilterPass {
         reserve_headroom(&mut self.links, links);
         reserve_headroom(&mut self.values, links);
         for out in outputs.iter_mut() {
-            let chunk = out.filter_chunk();
+            let chunk = out.data.filter_chunk();
             let offset = self.nodes.len() as u32;
             let shift = |i: u32| if i == NONE { NONE } else { i + offset };
             self.nodes.extend(chunk.nodes.iter().map(|n| {
@@ -246,11 +247,11 @@ impl FilterPass {
     /// Append the chunks' nodes (bridges, whose links are already global) after the
     /// gathered ones, and rebuild the grid over all of them at the pass's radius.
     pub fn append_nodes(&mut self, outputs: &mut [ChunkOutput]) {
-        let more = outputs.iter_mut().map(|out| out.filter_chunk().nodes.len()).sum();
+        let more = outputs.iter_mut().map(|out| out.data.filter_chunk().nodes.len()).sum();
         reserve_headroom(&mut self.nodes, more);
         reserve_headroom(&mut self.points, more);
         for out in outputs.iter_mut() {
-            let chunk = out.filter_chunk();
+            let chunk = out.data.filter_chunk();
             self.nodes.extend_from_slice(&chunk.nodes);
             self.points.extend(chunk.nodes.iter().map(KernelPoint::of));
         }
@@ -284,17 +285,17 @@ impl FilterPass {
         self.dens.clear();
         reserve_headroom(&mut self.dens, self.nodes.len());
         for out in outputs.iter_mut() {
-            self.dens.extend_from_slice(&out.filter_chunk().dens);
+            self.dens.extend_from_slice(&out.data.filter_chunk().dens);
         }
     }
 
     /// Gather the chunks' rows; L₀ = the rows' emission.
     pub fn gather_rows(&mut self, outputs: &mut [ChunkOutput]) {
         self.graph.clear();
-        let pairs = outputs.iter_mut().map(|out| out.filter_chunk().rows.pairs()).sum();
+        let pairs = outputs.iter_mut().map(|out| out.data.filter_chunk().rows.pairs()).sum();
         self.graph.reserve_headroom(self.nodes.len(), pairs);
         for out in outputs.iter_mut() {
-            self.graph.append(&out.filter_chunk().rows, 0);
+            self.graph.append(&out.data.filter_chunk().rows, 0);
         }
         self.radiance.clear();
         reserve_headroom(&mut self.radiance, self.nodes.len());
@@ -306,7 +307,7 @@ impl FilterPass {
         self.radiance.clear();
         reserve_headroom(&mut self.radiance, self.nodes.len());
         for out in outputs.iter_mut() {
-            self.radiance.extend_from_slice(&out.filter_chunk().radiance);
+            self.radiance.extend_from_slice(&out.data.filter_chunk().radiance);
         }
     }
 
@@ -409,7 +410,7 @@ mod tests {
         let mut rng = crate::rng::SampleStream::for_sample(5, crate::rng::Stream::Aux, 0, 0, 0);
         let mut outputs: Vec<ChunkOutput> = (0..3).map(|_| ChunkOutput::default()).collect();
         for (c, out) in outputs.iter_mut().enumerate() {
-            let chunk = out.filter_chunk();
+            let chunk = out.data.filter_chunk();
             for path in 0..20u32 {
                 let start = chunk.nodes.len() as u32;
                 for k in 0..10u32 {
@@ -451,7 +452,7 @@ mod tests {
             let mut unsorted = Vec::new();
             let (mut links, mut values) = (Vec::new(), Vec::new());
             for out in outputs.iter_mut() {
-                let chunk = out.filter_chunk();
+                let chunk = out.data.filter_chunk();
                 let offset = unsorted.len() as u32;
                 let shift = |i: u32| if i == NONE { NONE } else { i + offset };
                 unsorted.extend(chunk.nodes.iter().map(|n| {

@@ -40,9 +40,10 @@
 use super::nodes::{near_specular, scale_kernels, trace_light_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk};
 use crate::bsdf::TransportMode;
+use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
-use crate::merge::{Footprint, progressive_radius};
-use crate::render::{ChunkOutput, Context, Cursor, Film, FilterConfig, Phase, Phased, Stage};
+use crate::merge::progressive_radius;
+use crate::render::{Context, Cursor, Film, FilterConfig, Phase, Phased, Stage};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::segment::Kernel;
@@ -94,6 +95,7 @@ impl Phf {
 }
 
 impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
+    type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         let (nodes, paths) = (self.pass.nodes.len() as u32, self.light_paths());
         Some(match self.cursor.stage()? {
@@ -117,7 +119,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
         let (scene, tracer) = (ctx.scene, ctx.tracer);
         let items = out.items.clone();
         if phase.id == 0 {
-            Footprint::map_chunk(scene, tracer, out);
+            crate::estimators::map_footprint(scene, tracer, out);
             return;
         }
         let Some(pass) = phase.pass else { return };
@@ -126,7 +128,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
             out.counters = gather_pixels(scene, tracer, &self.params, self.config.glossy_alpha, &self.pass, pass, items, out.pixel_buffer());
             return;
         }
-        let chunk = out.filter_chunk();
+        let chunk = out.data.filter_chunk();
         match phase.id {
             1 => {
                 let c = trace_light_nodes(
@@ -154,7 +156,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         match phase.id {
-            0 => self.r0 = self.config.radius.initial_radius(ctx.scene, &Footprint::reduce_chunks(outputs)),
+            0 => self.r0 = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs)),
             id if id == 4 + self.sweeps => {
                 for out in outputs.iter() {
                     film.set_camera_samples(out.items.clone(), &out.pixels);

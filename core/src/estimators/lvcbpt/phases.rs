@@ -9,9 +9,10 @@
 use alloc::vec::Vec;
 
 use super::{PassInputs, StrategyCounts, count_cacheable, render_pixels, trace_light_paths};
+use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
 use crate::path::{CacheEntry, LightPaths};
-use crate::render::{ChunkOutput, Context, Cursor, Film, LvcbptConfig, Phase, PhaseData, Phased, Stage, chunk_for};
+use crate::render::{Context, Cursor, Film, LvcbptConfig, Phase, Phased, Stage, chunk_for};
 use crate::transport::RenderParams;
 
 /// Light paths per chunk.
@@ -52,6 +53,7 @@ impl Lvcbpt {
 }
 
 impl<Q: RayQuery + ?Sized> Phased<Q> for Lvcbpt {
+    type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         Some(match self.cursor.stage()? {
             Stage::Setup(_) => Phase { name: "c̄ probe", id: 0, pass: None, items: self.config.probe_paths, chunk: CHUNK, samples: false },
@@ -76,7 +78,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Lvcbpt {
             (1, Some(pass)) => {
                 // The splat list is taken out while the light-path store is borrowed.
                 let mut splats = core::mem::take(&mut out.splats);
-                let (paths, _) = out.light_paths();
+                let (paths, _) = out.data.light_paths();
                 out.counters = trace_light_paths(scene, tracer, params, &self.counts, pass, items, paths, &mut |s| splats.push(s));
                 out.splats = splats;
             }

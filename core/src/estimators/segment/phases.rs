@@ -6,9 +6,9 @@
 //! | pass 0 | `camera` (segment PT, segment BDPT) or `light paths` (segment LT, W·H paths) | W·H | camera samples staged, splats pushed (LT, BDPT's t = 1); pass committed with splat factor 1/(W·H) |
 
 use super::{sbdpt, slt, spt};
+use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
-use crate::merge::Footprint;
-use crate::render::{ChunkOutput, Context, Cursor, Film, KernelChoice, Phase, Phased, SegmentAlgorithm, SegmentConfig, Stage};
+use crate::render::{Context, Cursor, Film, KernelChoice, Phase, Phased, SegmentAlgorithm, SegmentConfig, Stage};
 use crate::segment::Kernel;
 use crate::transport::RenderParams;
 
@@ -42,6 +42,7 @@ impl Segments {
 }
 
 impl<Q: RayQuery + ?Sized> Phased<Q> for Segments {
+    type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         Some(match self.cursor.stage()? {
             Stage::Setup(_) => {
@@ -61,7 +62,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Segments {
         let (scene, tracer, params) = (ctx.scene, ctx.tracer, &self.params);
         let items = out.items.clone();
         match (phase.id, phase.pass) {
-            (0, _) => Footprint::map_chunk(scene, tracer, out),
+            (0, _) => crate::estimators::map_footprint(scene, tracer, out),
             (_, Some(pass)) => match self.algorithm {
                 SegmentAlgorithm::PathTracing => {
                     out.counters = spt::render_pixels(scene, tracer, params, self.kernel, pass, items, out.pixel_buffer());
@@ -81,7 +82,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Segments {
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         if phase.id == 0 {
             if let Kernel::Disk { radius } = &mut self.kernel {
-                *radius = self.config.radius.initial_radius(ctx.scene, &Footprint::reduce_chunks(outputs));
+                *radius = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs));
             }
         } else {
             for out in outputs.iter() {

@@ -19,8 +19,9 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use super::{Classifier, Model, PassCache, build_buckets, build_gamma_tables, light_source_bins, prepare, render_pixels, splat_light_paths, trace_light_paths};
+use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
-use crate::render::{ChunkOutput, Context, Cursor, Film, Phase, PhaseData, Phased, SpcbptConfig, Stage};
+use crate::render::{Context, Cursor, Film, Phase, Phased, SpcbptConfig, Stage};
 use crate::subspace::{AdamParams, DecisionTree, LightSourceBins, SubpathFeature, SubspaceMatrix, TrainParams, TrainingSet};
 use crate::transport::RenderParams;
 
@@ -156,6 +157,7 @@ impl Spcbpt {
 }
 
 impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
+    type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         let setup = |name, id, items| Phase { name, id, pass: None, items, chunk: CHUNK, samples: false };
         let pass = |name, id, p, items, chunk, samples| Phase { name, id, pass: Some(p), items, chunk, samples };
@@ -192,19 +194,19 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
         let pass = phase.pass.unwrap_or(0);
         match phase.id {
             0 => {
-                let (features, weights, _, _) = out.features();
+                let (features, weights, _, _) = out.data.features();
                 out.counters = prepare::light_features(scene, tracer, params, items, features, weights);
             }
             1 => {
                 let blocks_n = (self.width.div_ceil(prepare::BLOCK) * self.height.div_ceil(prepare::BLOCK)) as usize;
-                let (features, weights, blocks, block_samples) = out.features();
+                let (features, weights, blocks, block_samples) = out.data.features();
                 blocks.resize(blocks_n, 0.0);
                 block_samples.resize(blocks_n, 0);
                 out.counters = prepare::dataset_features(scene, tracer, params, items, features, weights, blocks, block_samples);
             }
             2 => {
                 let Some(classifier) = &self.setup.classifier else { return };
-                let q = out.sums(classifier.n_light as usize);
+                let q = out.data.sums(classifier.n_light as usize);
                 out.counters = prepare::accumulate_q(scene, tracer, params, classifier, items, q);
             }
             3 => {
@@ -216,18 +218,18 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
                     light_tracing: self.light_tracing(),
                     block_mean: &self.setup.block_mean,
                 };
-                let set = out.training();
+                let set = out.data.training();
                 out.counters = prepare::dataset_records(ctx, params, &inputs, items, set);
             }
             _ => {
                 let Some(model) = &self.model else { return };
                 match phase.id {
                     4 => {
-                        let (paths, memo) = out.light_paths();
+                        let (paths, memo) = out.data.light_paths();
                         out.counters = trace_light_paths(scene, tracer, params, model, pass, items, paths, memo);
                     }
                     5 => {
-                        let (tables, norms) = out.gamma_tables();
+                        let (tables, norms) = out.data.gamma_tables(out.items.len());
                         build_gamma_tables(model, &self.cache, items, tables, norms);
                     }
                     6 => {

@@ -10,10 +10,11 @@ use alloc::vec::Vec;
 
 use super::mis::Techniques;
 use super::{MergeMode, PassInputs, Photon, photon_position, render_pixels, trace_light_paths};
+use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
-use crate::merge::{Footprint, HashGrid, progressive_radius};
+use crate::merge::{HashGrid, progressive_radius};
 use crate::path::{CacheEntry, LightPaths};
-use crate::render::{ChunkOutput, Context, Cursor, Film, MergingConfig, Phase, PhaseData, Phased, Stage, chunk_for};
+use crate::render::{Context, Cursor, Film, MergingConfig, Phase, Phased, Stage, chunk_for};
 use crate::transport::RenderParams;
 
 /// Items per chunk.
@@ -98,6 +99,7 @@ impl Vcm {
 }
 
 impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
+    type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         Some(match self.cursor.stage()? {
             Stage::Setup(_) => {
@@ -117,11 +119,11 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
         let (scene, tracer, params) = (ctx.scene, ctx.tracer, &self.params);
         let items = out.items.clone();
         match (phase.id, phase.pass) {
-            (0, _) => Footprint::map_chunk(scene, tracer, out),
+            (0, _) => crate::estimators::map_footprint(scene, tracer, out),
             (1, Some(pass)) => {
                 let tech = self.techniques(pass);
                 let mut splats = core::mem::take(&mut out.splats);
-                let (paths, sums) = out.paths_with_sums();
+                let (paths, sums) = out.data.paths_with_sums();
                 out.counters = trace_light_paths(scene, tracer, params, &tech, pass, items, paths, sums, &mut |s| splats.push(s));
                 out.splats = splats;
             }
@@ -141,7 +143,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         match (phase.id, phase.pass) {
-            (0, _) => self.r0 = self.config.radius.initial_radius(ctx.scene, &Footprint::reduce_chunks(outputs)),
+            (0, _) => self.r0 = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs)),
             (1, pass) => {
                 self.paths.clear();
                 self.prefix.clear();
