@@ -31,7 +31,32 @@ pub mod spcbpt;
 #[cfg(feature = "merging")]
 pub mod vcm;
 
+mod one_phase;
 mod payload;
+mod registry;
+mod renderer;
+
+// Each family's configuration lives in its folder and is compiled in every build: a host
+// names, and `Renderer::new` refuses by name, an estimator a build leaves out.
+#[path = "filter/config.rs"]
+mod filter_config;
+#[path = "lvcbpt/config.rs"]
+mod lvcbpt_config;
+#[path = "segment/config.rs"]
+mod segment_config;
+#[path = "spcbpt/config.rs"]
+mod spcbpt_config;
+#[path = "vcm/config.rs"]
+mod vcm_config;
+
+pub use crate::transport::config::{ConfigError, MAX_DATASET, MAX_LIGHT_PATHS};
+pub use filter_config::{DEFAULT_FILTER_SEGMENTS, FilterConfig, FilterReuse, FilterSide, MAX_FILTER_BETA, MAX_FILTER_SEGMENTS};
+pub use lvcbpt_config::LvcbptConfig;
+pub use registry::{EstimatorConfig, EstimatorKind, FILM_BYTES_PER_PIXEL, MemoryEstimate};
+pub use renderer::{Renderer, RendererError};
+pub use segment_config::{KernelChoice, SegmentAlgorithm, SegmentConfig};
+pub use spcbpt_config::SpcbptConfig;
+pub use vcm_config::{MergeMode, MergingConfig};
 
 pub use payload::{Absent, ChunkOutput, PhaseBuffers, PhaseData, types as payload_types};
 #[cfg(any(feature = "merging", feature = "segments", feature = "filtering"))]

@@ -47,8 +47,8 @@ use alloc::string::String;
 use alloc::vec::Vec;
 use core::fmt::Write;
 
+use crate::estimators::{EstimatorConfig, MergeMode};
 use crate::math::Bounds3;
-use crate::render::{EstimatorConfig, MergeMode};
 use crate::scene::Scene;
 use crate::transport::MaxDepth;
 
@@ -240,8 +240,8 @@ impl Plan {
                 let rarely = pilot.filter(|p| p.connections > 0).map(|p| p.occluded_share());
                 match rarely {
                     // LVCBPT must be in the build (a core without the `lvcbpt` feature keeps SPCBPT).
-                    Some(share) if share < RARELY_OCCLUDED && crate::render::EstimatorKind::Lvcbpt.is_compiled() => {
-                        let lv = EstimatorConfig::Lvcbpt(crate::render::LvcbptConfig {
+                    Some(share) if share < RARELY_OCCLUDED && crate::estimators::EstimatorKind::Lvcbpt.is_compiled() => {
+                        let lv = EstimatorConfig::Lvcbpt(crate::estimators::LvcbptConfig {
                             light_paths: c.light_paths,
                             connections: c.connections,
                             ..Default::default()

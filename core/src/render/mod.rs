@@ -34,20 +34,20 @@
 #![warn(missing_docs)]
 
 pub mod aov;
-mod config;
 mod film;
-mod renderer;
 #[cfg(feature = "wire")]
 pub mod wire;
 
+/// Old paths, kept while the hosts move to the new ones (issue 49); removed when they have.
+#[doc(hidden)]
+pub use crate::estimators::{
+    ConfigError, DEFAULT_FILTER_SEGMENTS, EstimatorConfig, EstimatorKind, FILM_BYTES_PER_PIXEL, FilterConfig, FilterReuse, FilterSide, KernelChoice,
+    LvcbptConfig, MAX_DATASET, MAX_FILTER_SEGMENTS, MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig, Renderer, RendererError, SegmentAlgorithm,
+    SegmentConfig, SpcbptConfig,
+};
 /// What every phase reads: the scene and the ray queries (defined with the scene).
 pub use crate::scene::Context;
-pub use config::{
-    ConfigError, DEFAULT_FILTER_SEGMENTS, EstimatorConfig, EstimatorKind, FILM_BYTES_PER_PIXEL, FilterConfig, FilterReuse, FilterSide, KernelChoice,
-    LvcbptConfig, MAX_DATASET, MAX_FILTER_SEGMENTS, MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig, SegmentAlgorithm, SegmentConfig, SpcbptConfig,
-};
 pub use film::{Band, Film, FilmError, ParallelBands, QUANTUM_BITS, Tallies};
-pub use renderer::{CHUNKS, Renderer, RendererError, chunk_for};
 
 use alloc::vec::Vec;
 use core::ops::Range;
@@ -67,6 +67,20 @@ pub trait Payload: Default + Clone + core::fmt::Debug {
 impl Payload for () {
     fn clear(&mut self) {}
 }
+
+/// Pixels per chunk of a camera phase, light paths per chunk of a light phase, for a
+/// phase of `items`: about [`CHUNKS`] chunks, a power of two from 64 to 1024 items each.
+/// A pass ends when its slowest thread does, so chunks must be many per thread: 1024
+/// items gave the 256² suite scenes 64 chunks, 4 per thread on 16 threads, where path
+/// tracing scaled to 10.8× (docs/performance.md, "Thread scaling on 16 cores"). The
+/// size depends on the phase alone, never on the host, and the random numbers on the
+/// item alone, so the image does not depend on it either.
+pub fn chunk_for(items: u32) -> u32 {
+    (items / CHUNKS).max(1).next_power_of_two().clamp(64, 1024)
+}
+
+/// The chunks a large phase is cut into ([`chunk_for`]).
+pub const CHUNKS: u32 = 256;
 
 /// One phase: a map over `0..items` in chunks of `chunk`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -354,6 +368,14 @@ mod tests {
         assert_eq!(none.stage(), None);
         none.start_pass(0);
         assert_eq!(none.stage(), Some(Stage::Pass(0, 0)));
+    }
+
+    /// About 256 chunks where the phase is large enough, within 64..=1024 items each.
+    #[test]
+    fn chunks_are_many_and_bounded() {
+        for (items, chunk) in [(0, 64), (1, 64), (4096, 64), (65_536, 256), (76_800, 512), (2_073_600, 1024), (u32::MAX, 1024)] {
+            assert_eq!(chunk_for(items), chunk, "{items} items");
+        }
     }
 
     #[test]

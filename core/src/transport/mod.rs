@@ -8,6 +8,7 @@
 //! from the camera to the emitter; 1 = emitters seen directly, 2 = direct lighting,
 //! −1 = unbounded. Unbounded paths end by Russian roulette from the fifth segment on.
 
+pub mod config;
 mod surface;
 
 pub use surface::SurfacePoint;

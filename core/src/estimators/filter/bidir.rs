@@ -85,7 +85,7 @@
 //! leaving w was counted once per arrival (the room 60× too bright;
 //! `host-cli/tests/filter_scenes.rs`). On diffuse scenes the two agree.
 //!
-//! **Merges only** ([`crate::render::FilterReuse::Merges`], the reduction to BPM). A
+//! **Merges only** ([`crate::estimators::FilterReuse::Merges`], the reduction to BPM). A
 //! camera junction reuses its own continuation and light sample and merges the light
 //! segments in its kernel; a light junction follows its own path. A merged segment
 //! s = (x, y) leaving light node w at y is the light technique's sample, whose density is
@@ -105,7 +105,7 @@
 //! footprints with β = 4). The emitted part of a merged segment that ends on a
 //! reflective emitter keeps its weight over the full D (not corrected).
 //!
-//! **Bridge segments** ([`crate::render::FilterReuse::Bridges`], the segment paper's
+//! **Bridge segments** ([`crate::estimators::FilterReuse::Bridges`], the segment paper's
 //! §6.4): each camera node c that may take another segment joins one of the pass's M
 //! bridge ends (non-Dirac light nodes), drawn uniformly, by a shadow ray. The bridge is a
 //! light-kind node at c whose segment runs to its end l: reused like a light segment
@@ -143,9 +143,9 @@ pub struct Bidirectional<'a> {
     /// Light paths traced in the pass (the emission technique's samples).
     pub light_paths: f64,
     /// Reuse only bidirectional photon mapping's segment paths
-    /// ([`crate::render::FilterReuse::Merges`]).
+    /// ([`crate::estimators::FilterReuse::Merges`]).
     pub merges_only: bool,
-    /// With bridge segments ([`crate::render::FilterReuse::Bridges`]): 1 / M, the chance
+    /// With bridge segments ([`crate::estimators::FilterReuse::Bridges`]): 1 / M, the chance
     /// that a camera node's bridge goes to a given one of the pass's M bridge ends.
     pub bridge_choice: Option<f64>,
 }

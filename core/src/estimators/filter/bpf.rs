@@ -31,7 +31,7 @@
 //!
 //! d = (segments per path) − 1 sweeps; committed with splat factor 1 (no splats).
 //!
-//! **Bridge segments** ([`crate::render::FilterReuse::Bridges`], §6.4 and Fig. 7): each
+//! **Bridge segments** ([`crate::estimators::FilterReuse::Bridges`], §6.4 and Fig. 7): each
 //! camera node that may take another segment also joins one light node of the pass,
 //! drawn uniformly among its M non-Dirac light nodes, by a shadow ray. A bridge is
 //! reused like a light segment arriving at the camera node, and its radiance is the
@@ -46,10 +46,11 @@ use super::bidir::Bidirectional;
 use super::bridge::{bridge_end, trace_bridges};
 use super::nodes::{scale_kernels, trace_camera_nodes, trace_light_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk};
+use crate::estimators::FilterConfig;
 use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
 use crate::merge::progressive_radius;
-use crate::render::{Context, Cursor, Film, FilterConfig, Phase, Phased, Stage};
+use crate::render::{Context, Cursor, Film, Phase, Phased, Stage};
 use crate::spectrum::Rgb;
 use crate::transport::RenderParams;
 
@@ -123,7 +124,7 @@ impl Bpf {
         Bidirectional {
             hood: self.pass.neighbourhood(scene),
             light_paths: self.light_paths() as f64,
-            merges_only: self.config.reuse == crate::render::FilterReuse::Merges,
+            merges_only: self.config.reuse == crate::estimators::FilterReuse::Merges,
             bridge_choice: (self.config.bridges() && !self.bridge_ends.is_empty()).then(|| 1.0 / self.bridge_ends.len() as f64),
         }
     }

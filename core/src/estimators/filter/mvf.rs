@@ -14,10 +14,11 @@ use alloc::vec::Vec;
 
 use super::nodes::{scale_kernels, trace_camera_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk};
+use crate::estimators::FilterConfig;
 use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
 use crate::merge::progressive_radius;
-use crate::render::{Context, Cursor, Film, FilterConfig, Phase, Phased, Stage};
+use crate::render::{Context, Cursor, Film, Phase, Phased, Stage};
 use crate::spectrum::Rgb;
 use crate::transport::RenderParams;
 

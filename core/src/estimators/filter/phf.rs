@@ -40,10 +40,11 @@
 use super::nodes::{near_specular, scale_kernels, trace_light_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk};
 use crate::bsdf::TransportMode;
+use crate::estimators::FilterConfig;
 use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
 use crate::merge::progressive_radius;
-use crate::render::{Context, Cursor, Film, FilterConfig, Phase, Phased, Stage};
+use crate::render::{Context, Cursor, Film, Phase, Phased, Stage};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::segment::Kernel;

@@ -9,10 +9,11 @@
 use alloc::vec::Vec;
 
 use super::{PassInputs, StrategyCounts, count_cacheable, render_pixels, trace_light_paths};
+use crate::estimators::LvcbptConfig;
 use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
 use crate::path::{CacheEntry, LightPaths};
-use crate::render::{Context, Cursor, Film, LvcbptConfig, Phase, Phased, Stage, chunk_for};
+use crate::render::{Context, Cursor, Film, Phase, Phased, Stage, chunk_for};
 use crate::transport::RenderParams;
 
 /// Light paths per chunk.

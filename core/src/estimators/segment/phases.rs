@@ -7,8 +7,9 @@
 
 use super::{sbdpt, slt, spt};
 use crate::estimators::{ChunkOutput, PhaseData};
+use crate::estimators::{KernelChoice, SegmentAlgorithm, SegmentConfig};
 use crate::geometry::RayQuery;
-use crate::render::{Context, Cursor, Film, KernelChoice, Phase, Phased, SegmentAlgorithm, SegmentConfig, Stage};
+use crate::render::{Context, Cursor, Film, Phase, Phased, Stage};
 use crate::segment::Kernel;
 use crate::transport::RenderParams;
 

@@ -19,9 +19,10 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use super::{Classifier, Model, PassCache, build_buckets, build_gamma_tables, light_source_bins, prepare, render_pixels, splat_light_paths, trace_light_paths};
+use crate::estimators::SpcbptConfig;
 use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
-use crate::render::{Context, Cursor, Film, Phase, Phased, SpcbptConfig, Stage};
+use crate::render::{Context, Cursor, Film, Phase, Phased, Stage};
 use crate::subspace::{AdamParams, DecisionTree, LightSourceBins, SubpathFeature, SubspaceMatrix, TrainParams, TrainingSet};
 use crate::transport::RenderParams;
 

@@ -49,7 +49,7 @@ use crate::transport::{Counters, RenderParams, Splat};
 
 /// Which vertex-merging estimator: part of the configuration, so defined with it (the
 /// configurations compile without the `merging` feature).
-pub use crate::render::MergeMode;
+pub use crate::estimators::MergeMode;
 
 /// Photons on surfaces turned more than about 37° from the camera vertex's are not
 /// merged: within a ball of radius r they lie on another surface (the other wall of a

@@ -10,11 +10,12 @@ use alloc::vec::Vec;
 
 use super::mis::Techniques;
 use super::{MergeMode, PassInputs, Photon, photon_position, render_pixels, trace_light_paths};
+use crate::estimators::MergingConfig;
 use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
 use crate::merge::{HashGrid, progressive_radius};
 use crate::path::{CacheEntry, LightPaths};
-use crate::render::{Context, Cursor, Film, MergingConfig, Phase, Phased, Stage, chunk_for};
+use crate::render::{Context, Cursor, Film, Phase, Phased, Stage, chunk_for};
 use crate::transport::RenderParams;
 
 /// Items per chunk.

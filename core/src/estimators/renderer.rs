@@ -1,119 +1,32 @@
-//! The estimators behind one value: [`Renderer`] dispatches the protocol to PT, LT,
-//! BDPT (one phase per pass each, written here) and to LVCBPT, SPCBPT and the merging
-//! estimators and the segment estimators (whose phases live in their modules).
+//! The estimators behind one value: [`Renderer`] dispatches the render protocol to each
+//! estimator of the registry ([`super::EstimatorKind`]): PT, LT and BDPT
+//! ([`super::one_phase`]), LVCBPT, SPCBPT, the merging estimators, the segment estimators
+//! and the filters (whose phases live in their homes).
 //!
 //! Each estimator's variant exists only where its cargo feature is on (docs/features.md);
 //! [`Renderer::new`] refuses the others with [`RendererError::NotCompiled`].
 
 use core::fmt;
 
-#[cfg(feature = "bdpt")]
-use crate::estimators::bdpt;
-#[cfg(feature = "filtering")]
-use crate::estimators::filter::{Bpf, Mvf, Phf};
-#[cfg(feature = "lvcbpt")]
-use crate::estimators::lvcbpt::Lvcbpt;
-#[cfg(feature = "segments")]
-use crate::estimators::segment::Segments;
-#[cfg(feature = "spcbpt")]
-use crate::estimators::spcbpt::Spcbpt;
-#[cfg(feature = "merging")]
-use crate::estimators::vcm::Vcm;
-use crate::estimators::{lt, pt};
-use crate::geometry::RayQuery;
-use crate::scene::Scene;
-use crate::transport::RenderParams;
-
 #[cfg(feature = "filtering")]
 use super::FilterSide;
-use super::{ConfigError, Context, Cursor, EstimatorConfig, EstimatorKind, Film, Phase, Phased, Stage};
-use crate::estimators::{ChunkOutput, PhaseData};
-
-/// Pixels per chunk of a camera phase, light paths per chunk of a light phase, for a
-/// phase of `items`: about [`CHUNKS`] chunks, a power of two from 64 to 1024 items each.
-/// A pass ends when its slowest thread does, so chunks must be many per thread: 1024
-/// items gave the 256² suite scenes 64 chunks, 4 per thread on 16 threads, where path
-/// tracing scaled to 10.8× (docs/performance.md, "Thread scaling on 16 cores"). The
-/// size depends on the phase alone, never on the host, and the random numbers on the
-/// item alone, so the image does not depend on it either.
-pub fn chunk_for(items: u32) -> u32 {
-    (items / CHUNKS).max(1).next_power_of_two().clamp(64, 1024)
-}
-
-/// The chunks a large phase is cut into ([`chunk_for`]).
-pub const CHUNKS: u32 = 256;
-
-/// Which of the one-phase estimators.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Simple {
-    Pt,
-    Lt,
-    #[cfg(feature = "bdpt")]
-    Bdpt,
-    #[cfg(feature = "bdpt")]
-    PtMoment,
-}
-
-/// PT, LT and BDPT: one phase per pass over every pixel (PT, BDPT) or W·H light paths
-/// (LT); BDPT and LT splat, scaled by 1/(W·H).
-#[derive(Clone, Debug)]
-pub struct OnePhase {
-    which: Simple,
-    params: RenderParams,
-    pixels: u32,
-    cursor: Cursor,
-}
-
-impl OnePhase {
-    fn new(which: Simple, params: RenderParams, pixels: u32) -> Self {
-        Self { which, params, pixels, cursor: Cursor::new(0, 1) }
-    }
-}
-
-impl<Q: RayQuery + ?Sized> Phased<Q> for OnePhase {
-    type Data = PhaseData;
-    fn next_phase(&self) -> Option<Phase> {
-        let Some(Stage::Pass(pass, 0)) = self.cursor.stage() else { return None };
-        let name = if self.which == Simple::Lt { "light paths" } else { "camera" };
-        Some(Phase { name, id: 0, pass: Some(pass), items: self.pixels, chunk: chunk_for(self.pixels), samples: true })
-    }
-    fn start_pass(&mut self, pass: u32) {
-        self.cursor.start_pass(pass);
-    }
-    fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput) {
-        let (scene, tracer, params) = (ctx.scene, ctx.tracer, &self.params);
-        let pass = phase.pass.unwrap_or(0);
-        let items = out.items.clone();
-        out.counters = match self.which {
-            Simple::Pt => pt::render_pixels(scene, tracer, params, pass, items, out.pixel_buffer()),
-            #[cfg(feature = "bdpt")]
-            Simple::Bdpt => {
-                let (pixels, splats) = out.pixels_and_splats();
-                bdpt::render_pixels(scene, tracer, params, pass, items, pixels, &mut |s| splats.push(s))
-            }
-            #[cfg(feature = "bdpt")]
-            Simple::PtMoment => {
-                let (pixels, splats) = out.pixels_and_splats();
-                bdpt::probe::render_pixels(scene, tracer, params, pass, items, pixels, &mut |s| splats.push(s))
-            }
-            Simple::Lt => {
-                let splats = &mut out.splats;
-                lt::trace_paths(scene, tracer, params, pass, items, &mut |s| splats.push(s))
-            }
-        };
-    }
-    fn reduce(&mut self, _ctx: &Context<'_, Q>, _phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
-        for out in outputs.iter() {
-            if self.which != Simple::Lt {
-                film.set_camera_samples(out.items.clone(), &out.pixels);
-            }
-            film.push_splats(&out.splats);
-        }
-        if self.cursor.advance() {
-            film.end_pass(1.0 / self.pixels.max(1) as f64);
-        }
-    }
-}
+#[cfg(feature = "filtering")]
+use super::filter::{Bpf, Mvf, Phf};
+#[cfg(feature = "lvcbpt")]
+use super::lvcbpt::Lvcbpt;
+use super::one_phase::{OnePhase, Simple};
+#[cfg(feature = "segments")]
+use super::segment::Segments;
+#[cfg(feature = "spcbpt")]
+use super::spcbpt::Spcbpt;
+#[cfg(feature = "merging")]
+use super::vcm::Vcm;
+use super::{ChunkOutput, EstimatorConfig, EstimatorKind, PhaseData};
+use crate::geometry::RayQuery;
+use crate::render::{Context, Film, Phase, Phased};
+use crate::scene::Scene;
+use crate::transport::RenderParams;
+use crate::transport::config::ConfigError;
 
 /// Any of the core's estimators, configured for one scene.
 #[derive(Debug)]
@@ -362,16 +275,8 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
 mod tests {
     use super::*;
     #[cfg(not(feature = "merging"))]
-    use crate::render::{MergeMode, MergingConfig};
+    use crate::estimators::{MergeMode, MergingConfig};
     use crate::scene::builtin;
-
-    /// About 256 chunks where the phase is large enough, within 64..=1024 items each.
-    #[test]
-    fn chunks_are_many_and_bounded() {
-        for (items, chunk) in [(0, 64), (1, 64), (4096, 64), (65_536, 256), (76_800, 512), (2_073_600, 1024), (u32::MAX, 1024)] {
-            assert_eq!(chunk_for(items), chunk, "{items} items");
-        }
-    }
 
     /// In every build, whatever its features: an estimator is constructed exactly when it
     /// is compiled, and a refusal names the estimator and the feature that compiles it.
