@@ -332,12 +332,11 @@ mod wire {
 #[cfg(all(test, feature = "wire"))]
 mod wire_tests {
     use super::*;
-    #[cfg(feature = "path")]
-    use crate::path::VertexKind;
     use crate::render::Phase;
     use crate::render::wire::{Part, WireError};
-    use crate::scene::{Scene, builtin};
-    use crate::spectrum::Rgb;
+    use crate::scene::builtin;
+    #[cfg(feature = "path")]
+    use crate::{path::VertexKind, scene::Scene, spectrum::Rgb};
 
     #[test]
     fn refuses_what_it_cannot_trust() {
