@@ -73,7 +73,12 @@ pub use product::{product_of_sums, tuple_weight};
 pub use scaled::Scaled;
 
 /// A sampling technique, known to MMIS through its conditional density `p_i(x | t)`
-/// (eq. 2, 6): the extension point that estimators implement for their techniques.
+/// (eq. 2, 6), for the generic estimator [`Mmis`]. The paper's canonical experiments
+/// (`tests/tests/mmis_estimator.rs`, `mmis_fig1`) and the fuzz targets implement it; the
+/// path filters (`estimators::filter`) do not: their denominators are eq. (14)'s product
+/// of sums regrouped per kernel and propagated over a graph of nodes in f32/f64 (one sweep
+/// per depth), a shape that a per-sample trait call and [`Scaled`] arithmetic would only
+/// slow down, so they keep their own and are checked against brute-force sums instead.
 ///
 /// `X` is the sample space (a point, a path, a segment), `T` the auxiliary variable that
 /// conditions sampling. Techniques with different technique spaces share one `T`

@@ -147,9 +147,8 @@ impl<T: Real> FilterGraph<T> {
     }
 
     /// Make room for `rows` more rows and `pairs` more pairs, with headroom where the
-    /// storage must grow ([`super::pass::reserve_headroom`]).
+    /// storage must grow ([`reserve_headroom`]).
     pub fn reserve_headroom(&mut self, rows: usize, pairs: usize) {
-        use super::pass::reserve_headroom;
         reserve_headroom(&mut self.emission, rows);
         reserve_headroom(&mut self.direct, rows);
         reserve_headroom(&mut self.starts, rows);
@@ -207,5 +206,15 @@ impl<T: Real> FilterGraph<T> {
             core::mem::swap(&mut cur, &mut next);
         }
         cur
+    }
+}
+
+/// Make room for `n` more elements. Where the vector must grow it takes a quarter more
+/// than it needs, so that the next pass's slightly larger node count fits. `Vec`'s own
+/// growth is exact when a vector's first fill reserves its length, as `extend` does.
+pub(super) fn reserve_headroom<T>(v: &mut Vec<T>, n: usize) {
+    let need = v.len().saturating_add(n);
+    if need > v.capacity() {
+        v.reserve(need.saturating_add(need / 4) - v.len());
     }
 }

@@ -4,7 +4,7 @@
 
 use alloc::vec::Vec;
 
-use super::graph::{FilterGraph, Rgb3};
+use super::graph::{FilterGraph, Rgb3, reserve_headroom};
 use super::nodes::{NONE, Node};
 use super::weights::{Denominators, KernelPoint, Neighbourhood};
 use crate::camera::PerspectiveCamera;
@@ -37,16 +37,6 @@ const MIN_NODE_CHUNK: u32 = 64;
 pub(super) fn node_chunk(nodes: u32, paths: u32) -> u32 {
     let chunks = NODE_CHUNKS_PER_PATH_CHUNK * paths.div_ceil(CHUNK).max(1);
     nodes.div_ceil(chunks).max(MIN_NODE_CHUNK)
-}
-
-/// Make room for `n` more elements. Where the vector must grow it takes a quarter more
-/// than it needs, so that the next pass's slightly larger node count fits. `Vec`'s own
-/// growth is exact when a vector's first fill reserves its length, as `extend` does.
-pub(super) fn reserve_headroom<T>(v: &mut Vec<T>, n: usize) {
-    let need = v.len().saturating_add(n);
-    if need > v.capacity() {
-        v.reserve(need.saturating_add(need / 4) - v.len());
-    }
 }
 
 /// A node's position in the grid: emission nodes (all on the lights, and never anyone's

@@ -157,20 +157,34 @@ impl Spcbpt {
     }
 }
 
+/// SPCBPT's phase ids, named once: setup (κ_L's light features, the dataset's features,
+/// Q, the training set), then per pass (light paths, stage-1 Γ tables, light-tracing
+/// splats, camera).
+mod phase {
+    pub const LIGHT_FEATURES: u8 = 0;
+    pub const DATASET_FEATURES: u8 = 1;
+    pub const Q: u8 = 2;
+    pub const TRAINING_SET: u8 = 3;
+    pub const LIGHT_PATHS: u8 = 4;
+    pub const GAMMA_TABLES: u8 = 5;
+    pub const SPLATS: u8 = 6;
+    pub const CAMERA: u8 = 7;
+}
+
 impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
     type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         let setup = |name, id, items| Phase { name, id, pass: None, items, chunk: CHUNK, samples: false };
         let pass = |name, id, p, items, chunk, samples| Phase { name, id, pass: Some(p), items, chunk, samples };
         Some(match self.cursor.stage()? {
-            Stage::Setup(0) => setup("light features", 0, self.dataset.min(FIT_CAP as u32)),
-            Stage::Setup(1) => setup("dataset features", 1, self.dataset),
-            Stage::Setup(2) => setup("Q", 2, self.q_paths),
-            Stage::Setup(_) => setup("training set", 3, self.dataset),
-            Stage::Pass(p, 0) => pass("light paths", 4, p, self.light_paths, CHUNK, true),
-            Stage::Pass(p, 1) => pass("Γ tables", 5, p, self.n_eye(), EYE_CHUNK, false),
-            Stage::Pass(p, 2) => pass("splats", 6, p, self.light_paths, CHUNK, false),
-            Stage::Pass(p, _) => pass("camera", 7, p, self.pixels(), CHUNK, true),
+            Stage::Setup(0) => setup("light features", phase::LIGHT_FEATURES, self.dataset.min(FIT_CAP as u32)),
+            Stage::Setup(1) => setup("dataset features", phase::DATASET_FEATURES, self.dataset),
+            Stage::Setup(2) => setup("Q", phase::Q, self.q_paths),
+            Stage::Setup(_) => setup("training set", phase::TRAINING_SET, self.dataset),
+            Stage::Pass(p, 0) => pass("light paths", phase::LIGHT_PATHS, p, self.light_paths, CHUNK, true),
+            Stage::Pass(p, 1) => pass("Γ tables", phase::GAMMA_TABLES, p, self.n_eye(), EYE_CHUNK, false),
+            Stage::Pass(p, 2) => pass("splats", phase::SPLATS, p, self.light_paths, CHUNK, false),
+            Stage::Pass(p, _) => pass("camera", phase::CAMERA, p, self.pixels(), CHUNK, true),
         })
     }
 
@@ -194,23 +208,23 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
         let items = out.items.clone();
         let pass = phase.pass.unwrap_or(0);
         match phase.id {
-            0 => {
+            phase::LIGHT_FEATURES => {
                 let (features, weights, _, _) = out.data.features();
                 out.counters = prepare::light_features(scene, tracer, params, items, features, weights);
             }
-            1 => {
+            phase::DATASET_FEATURES => {
                 let blocks_n = (self.width.div_ceil(prepare::BLOCK) * self.height.div_ceil(prepare::BLOCK)) as usize;
                 let (features, weights, blocks, block_samples) = out.data.features();
                 blocks.resize(blocks_n, 0.0);
                 block_samples.resize(blocks_n, 0);
                 out.counters = prepare::dataset_features(scene, tracer, params, items, features, weights, blocks, block_samples);
             }
-            2 => {
+            phase::Q => {
                 let Some(classifier) = &self.setup.classifier else { return };
                 let q = out.data.sums(classifier.n_light as usize);
                 out.counters = prepare::accumulate_q(scene, tracer, params, classifier, items, q);
             }
-            3 => {
+            phase::TRAINING_SET => {
                 let Some(classifier) = &self.setup.classifier else { return };
                 let inputs = prepare::RecordInputs {
                     classifier,
@@ -225,15 +239,15 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
             _ => {
                 let Some(model) = &self.model else { return };
                 match phase.id {
-                    4 => {
+                    phase::LIGHT_PATHS => {
                         let (paths, memo) = out.data.light_paths();
                         out.counters = trace_light_paths(scene, tracer, params, model, pass, items, paths, memo);
                     }
-                    5 => {
+                    phase::GAMMA_TABLES => {
                         let (tables, norms) = out.data.gamma_tables(out.items.len());
                         build_gamma_tables(model, &self.cache, items, tables, norms);
                     }
-                    6 => {
+                    phase::SPLATS => {
                         let splats = &mut out.splats;
                         out.counters = splat_light_paths(scene, tracer, params, model, &self.cache, self.light_tracing(), pass, items, &mut |s| splats.push(s));
                     }
@@ -248,7 +262,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         let scene = ctx.scene;
         match phase.id {
-            0 => {
+            phase::LIGHT_FEATURES => {
                 let (mut lf, mut lw): (Vec<SubpathFeature>, Vec<f32>) = (Vec::new(), Vec::new());
                 for out in outputs.iter() {
                     if let PhaseData::Features { features, weights, .. } = &out.data {
@@ -274,7 +288,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
                 self.report.light_source_bins = self.setup.sources.as_ref().map_or(0, |b| b.bin_count());
                 self.setup.light_tree = Some((tree, n_surface));
             }
-            1 => {
+            phase::DATASET_FEATURES => {
                 let blocks_n = (self.width.div_ceil(prepare::BLOCK) * self.height.div_ceil(prepare::BLOCK)) as usize;
                 let (mut ef, mut ew): (Vec<SubpathFeature>, Vec<f32>) = (Vec::new(), Vec::new());
                 let (mut blocks, mut block_samples) = (vec![0.0f64; blocks_n], vec![0u32; blocks_n]);
@@ -296,7 +310,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
                 let Some((light_tree, n_surface)) = self.setup.light_tree.take() else { return };
                 self.setup.classifier = Some(Classifier::new(eye_tree, n_eye, light_tree, n_surface, self.setup.sources.take()));
             }
-            2 => {
+            phase::Q => {
                 let n_light = self.setup.classifier.as_ref().map_or(0, |c| c.n_light) as usize;
                 let mut q = vec![0.0f64; n_light];
                 for out in outputs.iter() {
@@ -308,7 +322,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
                 }
                 self.setup.q = q.iter().map(|v| (v / self.q_paths.max(1) as f64) as f32).collect();
             }
-            3 => {
+            phase::TRAINING_SET => {
                 let mut set = TrainingSet::new();
                 for out in outputs.iter_mut() {
                     if let PhaseData::Training(part) = &mut out.data {
@@ -342,7 +356,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
                 self.setup = Setup::default();
                 self.model = Some(Model { classifier, q, gamma, connections: self.config.connections });
             }
-            4 => {
+            phase::LIGHT_PATHS => {
                 let cache = &mut self.cache;
                 cache.paths.clear();
                 cache.memo.clear();
@@ -356,7 +370,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
                     build_buckets(scene, model, cache);
                 }
             }
-            5 => {
+            phase::GAMMA_TABLES => {
                 self.cache.gamma_tables.clear();
                 self.cache.gamma_norm.clear();
                 for out in outputs.iter_mut() {
@@ -366,7 +380,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
                     }
                 }
             }
-            6 => {
+            phase::SPLATS => {
                 for out in outputs.iter() {
                     film.push_splats(&out.splats);
                 }
