@@ -32,6 +32,17 @@ pub struct OnePhase {
 }
 
 impl OnePhase {
+    /// Which estimator this is (the second-moment probe is BDPT's samples).
+    pub fn kind(&self) -> super::EstimatorKind {
+        use super::EstimatorKind;
+        match self.which {
+            Simple::Pt => EstimatorKind::Pt,
+            Simple::Lt => EstimatorKind::Lt,
+            #[cfg(feature = "bdpt")]
+            Simple::Bdpt | Simple::PtMoment => EstimatorKind::Bdpt,
+        }
+    }
+
     pub(super) fn new(which: Simple, params: RenderParams, pixels: u32) -> Self {
         Self { which, params, pixels, cursor: Cursor::new(0, 1) }
     }

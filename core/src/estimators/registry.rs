@@ -9,119 +9,213 @@ use core::fmt;
 use super::{FilterConfig, FilterSide, LvcbptConfig, MergeMode, MergingConfig, SegmentAlgorithm, SegmentConfig, SpcbptConfig};
 use crate::transport::config::ConfigError;
 
-/// The light-transport estimators, in the order hosts list them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum EstimatorKind {
+/// Writes [`EstimatorKind`] and everything it knows from one row per estimator: its
+/// name, its cargo feature (`always` for PT and LT), its summary, its default
+/// configuration and the configurations that select it.
+macro_rules! estimators {
+    (@feature always) => { None };
+    (@feature feature $f:literal) => { Some($f) };
+    (@compiled always) => { true };
+    (@compiled feature $f:literal) => { cfg!(feature = $f) };
+    ($(
+        $(#[doc = $doc:literal])*
+        $kind:ident {
+            name: $name:literal,
+            $($feature:ident)+ $($f:literal)?,
+            summary: $summary:expr,
+            default: $default:expr,
+            configured_by: $pattern:pat,
+        },
+    )*) => {
+        /// The light-transport estimators, in the order hosts list them (the list is
+        /// the same in every build; [`EstimatorKind::is_compiled`] says which a build
+        /// holds).
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum EstimatorKind {
+            $($(#[doc = $doc])* $kind,)*
+        }
+
+        impl EstimatorKind {
+            /// Every estimator, in listing order (its index is the browser's and the C ABI's id).
+            pub const ALL: [EstimatorKind; [$(EstimatorKind::$kind),*].len()] = [$(EstimatorKind::$kind),*];
+
+            /// The name as typed on a command line.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(Self::$kind => $name,)*
+                }
+            }
+
+            /// One line for help texts.
+            pub fn summary(self) -> &'static str {
+                match self {
+                    $(Self::$kind => $summary,)*
+                }
+            }
+
+            /// This estimator with its default configuration.
+            pub fn default_config(self) -> EstimatorConfig {
+                match self {
+                    $(Self::$kind => $default,)*
+                }
+            }
+
+            /// The cargo feature of `ember-core` that compiles this estimator, or `None`
+            /// for PT and LT, which every build holds (docs/features.md). The list
+            /// itself, its order and its indices are the same in every build.
+            pub fn cargo_feature(self) -> Option<&'static str> {
+                match self {
+                    $(Self::$kind => estimators!(@feature $($feature)+ $($f)?),)*
+                }
+            }
+
+            /// Is this estimator's code in this build? [`super::Renderer::new`] refuses
+            /// one that is not ([`super::RendererError::NotCompiled`]).
+            pub fn is_compiled(self) -> bool {
+                match self {
+                    $(Self::$kind => estimators!(@compiled $($feature)+ $($f)?),)*
+                }
+            }
+        }
+
+        impl EstimatorConfig {
+            /// Which estimator this configures.
+            pub fn kind(&self) -> EstimatorKind {
+                match *self {
+                    $($pattern => EstimatorKind::$kind,)*
+                }
+            }
+        }
+    };
+}
+
+// The one list of estimators: adding one is its module, its configuration (a variant of
+// `EstimatorConfig` for a new family) and a row here; `Renderer` dispatches by family.
+estimators! {
     /// Path tracing: camera paths with next-event estimation and MIS (Mitsuba's `path`).
-    Pt,
+    Pt {
+        name: "pt",
+        always,
+        summary: "path tracing with next-event estimation and MIS (Mitsuba's `path`)",
+        default: EstimatorConfig::Pt,
+        configured_by: EstimatorConfig::Pt,
+    },
     /// Light tracing: light paths connected to the camera (Mitsuba's `ptracer`).
-    Lt,
+    Lt {
+        name: "lt",
+        always,
+        summary: "light tracing: light paths connected to the camera (Mitsuba's `ptracer`)",
+        default: EstimatorConfig::Lt,
+        configured_by: EstimatorConfig::Lt,
+    },
     /// Bidirectional path tracing with multiple importance sampling (Veach 1997).
-    Bdpt,
+    Bdpt {
+        name: "bdpt",
+        feature "bdpt",
+        summary: "bidirectional path tracing with every (s, t) strategy and balance-heuristic MIS",
+        default: EstimatorConfig::Bdpt,
+        configured_by: EstimatorConfig::Bdpt | EstimatorConfig::PtMoment,
+    },
     /// Light-vertex-cache BDPT: M light paths per pass into a cache, N uniform
     /// connections per camera vertex (Davidovič et al. 2014).
-    Lvcbpt,
+    Lvcbpt {
+        name: "lvcbpt",
+        feature "lvcbpt",
+        summary: "light-vertex-cache BDPT: N uniform connections to M cached light paths per pass",
+        default: EstimatorConfig::Lvcbpt(LvcbptConfig::DEFAULT),
+        configured_by: EstimatorConfig::Lvcbpt(_),
+    },
     /// Subspace-based probabilistic connections (Su, Li, Wang 2022): Γ-guided
     /// connections to cached light vertices, Γ trained by Adam before rendering.
-    Spcbpt,
+    Spcbpt {
+        name: "spcbpt",
+        feature "spcbpt",
+        summary: "subspace-based probabilistic connections: Γ-guided connections, Γ trained before rendering",
+        default: EstimatorConfig::Spcbpt(SpcbptConfig::DEFAULT),
+        configured_by: EstimatorConfig::Spcbpt(_),
+    },
     /// Progressive photon mapping: photons merged at the first non-Dirac camera vertex.
-    Ppm,
+    Ppm {
+        name: "ppm",
+        feature "merging",
+        summary: "progressive photon mapping: photons merged at the first non-specular camera vertex, shrinking radius",
+        default: EstimatorConfig::Merging(MergeMode::Ppm, MergingConfig::DEFAULT),
+        configured_by: EstimatorConfig::Merging(MergeMode::Ppm, _),
+    },
     /// Bidirectional photon mapping: merges at every camera vertex, balance heuristic.
-    Bpm,
+    Bpm {
+        name: "bpm",
+        feature "merging",
+        summary: "bidirectional photon mapping: merges at every camera vertex under the balance heuristic",
+        default: EstimatorConfig::Merging(MergeMode::Bpm, MergingConfig::DEFAULT),
+        configured_by: EstimatorConfig::Merging(MergeMode::Bpm, _),
+    },
     /// Vertex connection and merging (UPS): BDPT's connections and every merge under
     /// one balance heuristic (Georgiev et al. 2012).
-    Vcm,
+    Vcm {
+        name: "vcm",
+        feature "merging",
+        summary: "vertex connection and merging (UPS): BDPT's connections and photon merges under one balance heuristic",
+        default: EstimatorConfig::Merging(MergeMode::Vcm, MergingConfig::DEFAULT),
+        configured_by: EstimatorConfig::Merging(MergeMode::Vcm, _),
+    },
     /// Segment path tracing (Wang, West, Hachisuka 2025): the sequential segment sampler
     /// from the camera with a kernel between segments, light-sampled last segment by MIS.
-    Spt,
+    Spt {
+        name: "spt",
+        feature "segments",
+        summary: "segment path tracing: segments sampled in sequence from the camera, joined by a kernel (--kernel), light-sampled last segment by MIS; = pt with the Dirac kernel",
+        default: EstimatorConfig::Segment(SegmentAlgorithm::PathTracing, SegmentConfig::DEFAULT),
+        configured_by: EstimatorConfig::Segment(SegmentAlgorithm::PathTracing, _),
+    },
     /// Segment light tracing: the sequential segment sampler from the lights with a kernel
     /// between segments, last segment to the pinhole.
-    Slt,
+    Slt {
+        name: "slt",
+        feature "segments",
+        summary: "segment light tracing: segments sampled in sequence from the lights, joined by a kernel (--kernel), last segment to the camera; = lt with the Dirac kernel",
+        default: EstimatorConfig::Segment(SegmentAlgorithm::LightTracing, SegmentConfig::DEFAULT),
+        configured_by: EstimatorConfig::Segment(SegmentAlgorithm::LightTracing, _),
+    },
     /// Segment BDPT: camera and light segment sequences joined by bridge segments, MIS
     /// over every technique.
-    Sbdpt,
+    Sbdpt {
+        name: "sbdpt",
+        feature "segments",
+        summary: "segment BDPT: camera and light segment sequences joined by a kernel (--kernel), every pair of prefixes by a bridge segment, balance-heuristic MIS; = bdpt with the Dirac kernel",
+        default: EstimatorConfig::Segment(SegmentAlgorithm::Bidirectional, SegmentConfig::DEFAULT),
+        configured_by: EstimatorConfig::Segment(SegmentAlgorithm::Bidirectional, _),
+    },
     /// Multi-vertex path filtering: recursive MMIS (eq. 18) over camera segment
     /// sequences, computed by propagation, progressive kernel.
-    Mvf,
+    Mvf {
+        name: "mvf",
+        feature "filtering",
+        summary: "multi-vertex path filtering: camera segments reused by every kernel they fall in, recursive marginal MIS computed by propagation, shrinking kernel (--alpha)",
+        default: EstimatorConfig::Filter(FilterSide::Camera, FilterConfig::DEFAULT),
+        configured_by: EstimatorConfig::Filter(FilterSide::Camera, _),
+    },
     /// Photon filtering: recursive MMIS over light segment sequences, then photon density
     /// estimation at the first non-Dirac camera vertex.
-    Phf,
+    Phf {
+        name: "phf",
+        feature "filtering",
+        summary: "photon filtering: light segments reused by every kernel they fall in (recursive marginal MIS by propagation), then photon density estimation; shrinking kernel",
+        default: EstimatorConfig::Filter(FilterSide::Light, FilterConfig::DEFAULT),
+        configured_by: EstimatorConfig::Filter(FilterSide::Light, _),
+    },
     /// Bidirectional path filtering: recursive MMIS over camera and light segment
     /// sequences together (Wang, West, Hachisuka 2025 §5).
-    Bpf,
+    Bpf {
+        name: "bpf",
+        feature "filtering",
+        summary: "bidirectional path filtering: camera and light segments (--beta light paths per pixel) reused by every kernel they fall in, recursive marginal MIS by propagation; shrinking kernel",
+        default: EstimatorConfig::Filter(FilterSide::Both, FilterConfig::DEFAULT),
+        configured_by: EstimatorConfig::Filter(FilterSide::Both, _),
+    },
 }
 
 impl EstimatorKind {
-    /// Every estimator, in listing order (its index is the browser's and the C ABI's id).
-    pub const ALL: [EstimatorKind; 14] = [
-        Self::Pt,
-        Self::Lt,
-        Self::Bdpt,
-        Self::Lvcbpt,
-        Self::Spcbpt,
-        Self::Ppm,
-        Self::Bpm,
-        Self::Vcm,
-        Self::Spt,
-        Self::Slt,
-        Self::Sbdpt,
-        Self::Mvf,
-        Self::Phf,
-        Self::Bpf,
-    ];
-
-    /// The name as typed on a command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Pt => "pt",
-            Self::Lt => "lt",
-            Self::Bdpt => "bdpt",
-            Self::Lvcbpt => "lvcbpt",
-            Self::Spcbpt => "spcbpt",
-            Self::Ppm => "ppm",
-            Self::Bpm => "bpm",
-            Self::Vcm => "vcm",
-            Self::Spt => "spt",
-            Self::Slt => "slt",
-            Self::Sbdpt => "sbdpt",
-            Self::Mvf => "mvf",
-            Self::Phf => "phf",
-            Self::Bpf => "bpf",
-        }
-    }
-
-    /// One line for help texts.
-    pub fn summary(self) -> &'static str {
-        match self {
-            Self::Pt => "path tracing with next-event estimation and MIS (Mitsuba's `path`)",
-            Self::Lt => "light tracing: light paths connected to the camera (Mitsuba's `ptracer`)",
-            Self::Bdpt => "bidirectional path tracing with every (s, t) strategy and balance-heuristic MIS",
-            Self::Lvcbpt => "light-vertex-cache BDPT: N uniform connections to M cached light paths per pass",
-            Self::Spcbpt => "subspace-based probabilistic connections: Γ-guided connections, Γ trained before rendering",
-            Self::Ppm => "progressive photon mapping: photons merged at the first non-specular camera vertex, shrinking radius",
-            Self::Bpm => "bidirectional photon mapping: merges at every camera vertex under the balance heuristic",
-            Self::Vcm => "vertex connection and merging (UPS): BDPT's connections and photon merges under one balance heuristic",
-            Self::Spt => {
-                "segment path tracing: segments sampled in sequence from the camera, joined by a kernel (--kernel), light-sampled last segment by MIS; = pt with the Dirac kernel"
-            }
-            Self::Slt => {
-                "segment light tracing: segments sampled in sequence from the lights, joined by a kernel (--kernel), last segment to the camera; = lt with the Dirac kernel"
-            }
-            Self::Sbdpt => {
-                "segment BDPT: camera and light segment sequences joined by a kernel (--kernel), every pair of prefixes by a bridge segment, balance-heuristic MIS; = bdpt with the Dirac kernel"
-            }
-            Self::Mvf => {
-                "multi-vertex path filtering: camera segments reused by every kernel they fall in, recursive marginal MIS computed by propagation, shrinking kernel (--alpha)"
-            }
-            Self::Phf => {
-                "photon filtering: light segments reused by every kernel they fall in (recursive marginal MIS by propagation), then photon density estimation; shrinking kernel"
-            }
-            Self::Bpf => {
-                "bidirectional path filtering: camera and light segments (--beta light paths per pixel) reused by every kernel they fall in, recursive marginal MIS by propagation; shrinking kernel"
-            }
-        }
-    }
-
     /// The estimator called `name` ([`Self::name`]).
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|e| e.name() == name)
@@ -130,57 +224,6 @@ impl EstimatorKind {
     /// The estimator with index `i` in [`Self::ALL`].
     pub fn from_index(i: u32) -> Option<Self> {
         Self::ALL.get(i as usize).copied()
-    }
-
-    /// This estimator with its default configuration.
-    pub fn default_config(self) -> EstimatorConfig {
-        match self {
-            Self::Pt => EstimatorConfig::Pt,
-            Self::Lt => EstimatorConfig::Lt,
-            Self::Bdpt => EstimatorConfig::Bdpt,
-            Self::Lvcbpt => EstimatorConfig::Lvcbpt(LvcbptConfig::DEFAULT),
-            Self::Spcbpt => EstimatorConfig::Spcbpt(SpcbptConfig::DEFAULT),
-            Self::Ppm => EstimatorConfig::Merging(MergeMode::Ppm, MergingConfig::DEFAULT),
-            Self::Bpm => EstimatorConfig::Merging(MergeMode::Bpm, MergingConfig::DEFAULT),
-            Self::Vcm => EstimatorConfig::Merging(MergeMode::Vcm, MergingConfig::DEFAULT),
-            Self::Spt => EstimatorConfig::Segment(SegmentAlgorithm::PathTracing, SegmentConfig::DEFAULT),
-            Self::Slt => EstimatorConfig::Segment(SegmentAlgorithm::LightTracing, SegmentConfig::DEFAULT),
-            Self::Sbdpt => EstimatorConfig::Segment(SegmentAlgorithm::Bidirectional, SegmentConfig::DEFAULT),
-            Self::Mvf => EstimatorConfig::Filter(FilterSide::Camera, FilterConfig::DEFAULT),
-            Self::Phf => EstimatorConfig::Filter(FilterSide::Light, FilterConfig::DEFAULT),
-            Self::Bpf => EstimatorConfig::Filter(FilterSide::Both, FilterConfig::DEFAULT),
-        }
-    }
-}
-
-impl EstimatorKind {
-    /// The cargo feature of `ember-core` that compiles this estimator, or `None` for PT
-    /// and LT, which every build holds (docs/features.md). The list itself, its order and
-    /// its indices are the same in every build.
-    pub fn cargo_feature(self) -> Option<&'static str> {
-        match self {
-            Self::Pt | Self::Lt => None,
-            Self::Bdpt => Some("bdpt"),
-            Self::Lvcbpt => Some("lvcbpt"),
-            Self::Spcbpt => Some("spcbpt"),
-            Self::Ppm | Self::Bpm | Self::Vcm => Some("merging"),
-            Self::Spt | Self::Slt | Self::Sbdpt => Some("segments"),
-            Self::Mvf | Self::Phf | Self::Bpf => Some("filtering"),
-        }
-    }
-
-    /// Is this estimator's code in this build? [`super::Renderer::new`] refuses one that is
-    /// not ([`super::RendererError::NotCompiled`]).
-    pub fn is_compiled(self) -> bool {
-        match self {
-            Self::Pt | Self::Lt => true,
-            Self::Bdpt => cfg!(feature = "bdpt"),
-            Self::Lvcbpt => cfg!(feature = "lvcbpt"),
-            Self::Spcbpt => cfg!(feature = "spcbpt"),
-            Self::Ppm | Self::Bpm | Self::Vcm => cfg!(feature = "merging"),
-            Self::Spt | Self::Slt | Self::Sbdpt => cfg!(feature = "segments"),
-            Self::Mvf | Self::Phf | Self::Bpf => cfg!(feature = "filtering"),
-        }
     }
 }
 
@@ -217,26 +260,6 @@ pub enum EstimatorConfig {
 }
 
 impl EstimatorConfig {
-    /// Which estimator this configures.
-    pub fn kind(&self) -> EstimatorKind {
-        match self {
-            Self::Pt => EstimatorKind::Pt,
-            Self::Lt => EstimatorKind::Lt,
-            Self::Bdpt | Self::PtMoment => EstimatorKind::Bdpt,
-            Self::Lvcbpt(_) => EstimatorKind::Lvcbpt,
-            Self::Spcbpt(_) => EstimatorKind::Spcbpt,
-            Self::Merging(MergeMode::Ppm, _) => EstimatorKind::Ppm,
-            Self::Merging(MergeMode::Bpm, _) => EstimatorKind::Bpm,
-            Self::Merging(MergeMode::Vcm, _) => EstimatorKind::Vcm,
-            Self::Segment(SegmentAlgorithm::PathTracing, _) => EstimatorKind::Spt,
-            Self::Segment(SegmentAlgorithm::LightTracing, _) => EstimatorKind::Slt,
-            Self::Segment(SegmentAlgorithm::Bidirectional, _) => EstimatorKind::Sbdpt,
-            Self::Filter(FilterSide::Camera, _) => EstimatorKind::Mvf,
-            Self::Filter(FilterSide::Light, _) => EstimatorKind::Phf,
-            Self::Filter(FilterSide::Both, _) => EstimatorKind::Bpf,
-        }
-    }
-
     /// Check every field against its range.
     pub fn validate(&self) -> Result<(), ConfigError> {
         match self {

@@ -6,6 +6,7 @@
 //! Each estimator's variant exists only where its cargo feature is on (docs/features.md);
 //! [`Renderer::new`] refuses the others with [`RendererError::NotCompiled`].
 
+use alloc::boxed::Box;
 use core::fmt;
 
 #[cfg(feature = "filtering")]
@@ -28,32 +29,84 @@ use crate::scene::Scene;
 use crate::transport::RenderParams;
 use crate::transport::config::ConfigError;
 
-/// Any of the core's estimators, configured for one scene.
-#[derive(Debug)]
-pub enum Renderer {
+/// Writes [`Renderer`], one boxed variant per estimator family (behind the family's cargo
+/// feature), with its kind, its parameters and the protocol dispatched to the family's
+/// own `Phased` implementation, from one row per family.
+macro_rules! families {
+    ($(
+        $(#[doc = $doc:literal])*
+        $variant:ident($family:ty) $(if $feature:literal)?, |$e:ident| $kind:expr;
+    )*) => {
+        /// Any of the core's estimators, configured for one scene.
+        #[derive(Debug)]
+        pub enum Renderer {
+            $($(#[doc = $doc])* $(#[cfg(feature = $feature)])? $variant(Box<$family>),)*
+        }
+
+        impl Renderer {
+            /// Which estimator this is.
+            pub fn kind(&self) -> EstimatorKind {
+                match self {
+                    $($(#[cfg(feature = $feature)])? Self::$variant($e) => $kind,)*
+                }
+            }
+
+            /// The settings shared by the estimators.
+            pub fn params(&self) -> &RenderParams {
+                match self {
+                    $($(#[cfg(feature = $feature)])? Self::$variant(e) => &e.params,)*
+                }
+            }
+        }
+
+        impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
+            type Data = PhaseData;
+            fn next_phase(&self) -> Option<Phase> {
+                match self {
+                    $($(#[cfg(feature = $feature)])? Self::$variant(e) => Phased::<Q>::next_phase(&**e),)*
+                }
+            }
+            fn start_pass(&mut self, pass: u32) {
+                match self {
+                    $($(#[cfg(feature = $feature)])? Self::$variant(e) => Phased::<Q>::start_pass(&mut **e, pass),)*
+                }
+            }
+            fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput) {
+                match self {
+                    $($(#[cfg(feature = $feature)])? Self::$variant(e) => e.map(ctx, phase, out),)*
+                }
+            }
+            fn replay_pass(&mut self, pass: u32) -> bool {
+                match self {
+                    $($(#[cfg(feature = $feature)])? Self::$variant(e) => Phased::<Q>::replay_pass(&mut **e, pass),)*
+                }
+            }
+            fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
+                match self {
+                    $($(#[cfg(feature = $feature)])? Self::$variant(e) => e.reduce(ctx, phase, outputs, film),)*
+                }
+            }
+        }
+    };
+}
+
+families! {
     /// PT, LT or BDPT.
-    OnePhase(OnePhase),
+    OnePhase(OnePhase), |o| o.kind();
     /// LVCBPT.
-    #[cfg(feature = "lvcbpt")]
-    Lvcbpt(Lvcbpt),
-    /// SPCBPT (boxed: its model is large).
-    #[cfg(feature = "spcbpt")]
-    Spcbpt(alloc::boxed::Box<Spcbpt>),
+    Lvcbpt(Lvcbpt) if "lvcbpt", |_l| EstimatorKind::Lvcbpt;
+    /// SPCBPT.
+    Spcbpt(Spcbpt) if "spcbpt", |_s| EstimatorKind::Spcbpt;
     /// PPM, BPM or VCM.
-    #[cfg(feature = "merging")]
-    Merging(alloc::boxed::Box<Vcm>),
+    Merging(Vcm) if "merging", |m| EstimatorConfig::Merging(m.mode, m.config).kind();
     /// Segment PT, LT or BDPT.
-    #[cfg(feature = "segments")]
-    Segment(Segments),
+    Segment(Segments) if "segments", |s| EstimatorConfig::Segment(s.algorithm, s.config).kind();
     /// Multi-vertex path filtering.
-    #[cfg(feature = "filtering")]
-    Filter(alloc::boxed::Box<Mvf>),
+    Filter(Mvf) if "filtering", |_f| EstimatorKind::Mvf;
     /// Photon filtering.
-    #[cfg(feature = "filtering")]
-    PhotonFilter(alloc::boxed::Box<Phf>),
+    PhotonFilter(Phf) if "filtering", |_f| EstimatorKind::Phf;
     /// Bidirectional path filtering.
-    #[cfg(feature = "filtering")]
-    BidirectionalFilter(alloc::boxed::Box<Bpf>),
+    BidirectionalFilter(Bpf) if "filtering", |_f| EstimatorKind::Bpf;
 }
 
 /// Why [`Renderer::new`] refused a configuration.
@@ -106,168 +159,32 @@ impl Renderer {
         config.validate()?;
         let pixels = scene.camera.width() * scene.camera.height();
         Ok(match config {
-            EstimatorConfig::Pt => Self::OnePhase(OnePhase::new(Simple::Pt, params, pixels)),
-            EstimatorConfig::Lt => Self::OnePhase(OnePhase::new(Simple::Lt, params, pixels)),
+            EstimatorConfig::Pt => Self::OnePhase(Box::new(OnePhase::new(Simple::Pt, params, pixels))),
+            EstimatorConfig::Lt => Self::OnePhase(Box::new(OnePhase::new(Simple::Lt, params, pixels))),
             #[cfg(feature = "bdpt")]
-            EstimatorConfig::Bdpt => Self::OnePhase(OnePhase::new(Simple::Bdpt, params, pixels)),
+            EstimatorConfig::Bdpt => Self::OnePhase(Box::new(OnePhase::new(Simple::Bdpt, params, pixels))),
             #[cfg(feature = "bdpt")]
-            EstimatorConfig::PtMoment => Self::OnePhase(OnePhase::new(Simple::PtMoment, params, pixels)),
+            EstimatorConfig::PtMoment => Self::OnePhase(Box::new(OnePhase::new(Simple::PtMoment, params, pixels))),
             #[cfg(feature = "lvcbpt")]
-            EstimatorConfig::Lvcbpt(c) => Self::Lvcbpt(Lvcbpt::new(params, c, pixels)),
+            EstimatorConfig::Lvcbpt(c) => Self::Lvcbpt(Box::new(Lvcbpt::new(params, c, pixels))),
             #[cfg(feature = "spcbpt")]
-            EstimatorConfig::Spcbpt(c) => Self::Spcbpt(alloc::boxed::Box::new(Spcbpt::new(params, c, scene.camera.width(), scene.camera.height()))),
+            EstimatorConfig::Spcbpt(c) => Self::Spcbpt(Box::new(Spcbpt::new(params, c, scene.camera.width(), scene.camera.height()))),
             #[cfg(feature = "merging")]
-            EstimatorConfig::Merging(mode, c) => Self::Merging(alloc::boxed::Box::new(Vcm::new(params, mode, c, pixels))),
+            EstimatorConfig::Merging(mode, c) => Self::Merging(Box::new(Vcm::new(params, mode, c, pixels))),
             #[cfg(feature = "segments")]
-            EstimatorConfig::Segment(a, c) => Self::Segment(Segments::new(params, a, c, pixels)),
+            EstimatorConfig::Segment(a, c) => Self::Segment(Box::new(Segments::new(params, a, c, pixels))),
             #[cfg(feature = "filtering")]
-            EstimatorConfig::Filter(FilterSide::Camera, c) => Self::Filter(alloc::boxed::Box::new(Mvf::new(params, c, pixels))),
+            EstimatorConfig::Filter(FilterSide::Camera, c) => Self::Filter(Box::new(Mvf::new(params, c, pixels))),
             #[cfg(feature = "filtering")]
-            EstimatorConfig::Filter(FilterSide::Light, c) => Self::PhotonFilter(alloc::boxed::Box::new(Phf::new(params, c, pixels))),
+            EstimatorConfig::Filter(FilterSide::Light, c) => Self::PhotonFilter(Box::new(Phf::new(params, c, pixels))),
             #[cfg(feature = "filtering")]
-            EstimatorConfig::Filter(FilterSide::Both, c) => Self::BidirectionalFilter(alloc::boxed::Box::new(Bpf::new(params, c, pixels))),
+            EstimatorConfig::Filter(FilterSide::Both, c) => Self::BidirectionalFilter(Box::new(Bpf::new(params, c, pixels))),
             #[cfg(not(all(feature = "bdpt", feature = "lvcbpt", feature = "spcbpt", feature = "merging", feature = "segments", feature = "filtering")))]
             other => {
                 let estimator = other.kind();
                 return Err(RendererError::NotCompiled { estimator, feature: estimator.cargo_feature().unwrap_or("default") });
             }
         })
-    }
-
-    /// Which estimator this is.
-    pub fn kind(&self) -> EstimatorKind {
-        match self {
-            Self::OnePhase(o) => match o.which {
-                Simple::Pt => EstimatorKind::Pt,
-                Simple::Lt => EstimatorKind::Lt,
-                #[cfg(feature = "bdpt")]
-                Simple::Bdpt | Simple::PtMoment => EstimatorKind::Bdpt,
-            },
-            #[cfg(feature = "lvcbpt")]
-            Self::Lvcbpt(_) => EstimatorKind::Lvcbpt,
-            #[cfg(feature = "spcbpt")]
-            Self::Spcbpt(_) => EstimatorKind::Spcbpt,
-            #[cfg(feature = "merging")]
-            Self::Merging(m) => EstimatorConfig::Merging(m.mode, m.config).kind(),
-            #[cfg(feature = "segments")]
-            Self::Segment(s) => EstimatorConfig::Segment(s.algorithm, s.config).kind(),
-            #[cfg(feature = "filtering")]
-            Self::Filter(_) => EstimatorKind::Mvf,
-            #[cfg(feature = "filtering")]
-            Self::PhotonFilter(_) => EstimatorKind::Phf,
-            #[cfg(feature = "filtering")]
-            Self::BidirectionalFilter(_) => EstimatorKind::Bpf,
-        }
-    }
-
-    /// The settings shared by the estimators.
-    pub fn params(&self) -> &RenderParams {
-        match self {
-            Self::OnePhase(o) => &o.params,
-            #[cfg(feature = "lvcbpt")]
-            Self::Lvcbpt(l) => &l.params,
-            #[cfg(feature = "spcbpt")]
-            Self::Spcbpt(s) => &s.params,
-            #[cfg(feature = "merging")]
-            Self::Merging(m) => &m.params,
-            #[cfg(feature = "segments")]
-            Self::Segment(s) => &s.params,
-            #[cfg(feature = "filtering")]
-            Self::Filter(f) => &f.params,
-            #[cfg(feature = "filtering")]
-            Self::PhotonFilter(f) => &f.params,
-            #[cfg(feature = "filtering")]
-            Self::BidirectionalFilter(f) => &f.params,
-        }
-    }
-}
-
-impl<Q: RayQuery + ?Sized> Phased<Q> for Renderer {
-    type Data = PhaseData;
-    fn next_phase(&self) -> Option<Phase> {
-        match self {
-            Self::OnePhase(o) => Phased::<Q>::next_phase(o),
-            #[cfg(feature = "lvcbpt")]
-            Self::Lvcbpt(l) => Phased::<Q>::next_phase(l),
-            #[cfg(feature = "spcbpt")]
-            Self::Spcbpt(s) => Phased::<Q>::next_phase(&**s),
-            #[cfg(feature = "merging")]
-            Self::Merging(m) => Phased::<Q>::next_phase(&**m),
-            #[cfg(feature = "segments")]
-            Self::Segment(s) => Phased::<Q>::next_phase(s),
-            #[cfg(feature = "filtering")]
-            Self::Filter(f) => Phased::<Q>::next_phase(&**f),
-            #[cfg(feature = "filtering")]
-            Self::PhotonFilter(f) => Phased::<Q>::next_phase(&**f),
-            #[cfg(feature = "filtering")]
-            Self::BidirectionalFilter(f) => Phased::<Q>::next_phase(&**f),
-        }
-    }
-    fn start_pass(&mut self, pass: u32) {
-        match self {
-            Self::OnePhase(o) => Phased::<Q>::start_pass(o, pass),
-            #[cfg(feature = "lvcbpt")]
-            Self::Lvcbpt(l) => Phased::<Q>::start_pass(l, pass),
-            #[cfg(feature = "spcbpt")]
-            Self::Spcbpt(s) => Phased::<Q>::start_pass(&mut **s, pass),
-            #[cfg(feature = "merging")]
-            Self::Merging(m) => Phased::<Q>::start_pass(&mut **m, pass),
-            #[cfg(feature = "segments")]
-            Self::Segment(s) => Phased::<Q>::start_pass(s, pass),
-            #[cfg(feature = "filtering")]
-            Self::Filter(f) => Phased::<Q>::start_pass(&mut **f, pass),
-            #[cfg(feature = "filtering")]
-            Self::PhotonFilter(f) => Phased::<Q>::start_pass(&mut **f, pass),
-            #[cfg(feature = "filtering")]
-            Self::BidirectionalFilter(f) => Phased::<Q>::start_pass(&mut **f, pass),
-        }
-    }
-    fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput) {
-        match self {
-            Self::OnePhase(o) => o.map(ctx, phase, out),
-            #[cfg(feature = "lvcbpt")]
-            Self::Lvcbpt(l) => l.map(ctx, phase, out),
-            #[cfg(feature = "spcbpt")]
-            Self::Spcbpt(s) => s.map(ctx, phase, out),
-            #[cfg(feature = "merging")]
-            Self::Merging(m) => m.map(ctx, phase, out),
-            #[cfg(feature = "segments")]
-            Self::Segment(s) => s.map(ctx, phase, out),
-            #[cfg(feature = "filtering")]
-            Self::Filter(f) => f.map(ctx, phase, out),
-            #[cfg(feature = "filtering")]
-            Self::PhotonFilter(f) => f.map(ctx, phase, out),
-            #[cfg(feature = "filtering")]
-            Self::BidirectionalFilter(f) => f.map(ctx, phase, out),
-        }
-    }
-    fn replay_pass(&mut self, pass: u32) -> bool {
-        // Only SPCBPT carries state from pass to pass.
-        #[cfg(feature = "spcbpt")]
-        if let Self::Spcbpt(s) = self {
-            return Phased::<Q>::replay_pass(&mut **s, pass);
-        }
-        let _ = pass;
-        false
-    }
-    fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
-        match self {
-            Self::OnePhase(o) => o.reduce(ctx, phase, outputs, film),
-            #[cfg(feature = "lvcbpt")]
-            Self::Lvcbpt(l) => l.reduce(ctx, phase, outputs, film),
-            #[cfg(feature = "spcbpt")]
-            Self::Spcbpt(s) => s.reduce(ctx, phase, outputs, film),
-            #[cfg(feature = "merging")]
-            Self::Merging(m) => m.reduce(ctx, phase, outputs, film),
-            #[cfg(feature = "segments")]
-            Self::Segment(s) => s.reduce(ctx, phase, outputs, film),
-            #[cfg(feature = "filtering")]
-            Self::Filter(f) => f.reduce(ctx, phase, outputs, film),
-            #[cfg(feature = "filtering")]
-            Self::PhotonFilter(f) => f.reduce(ctx, phase, outputs, film),
-            #[cfg(feature = "filtering")]
-            Self::BidirectionalFilter(f) => f.reduce(ctx, phase, outputs, film),
-        }
     }
 }
 
