@@ -43,6 +43,7 @@ pub mod spectrum;
 #[cfg(feature = "subspace")]
 pub mod subspace;
 pub mod texture;
+pub mod transport;
 pub mod warp;
 
 pub use math::{Vec2, Vec3};

@@ -1,0 +1,3 @@
+//! Light transport shared by every estimator: the one bounce loop ([`walk`]).
+
+pub mod walk;
