@@ -135,11 +135,10 @@ fn trace_one<Q: RayQuery + ?Sized>(
     let ray = if es.n == Vec3::ZERO { crate::geometry::Ray::new(es.p, es.dir, f32::INFINITY) } else { crate::geometry::spawn_ray(es.p, es.n, es.dir) };
     let first_dim = rng.dimension();
     let mut path = PathState::new(ray, beta, first_dim + WALK.layout.per_bounce);
-    loop {
-        let Some(arrived) = WALK.trace(tracer, &path, counters) else { break };
+    while let Some(arrived) = WALK.trace(tracer, &path, counters) {
         // The next segment starts here, or where the kernel puts it (the shading point
         // moves there, β takes the kernel's reversed ratio).
-        let hit = WALK.junction(tracer, &mut path, arrived, junctions.as_deref_mut(), counters).shading;
+        let hit = WALK.junction(tracer, &mut path, &arrived, junctions.as_deref_mut(), counters).map_or(arrived, |m| m.at);
         let sp = SurfacePoint::new(hit, -path.ray.dir);
         let material = sp.material(scene);
 

@@ -118,8 +118,8 @@ fn walk<Q: RayQuery + ?Sized>(
         let material = sp.material(scene);
 
         // Start the next segment: at this vertex, or where the kernel puts it.
-        let junction = WALK.junction(tracer, &mut path, hit, junctions.as_deref_mut(), counters);
-        let start = junction.moved.then_some(&junction.exit);
+        let moved = WALK.junction(tracer, &mut path, &hit, junctions.as_deref_mut(), counters);
+        let start = moved.as_ref().map(|m| &m.at);
 
         // Sample a light (next-event estimation) unless the BSDF is all Dirac.
         if !material.is_delta() {

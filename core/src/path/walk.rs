@@ -199,8 +199,12 @@ fn random_walk<Q: RayQuery + ?Sized>(
             return;
         };
         // The junction: which point keeps the BSDF and which starts the next segment.
-        let junction = walk.junction(tracer, &mut state, hit, junctions.as_deref_mut(), counters);
-        let (shading, exit) = (junction.shading, junction.exit);
+        let moved = walk.junction(tracer, &mut state, &hit, junctions.as_deref_mut(), counters);
+        let (shading, exit, kernel_ratio) = match (moved, mode) {
+            (None, _) => (hit, hit, 1.0),
+            (Some(m), TransportMode::Radiance) => (hit, m.at, m.ratio),
+            (Some(m), TransportMode::Importance) => (m.at, hit, m.ratio),
+        };
         let sp = SurfacePoint::new(shading, -state.ray.dir);
         let mut v = Vertex {
             kind: VertexKind::Surface,
@@ -216,7 +220,7 @@ fn random_walk<Q: RayQuery + ?Sized>(
             pdf_fwd: VertexPdf::ZERO,
             pdf_rev: VertexPdf::ZERO,
             exit: Exit::at(exit.p, exit.ng, exit.ns),
-            kernel_ratio: junction.ratio,
+            kernel_ratio,
         };
         set_densities(scene, path, &prev, &mut v, mode);
         if path.push(v).is_err() || path.len() >= max_vertices {
@@ -227,7 +231,7 @@ fn random_walk<Q: RayQuery + ?Sized>(
         // toward the light side (radiance), the shading point toward the camera side
         // (importance). Its cosine is taken there (eq. 6).
         let material = scene.material(shading.material, shading.uv);
-        let moved_start = (mode == TransportMode::Radiance && junction.moved).then_some(&exit);
+        let moved_start = (mode == TransportMode::Radiance && moved.is_some()).then_some(&exit);
         match walk.scatter(params, &mut state, &sp, &material, moved_start, roulette, rng) {
             Leave::Continues(b) => path[n].delta |= b.delta,
             Leave::Ended(b) => {

@@ -166,16 +166,13 @@ pub enum Leave {
     Continues(Bounce),
 }
 
-/// Where a segment kernel put the junction at a hit (see [`Walk::junction`]).
+/// Where a segment kernel moved a junction off the hit (see [`Walk::junction`]).
 #[derive(Clone, Copy, Debug)]
-pub struct Junction {
-    /// The point whose BSDF and frame shade the vertex.
-    pub shading: SurfaceHit,
-    /// The point the camera-side segment leaves from (the hit itself for a light walk).
-    pub exit: SurfaceHit,
-    /// The kernel moved one of them off the hit.
-    pub moved: bool,
-    /// K's reversed ratio ([`crate::segment::Kernel::reversed_ratio`]); 1 unless moved.
+pub struct Moved {
+    /// The kernel's point: a radiance walk's next segment leaves from it, an importance
+    /// walk shades there.
+    pub at: SurfaceHit,
+    /// K's reversed ratio ([`crate::segment::Kernel::reversed_ratio`]).
     pub ratio: f32,
 }
 
@@ -206,30 +203,28 @@ impl Walk {
         tracer.intersect(&state.ray)
     }
 
-    /// The junction at `hit` (the state's ray reached it): without `junctions` (the
-    /// Dirac kernel) the hit itself; otherwise a point the kernel draws around it. A
-    /// light walk shades at that point and multiplies β by the kernel's reversed ratio.
+    /// The junction at `hit` (the state's ray reached it): `None` where it stays at the
+    /// hit (no `junctions`, the Dirac kernel, or the kernel's miss mass); otherwise the
+    /// point the kernel drew around it. A light walk shades at that point and multiplies
+    /// β by the kernel's reversed ratio; a camera walk keeps the hit's BSDF and leaves
+    /// from it.
     #[inline]
     pub fn junction<Q: RayQuery + ?Sized>(
         &self,
         tracer: &Q,
         state: &mut PathState,
-        hit: SurfaceHit,
+        hit: &SurfaceHit,
         junctions: Option<&mut Junctions>,
         counters: &mut Counters,
-    ) -> Junction {
-        let at_end = Junction { shading: hit, exit: hit, moved: false, ratio: 1.0 };
-        let Some(j) = junctions else { return at_end };
+    ) -> Option<Moved> {
+        let j = junctions?;
         counters.rays += 1;
-        let KernelSample::Moved(x) = j.sample(tracer, &hit, -state.ray.dir) else { return at_end };
-        let ratio = j.kernel.reversed_ratio(&hit, &x);
-        match self.mode {
-            TransportMode::Radiance => Junction { shading: hit, exit: x, moved: true, ratio },
-            TransportMode::Importance => {
-                state.beta *= ratio;
-                Junction { shading: x, exit: hit, moved: true, ratio }
-            }
+        let KernelSample::Moved(at) = j.sample(tracer, hit, -state.ray.dir) else { return None };
+        let ratio = j.kernel.reversed_ratio(hit, &at);
+        if self.mode == TransportMode::Importance {
+            state.beta *= ratio;
         }
+        Some(Moved { at, ratio })
     }
 
     /// Next-event estimation's draw at the current bounce: a light ∝ power (dimension

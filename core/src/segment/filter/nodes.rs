@@ -425,8 +425,7 @@ fn light_walk<Q: RayQuery + ?Sized>(
     let first_dim = rng.dimension();
     let mut path = PathState::new(ray, start.beta0, first_dim + LIGHT_WALK.layout.per_bounce);
     let mut parent = NONE;
-    loop {
-        let Some(hit) = LIGHT_WALK.trace(tracer, &path, counters) else { break };
+    while let Some(hit) = LIGHT_WALK.trace(tracer, &path, counters) {
         let (segments, ray) = (path.segments, path.ray);
         if segments == 1 && start.with_node {
             if let Some(e) = emission_node(scene, tracer, &hit, &start.sample, counters) {
