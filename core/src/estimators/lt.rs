@@ -23,11 +23,13 @@ use crate::geometry::{RayQuery, spawn_ray_to};
 use crate::math::{Vec2, Vec3};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
-use crate::segment::{Junctions, Kernel, KernelSample, LIGHT_KERNEL_KEY};
+use crate::segment::{Junctions, Kernel, LIGHT_KERNEL_KEY};
 use crate::spectrum::Rgb;
-use crate::transport::{Counters, RenderParams, Splat, SurfacePoint, survives_roulette};
+use crate::transport::walk::{Layout, Leave, PathState, Roulette, Walk};
+use crate::transport::{Counters, RenderParams, Splat, SurfacePoint};
 
-const DIMS_PER_BOUNCE: u32 = 4;
+/// LT's walk: importance, 4 dimensions per bounce (lobe 1, direction 2, roulette 1).
+const WALK: Walk = Walk { mode: TransportMode::Importance, layout: Layout { per_bounce: 4, light: 0, lobe: 0, roulette: 3 } };
 
 /// Trace light paths `paths` of pass `pass`; every camera connection goes to `splat`.
 pub fn trace_paths<Q: RayQuery + ?Sized>(
@@ -128,40 +130,25 @@ fn trace_one<Q: RayQuery + ?Sized>(
     }
 
     let cos0 = if es.n == Vec3::ZERO { 1.0 } else { es.n.dot(es.dir).abs() };
-    let mut beta = es.radiance * (cos0 / (pdf_pos * es.pdf_dir.0));
-    let reference = crate::transport::light_roulette_reference(beta);
-    let mut ray = if es.n == Vec3::ZERO { crate::geometry::Ray::new(es.p, es.dir, f32::INFINITY) } else { crate::geometry::spawn_ray(es.p, es.n, es.dir) };
+    let beta = es.radiance * (cos0 / (pdf_pos * es.pdf_dir.0));
+    let roulette = Roulette::Throughput { reference: crate::transport::light_roulette_reference(beta) };
+    let ray = if es.n == Vec3::ZERO { crate::geometry::Ray::new(es.p, es.dir, f32::INFINITY) } else { crate::geometry::spawn_ray(es.p, es.n, es.dir) };
     let first_dim = rng.dimension();
-    let mut segments = 1u32;
-    loop {
-        counters.rays += 1;
-        let Some(arrived) = tracer.intersect(&ray) else { break };
-        // The next segment starts here, or where the kernel puts it.
-        let hit = match junctions.as_deref_mut() {
-            Some(j) => {
-                counters.rays += 1;
-                match j.sample(tracer, &arrived, -ray.dir) {
-                    KernelSample::AtEnd => arrived,
-                    KernelSample::Moved(x) => {
-                        // The integrand's kernel is the camera-direction one.
-                        beta *= j.kernel.reversed_ratio(&arrived, &x);
-                        x
-                    }
-                }
-            }
-            None => arrived,
-        };
-        let sp = SurfacePoint::new(hit, -ray.dir);
+    let mut path = PathState::new(ray, beta, first_dim + WALK.layout.per_bounce);
+    while let Some(arrived) = WALK.trace(tracer, &path, counters) {
+        // The next segment starts here, or where the kernel puts it (the shading point
+        // moves there, β takes the kernel's reversed ratio).
+        let hit = WALK.junction(tracer, &mut path, &arrived, junctions.as_deref_mut(), counters).map_or(arrived, |m| m.at);
+        let sp = SurfacePoint::new(hit, -path.ray.dir);
         let material = sp.material(scene);
-        rng.set_dimension(first_dim + segments * DIMS_PER_BOUNCE);
 
         // Connect this vertex to the camera: segments + 1 segments in all.
-        if !material.is_delta() && params.max_depth.allows(segments + 1) {
+        if !material.is_delta() && params.max_depth.allows(path.segments + 1) {
             // The lens point from the auxiliary stream, so the walk's dimensions stay.
             let u_lens = scene.camera.lens_u(sky_rng);
             if let Some(cs) = scene.camera.sample_wi(hit.p, u_lens) {
                 let f = sp.f_cos(scene, cs.wi, TransportMode::Importance);
-                let value = beta * f * scene.camera.arriving_importance(&cs);
+                let value = path.beta * f * scene.camera.arriving_importance(&cs);
                 if !value.is_black() {
                     counters.rays += 1;
                     if !tracer.occluded(&sp.spawn_to(cs.position, Vec3::ZERO)) {
@@ -170,26 +157,11 @@ fn trace_one<Q: RayQuery + ?Sized>(
                 }
             }
         }
-        if !params.max_depth.allows(segments + 2) {
+        if !params.max_depth.allows(path.segments + 2) {
             break;
         }
 
         // Sample the adjoint BSDF to continue.
-        let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
-        let Some(bs) = material.sample(sp.frame.to_local(sp.wo), u_lobe, u_dir, TransportMode::Importance) else { break };
-        if !bs.pdf.is_positive() {
-            break;
-        }
-        let wi = sp.frame.to_world(bs.wi);
-        let correction = crate::bsdf::shading_normal_correction(TransportMode::Importance, sp.wo, wi, hit.ng, hit.ns);
-        beta *= bs.f * (bs.wi.z.abs() * correction / bs.pdf.0);
-        if beta.is_black() || !beta.is_finite() {
-            break;
-        }
-        segments += 1;
-        if !survives_roulette(params, segments, &mut beta, reference, rng) {
-            break;
-        }
-        ray = sp.spawn(wi);
+        let Leave::Continues(_) = WALK.scatter(params, &mut path, &sp, &material, None, roulette, rng) else { break };
     }
 }

@@ -12,27 +12,18 @@
 use core::ops::Range;
 
 use crate::bsdf::{Material, TransportMode};
-use crate::geometry::{Ray, RayQuery, SurfaceHit, spawn_ray, spawn_ray_to};
-use crate::math::{Vec2, Vec3};
+use crate::geometry::{Ray, RayQuery, SurfaceHit};
+use crate::math::Vec3;
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
-use crate::segment::{CAMERA_KERNEL_KEY, Junctions, Kernel, KernelSample, start_cosine};
+use crate::segment::{CAMERA_KERNEL_KEY, Junctions, Kernel, start_cosine};
 use crate::spectrum::Rgb;
-use crate::transport::{Counters, RenderParams, SurfacePoint, survives_roulette};
+use crate::transport::walk::{LastBounce, Layout, Leave, PathState, Roulette, Walk, light_origin, shadow_ray};
+use crate::transport::{Counters, RenderParams, SurfacePoint};
 
-/// Random dimensions used per bounce (light choice 1, light point 2, lobe 1, direction 2, roulette 1).
-const DIMS_PER_BOUNCE: u32 = 8;
-
-/// Where the path was before the current segment, for the MIS weight of emission found
-/// by BSDF sampling.
-#[derive(Clone, Copy, Debug)]
-struct PrevBounce {
-    /// The origin of the BSDF-sampled ray (offset off the surface): light densities are
-    /// evaluated from the point the ray was tested from.
-    origin: Vec3,
-    bsdf_pdf: f32,
-    is_delta: bool,
-}
+/// PT's walk: radiance, 8 dimensions per bounce (light choice 1, light point 2, lobe 1,
+/// direction 2, roulette 1).
+const WALK: Walk = Walk { mode: TransportMode::Radiance, layout: Layout { per_bounce: 8, light: 0, lobe: 3, roulette: 6 } };
 
 /// Render one sample for each pixel in `pixels` (index y·width + x) of pass `pass`
 /// into `out[i − pixels.start]`.
@@ -73,16 +64,18 @@ pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Render
     walk(scene, tracer, params, ray, rng, None, counters)
 }
 
-/// The camera walk of PT and of segment PT ([`crate::estimators::estimators::spt`]): with `junctions`
-/// `None` (the Dirac kernel) each segment starts where the previous one ended, which is
-/// path tracing; otherwise each next segment starts at a point the kernel draws around
-/// the end of the previous one (eq. 15's p_K), from a random stream of its own, so the
-/// walk's own random numbers keep PT's layout.
+/// The camera walk of PT and of segment PT ([`crate::estimators::segment::spt`]) on the one walk
+/// ([`crate::transport::walk`]): with `junctions` `None` (the Dirac kernel) each segment
+/// starts where the previous one ended, which is path tracing; otherwise each next
+/// segment starts at a point the kernel draws around the end of the previous one (eq.
+/// 15's p_K), from a random stream of its own, so the walk's own random numbers keep PT's
+/// layout. What PT records per vertex: emission weighted against light sampling, and
+/// next-event estimation.
 fn walk<Q: RayQuery + ?Sized>(
     scene: &Scene,
     tracer: &Q,
     params: &RenderParams,
-    mut ray: Ray,
+    ray: Ray,
     rng: &mut SampleStream,
     mut junctions: Option<&mut Junctions>,
     counters: &mut Counters,
@@ -92,22 +85,19 @@ fn walk<Q: RayQuery + ?Sized>(
     if !params.max_depth.allows(1) {
         return l;
     }
-    let mut beta = Rgb::ONE;
-    let mut prev: Option<PrevBounce> = None;
     let first_dim = rng.dimension();
-    // `segments` counts the segment the current ray is about to trace.
-    let mut segments = 1u32;
+    let mut path = PathState::new(ray, Rgb::ONE, first_dim + WALK.layout.per_bounce);
     loop {
-        counters.rays += 1;
-        let Some(hit) = tracer.intersect(&ray) else {
+        let ray = path.ray;
+        let Some(hit) = WALK.trace(tracer, &path, counters) else {
             // Escaped: add the infinite lights, weighted against light sampling.
             for (id, light) in scene.infinite_lights() {
                 let le = light.environment_radiance(ray.dir);
                 if le.is_black() {
                     continue;
                 }
-                let w = emission_weight(params, prev, || scene.light_pmf(id) * light.pdf_li(prev_p(prev), ray.dir, Vec3::ZERO, Vec3::ZERO).0);
-                l += beta * le * w;
+                let w = emission_weight(params, path.last, || scene.light_pmf(id) * light.pdf_li(prev_p(path.last), ray.dir, Vec3::ZERO, Vec3::ZERO).0);
+                l += path.beta * le * w;
             }
             break;
         };
@@ -118,77 +108,44 @@ fn walk<Q: RayQuery + ?Sized>(
             let light = &scene.lights[id as usize];
             let le = light.radiance(hit.p, hit.ng, -ray.dir);
             if !le.is_black() {
-                let w = emission_weight(params, prev, || scene.light_pmf(id) * light.pdf_li(prev_p(prev), ray.dir, hit.p, hit.ng).0);
-                l += beta * le * w;
+                let w = emission_weight(params, path.last, || scene.light_pmf(id) * light.pdf_li(prev_p(path.last), ray.dir, hit.p, hit.ng).0);
+                l += path.beta * le * w;
             }
         }
-        if !params.max_depth.allows(segments + 1) {
+        if !params.max_depth.allows(path.segments + 1) {
             break;
         }
-        rng.set_dimension(first_dim + segments * DIMS_PER_BOUNCE);
         let material = sp.material(scene);
-        let wo_local = sp.frame.to_local(sp.wo);
 
         // Start the next segment: at this vertex, or where the kernel puts it.
-        let moved = match junctions.as_deref_mut() {
-            Some(j) => {
-                counters.rays += 1;
-                j.sample(tracer, &hit, sp.wo)
-            }
-            None => KernelSample::AtEnd,
-        };
-        let start = moved.moved();
+        let moved = WALK.junction(tracer, &mut path, &hit, junctions.as_deref_mut(), counters);
+        let start = moved.as_ref().map(|m| &m.at);
 
         // Sample a light (next-event estimation) unless the BSDF is all Dirac.
-        let u_light = rng.next_f32();
-        let u_point = rng.next_2d();
         if !material.is_delta() {
-            let at = Shading { sp: &sp, material: &material, wo_local, start };
-            l += beta * next_event(scene, tracer, params, &at, u_light, u_point, counters);
+            let at = Shading { sp: &sp, material: &material, wo_local: sp.frame.to_local(sp.wo), start };
+            l += path.beta * next_event(scene, tracer, params, &path, &at, rng, counters);
         }
 
         // Sample the BSDF to continue the path.
-        let u_lobe = rng.next_f32();
-        let u_dir = rng.next_2d();
-        let Some(bs) = material.sample(wo_local, u_lobe, u_dir, TransportMode::Radiance) else { break };
-        let wi = sp.frame.to_world(bs.wi);
-        if !bs.pdf.is_positive() {
-            break;
-        }
-        // f_r |cos| / p_ω, the cosine at the segment's start (eq. 6, 15).
-        let cos = match start {
-            None => bs.wi.z.abs(),
-            Some(x) => x.ns.dot(wi).abs(),
-        };
-        beta *= bs.f * (cos / bs.pdf.0);
-        if beta.is_black() || !beta.is_finite() {
-            break;
-        }
-        segments += 1;
-        if !survives_roulette(params, segments, &mut beta, 1.0, rng) {
-            break;
-        }
-        ray = match start {
-            None => sp.spawn(wi),
-            Some(x) => spawn_ray(x.p, x.ng, wi),
-        };
-        prev = Some(PrevBounce { origin: ray.origin, bsdf_pdf: bs.pdf.0, is_delta: bs.is_delta });
+        let roulette = Roulette::Throughput { reference: 1.0 };
+        let Leave::Continues(_) = WALK.scatter(params, &mut path, &sp, &material, start, roulette, rng) else { break };
     }
     l
 }
 
 #[inline]
-fn prev_p(prev: Option<PrevBounce>) -> Vec3 {
+fn prev_p(prev: Option<LastBounce>) -> Vec3 {
     prev.map_or(Vec3::ZERO, |p| p.origin)
 }
 
 /// MIS weight of emission reached by the BSDF-sampled segment from `prev`.
 #[inline]
-fn emission_weight(params: &RenderParams, prev: Option<PrevBounce>, light_pdf: impl FnOnce() -> f32) -> f32 {
+fn emission_weight(params: &RenderParams, prev: Option<LastBounce>, light_pdf: impl FnOnce() -> f32) -> f32 {
     match prev {
         None => 1.0,
-        Some(p) if p.is_delta => 1.0,
-        Some(p) => params.heuristic.weight(p.bsdf_pdf, light_pdf()),
+        Some(p) if p.delta => 1.0,
+        Some(p) => params.heuristic.weight(p.pdf, light_pdf()),
     }
 }
 
@@ -202,32 +159,25 @@ struct Shading<'a> {
     start: Option<&'a SurfaceHit>,
 }
 
-/// One light sample from `at.sp`: choose a light ∝ power, sample a point on it, trace
-/// the shadow ray, weight against BSDF sampling. Returns the weighted contribution
-/// (without β). With a kernel-moved `start` (segment PT) the light is sampled from
-/// there, the BSDF is still the one of `sp` (eq. 6) and the cosine the one at `start`.
+/// One light sample from `at.sp` at the path's current bounce: choose a light ∝ power,
+/// sample a point on it, trace the shadow ray, weight against BSDF sampling. Returns the
+/// weighted contribution (without β). With a kernel-moved `start` (segment PT) the light
+/// is sampled from there, the BSDF is still the one of `sp` (eq. 6) and the cosine the
+/// one at `start`.
 fn next_event<Q: RayQuery + ?Sized>(
     scene: &Scene,
     tracer: &Q,
     params: &RenderParams,
+    path: &PathState,
     at: &Shading,
-    u_light: f32,
-    u_point: Vec2,
+    rng: &mut SampleStream,
     counters: &mut Counters,
 ) -> Rgb {
     let (sp, start) = (at.sp, at.start);
-    let Some(table) = scene.light_selection.as_ref() else { return Rgb::ZERO };
-    let chosen = table.sample(u_light);
-    let light = &scene.lights[chosen.index];
+    let from = start.unwrap_or(&sp.hit);
     // Seen from where reflected rays start (see `SurfacePoint::reflection_origin`).
-    let origin = match start {
-        None => sp.reflection_origin(),
-        Some(x) => spawn_ray(x.p, x.ng, sp.wo).origin,
-    };
-    let Some(ls) = light.sample_li(origin, u_point) else { return Rgb::ZERO };
-    if !ls.pdf.is_positive() || ls.radiance.is_black() {
-        return Rgb::ZERO;
-    }
+    let Some(draw) = WALK.draw_light(scene, path, light_origin(from, sp.wo), rng) else { return Rgb::ZERO };
+    let ls = &draw.sample;
     // f |cos| (eq. 6): the BSDF at `sp`, the cosine at the segment's start.
     let wi_local = sp.frame.to_local(ls.wi);
     // The BSDF's density is needed for the MIS weight unless the light is a Dirac one;
@@ -243,16 +193,10 @@ fn next_event<Q: RayQuery + ?Sized>(
     }
     let f = f * start_cosine(sp, start, ls.wi, wi_local, TransportMode::Radiance);
     counters.rays += 1;
-    let shadow = match (start, ls.dist.is_finite()) {
-        (None, true) => sp.spawn_to(ls.p, ls.n),
-        (None, false) => sp.spawn(ls.wi),
-        (Some(x), true) => spawn_ray_to(x.p, x.ng, ls.p, ls.n),
-        (Some(x), false) => spawn_ray(x.p, x.ng, ls.wi),
-    };
-    if tracer.occluded(&shadow) {
+    if tracer.occluded(&shadow_ray(from, ls)) {
         return Rgb::ZERO;
     }
-    let light_pdf = chosen.pmf * ls.pdf.0;
+    let light_pdf = draw.pmf * ls.pdf.0;
     let w = if ls.is_delta { 1.0 } else { params.heuristic.weight(light_pdf, bsdf_pdf) };
     f * ls.radiance * (w / light_pdf)
 }

@@ -4,22 +4,23 @@ use heapless::Vec as FixedVec;
 
 use super::MAX_VERTICES;
 use super::vertex::{Exit, Vertex, VertexKind, infinite_light_density};
-use crate::bsdf::{TransportMode, shading_normal_correction};
+use crate::bsdf::TransportMode;
 use crate::camera::PrimaryRay;
 use crate::geometry::{Ray, RayQuery, spawn_ray};
-use crate::math::{Frame, Vec2, Vec3};
+use crate::math::{Vec2, Vec3};
 use crate::measure::{AreaPdf, VertexPdf};
 use crate::rng::SampleStream;
 use crate::scene::Scene;
-use crate::segment::{Junctions, KernelSample};
+use crate::segment::Junctions;
 use crate::spectrum::Rgb;
-use crate::transport::{Counters, RenderParams, light_roulette_reference, survives_roulette};
+use crate::transport::walk::{Layout, Leave, PathState, Roulette, Walk};
+use crate::transport::{Counters, RenderParams, SurfacePoint, light_roulette_reference};
 
 /// A sub-path: vertices in the order they were generated.
 pub type SubPath = FixedVec<Vertex, MAX_VERTICES>;
 
-/// Random dimensions per bounce of a walk.
-const DIMS_PER_BOUNCE: u32 = 4;
+/// The sub-path walks' random dimensions: 4 per bounce (lobe 1, direction 2, roulette 1).
+const LAYOUT: Layout = Layout { per_bounce: 4, light: 0, lobe: 0, roulette: 3 };
 
 /// Camera sub-path through continuous film position `film`, at most `max_vertices`
 /// vertices including the camera.
@@ -145,7 +146,8 @@ pub fn light_subpath_with_kernel<Q: RayQuery + ?Sized>(
 }
 
 /// Extend `path` by sampling BSDFs from `ray` until `max_vertices`, absorption,
-/// escape or Russian roulette.
+/// escape or Russian roulette: the one walk ([`crate::transport::walk`]), each vertex
+/// stored with its densities.
 ///
 /// Forward and reverse densities are evaluated from the stored vertex positions, not
 /// taken from the sampler: the ray left from an offset origin, so near corners the
@@ -163,8 +165,8 @@ fn random_walk<Q: RayQuery + ?Sized>(
     scene: &Scene,
     tracer: &Q,
     params: &RenderParams,
-    mut ray: Ray,
-    mut beta: Rgb,
+    ray: Ray,
+    beta: Rgb,
     max_vertices: usize,
     mode: TransportMode,
     rng: &mut SampleStream,
@@ -172,8 +174,12 @@ fn random_walk<Q: RayQuery + ?Sized>(
     counters: &mut Counters,
     path: &mut SubPath,
 ) {
+    let walk = Walk { mode, layout: LAYOUT };
+    // Bounce k (the path's (k + 1)-th vertex) uses block k + 1 from here.
     let first_dim = rng.dimension();
+    let mut state = PathState::new(ray, beta, first_dim + 2 * LAYOUT.per_bounce);
     let reference = if mode == TransportMode::Importance { light_roulette_reference(beta) } else { 1.0 };
+    let roulette = Roulette::Throughput { reference };
     loop {
         if path.len() >= max_vertices {
             if params.max_depth.0 < 0 {
@@ -181,49 +187,35 @@ fn random_walk<Q: RayQuery + ?Sized>(
             }
             return;
         }
-        counters.rays += 1;
         let n = path.len();
         let Some(prev) = path.last().copied() else { return };
-        let Some(hit) = tracer.intersect(&ray) else {
+        let Some(hit) = walk.trace(tracer, &state, counters) else {
             // Camera paths that escape end on the infinite lights.
             if mode == TransportMode::Radiance && scene.infinite_lights().next().is_some() {
-                let mut v = Vertex::infinite(prev.exit.p + ray.dir, beta, VertexPdf::ZERO);
+                let mut v = Vertex::infinite(prev.exit.p + state.ray.dir, state.beta, VertexPdf::ZERO);
                 set_densities(scene, path, &prev, &mut v, mode);
                 let _ = path.push(v);
             }
             return;
         };
         // The junction: which point keeps the BSDF and which starts the next segment.
-        let moved = match junctions.as_deref_mut() {
-            Some(j) => {
-                counters.rays += 1;
-                j.sample(tracer, &hit, -ray.dir)
-            }
-            None => KernelSample::AtEnd,
-        };
-        let kernel_moved = moved.moved().is_some();
+        let moved = walk.junction(tracer, &mut state, &hit, junctions.as_deref_mut(), counters);
         let (shading, exit, kernel_ratio) = match (moved, mode) {
-            (KernelSample::AtEnd, _) => (hit, hit, 1.0),
-            (KernelSample::Moved(x), TransportMode::Radiance) => (hit, x, kernel_reversed_ratio(junctions.as_deref(), &hit, &x)),
-            (KernelSample::Moved(x), TransportMode::Importance) => {
-                // The light walk drew y_i around x_{i+1}; the integrand's kernel is the
-                // camera-direction one (`Kernel::reversed_ratio`).
-                let ratio = kernel_reversed_ratio(junctions.as_deref(), &hit, &x);
-                beta *= ratio;
-                (x, hit, ratio)
-            }
+            (None, _) => (hit, hit, 1.0),
+            (Some(m), TransportMode::Radiance) => (hit, m.at, m.ratio),
+            (Some(m), TransportMode::Importance) => (m.at, hit, m.ratio),
         };
-        let frame = Frame::from_normal(shading.ns);
+        let sp = SurfacePoint::new(shading, -state.ray.dir);
         let mut v = Vertex {
             kind: VertexKind::Surface,
             p: shading.p,
             ng: shading.ng,
-            frame,
-            wo: -ray.dir,
+            frame: sp.frame,
+            wo: sp.wo,
             material: shading.material,
             uv: shading.uv,
             emitter: shading.emitter,
-            beta,
+            beta: state.beta,
             delta: false,
             pdf_fwd: VertexPdf::ZERO,
             pdf_rev: VertexPdf::ZERO,
@@ -234,40 +226,21 @@ fn random_walk<Q: RayQuery + ?Sized>(
         if path.push(v).is_err() || path.len() >= max_vertices {
             return;
         }
-        rng.set_dimension(first_dim + (n + 1) as u32 * DIMS_PER_BOUNCE);
 
-        // Sample the BSDF for the next direction.
+        // Sample the BSDF for the next direction. The next segment leaves from: the exit
+        // toward the light side (radiance), the shading point toward the camera side
+        // (importance). Its cosine is taken there (eq. 6).
         let material = scene.material(shading.material, shading.uv);
-        let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
-        let Some(bs) = material.sample(frame.to_local(v.wo), u_lobe, u_dir, mode) else { return };
-        if !bs.pdf.is_positive() {
-            return;
+        let moved_start = (mode == TransportMode::Radiance && moved.is_some()).then_some(&exit);
+        match walk.scatter(params, &mut state, &sp, &material, moved_start, roulette, rng) {
+            Leave::Continues(b) => path[n].delta |= b.delta,
+            Leave::Ended(b) => {
+                path[n].delta |= b.delta;
+                return;
+            }
+            Leave::Stopped => return,
         }
-        let wi = frame.to_world(bs.wi);
-        // The next segment leaves from: the exit toward the light side (radiance), the
-        // shading point toward the camera side (importance). Its cosine is taken there (eq. 6).
-        let moved_start = (mode == TransportMode::Radiance && kernel_moved).then_some(exit);
-        let (from, cos) = match moved_start {
-            None => (shading, bs.wi.z.abs()),
-            Some(x) => (x, x.ns.dot(wi).abs()),
-        };
-        beta *= bs.f * (cos * shading_normal_correction(mode, v.wo, wi, shading.ng, shading.ns) / bs.pdf.0);
-        if beta.is_black() || !beta.is_finite() {
-            return;
-        }
-        if bs.is_delta {
-            path[n].delta = true;
-        }
-        if !survives_roulette(params, (n + 1) as u32, &mut beta, reference, rng) {
-            return;
-        }
-        ray = spawn_ray(from.p, from.ng, wi);
     }
-}
-
-/// [`crate::segment::Kernel::reversed_ratio`] of the junctions' kernel (1 without one).
-fn kernel_reversed_ratio(junctions: Option<&Junctions>, hit: &crate::geometry::SurfaceHit, x: &crate::geometry::SurfaceHit) -> f32 {
-    junctions.map_or(1.0, |j| j.kernel.reversed_ratio(hit, x))
 }
 
 /// The new vertex `v`'s forward density from `prev` (the path's last vertex) and, now

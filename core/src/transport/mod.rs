@@ -10,6 +10,7 @@
 
 pub mod config;
 mod surface;
+pub mod walk;
 
 pub use surface::SurfacePoint;
 

@@ -7,18 +7,22 @@ use alloc::vec::Vec;
 
 use crate::bsdf::{Material, TransportMode};
 use crate::geometry::{Ray, RayQuery, SurfaceHit, spawn_ray};
-use crate::math::{Vec2, Vec3};
+use crate::math::Vec3;
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
+use crate::transport::walk::{Layout, Leave, PathState, Roulette, Walk, emitted, environment, shadow_ray};
 use crate::transport::{Counters, RenderParams, SurfacePoint};
 
 /// "No node".
 pub const NONE: u32 = u32::MAX;
 
-/// Random dimensions per bounce (roulette 1, light choice 1, light point 2, lobe 1,
-/// direction 2, spare 1).
-const DIMS_PER_BOUNCE: u32 = 8;
+/// The camera walk: radiance, 8 random dimensions per bounce (roulette 1, light choice 1,
+/// light point 2, lobe 1, direction 2, spare 1).
+const CAMERA_WALK: Walk = Walk { mode: TransportMode::Radiance, layout: Layout { per_bounce: 8, light: 1, lobe: 4, roulette: 0 } };
+/// The light walk: importance, the same blocks without the light sample (roulette 1,
+/// lobe 1, direction 2).
+const LIGHT_WALK: Walk = Walk { mode: TransportMode::Importance, layout: Layout { per_bounce: 8, light: 0, lobe: 1, roulette: 0 } };
 
 /// The BSDF-sampled continuation segment leaving a node.
 #[derive(Clone, Copy, Debug, Default)]
@@ -223,11 +227,6 @@ pub fn trace_camera_nodes<Q: RayQuery + ?Sized>(
     counters
 }
 
-/// Radiance of the environment along `dir`.
-fn environment(scene: &Scene, dir: Vec3) -> Rgb {
-    scene.infinite_lights().fold(Rgb::ZERO, |acc, (_, l)| acc + l.environment_radiance(dir))
-}
-
 /// P(light) · p_light per solid angle of light sampling from `origin` drawing `dir`, for
 /// a segment ending at `hit` (on an area light) or escaping (`hit` = None).
 pub fn light_density(scene: &Scene, origin: Vec3, dir: Vec3, hit: Option<&SurfaceHit>) -> f32 {
@@ -237,30 +236,26 @@ pub fn light_density(scene: &Scene, origin: Vec3, dir: Vec3, hit: Option<&Surfac
     }
 }
 
-/// One camera path; returns the index of its first node (or [`NONE`]) and the
-/// environment radiance if the camera ray escaped.
+/// One camera path on the one walk ([`crate::transport::walk`]); returns the index of its
+/// first node (or [`NONE`]) and the environment radiance if the camera ray escaped.
 #[allow(clippy::too_many_arguments)]
 fn walk<Q: RayQuery + ?Sized>(
     scene: &Scene,
     tracer: &Q,
     params: &RenderParams,
     max_segments: u32,
-    mut ray: Ray,
+    ray: Ray,
     rng: &mut SampleStream,
     nodes: &mut Vec<Node>,
     counters: &mut Counters,
 ) -> (u32, Rgb) {
     let first_dim = rng.dimension();
-    let mut beta = Rgb::ONE;
+    let mut path = PathState::new(ray, Rgb::ONE, first_dim + CAMERA_WALK.layout.per_bounce);
     let mut parent = NONE;
     let mut first = NONE;
-    // `segments` counts the segment the current ray traces.
-    let mut segments = 1u32;
     loop {
-        counters.rays += 1;
-        let hit = tracer.intersect(&ray);
-        let Some(hit) = hit else {
-            let env = environment(scene, ray.dir);
+        let Some(hit) = CAMERA_WALK.trace(tracer, &path, counters) else {
+            let env = environment(scene, path.ray.dir);
             if parent == NONE {
                 return (NONE, env);
             }
@@ -273,45 +268,34 @@ fn walk<Q: RayQuery + ?Sized>(
         } else {
             nodes[parent as usize].next.node = index;
         }
-        let sp = SurfacePoint::new(hit, -ray.dir);
+        let sp = SurfacePoint::new(hit, -path.ray.dir);
         let material = sp.material(scene);
         let mut node = Node::new(scene, hit, sp.wo, NodeKind::Camera, parent);
-        node.emitted = hit.emitter.map_or(Rgb::ZERO, |id| scene.lights[id as usize].radiance(hit.p, hit.ng, sp.wo));
-        let more = segments < max_segments && params.max_depth.allows(segments + 1);
-        rng.set_dimension(first_dim + segments * DIMS_PER_BOUNCE);
-        let u_rr = rng.next_f32();
-        let (u_light, u_point) = (rng.next_f32(), rng.next_2d());
-        let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
+        node.emitted = emitted(scene, &hit, sp.wo);
+        let more = path.segments < max_segments && params.max_depth.allows(path.segments + 1);
 
         // The light-sampled segment (next-event estimation), shadow ray included.
-        if more && !node.delta {
-            if let Some(table) = scene.light_selection.as_ref() {
-                node.light.attempted = true;
-                let chosen = table.sample(u_light);
-                let light = &scene.lights[chosen.index];
-                if let Some(ls) = light.sample_li(sp.reflection_origin(), u_point) {
-                    if ls.pdf.is_positive() && !ls.radiance.is_black() {
-                        node.light.dir = ls.wi;
-                        node.light.pdf = chosen.pmf * ls.pdf.0;
-                        node.light.delta = ls.is_delta;
-                        node.light.end = LightEnd { light: chosen.index as u32, p: ls.p, n: ls.n };
-                        counters.rays += 1;
-                        let shadow = if ls.dist.is_finite() { sp.spawn_to(ls.p, ls.n) } else { sp.spawn(ls.wi) };
-                        if !tracer.occluded(&shadow) {
-                            node.light.radiance = ls.radiance;
-                        }
-                    }
+        if more && !node.delta && scene.light_selection.is_some() {
+            node.light.attempted = true;
+            if let Some(draw) = CAMERA_WALK.draw_light(scene, &path, sp.reflection_origin(), rng) {
+                let ls = &draw.sample;
+                node.light.dir = ls.wi;
+                node.light.pdf = draw.pmf * ls.pdf.0;
+                node.light.delta = ls.is_delta;
+                node.light.end = LightEnd { light: draw.light as u32, p: ls.p, n: ls.n };
+                counters.rays += 1;
+                if !tracer.occluded(&shadow_ray(&sp.hit, ls)) {
+                    node.light.radiance = ls.radiance;
                 }
             }
         }
 
-        let draws = ContinuationDraws { more, segments, u_rr, u_lobe, u_dir };
-        let next_ray = continue_path(params, &sp, &material, TransportMode::Radiance, draws, &mut node, &mut beta);
+        let leave = continue_path(params, &mut path, &sp, &material, CAMERA_WALK, more, &mut node, rng);
         nodes.push(node);
-        let Some(r) = next_ray else { break };
+        if !leave {
+            break;
+        }
         parent = index;
-        segments += 1;
-        ray = r;
     }
     // Light densities of continuations that ended on a light or escaped.
     fill_light_densities(scene, nodes, first);
@@ -432,19 +416,17 @@ fn light_walk<Q: RayQuery + ?Sized>(
     tracer: &Q,
     params: &RenderParams,
     max_segments: u32,
-    mut ray: Ray,
+    ray: Ray,
     start: Emission,
     rng: &mut SampleStream,
     out: LightNodes<'_>,
     counters: &mut Counters,
 ) {
     let first_dim = rng.dimension();
-    let mut beta = start.beta0;
+    let mut path = PathState::new(ray, start.beta0, first_dim + LIGHT_WALK.layout.per_bounce);
     let mut parent = NONE;
-    let mut segments = 1u32;
-    loop {
-        counters.rays += 1;
-        let Some(hit) = tracer.intersect(&ray) else { break };
+    while let Some(hit) = LIGHT_WALK.trace(tracer, &path, counters) {
+        let (segments, ray) = (path.segments, path.ray);
         if segments == 1 && start.with_node {
             if let Some(e) = emission_node(scene, tracer, &hit, &start.sample, counters) {
                 parent = out.nodes.len() as u32;
@@ -476,40 +458,25 @@ fn light_walk<Q: RayQuery + ?Sized>(
         }
         // A light segment and the camera's make two segments: one more must fit.
         let more = segments + 2 <= max_segments && params.max_depth.allows(segments + 2);
-        rng.set_dimension(first_dim + segments * DIMS_PER_BOUNCE);
-        let u_rr = rng.next_f32();
-        let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
-        let draws = ContinuationDraws { more, segments, u_rr, u_lobe, u_dir };
-        let next_ray = continue_path(params, &sp, &material, TransportMode::Importance, draws, &mut node, &mut beta);
+        let goes_on = continue_path(params, &mut path, &sp, &material, LIGHT_WALK, more, &mut node, rng);
         out.nodes.push(node);
         out.pred.push(parent);
         out.base.push(if segments == 1 { start.beta0 / start.paths_per_pass.max(1) as f32 } else { Rgb::ZERO });
-        let Some(r) = next_ray else { break };
+        if !goes_on {
+            break;
+        }
         parent = index;
-        segments += 1;
-        ray = r;
     }
-}
-
-/// The random numbers and depth state of one continuation.
-#[derive(Clone, Copy, Debug)]
-struct ContinuationDraws {
-    /// Does the depth cap allow another segment?
-    more: bool,
-    /// Segments so far (roulette starts at `rr_depth`).
-    segments: u32,
-    u_rr: f32,
-    u_lobe: f32,
-    u_dir: Vec2,
 }
 
 /// Least survival probability of the roulette (see [`continue_path`]).
 const MIN_SURVIVAL: f32 = 0.25;
 
-/// The continuation of `node` at `sp` on both walks: roulette first, so that its
-/// probability q (recorded in `node.next.q`) does not depend on the direction drawn;
-/// then the BSDF draw in `mode` (the adjoint, with its shading-normal correction, for
-/// importance). Fills `node.next`, updates `beta` and returns the ray to trace, if any.
+/// The continuation of `node` at `sp` on both walks, a step of `walk` with the filters'
+/// roulette rule: q is fixed before the draw (recorded in `node.next.q`), so that it does
+/// not depend on the direction drawn; then the BSDF draw in the walk's mode (the adjoint,
+/// with its shading-normal correction, for importance). Fills `node.next`, updates the
+/// path and says whether it goes on.
 ///
 /// From `rr_depth` segments on, q is the node's own albedo (its material's
 /// [`crate::bsdf::Material::albedo_hint`], clamped to [`MIN_SURVIVAL`]..0.95), not the
@@ -520,43 +487,32 @@ const MIN_SURVIVAL: f32 = 0.25;
 /// through it and a ceiling node grew 15× per two sweeps, a pixel 18 000× the
 /// reference (`host-cli/tests/filter_scenes.rs`). With q ≈ ρ the coefficients
 /// f |cos| / (q p) stay near 1.
+#[allow(clippy::too_many_arguments)]
 fn continue_path(
     params: &RenderParams,
+    path: &mut PathState,
     sp: &SurfacePoint,
     material: &crate::bsdf::Material,
-    mode: TransportMode,
-    draws: ContinuationDraws,
+    walk: Walk,
+    more: bool,
     node: &mut Node,
-    beta: &mut Rgb,
-) -> Option<Ray> {
-    let q = if !draws.more {
+    rng: &mut SampleStream,
+) -> bool {
+    let q = if !more {
         0.0
-    } else if draws.segments < params.rr_depth {
+    } else if path.segments < params.rr_depth {
         1.0
     } else {
         let albedo = material.albedo_hint().max_component();
         if albedo.is_nan() { MIN_SURVIVAL } else { albedo.clamp(MIN_SURVIVAL, 0.95) }
     };
     node.next.q = q;
-    if !(q > 0.0 && draws.u_rr < q) {
-        return None;
-    }
-    let bs = material.sample(sp.frame.to_local(sp.wo), draws.u_lobe, draws.u_dir, mode)?;
-    if !bs.pdf.is_positive() {
-        return None;
-    }
-    let wi = sp.frame.to_world(bs.wi);
-    let correction = crate::bsdf::shading_normal_correction(mode, sp.wo, wi, sp.hit.ng, sp.hit.ns);
-    let throughput = bs.f * (bs.wi.z.abs() * correction / bs.pdf.0);
-    if throughput.is_black() || !throughput.is_finite() {
-        return None;
-    }
-    node.next.dir = wi;
-    node.next.delta = bs.is_delta;
-    node.next.throughput = throughput / q;
-    node.next.pdf = bs.pdf.0;
-    *beta *= throughput / q;
-    Some(spawn_ray(sp.hit.p, sp.hit.ng, wi))
+    let Leave::Continues(b) = walk.scatter(params, path, sp, material, None, Roulette::Fixed { q }, rng) else { return false };
+    node.next.dir = b.wi;
+    node.next.delta = b.delta;
+    node.next.throughput = b.throughput / q;
+    node.next.pdf = b.pdf;
+    true
 }
 
 #[cfg(test)]

@@ -49,8 +49,12 @@ use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::segment::Kernel;
 use crate::spectrum::Rgb;
+use crate::transport::walk::{Layout, Leave, PathState, Roulette, Walk, emitted, environment};
 use crate::transport::{Counters, RenderParams, SurfacePoint};
 
+/// The camera side's walk: radiance, the lobe and direction of each bounce next in the
+/// stream after the primary ray's numbers, no roulette (it ends at its first diffuse vertex).
+const CAMERA_WALK: Walk = Walk { mode: TransportMode::Radiance, layout: Layout { per_bounce: 3, light: 0, lobe: 0, roulette: 0 } };
 /// Dirac bounces the camera side follows at most.
 const MAX_CAMERA_BOUNCES: u32 = 16;
 /// Rays per side of the stratified estimate of the gather kernel's surface share.
@@ -208,44 +212,32 @@ fn gather_pixels<Q: RayQuery + ?Sized>(
             *slot = Rgb::ZERO;
             continue;
         };
-        let mut ray = primary.ray;
         // The path's throughput starts at the filter weight.
-        let mut beta = Rgb::splat(primary.weight);
+        let first_dim = rng.dimension();
+        let mut path = PathState::new(primary.ray, Rgb::splat(primary.weight), first_dim);
         let mut l = Rgb::ZERO;
-        let mut segments = 1u32;
-        while params.max_depth.allows(segments) && segments <= MAX_CAMERA_BOUNCES {
-            counters.rays += 1;
-            let Some(hit) = tracer.intersect(&ray) else {
-                l += beta * scene.infinite_lights().fold(Rgb::ZERO, |acc, (_, light)| acc + light.environment_radiance(ray.dir));
+        while params.max_depth.allows(path.segments) && path.segments <= MAX_CAMERA_BOUNCES {
+            let Some(hit) = CAMERA_WALK.trace(tracer, &path, &mut counters) else {
+                l += path.beta * environment(scene, path.ray.dir);
                 break;
             };
-            let sp = SurfacePoint::new(hit, -ray.dir);
-            if let Some(id) = hit.emitter {
-                l += beta * scene.lights[id as usize].radiance(hit.p, hit.ng, sp.wo);
+            let sp = SurfacePoint::new(hit, -path.ray.dir);
+            if hit.emitter.is_some() {
+                l += path.beta * emitted(scene, &hit, sp.wo);
             }
             let material = sp.material(scene);
             let pass_through = near_specular(&material, glossy_alpha).is_some();
             if !material.is_delta() && !pass_through {
                 // The gather adds the light path's segments (at least one).
-                if params.max_depth.allows(segments + 1) {
-                    l += beta * gather(tracer, pass_data, &kernel, &sp, &material, params.seed, pixel, pass, &mut counters);
+                if params.max_depth.allows(path.segments + 1) {
+                    l += path.beta * gather(tracer, pass_data, &kernel, &sp, &material, params.seed, pixel, pass, &mut counters);
                 }
                 break;
             }
-            if pass_through && params.max_depth.allows(segments + 1) {
-                l += beta * dirac_light_at(scene, tracer, &sp, &material, &mut counters);
+            if pass_through && params.max_depth.allows(path.segments + 1) {
+                l += path.beta * dirac_light_at(scene, tracer, &sp, &material, &mut counters);
             }
-            let (u_lobe, u_dir) = (rng.next_f32(), rng.next_2d());
-            let Some(bs) = material.sample(sp.frame.to_local(sp.wo), u_lobe, u_dir, TransportMode::Radiance) else { break };
-            if !bs.pdf.is_positive() {
-                break;
-            }
-            beta *= bs.f * (bs.wi.z.abs() / bs.pdf.0);
-            if beta.is_black() || !beta.is_finite() {
-                break;
-            }
-            ray = sp.spawn(sp.frame.to_world(bs.wi));
-            segments += 1;
+            let Leave::Continues(_) = CAMERA_WALK.scatter(params, &mut path, &sp, &material, None, Roulette::Never, &mut rng) else { break };
         }
         *slot = counters.sanitize(l);
     }
