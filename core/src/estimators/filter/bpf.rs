@@ -45,7 +45,7 @@ use alloc::vec::Vec;
 use super::bidir::Bidirectional;
 use super::bridge::{bridge_end, trace_bridges};
 use super::nodes::{scale_kernels, trace_camera_nodes, trace_light_nodes};
-use super::pass::{CHUNK, FilterPass, node_chunk};
+use super::pass::{CHUNK, FilterPass, node_chunk, phase};
 use crate::estimators::FilterConfig;
 use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
@@ -76,9 +76,6 @@ pub struct Bpf {
     cursor: Cursor,
 }
 
-/// The phase id of the bridges (after `paths`; the later phases keep their ids).
-const BRIDGES: u8 = 200;
-
 impl Bpf {
     /// The estimator for a film of `pixels` pixels (r₀ is set by the setup phase).
     pub fn new(params: RenderParams, config: FilterConfig, pixels: u32) -> Self {
@@ -98,12 +95,12 @@ impl Bpf {
         }
     }
 
-    /// The phase id of stage `i` of a pass: 1 the paths, [`BRIDGES`], then 2 the
+    /// The phase id of stage `i` of a pass: 1 the paths, [`phase::BRIDGES`], then 2 the
     /// denominators, 3 the rows, 4 … the sweeps.
     fn phase_id(&self, i: u8) -> u8 {
         match (self.config.bridges(), i) {
-            (_, 0) => 1,
-            (true, 1) => BRIDGES,
+            (_, 0) => phase::PATHS,
+            (true, 1) => phase::BRIDGES,
             (true, i) => i,
             (false, i) => i.saturating_add(1),
         }
@@ -137,14 +134,14 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
         Some(match self.cursor.stage()? {
             Stage::Setup(_) => {
                 let items = if self.config.radius.needs_footprint() { self.pixels } else { 0 };
-                Phase { name: "footprint", id: 0, pass: None, items, chunk: CHUNK, samples: false }
+                Phase { name: "footprint", id: phase::FOOTPRINT, pass: None, items, chunk: CHUNK, samples: false }
             }
             Stage::Pass(pass, i) => {
                 let (name, id) = match self.phase_id(i) {
-                    1 => return Some(Phase { name: "paths", id: 1, pass: Some(pass), items: paths, chunk: CHUNK, samples: true }),
-                    BRIDGES => ("bridges", BRIDGES),
-                    2 => ("denominators", 2),
-                    3 => ("filter", 3),
+                    1 => return Some(Phase { name: "paths", id: phase::PATHS, pass: Some(pass), items: paths, chunk: CHUNK, samples: true }),
+                    phase::BRIDGES => ("bridges", phase::BRIDGES),
+                    phase::DENOMINATORS => ("denominators", phase::DENOMINATORS),
+                    phase::ROWS => ("filter", phase::ROWS),
                     id => ("propagate", id),
                 };
                 Phase { name, id, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false }
@@ -157,7 +154,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
     fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput) {
         let (scene, tracer) = (ctx.scene, ctx.tracer);
         let items = out.items.clone();
-        if phase.id == 0 {
+        if phase.id == phase::FOOTPRINT {
             crate::estimators::map_footprint(scene, tracer, out);
             return;
         }
@@ -165,7 +162,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
         let range = items.start as usize..items.end as usize;
         let chunk = out.data.filter_chunk();
         match phase.id {
-            1 => {
+            phase::PATHS => {
                 // Items below W·H are pixels, the rest light paths.
                 let p = self.pixels;
                 let camera = items.start.min(p)..items.end.min(p);
@@ -179,15 +176,15 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
                 scale_kernels(scene, self.config.glossy_alpha, &mut chunk.nodes);
                 out.counters = c;
             }
-            BRIDGES => {
+            phase::BRIDGES => {
                 chunk.nodes.clear();
                 out.counters = trace_bridges(scene, tracer, self.params.seed, pass, &self.pass.nodes, &self.bridge_ends, range, &mut chunk.nodes);
             }
-            2 => {
+            phase::DENOMINATORS => {
                 let w = self.weights(scene);
                 self.pass.map_denominators(scene, range, chunk, |_, i| w.denominators(i));
             }
-            3 => {
+            phase::ROWS => {
                 let w = self.weights(scene);
                 self.pass.map_rows(scene, range, chunk, |_, i, pairs| w.row::<f32>(i as u32, &self.pass.dens, pairs));
             }
@@ -196,11 +193,11 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         match phase.id {
-            0 => self.r0 = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs)),
-            BRIDGES => self.pass.append_nodes(outputs),
+            phase::FOOTPRINT => self.r0 = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs)),
+            phase::BRIDGES => self.pass.append_nodes(outputs),
             id => {
                 self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0)));
-                if id == 1 && self.config.bridges() {
+                if id == phase::PATHS && self.config.bridges() {
                     self.bridge_ends.clear();
                     self.bridge_ends.extend(self.pass.nodes.iter().enumerate().filter(|(_, n)| bridge_end(n)).map(|(i, _)| i as u32));
                 }

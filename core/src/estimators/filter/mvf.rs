@@ -13,7 +13,7 @@
 use alloc::vec::Vec;
 
 use super::nodes::{scale_kernels, trace_camera_nodes};
-use super::pass::{CHUNK, FilterPass, node_chunk};
+use super::pass::{CHUNK, FilterPass, node_chunk, phase};
 use crate::estimators::FilterConfig;
 use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
@@ -61,11 +61,13 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Mvf {
         Some(match self.cursor.stage()? {
             Stage::Setup(_) => {
                 let items = if self.config.radius.needs_footprint() { self.pixels } else { 0 };
-                Phase { name: "footprint", id: 0, pass: None, items, chunk: CHUNK, samples: false }
+                Phase { name: "footprint", id: phase::FOOTPRINT, pass: None, items, chunk: CHUNK, samples: false }
             }
-            Stage::Pass(pass, 0) => Phase { name: "camera paths", id: 1, pass: Some(pass), items: self.pixels, chunk: CHUNK, samples: true },
-            Stage::Pass(pass, 1) => Phase { name: "denominators", id: 2, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
-            Stage::Pass(pass, 2) => Phase { name: "filter", id: 3, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
+            Stage::Pass(pass, 0) => Phase { name: "camera paths", id: phase::PATHS, pass: Some(pass), items: self.pixels, chunk: CHUNK, samples: true },
+            Stage::Pass(pass, 1) => {
+                Phase { name: "denominators", id: phase::DENOMINATORS, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false }
+            }
+            Stage::Pass(pass, 2) => Phase { name: "filter", id: phase::ROWS, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
             Stage::Pass(pass, i) => {
                 Phase { name: "propagate", id: i.saturating_add(1), pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false }
             }
@@ -77,7 +79,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Mvf {
     fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput) {
         let (scene, tracer) = (ctx.scene, ctx.tracer);
         let items = out.items.clone();
-        if phase.id == 0 {
+        if phase.id == phase::FOOTPRINT {
             crate::estimators::map_footprint(scene, tracer, out);
             return;
         }
@@ -85,19 +87,19 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Mvf {
         let range = items.start as usize..items.end as usize;
         let chunk = out.data.filter_chunk();
         match phase.id {
-            1 => {
+            phase::PATHS => {
                 let c = trace_camera_nodes(scene, tracer, &self.params, self.segments, pass, items, &mut chunk.nodes, &mut chunk.links, &mut chunk.values);
                 scale_kernels(scene, self.config.glossy_alpha, &mut chunk.nodes);
                 out.counters = c;
             }
-            2 => self.pass.map_denominators(scene, range, chunk, |hood, i| hood.denominators(i)),
-            3 => self.pass.map_rows(scene, range, chunk, |hood, i, pairs| hood.row::<f32>(&self.pass.nodes[i], &self.pass.dens, pairs)),
+            phase::DENOMINATORS => self.pass.map_denominators(scene, range, chunk, |hood, i| hood.denominators(i)),
+            phase::ROWS => self.pass.map_rows(scene, range, chunk, |hood, i, pairs| hood.row::<f32>(&self.pass.nodes[i], &self.pass.dens, pairs)),
             _ => self.pass.map_sweep(range, chunk),
         }
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         match phase.id {
-            0 => self.r0 = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs)),
+            phase::FOOTPRINT => self.r0 = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs)),
             id => self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0))),
         }
         // The pass ends after `filter` (no sweep) or after the last sweep: L is final.

@@ -46,6 +46,25 @@ fn grid_point(n: &Node) -> crate::math::Vec3 {
     if n.kind == super::nodes::NodeKind::Emission { crate::math::Vec3::NAN } else { n.hit.p }
 }
 
+/// The filters' phase ids, shared by MVF, PhF and BPF (`reduce_phase` reads them):
+/// setup's footprint, then per pass the paths, the denominators, the rows and one
+/// propagation sweep per further segment from [`phase::FIRST_SWEEP`] on; BPF's bridges
+/// (after the paths) and PhF's final gather take ids past the sweeps.
+pub mod phase {
+    /// The footprint setup phase (r₀ in pixel footprints).
+    pub const FOOTPRINT: u8 = 0;
+    /// Camera and/or light paths traced into nodes.
+    pub const PATHS: u8 = 1;
+    /// Each node's MMIS denominators.
+    pub const DENOMINATORS: u8 = 2;
+    /// Each node's row of the filter graph.
+    pub const ROWS: u8 = 3;
+    /// The first propagation sweep; sweep k has id `FIRST_SWEEP + k`.
+    pub const FIRST_SWEEP: u8 = 4;
+    /// BPF's bridge segments, between the paths and the denominators (past any sweep id).
+    pub const BRIDGES: u8 = 200;
+}
+
 /// What one chunk of a filtering phase produces (reused across passes).
 #[derive(Clone, Debug, Default)]
 #[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
@@ -305,9 +324,9 @@ impl FilterPass {
     /// kernel radius `r`), 2 the denominators, 3 the rows, later ones a sweep.
     pub fn reduce_phase(&mut self, id: u8, outputs: &mut [ChunkOutput], r: f32) {
         match id {
-            1 => self.gather_nodes(outputs, r),
-            2 => self.gather_denominators(outputs),
-            3 => self.gather_rows(outputs),
+            phase::PATHS => self.gather_nodes(outputs, r),
+            phase::DENOMINATORS => self.gather_denominators(outputs),
+            phase::ROWS => self.gather_rows(outputs),
             _ => self.gather_sweep(outputs),
         }
     }

@@ -38,7 +38,7 @@
 //! other vertex, as progressive photon mapping does (`gather_pixels`).
 
 use super::nodes::{near_specular, scale_kernels, trace_light_nodes};
-use super::pass::{CHUNK, FilterPass, node_chunk};
+use super::pass::{CHUNK, FilterPass, node_chunk, phase};
 use crate::bsdf::TransportMode;
 use crate::estimators::FilterConfig;
 use crate::estimators::{ChunkOutput, PhaseData};
@@ -106,11 +106,13 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
         Some(match self.cursor.stage()? {
             Stage::Setup(_) => {
                 let items = if self.config.radius.needs_footprint() { self.pixels } else { 0 };
-                Phase { name: "footprint", id: 0, pass: None, items, chunk: CHUNK, samples: false }
+                Phase { name: "footprint", id: phase::FOOTPRINT, pass: None, items, chunk: CHUNK, samples: false }
             }
-            Stage::Pass(pass, 0) => Phase { name: "light paths", id: 1, pass: Some(pass), items: self.light_paths(), chunk: CHUNK, samples: true },
-            Stage::Pass(pass, 1) => Phase { name: "denominators", id: 2, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
-            Stage::Pass(pass, 2) => Phase { name: "filter", id: 3, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
+            Stage::Pass(pass, 0) => Phase { name: "light paths", id: phase::PATHS, pass: Some(pass), items: self.light_paths(), chunk: CHUNK, samples: true },
+            Stage::Pass(pass, 1) => {
+                Phase { name: "denominators", id: phase::DENOMINATORS, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false }
+            }
+            Stage::Pass(pass, 2) => Phase { name: "filter", id: phase::ROWS, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false },
             Stage::Pass(pass, i) if i < 3 + self.sweeps => {
                 Phase { name: "propagate", id: i + 1, pass: Some(pass), items: nodes, chunk: node_chunk(nodes, paths), samples: false }
             }
@@ -123,19 +125,19 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
     fn map(&self, ctx: &Context<'_, Q>, phase: &Phase, out: &mut ChunkOutput) {
         let (scene, tracer) = (ctx.scene, ctx.tracer);
         let items = out.items.clone();
-        if phase.id == 0 {
+        if phase.id == phase::FOOTPRINT {
             crate::estimators::map_footprint(scene, tracer, out);
             return;
         }
         let Some(pass) = phase.pass else { return };
         let range = items.start as usize..items.end as usize;
-        if phase.id == 4 + self.sweeps {
+        if phase.id == phase::FIRST_SWEEP + self.sweeps {
             out.counters = gather_pixels(scene, tracer, &self.params, self.config.glossy_alpha, &self.pass, pass, items, out.pixel_buffer());
             return;
         }
         let chunk = out.data.filter_chunk();
         match phase.id {
-            1 => {
+            phase::PATHS => {
                 let c = trace_light_nodes(
                     scene,
                     tracer,
@@ -152,8 +154,8 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
                 scale_kernels(scene, self.config.glossy_alpha, &mut chunk.nodes);
                 out.counters = c;
             }
-            2 => self.pass.map_denominators(scene, range, chunk, |hood, i| hood.denominators(i)),
-            3 => {
+            phase::DENOMINATORS => self.pass.map_denominators(scene, range, chunk, |hood, i| hood.denominators(i)),
+            phase::ROWS => {
                 self.pass.map_rows(scene, range, chunk, |hood, u, pairs| hood.light_row::<f32>(self.pass.links[u], self.pass.values[u], &self.pass.dens, pairs))
             }
             _ => self.pass.map_sweep(range, chunk),
@@ -161,8 +163,8 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         match phase.id {
-            0 => self.r0 = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs)),
-            id if id == 4 + self.sweeps => {
+            phase::FOOTPRINT => self.r0 = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs)),
+            id if id == phase::FIRST_SWEEP + self.sweeps => {
                 for out in outputs.iter() {
                     film.set_camera_samples(out.items.clone(), &out.pixels);
                 }
