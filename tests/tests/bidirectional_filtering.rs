@@ -16,7 +16,9 @@
 
 use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
 use ember_core::estimators::filter::nodes::{NONE, NodeKind};
-use ember_core::estimators::filter::{Bidirectional, Denominators, FilterGraph, Neighbourhood, Node, kernel_points, trace_camera_nodes, trace_light_nodes};
+use ember_core::estimators::filter::{
+    BidirDenominators, Bidirectional, FilterGraph, Neighbourhood, Node, kernel_points, trace_camera_nodes, trace_light_nodes,
+};
 use ember_core::math::Frame;
 use ember_core::merge::HashGrid;
 use ember_core::scene::{AreaEmission, Scene};
@@ -289,7 +291,7 @@ fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
         merges_only: false,
         bridge_choice: None,
     };
-    let dens: Vec<Denominators> = (0..nodes.len() as u32).map(|i| weights.denominators(i)).collect();
+    let dens: Vec<BidirDenominators> = (0..nodes.len() as u32).map(|i| weights.denominators(i)).collect();
     let mut graph = FilterGraph::<f64>::new();
     let mut pairs = Vec::new();
     for v in 0..nodes.len() as u32 {

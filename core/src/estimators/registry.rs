@@ -334,7 +334,9 @@ impl EstimatorConfig {
             Self::Filter(side, c) => {
                 // Per node: itself, its denominators, two radiance vectors and its row,
                 // assuming 64 kernel neighbours, the neighbour budget (a pair is a u32 and three f32).
-                let node = core::mem::size_of::<crate::estimators::filter::Node>() as u64 + 16 + 24 + FILTER_NEIGHBOURS * 16;
+                use crate::estimators::filter::{BidirDenominators, Denominators, Node};
+                let dens = if *side == FilterSide::Both { core::mem::size_of::<BidirDenominators>() } else { core::mem::size_of::<Denominators>() };
+                let node = (core::mem::size_of::<Node>() + dens) as u64 + 24 + FILTER_NEIGHBOURS * 16;
                 // The paths whose nodes a pass holds: MVF's camera paths, PhF's light paths
                 // (one per pixel), BPF's camera paths and round(β · pixels) light paths (at
                 // 128×96 a BPF pass held 98, 190, 467 and 1562 MB at β = 0, 1, 4, 16).

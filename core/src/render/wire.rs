@@ -45,7 +45,7 @@ use crate::spectrum::Rgb;
 use crate::transport::{Counters, Splat};
 
 /// Bumped whenever a type carried in a part changes its fields.
-pub const WIRE_VERSION: u16 = 2;
+pub const WIRE_VERSION: u16 = 3;
 
 const MAGIC: [u8; 4] = *b"EMBW";
 

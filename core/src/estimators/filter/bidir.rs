@@ -130,10 +130,42 @@ use alloc::vec::Vec;
 use super::bridge::{self, bridge_end, bridges_from};
 use super::graph::{REFLECTED, Real, Rgb3, add3, mul3, rgb, scale3};
 use super::nodes::{LightEnd, NONE, Node, NodeKind};
-use super::weights::{Denominators, KernelPoint, Neighbourhood};
+use super::weights::{KernelPoint, Neighbourhood};
 use crate::bsdf::TransportMode;
 use crate::math::{Frame, Vec3};
 use crate::spectrum::Rgb;
+
+/// The denominators of a node's reusable segments under bidirectional filtering: MVF's
+/// two ([`super::Denominators`]) and the light side's and the bridges' parts.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
+pub struct BidirDenominators {
+    /// D of its continuation.
+    pub next: f64,
+    /// D of its light-sampled segment.
+    pub light: f64,
+    /// The light samples' part of `next`.
+    pub next_light: f64,
+    /// Light node: D of its arriving segment.
+    pub arrive: f64,
+    /// The light samples' part of `arrive`.
+    pub arrive_light: f64,
+    /// With merges only: D of the arriving segment at its own path's junction (its own
+    /// technique and the emission).
+    pub arrive_own: f64,
+    /// With merges only: the part of `arrive` (and `arrive_own`) of the light node whose
+    /// continuation drew the arriving segment, K(0) q p* |n_x·ŝ| / |n_y·ŝ|; 0 where the
+    /// emission drew it.
+    pub arrive_self: f64,
+    /// With bridges: Σ K(c → x) over the camera nodes c that start bridges, x this node
+    /// (the start of each of its reusable segments).
+    pub starts: f64,
+    /// The emission technique's part of `next`, `light` and `arrive` (all N_L light
+    /// paths'), which a light junction counts without its own path's.
+    pub next_emit: f64,
+    pub light_emit: f64,
+    pub arrive_emit: f64,
+}
 
 /// The weights of bidirectional filtering: the neighbourhood and the emission's sample
 /// count N_L.
@@ -400,8 +432,8 @@ impl Bidirectional<'_> {
 
     /// The denominators of node `index`'s reusable segments: a camera node's
     /// continuation and light sample, a light node's arriving segment.
-    pub fn denominators(&self, index: u32) -> Denominators {
-        let mut d = Denominators::default();
+    pub fn denominators(&self, index: u32) -> BidirDenominators {
+        let mut d = BidirDenominators::default();
         let nodes = self.nodes();
         let u = &nodes[index as usize];
         if u.kind == NodeKind::Light && (u.delta || (u.pred != NONE && nodes[u.pred as usize].delta && nodes[u.pred as usize].kind == NodeKind::Light)) {
@@ -455,7 +487,7 @@ impl Bidirectional<'_> {
 
     /// This row's segment a for the pair correction, or `None` where it does not apply
     /// (no light paths, the primary ray, Dirac chains, a light row with merges only).
-    fn pair_segment(&self, index: u32, dens: &[Denominators]) -> Option<PairSegment> {
+    fn pair_segment(&self, index: u32, dens: &[BidirDenominators]) -> Option<PairSegment> {
         if !self.light_side_owns_dirac() {
             return None;
         }
@@ -511,13 +543,13 @@ impl Bidirectional<'_> {
     }
 
     /// [`PairSegment::bridge`] for a segment from `x` to `y`, `starts` = Σ K(c → x) over
-    /// the bridge starts ([`Denominators::starts`]; 0 without bridges).
+    /// the bridge starts ([`BidirDenominators::starts`]; 0 without bridges).
     fn bridge_factor(&self, x: &Node, starts: f64, y: &Node) -> f64 {
         self.bridge_density(x, y.hit.p, y.hit.ng, starts, 1.0)
     }
 
     /// Node `index`'s row: L_e of its segment, the constant terms and the pairs.
-    pub fn row<T: Real>(&self, index: u32, dens: &[Denominators], pairs: &mut Vec<(u32, Rgb3<T>)>) -> (Rgb3<T>, Rgb3<T>) {
+    pub fn row<T: Real>(&self, index: u32, dens: &[BidirDenominators], pairs: &mut Vec<(u32, Rgb3<T>)>) -> (Rgb3<T>, Rgb3<T>) {
         pairs.clear();
         let nodes = self.nodes();
         let v = &nodes[index as usize];

@@ -182,11 +182,11 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
             }
             phase::DENOMINATORS => {
                 let w = self.weights(scene);
-                self.pass.map_denominators(scene, range, chunk, |_, i| w.denominators(i));
+                self.pass.map_denominators(scene, range, &mut chunk.bidir_dens, |_, i| w.denominators(i));
             }
             phase::ROWS => {
                 let w = self.weights(scene);
-                self.pass.map_rows(scene, range, chunk, |_, i, pairs| w.row::<f32>(i as u32, &self.pass.dens, pairs));
+                self.pass.map_rows(scene, range, chunk, |_, i, pairs| w.row::<f32>(i as u32, &self.pass.bidir_dens, pairs));
             }
             _ => self.pass.map_sweep(range, chunk),
         }

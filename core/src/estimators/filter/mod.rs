@@ -48,6 +48,7 @@ pub mod pass;
 pub mod phf;
 pub mod weights;
 
+pub use bidir::BidirDenominators;
 pub use bidir::Bidirectional;
 pub use bpf::Bpf;
 pub use bridge::trace_bridges;

@@ -92,7 +92,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Mvf {
                 scale_kernels(scene, self.config.glossy_alpha, &mut chunk.nodes);
                 out.counters = c;
             }
-            phase::DENOMINATORS => self.pass.map_denominators(scene, range, chunk, |hood, i| hood.denominators(i)),
+            phase::DENOMINATORS => self.pass.map_denominators(scene, range, &mut chunk.dens, |hood, i| hood.denominators(i)),
             phase::ROWS => self.pass.map_rows(scene, range, chunk, |hood, i, pairs| hood.row::<f32>(&self.pass.nodes[i], &self.pass.dens, pairs)),
             _ => self.pass.map_sweep(range, chunk),
         }

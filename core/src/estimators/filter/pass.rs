@@ -4,6 +4,7 @@
 
 use alloc::vec::Vec;
 
+use super::bidir::BidirDenominators;
 use super::graph::{FilterGraph, Rgb3, reserve_headroom};
 use super::nodes::{NONE, Node};
 use super::weights::{Denominators, KernelPoint, Neighbourhood};
@@ -76,8 +77,10 @@ pub struct FilterChunk {
     /// MVF: per pixel, the environment radiance if its camera ray escaped; PhF: per node,
     /// its base flux.
     pub values: Vec<Rgb>,
-    /// `denominators`: per node.
+    /// `denominators`: per node (MVF, PhF).
     pub dens: Vec<Denominators>,
+    /// `denominators`: per node (BPF).
+    pub bidir_dens: Vec<BidirDenominators>,
     /// `filter`: the rows of the chunk's nodes (targets global).
     pub rows: FilterGraph<f32>,
     /// `propagate`: L_i (or A_i) of the chunk's nodes.
@@ -98,6 +101,7 @@ impl FilterChunk {
         self.links.clear();
         self.values.clear();
         self.dens.clear();
+        self.bidir_dens.clear();
         self.rows.clear();
         self.radiance.clear();
         self.light_scratch.0.clear();
@@ -120,7 +124,10 @@ pub struct FilterPass {
     pub grid: HashGrid,
     /// The kernel radius.
     pub r: f32,
+    /// Each node's denominators (MVF, PhF).
     pub dens: Vec<Denominators>,
+    /// Each node's denominators (BPF).
+    pub bidir_dens: Vec<BidirDenominators>,
     pub graph: FilterGraph<f32>,
     /// The current L_i (A_i) per node.
     pub radiance: Vec<Rgb3<f32>>,
@@ -144,6 +151,7 @@ impl FilterPass {
             + self.values.capacity() * core::mem::size_of::<Rgb>()
             + self.grid.size_bytes()
             + self.dens.capacity() * core::mem::size_of::<Denominators>()
+            + self.bidir_dens.capacity() * core::mem::size_of::<BidirDenominators>()
             + self.graph.size_bytes()
             + self.radiance.capacity() * core::mem::size_of::<Rgb3<f32>>()
             + self.new_index.capacity() * 4
@@ -292,9 +300,18 @@ impl FilterPass {
     /// Gather the chunks' denominators.
     pub fn gather_denominators(&mut self, outputs: &mut [ChunkOutput]) {
         self.dens.clear();
-        reserve_headroom(&mut self.dens, self.nodes.len());
+        self.bidir_dens.clear();
         for out in outputs.iter_mut() {
-            self.dens.extend_from_slice(&out.data.filter_chunk().dens);
+            let chunk = out.data.filter_chunk();
+            // One of the two is empty: MVF and PhF fill `dens`, BPF `bidir_dens`.
+            if !chunk.dens.is_empty() {
+                reserve_headroom(&mut self.dens, self.nodes.len());
+                self.dens.extend_from_slice(&chunk.dens);
+            }
+            if !chunk.bidir_dens.is_empty() {
+                reserve_headroom(&mut self.bidir_dens, self.nodes.len());
+                self.bidir_dens.extend_from_slice(&chunk.bidir_dens);
+            }
         }
     }
 
@@ -347,17 +364,12 @@ impl FilterPass {
         }
     }
 
-    /// Map step of `denominators` over nodes `range`: node i's from `denominators(hood, i)`.
-    pub fn map_denominators(
-        &self,
-        scene: &Scene,
-        range: core::ops::Range<usize>,
-        chunk: &mut FilterChunk,
-        denominators: impl Fn(&Neighbourhood<'_>, u32) -> Denominators,
-    ) {
+    /// Map step of `denominators` over nodes `range` into `out` (the chunk's `dens` or
+    /// `bidir_dens`): node i's from `denominators(hood, i)`.
+    pub fn map_denominators<D>(&self, scene: &Scene, range: core::ops::Range<usize>, out: &mut Vec<D>, denominators: impl Fn(&Neighbourhood<'_>, u32) -> D) {
         let hood = self.neighbourhood(scene);
-        reserve_headroom(&mut chunk.dens, range.len());
-        chunk.dens.extend(range.map(|i| denominators(&hood, i as u32)));
+        reserve_headroom(out, range.len());
+        out.extend(range.map(|i| denominators(&hood, i as u32)));
     }
 
     /// Map step of a sweep over nodes `range`.

@@ -154,7 +154,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
                 scale_kernels(scene, self.config.glossy_alpha, &mut chunk.nodes);
                 out.counters = c;
             }
-            phase::DENOMINATORS => self.pass.map_denominators(scene, range, chunk, |hood, i| hood.denominators(i)),
+            phase::DENOMINATORS => self.pass.map_denominators(scene, range, &mut chunk.dens, |hood, i| hood.denominators(i)),
             phase::ROWS => {
                 self.pass.map_rows(scene, range, chunk, |hood, u, pairs| hood.light_row::<f32>(self.pass.links[u], self.pass.values[u], &self.pass.dens, pairs))
             }

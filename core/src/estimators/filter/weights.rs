@@ -87,28 +87,6 @@ pub struct Denominators {
     pub next: f64,
     /// D of its light-sampled segment.
     pub light: f64,
-    /// Bidirectional filtering: the light samples' part of `next`.
-    pub next_light: f64,
-    /// Bidirectional filtering, light node: D of its arriving segment.
-    pub arrive: f64,
-    /// The light samples' part of `arrive`.
-    pub arrive_light: f64,
-    /// Bidirectional filtering with merges only: D of the arriving segment at its own
-    /// path's junction (its own technique and the emission).
-    pub arrive_own: f64,
-    /// Bidirectional filtering with merges only: the part of `arrive` (and `arrive_own`)
-    /// of the light node whose continuation drew the arriving segment, K(0) q p*
-    /// |n_x·ŝ| / |n_y·ŝ|; 0 where the emission drew it.
-    pub arrive_self: f64,
-    /// Bidirectional filtering with bridges: Σ K(c → x) over the camera nodes c that start
-    /// bridges, x this node (the start of each of its reusable segments).
-    pub starts: f64,
-    /// Bidirectional filtering: the emission technique's part of `next`, `light` and
-    /// `arrive` (all N_L light paths'), which a light junction counts without its own
-    /// path's.
-    pub next_emit: f64,
-    pub light_emit: f64,
-    pub arrive_emit: f64,
 }
 
 impl Neighbourhood<'_> {
