@@ -31,6 +31,7 @@ pub mod measure;
 pub mod merge;
 #[cfg(feature = "mmis")]
 pub mod mmis;
+pub mod options;
 #[cfg(feature = "path")]
 pub mod path;
 pub mod plan;
