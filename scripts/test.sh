@@ -15,6 +15,12 @@ step "formatting (rustfmt.toml) and lints (clippy, warnings denied)"
 cargo fmt --check
 cargo clippy --workspace --all-targets -- -D warnings
 
+step "host crates by role (issue 49): no import cycles in the hosts, a C library without the CLI's or the file formats' crates"
+scripts/import-cycles.py host/src host-formats/src host-cli/src host-capi/src host-wasm/src
+if cargo tree -q -p ember-capi -e normal | grep -E ' (clap|roxmltree|tobj|exr|png|indicatif) v'; then
+  echo "ember-capi links a crate of the command line or the file formats (above)"; exit 1
+fi
+
 step "core builds with no std at all, with every feature and with each alone (docs/features.md)"
 cargo build --release -p ember-core --target thumbv7em-none-eabihf
 cargo build --release -p ember-core --target x86_64-unknown-none

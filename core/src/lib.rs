@@ -30,6 +30,7 @@ pub mod measure;
 pub mod merge;
 #[cfg(feature = "mmis")]
 pub mod mmis;
+pub mod options;
 #[cfg(feature = "path")]
 pub mod path;
 pub mod pixel_filter;

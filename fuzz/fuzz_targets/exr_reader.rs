@@ -3,7 +3,7 @@
 //! EXRs (`seeds/exr_reader/`).
 #![no_main]
 
-use ember_cli::image_io::read_exr_from_bytes;
+use ember_formats::image_io::read_exr_from_bytes;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -9,7 +9,7 @@
 
 use std::path::Path;
 
-use ember_cli::mitsuba::{LoadOptions, load_scene_from_str};
+use ember_formats::mitsuba::{LoadOptions, load_scene_from_str};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

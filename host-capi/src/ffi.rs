@@ -31,9 +31,9 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::{Arc, LazyLock, Mutex, MutexGuard, Once, RwLock, RwLockReadGuard, RwLockWriteGuard};
 use std::time::Instant;
 
-use ember_cli::driver::{self, DriverConfig, Limits};
 use ember_core::estimators::ChunkOutput;
 use ember_core::render::{Context, EstimatorKind, Film, Phase, Phased, Renderer};
+use ember_host::driver::{self, Limits};
 
 use ray_queries::{Fault, Tracer, fault_error, tracer};
 
@@ -270,7 +270,7 @@ thread_local! {
     static IN_CALL: Cell<u32> = const { Cell::new(0) };
 }
 
-/// The names of the threads `ember_cli::driver::render` starts (its pool is named
+/// The names of the threads `ember_host::driver::render` starts (its pool is named
 /// "ember-render"; the panic test in `tests/panics.rs` fails if the two part).
 const RENDER_THREAD_PREFIX: &str = "ember-render-";
 
@@ -367,7 +367,7 @@ pub extern "C" fn ember_last_error() -> *const c_char {
 /// the same string split renders record, so an engine can log which build rendered.
 #[unsafe(no_mangle)]
 pub extern "C" fn ember_version() -> *const c_char {
-    static VERSION: LazyLock<CString> = LazyLock::new(|| CString::new(ember_cli::distributed::program_version()).unwrap_or_default());
+    static VERSION: LazyLock<CString> = LazyLock::new(|| CString::new(ember_host::program_version()).unwrap_or_default());
     VERSION.as_ptr()
 }
 
@@ -555,8 +555,7 @@ pub extern "C" fn ember_render_passes(renderer: EmberRenderer, passes: u32) -> E
         let q = tracer(&st.scene, &st.callbacks, &fault);
         let ctx = Context { scene: &st.scene.scene, tracer: &q };
         let limits = Limits { spp: end, deadline: None, interrupt: None, first_pass };
-        let config = DriverConfig { threads: st.threads, progress: false };
-        driver::render(&mut st.renderer, &ctx, &mut st.film, limits, config, Instant::now())
+        driver::render(&mut st.renderer, &ctx, &mut st.film, limits, st.threads, None, Instant::now())
             .map_err(|e| Error::new(EmberStatus::InvalidArgument, e.to_string()))?;
         st.ready = true;
         fault_error(fault, "the rest of the call's rays were misses, and the film holds its passes: destroy the renderer")?;

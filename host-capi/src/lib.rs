@@ -8,7 +8,7 @@
 //!
 //! Layers: this module is the safe part (the handle registry with generation-checked
 //! ids, scenes built from plain descriptions, renderers driving the core's render
-//! protocol on the CLI host's threads and BVH); [`ffi`] is the only module with
+//! protocol on `ember-host`'s threads and BVH); [`ffi`] is the only module with
 //! `unsafe`: it turns pointers and lengths into slices, calls the engine's callbacks, and
 //! catches every panic at the boundary.
 
@@ -18,13 +18,14 @@ pub mod film_state;
 use std::borrow::Cow;
 use std::sync::{Arc, OnceLock, RwLock, RwLockReadGuard, RwLockWriteGuard, TryLockError};
 
-use ember_cli::accel::Accel;
 use ember_core::camera::{FovAxis, PerspectiveCamera};
 use ember_core::integrator::{Heuristic, MaxDepth, RenderParams};
 use ember_core::math::Vec3;
+use ember_core::options::{self, OptionError, Options};
 use ember_core::render::{EstimatorConfig, EstimatorKind, Film, Renderer};
 use ember_core::scene::{AreaEmission, Scene, SceneBuilder, SceneGeometry};
 use ember_core::spectrum::Rgb;
+use ember_host::accel::Accel;
 
 /// What a call returned. Every function returns one; `Ok` is 0.
 #[repr(C)]
@@ -268,14 +269,14 @@ impl SceneData {
     }
 
     /// FNV-1a of everything a render reads, as the CLI hashes its scenes
-    /// (`ember_cli::estimators::PreparedScene::hash`): the scene's `Debug` form (camera,
+    /// (`ember_host::scene::PreparedScene::hash`): the scene's `Debug` form (camera,
     /// materials, lights), the BVH's geometry as raw bits, and each description
     /// triangle's index in the geometry (the callbacks name triangles by it; `u32::MAX`
     /// for a dropped one). Computed once, when an
     /// exported film first needs it.
     pub fn hash(&self) -> u64 {
         *self.hash.get_or_init(|| {
-            let mut h = ember_cli::estimators::scene_hasher(&self.scene, &self.accel);
+            let mut h = ember_host::scene::scene_hasher(&self.scene, &self.accel);
             for index in &self.triangle_index {
                 std::hash::Hasher::write_u32(&mut h, index.unwrap_or(u32::MAX));
             }
@@ -315,13 +316,12 @@ pub struct Config {
 const MEMORY_LIMIT: &str = "memory-limit";
 
 impl Settings {
-    /// The settings validated. The options go through the command line's own parser
-    /// (`ember_cli::cli::CacheArgs`), so every configuration field the CLI sets is
-    /// settable here with the same names, defaults and messages, and the core validates
-    /// the result; besides them only `memory-limit` (`ember render`'s, with its parser)
-    /// is accepted.
+    /// The settings validated. The options go through the core's options table
+    /// ([`ember_core::options`], which the command line's flags are checked against), so
+    /// every configuration field the CLI sets is settable here with the same names and
+    /// defaults, and the core validates each value; besides them only `memory-limit`
+    /// (`ember render`'s, with its parser) is accepted.
     pub fn config(&self) -> Result<Config> {
-        use clap::{Args, FromArgMatches};
         let invalid = |m: String| Error::new(EmberStatus::InvalidConfig, m);
         let kind = EstimatorKind::from_name(&self.estimator).ok_or_else(|| {
             let names: Vec<&str> = EstimatorKind::ALL.iter().map(|k| k.name()).collect();
@@ -330,37 +330,32 @@ impl Settings {
         if self.max_depth < -1 {
             return Err(invalid(format!("max_depth {} is below -1 (-1: unbounded)", self.max_depth)));
         }
-        let mut args: Vec<String> = Vec::new();
+        // The settings' own fields first, as options given (an option repeating one is
+        // refused as given twice).
+        let mut options = Options::new(kind);
+        let mut set = |name: &str, value: &str| options.set(name, value).map_err(|e| invalid(message(e)));
         if self.light_paths > 0 {
-            args.push(format!("--light-paths={}", self.light_paths));
+            set("light-paths", &self.light_paths.to_string())?;
         }
         if self.connections > 0 {
-            args.push(format!("--connections={}", self.connections));
+            set("connections", &self.connections.to_string())?;
         }
         if self.radius_footprints != 0.0 {
-            args.push(format!("--radius-footprints={}", self.radius_footprints));
+            set("radius-footprints", &self.radius_footprints.to_string())?;
         }
-        let command = ember_cli::cli::CacheArgs::augment_args(clap::Command::new("options").no_binary_name(true));
-        let known: Vec<String> = command.get_arguments().filter_map(|a| a.get_long().map(str::to_string)).collect();
         let mut memory_limit = None;
-        for option in self.options.split_whitespace() {
-            let (name, value) = option.split_once('=').ok_or_else(|| invalid(format!("option '{option}' is not name=value")))?;
+        for pair in options::pairs(&self.options) {
+            let (name, value) = pair.map_err(|e| invalid(message(e)))?;
             if name == MEMORY_LIMIT {
                 if memory_limit.is_some() {
                     return Err(invalid(format!("option '{MEMORY_LIMIT}' is given twice")));
                 }
-                memory_limit = Some(ember_cli::memory::parse_size(value).map_err(|e| invalid(format!("{MEMORY_LIMIT}: {e}")))?);
+                memory_limit = Some(ember_host::memory::parse_size(value).map_err(|e| invalid(format!("{MEMORY_LIMIT}: {e}")))?);
                 continue;
             }
-            if !known.iter().any(|k| k == name) {
-                return Err(invalid(format!("no estimator option '{name}' (options: {}, {MEMORY_LIMIT})", known.join(", "))));
-            }
-            args.push(format!("--{name}={value}"));
+            set(name, value)?;
         }
-        let matches = command.try_get_matches_from(&args).map_err(|e| invalid(first_line(&e.to_string())))?;
-        let cache = ember_cli::cli::CacheArgs::from_arg_matches(&matches).map_err(|e| invalid(first_line(&e.to_string())))?;
-        let estimator = cache.config_for(kind);
-        estimator.validate().map_err(|e| invalid(format!("{} {e}", kind.name())))?;
+        let estimator = options.finish().map_err(|e| invalid(message(e)))?;
         // As `ember render`: PT's two techniques under the power heuristic.
         let params = RenderParams { max_depth: MaxDepth(self.max_depth), seed: self.seed, heuristic: Heuristic::Power, ..RenderParams::default() };
         Ok(Config { estimator, params, memory_limit, threads: thread_count(self.threads) })
@@ -369,24 +364,24 @@ impl Settings {
 
 /// The threads `ember_render_passes` starts for `requested` (0: every core): capped, not
 /// refused, at 4 × the cores and at 1024, as `ember render --threads` caps them
-/// (`ember_cli::cli::capped_threads`: the CLI's rule without its warning, which a library
-/// must not print). Without the cap `UINT32_MAX` spent 30 s and 240 MB starting threads
+/// (`ember_host::driver::capped_threads`: the CLI's rule without its warning, which a
+/// library must not print). Without the cap `UINT32_MAX` spent 30 s and 240 MB starting threads
 /// before failing.
 pub fn thread_count(requested: u32) -> usize {
-    ember_cli::cli::capped_threads((requested != 0).then_some(requested))
+    ember_host::driver::capped_threads((requested != 0).then_some(requested))
 }
 
 /// Refuse, before the film and the estimator's stores are allocated, a renderer whose
 /// estimated memory ([`EstimatorConfig::memory_estimate`], at least the film's) exceeds
-/// `limit` or, without one, the memory available (`ember_cli::memory`): as `ember
+/// `limit` or, without one, the memory available (`ember_host::memory`): as `ember
 /// render` refuses it. An allocation that fails aborts the process, which no
 /// `catch_unwind` can turn into a status (a 65536×65536 camera did).
 pub fn check_memory(scene: &SceneData, config: &EstimatorConfig, limit: Option<u64>) -> Result<()> {
     let camera = &scene.scene.camera;
-    let (bytes, estimate) = ember_cli::estimators::memory_need_for(camera, config);
+    let (bytes, estimate) = ember_host::memory::need(camera, config);
     let (available, source) = match limit {
         Some(l) => (Some(l), "the memory-limit option"),
-        None => (ember_cli::memory::available_bytes(), "available memory"),
+        None => (ember_host::memory::available_bytes(), "available memory"),
     };
     match available {
         Some(a) if bytes > a => Err(Error::new(
@@ -394,11 +389,11 @@ pub fn check_memory(scene: &SceneData, config: &EstimatorConfig, limit: Option<u
             format!(
                 "{} would need about {} ({} at {}×{} is the largest part), more than the {} of {source}; lower {}",
                 config.kind(),
-                ember_cli::memory::human(bytes),
+                ember_host::memory::human(bytes),
                 estimate.largest,
                 camera.width(),
                 camera.height(),
-                ember_cli::memory::human(a),
+                ember_host::memory::human(a),
                 c_spelling(estimate.lower)
             ),
         )),
@@ -423,9 +418,15 @@ fn c_spelling(lower: &str) -> String {
         .join(" ")
 }
 
-/// A clap message's first line, without its `error: ` prefix.
-fn first_line(message: &str) -> String {
-    message.lines().next().unwrap_or_default().trim_start_matches("error: ").to_string()
+/// An options error in this API's words: an unknown name lists `memory-limit` too.
+fn message(e: OptionError) -> String {
+    match e {
+        OptionError::Unknown(name) => {
+            let names: Vec<&str> = options::all().iter().map(|o| o.name).collect();
+            format!("no estimator option '{name}' (options: {}, {MEMORY_LIMIT})", names.join(", "))
+        }
+        other => other.to_string(),
+    }
 }
 
 /// A renderer: an estimator bound to a scene (kept alive by the renderer), its film,
@@ -497,7 +498,7 @@ impl RendererState {
     pub fn film_identity(&self) -> film_state::FilmIdentity {
         let id = &self.identity;
         film_state::FilmIdentity {
-            build: ember_cli::distributed::program_version(),
+            build: ember_host::program_version(),
             estimator: id.estimator.clone(),
             config: id.config.clone(),
             seed: id.seed,

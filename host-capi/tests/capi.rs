@@ -13,9 +13,11 @@ use std::time::Instant;
 
 use ember_capi::EmberStatus;
 use ember_capi::ffi::*;
-use ember_cli::driver::{DriverConfig, Limits};
-use ember_cli::estimators::{CoreRenderer, PreparedScene};
+use ember_cli::estimators::CoreRenderer;
+use ember_cli::progress::DriverConfig;
 use ember_core::render::{EstimatorKind, Film};
+use ember_host::driver::Limits;
+use ember_host::scene::PreparedScene;
 
 const W: u32 = 40;
 const H: u32 = 32;
@@ -23,7 +25,7 @@ const PASSES: u32 = 3;
 
 fn cli_image(estimator: EstimatorKind, seed: u64) -> Vec<[f32; 3]> {
     let (scene, geometry, _) = ember_core::scene::builtin::cornell_box(W, H).build().unwrap();
-    let accel = ember_cli::accel::Accel::new(&geometry);
+    let accel = ember_host::accel::Accel::new(&geometry);
     let prepared = PreparedScene { name: "box".into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new(), inputs: Vec::new() };
     let mut r = CoreRenderer::with_config(prepared, estimator.default_config(), -1, seed, 2).unwrap();
     let mut film = Film::new(W, H);

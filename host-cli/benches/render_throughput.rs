@@ -41,15 +41,17 @@ use std::time::Instant;
 
 use clap::Parser;
 
-use ember_cli::accel::Accel;
 use ember_cli::cli::{Cli, Command, RenderArgs};
-use ember_cli::driver::{self, DriverConfig, Limits};
-use ember_cli::estimators::{CoreRenderer, PreparedScene, prepare_builtin};
+use ember_cli::estimators::CoreRenderer;
+use ember_cli::setup::prepare_builtin;
 use ember_core::Rgb;
 use ember_core::estimators::{ChunkOutput, PhaseData};
 use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
 use ember_core::integrator::pt;
 use ember_core::render::{Context, Cursor, Film, Phase, Phased, Stage};
+use ember_host::accel::Accel;
+use ember_host::driver::{self, Limits};
+use ember_host::scene::PreparedScene;
 
 const HOT_RES: u32 = 256;
 const HOT_PASSES: u32 = 4;
@@ -212,7 +214,7 @@ fn cpu_seconds() -> f64 {
 /// Logs every work item (chunk) the driver hands out, (pass, worker, start, end) in
 /// seconds, and times the reductions (the serial merge of each phase).
 struct Logged<'a> {
-    inner: &'a mut (dyn Phased<ember_cli::accel::Accel, Data = PhaseData> + Sync + Send),
+    inner: &'a mut (dyn Phased<ember_host::accel::Accel, Data = PhaseData> + Sync + Send),
     t0: Instant,
     items: Mutex<Vec<(u32, usize, f64, f64)>>,
     reduce_seconds: f64,
@@ -249,7 +251,7 @@ impl Logged<'_> {
     }
 }
 
-impl Phased<ember_cli::accel::Accel> for Logged<'_> {
+impl Phased<ember_host::accel::Accel> for Logged<'_> {
     type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         self.inner.next_phase()
@@ -257,12 +259,12 @@ impl Phased<ember_cli::accel::Accel> for Logged<'_> {
     fn start_pass(&mut self, pass: u32) {
         self.inner.start_pass(pass);
     }
-    fn map(&self, ctx: &Context<'_, ember_cli::accel::Accel>, phase: &Phase, out: &mut ChunkOutput) {
+    fn map(&self, ctx: &Context<'_, ember_host::accel::Accel>, phase: &Phase, out: &mut ChunkOutput) {
         let t = Instant::now();
         self.inner.map(ctx, phase, out);
         self.log(phase.pass.unwrap_or(0), t);
     }
-    fn reduce(&mut self, ctx: &Context<'_, ember_cli::accel::Accel>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
+    fn reduce(&mut self, ctx: &Context<'_, ember_host::accel::Accel>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         let t = Instant::now();
         self.inner.reduce(ctx, phase, outputs, film);
         self.reduce_seconds += t.elapsed().as_secs_f64();
@@ -283,15 +285,14 @@ struct Run {
     merge: f64,
 }
 
-fn drive(r: &mut (dyn Phased<ember_cli::accel::Accel, Data = PhaseData> + Sync + Send), scene: &PreparedScene, threads: usize, spp: u32) -> (Run, Film) {
+fn drive(r: &mut (dyn Phased<ember_host::accel::Accel, Data = PhaseData> + Sync + Send), scene: &PreparedScene, threads: usize, spp: u32) -> (Run, Film) {
     let mut logged = Logged { inner: r, t0: Instant::now(), items: Mutex::new(Vec::new()), reduce_seconds: 0.0 };
     let camera = &scene.scene.camera;
     let mut film = Film::new(camera.width(), camera.height());
-    let config = DriverConfig { progress: false, ..DriverConfig::with_threads(threads) };
     let ctx = Context { scene: &scene.scene, tracer: &scene.accel };
     let start = Instant::now();
     let cpu = cpu_seconds();
-    let s = driver::render(&mut logged, &ctx, &mut film, Limits { spp, deadline: None, interrupt: None, first_pass: 0 }, config, start).expect("render");
+    let s = driver::render(&mut logged, &ctx, &mut film, Limits { spp, deadline: None, interrupt: None, first_pass: 0 }, threads, None, start).expect("render");
     let cpu = cpu_seconds() - cpu;
     let (idle, worst_wait) = logged.tail_idle(threads, spp);
     (Run { wall: s.render_seconds, cpu, idle, worst_wait, merge: logged.reduce_seconds / spp.max(1) as f64 }, film)
@@ -319,7 +320,7 @@ fn scaling() {
     println!("    {:<6} {:>7} {:>8} {:>8} {:>6} {:>7} {:>15}   rounds / speedup per round", "", "threads", "seconds", "speedup", "cores", "CPU s", "tail idle");
 
     let scene = prepare_builtin(&args(&[])).expect("built-in scene");
-    let mut renderers: Vec<(&str, Box<dyn Phased<ember_cli::accel::Accel, Data = PhaseData> + Sync + Send>)> =
+    let mut renderers: Vec<(&str, Box<dyn Phased<ember_host::accel::Accel, Data = PhaseData> + Sync + Send>)> =
         vec![("spin", Box::new(Spin { cursor: Cursor::new(0, 1) }))];
     for e in ["pt", "lt", "bdpt"] {
         let spp = SCALE_SPP.to_string();

@@ -24,13 +24,15 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use ember_cli::cli::{CacheArgs, EstimatorKind};
-use ember_cli::driver::{DriverConfig, Limits};
-use ember_cli::estimators::{CoreRenderer, prepare_file};
+use ember_cli::estimators::CoreRenderer;
 use ember_cli::film::Film;
+use ember_cli::progress::DriverConfig;
+use ember_cli::setup::prepare_file;
 use ember_core::integrator::RenderParams;
 use ember_core::integrator::spcbpt::oracle::{ConnectionSums, connection_sums, distance};
 use ember_core::integrator::{Heuristic, MaxDepth};
 use ember_core::render::Renderer;
+use ember_host::driver::Limits;
 use rayon::prelude::*;
 
 fn main() {

@@ -1,8 +1,8 @@
 //! The commands: what `ember render` does between parsing and exiting.
 //!
 //! `render`: check the options that can fail cheaply (scene file, output path) before
-//! any work; build the renderer ([`crate::estimators::make_built`]: scene, ray
-//! queries, estimator); run the [`driver`](crate::driver) into a [`Film`]; write the
+//! any work; build the renderer ([`crate::setup::make_built`]: scene, ray
+//! queries, estimator); run the [`driver`](ember_host::driver) into a [`Film`]; write the
 //! EXR and the PNG; print a summary. A split render (`--passes`, `--task-*`) renders
 //! its range and writes a partial image instead ([`crate::distributed`]).
 //!
@@ -13,13 +13,16 @@ use std::fmt;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use crate::cli::{Cli, Command, CompareArgs, ConvergenceArgs, DEFAULT_RESOLUTION, MergeArgs, RenderArgs};
-use crate::convergence::{self, ConvergenceSetup, Reference};
-use crate::driver::{DriverConfig, DriverError, Limits, RenderSummary};
-use crate::image_io::{self, ImageError};
-use crate::metrics::{self, ErrorMetrics};
-use crate::{distributed, estimators, suite};
 use ember_core::render::Film;
+use ember_formats::image_io::{self, ImageError};
+use ember_formats::metrics::{self, ErrorMetrics};
+use ember_host::driver::{DriverError, Limits, RenderSummary};
+
+use crate::cli::{Cli, Command, CompareArgs, ConvergenceArgs, MergeArgs, RenderArgs, SplitArgs};
+use crate::convergence::{self, ConvergenceSetup, Reference};
+use crate::estimators::{Built, GUIDE_SAMPLES};
+use crate::progress::DriverConfig;
+use crate::{distributed, setup, suite};
 
 /// Everything a command can fail with; each message says what to do or which file.
 #[derive(Debug)]
@@ -30,7 +33,7 @@ pub enum AppError {
     Estimator(String),
     Driver(DriverError),
     Image(ImageError),
-    /// Stopped by Ctrl-C (exit status [`crate::interrupt::EXIT_CODE`]); says what was kept.
+    /// Stopped by Ctrl-C (exit status [`ember_host::interrupt::EXIT_CODE`]); says what was kept.
     Interrupted(String),
 }
 
@@ -52,16 +55,16 @@ impl std::error::Error for AppError {}
 pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
     match &cli.command {
         Command::Render(args) => {
-            if let Err(e) = crate::interrupt::install() {
+            if let Err(e) = ember_host::interrupt::install() {
                 eprintln!("warning: {e}");
             }
-            let report = render(args, start, true, |a| crate::estimators::make_built_at(a, start))?;
+            let report = render(args, start, true, |a| crate::setup::make_built_at(a, start))?;
             println!("{report}");
             if report.summary.interrupted {
                 let s = if report.summary.passes == 1 { "" } else { "es" };
                 return Err(AppError::Interrupted(format!(
                     "interrupted by {}: the image holds the {} completed pass{s}",
-                    crate::interrupt::signal_name(),
+                    ember_host::interrupt::signal_name(),
                     report.summary.passes
                 )));
             }
@@ -88,8 +91,8 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
             }
             // `train X/scene.xml -o X/scene.xml` replaced the scene with the model.
             let inputs: Vec<&std::path::Path> = args.selection.scene.iter().map(|p| p.as_path()).collect();
-            crate::files::probe_output(out, &inputs).map_err(AppError::Output)?;
-            let r = estimators::make_core_renderer(&args.render_args()).map_err(AppError::Estimator)?;
+            ember_formats::files::probe_output(out, &inputs).map_err(AppError::Output)?;
+            let r = setup::make_core_renderer(&args.render_args()).map_err(AppError::Estimator)?;
             let bytes = crate::trained::encode(&r.renderer, &r.identity(), r.width(), r.height()).map_err(AppError::Estimator)?;
             image_io::write_atomically(out, |temp| std::fs::write(temp, &bytes), |e| e).map_err(|e| AppError::Output(format!("{}: {e}", out.display())))?;
             println!("trained    {} for {} in {:.2} s; wrote {} ({} bytes)", r.kind().name(), r.prepared.name, r.setup_seconds, out.display(), bytes.len());
@@ -97,7 +100,7 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
         }
         Command::Plan(args) => {
             let r = args.selection.render_args();
-            let prepared = estimators::prepare(&r).map_err(AppError::Estimator)?;
+            let prepared = setup::prepare(&r).map_err(AppError::Estimator)?;
             for w in &prepared.warnings {
                 eprintln!("warning: {w}");
             }
@@ -132,7 +135,7 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
             Ok(())
         }
         Command::Suite(args) => {
-            crate::files::probe_output(&args.output, &[]).map_err(AppError::Output)?;
+            ember_formats::files::probe_output(&args.output, &[]).map_err(AppError::Output)?;
             let threads = crate::cli::thread_count(args.threads);
             let results = suite::run(args, threads).map_err(AppError::Estimator)?;
             // As a user would type it from the repository root.
@@ -155,9 +158,9 @@ fn run_convergence(args: &ConvergenceArgs) -> Result<(), AppError> {
         return Err(AppError::Output(format!("output folder '{}' exists and is not a folder", out.display())));
     }
     std::fs::create_dir_all(out).map_err(|e| AppError::Output(format!("cannot create output folder '{}': {e}", out.display())))?;
-    crate::files::probe_output(&out.join("convergence.md"), &[]).map_err(AppError::Output)?;
+    ember_formats::files::probe_output(&out.join("convergence.md"), &[]).map_err(AppError::Output)?;
     // The scene first: a missing scene was reported as a missing reference beside it.
-    crate::files::open_regular(&args.scene).map_err(|e| AppError::Estimator(format!("scene {}: {e}", args.scene.display())))?;
+    ember_formats::files::open_regular(&args.scene).map_err(|e| AppError::Estimator(format!("scene {}: {e}", args.scene.display())))?;
     convergence::check_distinct(&args.estimators).map_err(AppError::Estimator)?;
     let reference_path = args.reference.clone().unwrap_or_else(|| args.scene.with_file_name("reference.exr"));
     let reference = Reference::load(&reference_path).map_err(AppError::Output)?;
@@ -170,7 +173,7 @@ fn run_convergence(args: &ConvergenceArgs) -> Result<(), AppError> {
         max_depth: args.max_depth,
         memory_limit: args.memory_limit,
     };
-    let prepare = estimators::preparer(&args.scene, &args.defines.pairs);
+    let prepare = setup::preparer(&args.scene, &args.defines.pairs);
     let points = convergence::measure(&setup, &reference, &prepare, |c| {
         println!(
             "{:5} seed {} at {:7.2} s: relMSE {:.4e}  MAPE {:7.3} %  ({} passes)",
@@ -199,10 +202,10 @@ fn run_convergence(args: &ConvergenceArgs) -> Result<(), AppError> {
 pub fn compare_files(args: &CompareArgs) -> Result<ErrorMetrics, AppError> {
     // Never overwrite an input.
     if let Some(png) = &args.error_image {
-        if [&args.test, &args.reference].iter().any(|input| crate::files::same_file(png, input)) {
+        if [&args.test, &args.reference].iter().any(|input| ember_formats::files::same_file(png, input)) {
             return Err(AppError::Output(format!("--error-image '{}' is one of the images being compared; choose another file", png.display())));
         }
-        crate::files::probe_output(png, &[]).map_err(AppError::Output)?;
+        ember_formats::files::probe_output(png, &[]).map_err(AppError::Output)?;
     }
     let test = image_io::read_exr(&args.test).map_err(AppError::Image)?;
     let reference = image_io::read_exr(&args.reference).map_err(AppError::Image)?;
@@ -258,110 +261,24 @@ pub struct RenderReport {
     pub partial: Option<(crate::distributed::PassRange, u32)>,
 }
 
-/// Something that renders passes into a film: the core's estimators
-/// ([`estimators::CoreRenderer`]) or a test's stand-in.
-pub trait Render {
-    /// The image size.
-    fn size(&self) -> (u32, u32);
-    /// The camera's pixel filter, which the film spreads splats with (box by default).
-    fn filter(&self) -> ember_core::filter::Filter {
-        ember_core::filter::Filter::Box
+/// The pass range a `render` command asks for, with its task index if it names one
+/// (`None` for a whole render).
+fn requested_range(split: &SplitArgs, total: u32) -> Result<Option<(distributed::PassRange, Option<u32>)>, String> {
+    let task = |index, count| distributed::PassRange::of_task(index, count, total).map(|r| Some((r, Some(index))));
+    if let Some(r) = split.passes {
+        if r.end > total {
+            return Err(format!("--passes {r} reaches past the --spp total of {total} passes"));
+        }
+        return Ok(Some((r, None)));
     }
-    /// Render passes into `film` until `limits` say stop.
-    fn render(&mut self, film: &mut Film, limits: Limits, config: DriverConfig, program_start: Instant) -> Result<RenderSummary, DriverError>;
-    /// Lines about the renderer's memory, printed after rendering.
-    fn memory_report(&self) -> Vec<String> {
-        Vec::new()
+    if split.task_from_env {
+        let (index, count) = distributed::task_from_env(|name| std::env::var(name).ok(), split.task_count)?;
+        return task(index, count);
     }
-    /// The estimator that renders, where it is one of the core's (`auto` names its choice).
-    fn estimator_name(&self) -> Option<&'static str> {
-        None
-    }
-    /// The files the scene was read from (outputs must not overwrite them).
-    fn inputs(&self) -> Vec<std::path::PathBuf> {
-        Vec::new()
-    }
-    /// What a partial image records about the render (`None`: cannot be split).
-    fn identity(&self) -> Option<crate::distributed::RenderIdentity> {
-        None
-    }
-    /// The denoiser guides (albedo, normal) per pixel, `samples` rays each
-    /// (`ember_core::render::aov`); `None` where the renderer has no scene to trace.
-    fn guides(&self, _samples: u32, _seed: u64, _threads: usize) -> Option<Guides> {
-        None
-    }
-}
-
-impl Render for estimators::CoreRenderer {
-    fn estimator_name(&self) -> Option<&'static str> {
-        Some(self.kind().name())
-    }
-    fn size(&self) -> (u32, u32) {
-        (self.width(), self.height())
-    }
-    fn filter(&self) -> ember_core::filter::Filter {
-        self.camera_filter()
-    }
-    fn render(&mut self, film: &mut Film, limits: Limits, config: DriverConfig, program_start: Instant) -> Result<RenderSummary, DriverError> {
-        estimators::CoreRenderer::render(self, film, limits, config, program_start)
-    }
-    fn memory_report(&self) -> Vec<String> {
-        estimators::CoreRenderer::memory_report(self)
-    }
-    fn inputs(&self) -> Vec<std::path::PathBuf> {
-        self.prepared.inputs.clone()
-    }
-    fn identity(&self) -> Option<crate::distributed::RenderIdentity> {
-        Some(estimators::CoreRenderer::identity(self))
-    }
-    fn guides(&self, samples: u32, seed: u64, threads: usize) -> Option<Guides> {
-        Some(guides(&self.prepared, samples, seed, threads))
-    }
-}
-
-/// The denoiser guides of an image: per pixel the albedo and the normal.
-pub type Guides = (Vec<[f32; 3]>, Vec<[f32; 3]>);
-
-/// Rays per pixel of the denoiser guides.
-pub const GUIDE_SAMPLES: u32 = 16;
-
-/// The denoiser guides of `prepared`'s image, rows in parallel on `threads` threads (the
-/// values do not depend on the thread count: each pixel has its own random stream).
-pub fn guides(prepared: &estimators::PreparedScene, samples: u32, seed: u64, threads: usize) -> Guides {
-    use rayon::prelude::*;
-    let camera = &prepared.scene.camera;
-    let (w, h) = (camera.width() as usize, camera.height() as usize);
-    let mut albedo = vec![ember_core::spectrum::Rgb::ZERO; w * h];
-    let mut normal = vec![ember_core::math::Vec3::ZERO; w * h];
-    let mut work = || {
-        albedo.par_chunks_mut(w.max(1)).zip(normal.par_chunks_mut(w.max(1))).enumerate().for_each(|(y, (a, n))| {
-            let start = (y * w) as u32;
-            ember_core::render::aov::render_guides(&prepared.scene, &prepared.accel, seed, samples, start..start + w as u32, a, n);
-        })
-    };
-    match rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).build() {
-        Ok(pool) => pool.install(work),
-        Err(_) => work(),
-    }
-    (albedo.iter().map(|c| [c.r, c.g, c.b]).collect(), normal.iter().map(|v| v.to_array()).collect())
-}
-
-/// What `render` needs from the estimator wiring: the renderer and what to report.
-pub struct Built {
-    pub renderer: Box<dyn Render>,
-    /// The scene's name (its file, or "built-in Cornell box").
-    pub scene: String,
-    pub max_depth: i32,
-    /// The scene file's sample count, used when neither --spp nor --time is given.
-    pub file_spp: Option<u32>,
-    /// Passes already rendered with this renderer's configuration and seed, which the
-    /// render continues (`--estimator auto`'s race, when PT wins).
-    pub film: Option<Film>,
-}
-
-impl fmt::Debug for Built {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_struct("Built").field("scene", &self.scene).field("max_depth", &self.max_depth).field("file_spp", &self.file_spp).finish_non_exhaustive()
+    match (split.task_index, split.task_count) {
+        (Some(i), Some(n)) => task(i, n),
+        (None, Some(_)) => Err("--task-count needs --task-index or --task-from-env".into()),
+        _ => Ok(None),
     }
 }
 
@@ -372,7 +289,7 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         return Err(AppError::Output("--aov is not written by split renders (their parts hold sums, not images)".into()));
     }
     let split = match args.spp {
-        Some(total) => distributed::requested_range(&args.split, total).map_err(AppError::Output)?,
+        Some(total) => requested_range(&args.split, total).map_err(AppError::Output)?,
         // clap requires --spp with the others; --task-count alone must not pass silently.
         None if args.split != crate::cli::SplitArgs::default() => {
             return Err(AppError::Output("--task-count needs --task-index or --task-from-env, and --spp (the total)".into()));
@@ -421,7 +338,7 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     // Both files tried before any work; never over the scene or the model.
     let inputs: Vec<&std::path::Path> = args.scene.iter().chain(args.model.iter()).map(|p| p.as_path()).collect();
     for out in [&exr, &png] {
-        crate::files::probe_output(out, &inputs).map_err(AppError::Output)?;
+        ember_formats::files::probe_output(out, &inputs).map_err(AppError::Output)?;
     }
 
     if args.estimator == crate::cli::EstimatorChoice::Auto && (split.is_some() || args.model.is_some() || args.resume.is_some()) {
@@ -461,7 +378,7 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     let read = renderer.inputs();
     let read: Vec<&std::path::Path> = read.iter().map(|p| p.as_path()).collect();
     for out in [&exr, &png] {
-        crate::files::probe_output(out, &read).map_err(AppError::Output)?;
+        ember_formats::files::probe_output(out, &read).map_err(AppError::Output)?;
     }
     let (width, height) = renderer.size();
     let identity = if split.is_some() || args.resume.is_some() || args.checkpoint.is_some() {
@@ -497,7 +414,7 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     if held_before > 0 {
         eprintln!("continues  the {held_before} full-size pass{} the race rendered", if held_before == 1 { "" } else { "es" });
     }
-    let limits = Limits { spp: end, deadline, interrupt: Some(crate::interrupt::flag()), first_pass };
+    let limits = Limits { spp: end, deadline, interrupt: Some(ember_host::interrupt::flag()), first_pass };
     let config = DriverConfig { progress, ..DriverConfig::with_threads(args.thread_count()) };
     if progress && !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
         // A log's first line: what is being rendered and until when.
@@ -520,7 +437,7 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     // period, the output rewritten after each (the driver continues a film that holds
     // passes, so the slices render the passes one call would).
     let checkpoint = args.checkpoint.and_then(|t| Duration::try_from_secs_f64(t).ok());
-    let mut summary: Option<crate::driver::RenderSummary> = None;
+    let mut summary: Option<RenderSummary> = None;
     loop {
         let slice_end = checkpoint.and_then(|c| Instant::now().checked_add(c));
         let slice = Limits { deadline: [deadline, slice_end].into_iter().flatten().min(), ..limits };
@@ -635,7 +552,7 @@ fn partial_header(
     tallies: ember_core::render::Tallies,
 ) -> distributed::PartialHeader {
     distributed::PartialHeader {
-        program: distributed::program_version(),
+        program: ember_host::program_version(),
         scene: identity.scene.clone(),
         scene_hash: identity.scene_hash,
         estimator: identity.estimator.clone(),
@@ -679,11 +596,11 @@ fn whole_so_far(
 pub fn merge(args: &MergeArgs) -> Result<(distributed::PartialHeader, PathBuf, Option<PathBuf>), AppError> {
     let (exr, png) = crate::cli::output_paths(&args.output).map_err(AppError::Output)?;
     // Never overwrite an input.
-    if let Some(part) = args.parts.iter().find(|p| crate::files::same_file(&exr, p) || crate::files::same_file(&png, p)) {
+    if let Some(part) = args.parts.iter().find(|p| ember_formats::files::same_file(&exr, p) || ember_formats::files::same_file(&png, p)) {
         return Err(AppError::Output(format!("output '{}' is one of the parts being merged; choose another file", part.display())));
     }
     for out in [&exr, &png] {
-        crate::files::probe_output(out, &[]).map_err(AppError::Output)?;
+        ember_formats::files::probe_output(out, &[]).map_err(AppError::Output)?;
     }
     let cover = if args.partial { distributed::Cover::Contiguous } else { distributed::Cover::All };
     let (header, film) = distributed::merge_parts(&args.parts, cover).map_err(AppError::Output)?;
@@ -735,11 +652,6 @@ impl fmt::Display for RenderReport {
             (None, None) => write!(f, "wrote      {}", self.exr.display()),
         }
     }
-}
-
-/// The built-in scene's resolution under these options (for the estimator wiring).
-pub fn builtin_resolution(args: &RenderArgs) -> (u32, u32) {
-    args.resolution_or(DEFAULT_RESOLUTION)
 }
 
 #[cfg(test)]

@@ -204,7 +204,7 @@ pub struct ConvergenceArgs {
     /// Refuse a run whose estimators together (each holds its renderer until the end)
     /// would need more than this many bytes (suffixes K, M, G, T: binary) [default: the
     /// memory available].
-    #[arg(long, value_name = "BYTES", value_parser = crate::memory::parse_size)]
+    #[arg(long, value_name = "BYTES", value_parser = ember_host::memory::parse_size)]
     pub memory_limit: Option<u64>,
     #[command(flatten)]
     pub defines: Defines,
@@ -239,7 +239,7 @@ pub struct SuiteArgs {
     /// Refuse a run whose estimators together (each holds its renderer until the end)
     /// would need more than this many bytes (suffixes K, M, G, T: binary) [default: the
     /// memory available].
-    #[arg(long, value_name = "BYTES", value_parser = crate::memory::parse_size)]
+    #[arg(long, value_name = "BYTES", value_parser = ember_host::memory::parse_size)]
     pub memory_limit: Option<u64>,
     #[command(flatten)]
     pub defines: Defines,
@@ -455,7 +455,7 @@ pub struct RenderArgs {
     /// Refuse a render whose estimated memory exceeds this many bytes (suffixes K, M, G,
     /// T: binary) [default: the memory available: the smaller of MemAvailable and the
     /// cgroup's remaining limit].
-    #[arg(long, value_name = "BYTES", value_parser = crate::memory::parse_size)]
+    #[arg(long, value_name = "BYTES", value_parser = ember_host::memory::parse_size)]
     pub memory_limit: Option<u64>,
 
     /// Exposure of the PNG in stops (the PNG is linear × 2^STOPS, clamped, sRGB-encoded;
@@ -705,22 +705,12 @@ fn parse_exposure(s: &str) -> Result<f32, String> {
 /// threads than that only add start-up time, and a huge count ran for minutes with no
 /// output), else every core.
 pub fn thread_count(option: Option<u32>) -> usize {
-    let threads = capped_threads(option);
+    let threads = ember_host::driver::capped_threads(option);
     if let Some(n) = option.filter(|&n| n as usize > threads) {
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         eprintln!("warning: --threads {n} capped at {threads} (4 × {cores} cores, at most 1024)");
     }
     threads
-}
-
-/// [`thread_count`] without the warning, for library hosts (the C API), which print
-/// nothing: `n` capped at 4 × the cores and at 1024, or every core.
-pub fn capped_threads(option: Option<u32>) -> usize {
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    match option {
-        Some(n) => (n as usize).min((4 * cores).min(1024)),
-        None => cores,
-    }
 }
 
 impl RenderArgs {
@@ -740,10 +730,10 @@ impl RenderArgs {
     }
 
     /// Resolution: the options where given, `default` (the scene's film) otherwise; one
-    /// side alone keeps `default`'s aspect ratio ([`crate::mitsuba::film_size`], the rule
+    /// side alone keeps `default`'s aspect ratio ([`ember_formats::mitsuba::film_size`], the rule
     /// scene files follow too).
     pub fn resolution_or(&self, default: (u32, u32)) -> (u32, u32) {
-        crate::mitsuba::film_size(default, self.width, self.height)
+        ember_formats::mitsuba::film_size(default, self.width, self.height)
     }
 
     /// Mitsuba max_depth: the option where given, `default` (the scene's) otherwise.

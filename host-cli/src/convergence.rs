@@ -8,7 +8,7 @@
 //! before interpolation ([`time_to_reach`] interpolates log-log between checkpoints). The deadline is
 //! checked between passes, so a snapshot lands when the pass running at its checkpoint
 //! ends: the CSV records the actual elapsed seconds, and the plot uses them. relMSE and
-//! MAPE (see [`crate::metrics`]) are averaged over seeds at each checkpoint.
+//! MAPE (see [`ember_formats::metrics`]) are averaged over seeds at each checkpoint.
 //!
 //! The reference's own noise floor comes from its two half-sample images: their squared
 //! difference is about 4× the full reference's squared error, so the floor drawn is
@@ -19,13 +19,16 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use crate::cli::EstimatorKind;
-use crate::driver::{DriverConfig, Limits};
-use crate::estimators::{CoreRenderer, PreparedScene};
+use ember_core::render::EstimatorKind;
+use ember_host::driver::Limits;
+use ember_host::scene::PreparedScene;
+
+use crate::estimators::CoreRenderer;
 use crate::film::Film;
-use crate::image_io::{self, RgbImage};
-use crate::metrics::{self, ErrorMetrics};
 use crate::plot::{self, Floor, Series};
+use crate::progress::DriverConfig;
+use ember_formats::image_io::{self, RgbImage};
+use ember_formats::metrics::{self, ErrorMetrics};
 
 /// What to measure.
 #[derive(Clone, Debug)]
@@ -37,7 +40,7 @@ pub struct ConvergenceSetup {
     /// Overrides of the scene file's depth.
     pub max_depth: Option<i32>,
     /// Memory the renderers may claim together (`--memory-limit`); `None`: what the
-    /// machine has available ([`crate::memory::available_bytes`]).
+    /// machine has available ([`ember_host::memory::available_bytes`]).
     pub memory_limit: Option<u64>,
 }
 
@@ -57,22 +60,22 @@ fn check_memory(prepared: &PreparedScene, estimators: &[EstimatorKind], limit: O
     let mut total = 0u64;
     let mut largest = (0u64, EstimatorKind::Pt);
     for &e in estimators {
-        let (bytes, _) = crate::estimators::memory_need(prepared, &e.default_config());
+        let (bytes, _) = prepared.memory_need(&e.default_config());
         total = total.saturating_add(bytes);
         if bytes > largest.0 {
             largest = (bytes, e);
         }
     }
-    match crate::estimators::memory_budget(limit) {
+    match crate::setup::memory_budget(limit) {
         (Some(a), source) if total > a => Err(format!(
             "the {} estimators, run side by side at {}×{}, would need about {} ({} the most, {}), more than the {} of {source}; run fewer estimators, lower the resolution or raise --memory-limit",
             estimators.len(),
             camera.width(),
             camera.height(),
-            crate::memory::human(total),
+            ember_host::memory::human(total),
             largest.1,
-            crate::memory::human(largest.0),
-            crate::memory::human(a)
+            ember_host::memory::human(largest.0),
+            ember_host::memory::human(a)
         )),
         _ => Ok(()),
     }
@@ -287,7 +290,7 @@ pub fn write_outputs(
     let mut written = Vec::new();
     for (file, body) in files {
         let path = dir.join(file);
-        crate::image_io::write_atomically(&path, |temp| std::fs::write(temp, &body), |e| e).map_err(|e| format!("{}: {e}", path.display()))?;
+        ember_formats::image_io::write_atomically(&path, |temp| std::fs::write(temp, &body), |e| e).map_err(|e| format!("{}: {e}", path.display()))?;
         written.push(path);
     }
     Ok(written)

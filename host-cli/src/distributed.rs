@@ -27,7 +27,7 @@ use std::path::{Path, PathBuf};
 
 use ember_core::render::{Film, QUANTUM_BITS, Tallies};
 
-use crate::image_io::{self, ImageError, ImageErrorKind};
+use ember_formats::image_io::{self, ImageError, ImageErrorKind};
 
 /// The partial-image format's name and version (its `format` field).
 pub const FORMAT: &str = "ember partial film 1";
@@ -51,12 +51,6 @@ pub fn header_is_signed(header: &str) -> bool {
     let stored =
         rest.lines().next().and_then(|l| l.strip_prefix(CHECKSUM_KEY)).and_then(|l| l.strip_prefix(": ")).and_then(|c| u64::from_str_radix(c, 16).ok());
     stored == Some(ember_core::fnv::fnv1a(signed.as_bytes()))
-}
-
-/// This program's version and build (the `program` field): parts from different builds are
-/// never merged, since any code change may change the passes' bits.
-pub fn program_version() -> String {
-    format!("ember {} ({})", env!("CARGO_PKG_VERSION"), env!("EMBER_BUILD"))
 }
 
 /// Passes `start..end` (half-open).
@@ -147,27 +141,6 @@ pub fn task_from_env(var: impl Fn(&str) -> Option<String>, count: Option<u32>) -
     }
 }
 
-/// The pass range a `render` command asks for, with its task index if it names one
-/// (`None` for a whole render).
-pub fn requested_range(split: &crate::cli::SplitArgs, total: u32) -> Result<Option<(PassRange, Option<u32>)>, String> {
-    let task = |index, count| PassRange::of_task(index, count, total).map(|r| Some((r, Some(index))));
-    if let Some(r) = split.passes {
-        if r.end > total {
-            return Err(format!("--passes {r} reaches past the --spp total of {total} passes"));
-        }
-        return Ok(Some((r, None)));
-    }
-    if split.task_from_env {
-        let (index, count) = task_from_env(|name| std::env::var(name).ok(), split.task_count)?;
-        return task(index, count);
-    }
-    match (split.task_index, split.task_count) {
-        (Some(i), Some(n)) => task(i, n),
-        (None, Some(_)) => Err("--task-count needs --task-index or --task-from-env".into()),
-        _ => Ok(None),
-    }
-}
-
 /// The first placeholder (`{task}`, `{passes}`) that `path` names, if any: what only a split
 /// render fills in ([`expand_output`]).
 pub fn placeholder(path: &Path) -> Option<&'static str> {
@@ -205,7 +178,7 @@ pub fn first_difference(a: &str, b: &str) -> (String, String) {
 /// and `tallies` is equal.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct PartialHeader {
-    /// [`program_version`] of the program that wrote it.
+    /// [`ember_host::program_version`] of the program that wrote it.
     pub program: String,
     /// The scene's name (its file) and the hash of what was built from it.
     pub scene: String,
@@ -299,7 +272,7 @@ pub fn write_partial(path: &Path, header: &PartialHeader, film: &Film) -> Result
 /// Read a partial image: its header and its film. A file that is not a partial image,
 /// or whose header or channels are damaged, is an error naming the file and the problem.
 pub fn read_partial(path: &Path) -> Result<(PartialHeader, Film), String> {
-    let bytes = crate::files::read_bounded(path, crate::files::MAX_INPUT_BYTES).map_err(|e| format!("{}: {e}", path.display()))?;
+    let bytes = ember_formats::files::read_bounded(path, ember_formats::files::MAX_INPUT_BYTES).map_err(|e| format!("{}: {e}", path.display()))?;
     read_partial_from_bytes(path, &bytes)
 }
 
@@ -313,7 +286,7 @@ pub fn read_partial_from_bytes(name: &Path, bytes: &[u8]) -> Result<(PartialHead
 /// A partial image's header alone (the file's EXR header, not its pixels): what
 /// `merge` checks before it reads any film.
 pub fn read_partial_header(path: &Path) -> Result<PartialHeader, String> {
-    crate::files::open_regular(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    ember_formats::files::open_regular(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| format!("{}: {e}", path.display()))?;
     let header = meta.headers.first().ok_or_else(|| format!("{}: no image layer", path.display()))?;
     header_from(path, &header.own_attributes, header.layer_size)

@@ -1,25 +1,26 @@
-//! `ember` command-line host: ray queries (obvhs), the parallel render loop, the film
-//! and EXR/PNG output around the `no_std` core.
+//! `ember-cli`: the `ember` command — its syntax (clap, [`cli`]) and its commands
+//! ([`app`]: render, compare, convergence, suite, train, plan, merge), split renders
+//! ([`distributed`]), trained models ([`trained`]), the scene plan and `--estimator
+//! auto` on threads, and what a terminal shows ([`progress`]).
+//!
+//! What code here may do: anything a program may (print, exit with a status, read the
+//! environment). It builds on `ember-host` (ray queries, the driver, interrupts, memory)
+//! and `ember-formats` (scene files, images, metrics); neither depends on it, and the C
+//! library links neither it nor clap.
 //!
 //! The binary (`src/main.rs`) only parses and dispatches; everything lives in this
 //! library so the benchmarks and integration tests can reach it.
 
-pub mod accel;
 pub mod app;
 pub mod auto;
 pub mod cli;
 pub mod convergence;
 pub mod distributed;
-pub mod driver;
 pub mod estimators;
-pub mod files;
-pub mod image_io;
-pub mod interrupt;
-pub mod memory;
-pub mod metrics;
-pub mod mitsuba;
 pub mod plan;
 pub mod plot;
+pub mod progress;
+pub mod setup;
 pub mod suite;
 pub mod trained;
 

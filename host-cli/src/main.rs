@@ -25,7 +25,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e @ app::AppError::Interrupted(_)) => {
             eprintln!("{e}");
-            ExitCode::from(ember_cli::interrupt::exit_code())
+            ExitCode::from(ember_host::interrupt::exit_code())
         }
         Err(e) => {
             eprintln!("error: {e}");

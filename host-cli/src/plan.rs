@@ -6,7 +6,7 @@ use ember_core::plan::{PilotStats, Plan, SceneFacts, pilot};
 use ember_core::render::{Context, EstimatorConfig, EstimatorKind};
 use rayon::prelude::*;
 
-use crate::estimators::{PreparedScene, memory_need};
+use ember_host::scene::PreparedScene;
 
 /// Pilot samples per rayon task.
 const PILOT_CHUNK: u32 = 256;
@@ -15,7 +15,7 @@ const PILOT_CHUNK: u32 = 256;
 pub fn run_pilot(prepared: &PreparedScene, max_depth: i32, seed: u64, samples: u32, threads: usize) -> Result<PilotStats, String> {
     let params = RenderParams { max_depth: MaxDepth(max_depth), seed, heuristic: Heuristic::Power, ..RenderParams::default() };
     let ctx = Context { scene: &prepared.scene, tracer: &prepared.accel };
-    let pool = crate::driver::thread_pool(threads, "ember-pilot").map_err(|e| e.to_string())?;
+    let pool = ember_host::driver::thread_pool(threads, "ember-pilot").map_err(|e| e.to_string())?;
     let chunks = samples.div_ceil(PILOT_CHUNK);
     let parts: Vec<PilotStats> = pool.install(|| {
         (0..chunks)
@@ -64,14 +64,14 @@ pub fn describe_all(prepared: &PreparedScene, plans: &[Plan]) -> String {
         }
     }
     for p in plans {
-        let (bytes, estimate) = memory_need(prepared, &p.asked);
-        let (planned_bytes, _) = memory_need(prepared, &p.planned);
+        let (bytes, estimate) = prepared.memory_need(&p.asked);
+        let (planned_bytes, _) = prepared.memory_need(&p.planned);
         out.push_str(&format!(
             "{:<8} memory about {} ({} the largest part){}\n",
             p.asked.kind().name(),
-            crate::memory::human(bytes),
+            ember_host::memory::human(bytes),
             estimate.largest,
-            if planned_bytes != bytes { format!(", as planned {}", crate::memory::human(planned_bytes)) } else { String::new() }
+            if planned_bytes != bytes { format!(", as planned {}", ember_host::memory::human(planned_bytes)) } else { String::new() }
         ));
         for l in p.decision_lines() {
             out.push_str(&format!("         {l}\n"));
@@ -132,8 +132,8 @@ pub fn json_all(prepared: &PreparedScene, plans: &[Plan]) -> String {
     }
     o.push_str("  \"estimators\": [\n");
     for (i, p) in plans.iter().enumerate() {
-        let (bytes, _) = memory_need(prepared, &p.asked);
-        let (planned_bytes, _) = memory_need(prepared, &p.planned);
+        let (bytes, _) = prepared.memory_need(&p.asked);
+        let (planned_bytes, _) = prepared.memory_need(&p.planned);
         o.push_str(&format!(
             "    {{\"estimator\": {}, \"renders\": {}, \"memory_bytes\": {bytes}, \"planned_memory_bytes\": {planned_bytes}, \"decisions\": [",
             json_str(p.asked.kind().name()),

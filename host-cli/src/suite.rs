@@ -12,7 +12,7 @@ use std::path::PathBuf;
 
 use crate::cli::{EstimatorKind, SuiteArgs};
 use crate::convergence::{self, Checkpoint, ConvergenceSetup, Reference};
-use crate::estimators;
+use crate::setup;
 
 /// One scene's outcome.
 #[derive(Clone, Debug)]
@@ -74,7 +74,7 @@ pub fn run(args: &SuiteArgs, threads: usize) -> Result<Vec<SceneResult>, String>
             memory_limit: args.memory_limit,
         };
         let scene_file = folder.join("scene.xml");
-        let prepare = estimators::preparer(&scene_file, &args.defines.pairs);
+        let prepare = setup::preparer(&scene_file, &args.defines.pairs);
         let points = convergence::measure(&setup, &reference, &prepare, |c| {
             eprintln!(
                 "{name:12} {:5} seed {} at {:6.1} s: relMSE {:.4e}, MAPE {:6.2} % ({} passes)",

@@ -15,7 +15,7 @@ use ember_core::integrator::spcbpt::Model;
 use ember_core::render::Renderer;
 use ember_core::scene::Scene;
 
-use crate::distributed::{RenderIdentity, program_version};
+use crate::distributed::RenderIdentity;
 
 /// The file's first line.
 pub const HEADER: &str = "ember trained model 1";
@@ -26,7 +26,7 @@ const MAX_MODEL_BYTES: u64 = 1 << 30;
 fn fields(id: &RenderIdentity, width: u32, height: u32) -> Vec<(&'static str, String)> {
     // The resolution before the scene hash (which covers the camera, so changes with it).
     vec![
-        ("program", program_version()),
+        ("program", ember_host::program_version()),
         ("estimator", id.estimator.clone()),
         ("resolution", format!("{width}x{height}")),
         ("seed", id.seed.to_string()),
@@ -63,7 +63,7 @@ pub fn encode(renderer: &Renderer, id: &RenderIdentity, width: u32, height: u32)
 /// model, or an error naming the file and the first field that differs.
 pub fn load(path: &Path, id: &RenderIdentity, width: u32, height: u32, scene: &Scene) -> Result<Model, String> {
     let name = path.display();
-    let bytes = crate::files::read_bounded(path, MAX_MODEL_BYTES).map_err(|e| format!("--model {name}: {e}"))?;
+    let bytes = ember_formats::files::read_bounded(path, MAX_MODEL_BYTES).map_err(|e| format!("--model {name}: {e}"))?;
     let end =
         bytes.windows(2).position(|w| w == b"\n\n").ok_or_else(|| format!("--model {name} is not a model file (no header): write one with `ember train`"))?;
     let header = std::str::from_utf8(&bytes[..end]).map_err(|_| format!("--model {name} is not a model file (its header is not text)"))?;

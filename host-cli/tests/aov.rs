@@ -10,7 +10,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use ember_cli::image_io::read_exr_any;
+use ember_formats::image_io::read_exr_any;
 
 /// Channel `name` of the EXR at `path`, as f32 samples.
 fn channel(path: &Path, name: &str) -> Vec<f32> {

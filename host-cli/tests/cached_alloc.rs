@@ -27,7 +27,8 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use ember_cli::cli::{CacheArgs, EstimatorKind};
-use ember_cli::estimators::{CoreRenderer, prepare_file};
+use ember_cli::estimators::CoreRenderer;
+use ember_cli::setup::prepare_file;
 use ember_core::render::Renderer;
 
 struct Counting;

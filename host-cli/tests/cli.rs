@@ -33,8 +33,8 @@ fn bad_input_exits_one_with_a_message() {
     // A 2x2 image with a NaN and an infinity, and a finite one (for compare).
     let dir = temp_dir("bad-input");
     let (nan, finite) = (dir.join("nan.exr"), dir.join("finite.exr"));
-    ember_cli::image_io::write_exr(&nan, 2, 2, &[[1.0; 3], [f32::NAN, 1.0, 1.0], [1.0, 1.0, f32::INFINITY], [1.0; 3]]).unwrap();
-    ember_cli::image_io::write_exr(&finite, 2, 2, &[[1.0; 3]; 4]).unwrap();
+    ember_formats::image_io::write_exr(&nan, 2, 2, &[[1.0; 3], [f32::NAN, 1.0, 1.0], [1.0, 1.0, f32::INFINITY], [1.0; 3]]).unwrap();
+    ember_formats::image_io::write_exr(&finite, 2, 2, &[[1.0; 3]; 4]).unwrap();
     let (nan, finite) = (nan.to_str().unwrap(), finite.to_str().unwrap());
     let scenes_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes");
     let cornell_file = scenes_dir.join("cornell-box/scene.xml");
@@ -191,7 +191,7 @@ fn define_overrides_a_scene_default() {
         args.extend(define.map(|d| ["-D", d]).into_iter().flatten());
         let o = ember(&args);
         assert_eq!(o.status.code(), Some(0), "{args:?}: {}", stderr(&o));
-        let image = ember_cli::image_io::read_exr(&out).unwrap();
+        let image = ember_formats::image_io::read_exr(&out).unwrap();
         assert_eq!((image.width, image.height), (width, 6), "{args:?}");
     }
     let _ = std::fs::remove_dir_all(&dir);
@@ -232,7 +232,7 @@ fn auto_races_every_candidate_and_renders_the_full_film() {
     }
     let chosen = err.lines().find_map(|l| l.strip_prefix("auto       renders with ")).unwrap_or_else(|| panic!("no choice:\n{err}"));
     assert!(names.contains(&chosen.trim()), "{chosen}");
-    let image = ember_cli::image_io::read_exr(&out).unwrap();
+    let image = ember_formats::image_io::read_exr(&out).unwrap();
     assert_eq!((image.width, image.height), (64, 64));
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -245,9 +245,9 @@ fn auto_races_every_candidate_and_renders_the_full_film() {
 fn outputs_never_overwrite_what_the_scene_reads() {
     let dir = temp_dir("scene-inputs");
     let tiles = dir.join("tiles.png");
-    ember_cli::image_io::write_png(&tiles, 2, 2, &[[0.5; 3]; 4], 0.0).unwrap();
+    ember_formats::image_io::write_png(&tiles, 2, 2, &[[0.5; 3]; 4], 0.0).unwrap();
     let sky = dir.join("sky.exr");
-    ember_cli::image_io::write_exr(&sky, 4, 2, &[[1.0; 3]; 8]).unwrap();
+    ember_formats::image_io::write_exr(&sky, 4, 2, &[[1.0; 3]; 8]).unwrap();
     let scene = dir.join("scene.xml");
     std::fs::write(
         &scene,
@@ -311,7 +311,7 @@ fn a_failed_final_write_is_rescued() {
     assert_eq!(o.status.code(), Some(1), "{err}");
     let rescued =
         err.split("the image was written to ").nth(1).and_then(|t| t.split(" instead").next()).unwrap_or_else(|| panic!("no rescue named: {err}")).to_string();
-    let image = ember_cli::image_io::read_exr(std::path::Path::new(&rescued)).expect("a valid rescued image");
+    let image = ember_formats::image_io::read_exr(std::path::Path::new(&rescued)).expect("a valid rescued image");
     assert_eq!((image.width, image.height), (16, 16));
     let _ = std::fs::remove_file(&rescued);
     let _ = std::fs::remove_dir_all(&dir);

@@ -23,13 +23,15 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use ember_cli::accel::{AccelWith, Wide};
-use ember_cli::driver::{DriverConfig, Limits};
-use ember_cli::estimators::{CoreRenderer, PreparedScene};
-use ember_cli::mitsuba::{LoadOptions, load_scene_from_str};
+use ember_cli::estimators::CoreRenderer;
+use ember_cli::progress::DriverConfig;
 use ember_core::geometry::{Ray, RayQuery, spawn_ray};
 use ember_core::render::{EstimatorKind, Film};
 use ember_core::rng::{SampleStream, Stream};
+use ember_formats::mitsuba::{LoadOptions, load_scene_from_str};
+use ember_host::accel::{AccelWith, Wide};
+use ember_host::driver::Limits;
+use ember_host::scene::PreparedScene;
 use ember_tests::tracer::BruteForce;
 use glam::Vec3;
 use obvhs::bvh2::Bvh2;
@@ -97,7 +99,7 @@ fn render(estimator: EstimatorKind, passes: u32) -> Film {
     let (text, path) = covered_window_env();
     let loaded = load_scene_from_str(&text, &path, &LoadOptions { defaults: Vec::new(), width: Some(64), height: Some(48) }).expect("scene loads");
     let (scene, geometry, _) = loaded.builder.build().expect("scene builds");
-    let accel = ember_cli::accel::Accel::new(&geometry);
+    let accel = ember_host::accel::Accel::new(&geometry);
     let prepared = PreparedScene { name: "closed room".into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new(), inputs: Vec::new() };
     let mut r = CoreRenderer::with_config(prepared, estimator.default_config(), -1, 3, 2).expect("renderer");
     let mut film = Film::new(64, 48);

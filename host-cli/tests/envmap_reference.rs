@@ -21,10 +21,13 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use ember_cli::driver::{DriverConfig, Limits};
-use ember_cli::estimators::{CoreRenderer, PreparedScene};
-use ember_cli::mitsuba::{LoadOptions, load_scene_from_str};
+use ember_cli::progress::DriverConfig;
+
+use ember_cli::estimators::CoreRenderer;
 use ember_core::render::{EstimatorKind, Film};
+use ember_formats::mitsuba::{LoadOptions, load_scene_from_str};
+use ember_host::driver::Limits;
+use ember_host::scene::PreparedScene;
 use ember_tests::reference::{Reference, push_film_blocks};
 use ember_tests::stats::MeanVar;
 
@@ -45,7 +48,7 @@ fn renderer() -> CoreRenderer {
     let loaded = load_scene_from_str(&text, &at, &LoadOptions::default()).expect("the scene loads (../shared/scenes-extra/textured/textures/sky.exr)");
     assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
     let (scene, geometry, _) = loaded.builder.build().expect("scene builds");
-    let accel = ember_cli::accel::Accel::new(&geometry);
+    let accel = ember_host::accel::Accel::new(&geometry);
     let prepared = PreparedScene { name: "envmap".into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new(), inputs: Vec::new() };
     CoreRenderer::new(prepared, EstimatorKind::Pt, -1, 100).expect("renderer")
 }

@@ -27,11 +27,14 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use ember_cli::driver::{DriverConfig, Limits};
-use ember_cli::estimators::{CoreRenderer, PreparedScene};
-use ember_cli::mitsuba::{LoadOptions, load_scene_from_str};
+use ember_cli::progress::DriverConfig;
+
+use ember_cli::estimators::CoreRenderer;
 use ember_core::merge::RadiusRule;
 use ember_core::render::{EstimatorConfig, Film, FilterConfig, FilterSide};
+use ember_formats::mitsuba::{LoadOptions, load_scene_from_str};
+use ember_host::driver::Limits;
+use ember_host::scene::PreparedScene;
 use ember_tests::reference::{Image, read_exr};
 
 const W: usize = 40;
@@ -48,7 +51,7 @@ fn load(name: &str, width: usize, height: usize) -> PreparedScene {
     let loaded =
         load_scene_from_str(&text, &path, &LoadOptions { defaults: Vec::new(), width: Some(width as u32), height: Some(height as u32) }).expect("scene loads");
     let (scene, geometry, _) = loaded.builder.build().expect("scene builds");
-    let accel = ember_cli::accel::Accel::new(&geometry);
+    let accel = ember_host::accel::Accel::new(&geometry);
     PreparedScene { name: name.into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new(), inputs: Vec::new() }
 }
 

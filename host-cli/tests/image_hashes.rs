@@ -44,11 +44,14 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use ember_cli::cli::{CacheArgs, EstimatorKind, RenderArgs};
-use ember_cli::driver::{DriverConfig, Limits};
-use ember_cli::estimators::{CoreRenderer, PreparedScene, prepare_builtin, prepare_file};
+use ember_cli::estimators::CoreRenderer;
 use ember_cli::film::Film;
+use ember_cli::progress::DriverConfig;
+use ember_cli::setup::{prepare_builtin, prepare_file};
 use ember_core::estimators::PhaseBuffers;
 use ember_core::render::{Context, Renderer, render_pass};
+use ember_host::driver::Limits;
+use ember_host::scene::PreparedScene;
 
 const PASSES: u32 = 3;
 const SEED: u64 = 11;

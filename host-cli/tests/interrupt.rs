@@ -28,7 +28,7 @@ fn passes_written(rest: &str, stdout: &str, by: &str, out: &Path) -> u32 {
     let passes = passes_held(rest, by);
     assert!(passes >= 1, "{rest}");
     assert!(stdout.contains(&format!("passes     {passes} ")), "the summary reports another count: {stdout}");
-    let image = ember_cli::image_io::read_exr(out).expect("a valid image");
+    let image = ember_formats::image_io::read_exr(out).expect("a valid image");
     assert!(image.pixels.iter().flatten().all(|v| v.is_finite() && *v >= 0.0));
     assert!(image.pixels.iter().flatten().sum::<f32>() > 0.0, "a black image");
     passes
@@ -52,7 +52,7 @@ fn the_first_ctrl_c_writes_the_completed_passes() {
     let (status, rest, stdout) = finish(child, err);
     assert_eq!(status, Some(130), "exit status; stderr: {rest}");
     passes_written(&rest, &stdout, "Ctrl-C", &out);
-    let image = ember_cli::image_io::read_exr(&out).expect("a valid image");
+    let image = ember_formats::image_io::read_exr(&out).expect("a valid image");
     assert_eq!((image.width, image.height), (32, 32));
     let _ = std::fs::remove_dir_all(&dir);
 }

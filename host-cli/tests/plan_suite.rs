@@ -35,11 +35,15 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use ember_cli::driver::{DriverConfig, Limits};
-use ember_cli::estimators::{CoreRenderer, PreparedScene, prepare_file};
+use ember_cli::progress::DriverConfig;
+
+use ember_cli::estimators::CoreRenderer;
 use ember_cli::film::Film;
+use ember_cli::setup::prepare_file;
 use ember_core::merge::RadiusRule;
 use ember_core::render::{EstimatorConfig, MergeMode, MergingConfig, SpcbptConfig};
+use ember_host::driver::Limits;
+use ember_host::scene::PreparedScene;
 use ember_tests::chi2::sidak;
 use ember_tests::stats::{MeanVar, normal_two_sided_p};
 

@@ -29,10 +29,12 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use ember_cli::cli::{CacheArgs, EstimatorKind};
-use ember_cli::driver::{DriverConfig, Limits};
-use ember_cli::estimators::{CoreRenderer, prepare_file};
+use ember_cli::estimators::CoreRenderer;
 use ember_cli::film::Film;
+use ember_cli::progress::DriverConfig;
+use ember_cli::setup::prepare_file;
 use ember_core::integrator::ConnectionStats;
+use ember_host::driver::Limits;
 
 const W: u32 = 160;
 const H: u32 = 120;

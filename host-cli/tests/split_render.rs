@@ -17,9 +17,11 @@ use std::time::Instant;
 
 use ember_cli::cli::{CacheArgs, EstimatorKind, RenderArgs};
 use ember_cli::distributed::{self, PartialHeader, PassRange};
-use ember_cli::driver::{DriverConfig, Limits};
-use ember_cli::estimators::{CoreRenderer, prepare_builtin};
+use ember_cli::estimators::CoreRenderer;
 use ember_cli::film::Film;
+use ember_cli::progress::DriverConfig;
+use ember_cli::setup::prepare_builtin;
+use ember_host::driver::Limits;
 
 const TOTAL: u32 = 7;
 const TASKS: u32 = 4;
@@ -62,7 +64,7 @@ fn four_task_shares_merge_into_the_single_render_for_every_estimator() {
             let (r, film) = render(estimator, range);
             let id = r.identity();
             let header = PartialHeader {
-                program: distributed::program_version(),
+                program: ember_host::program_version(),
                 scene: id.scene,
                 scene_hash: id.scene_hash,
                 estimator: id.estimator,

@@ -24,10 +24,13 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use ember_cli::driver::{DriverConfig, Limits};
-use ember_cli::estimators::{CoreRenderer, PreparedScene};
-use ember_cli::mitsuba::{LoadOptions, load_scene};
+use ember_cli::progress::DriverConfig;
+
+use ember_cli::estimators::CoreRenderer;
 use ember_core::render::{EstimatorKind, Film};
+use ember_formats::mitsuba::{LoadOptions, load_scene};
+use ember_host::driver::Limits;
+use ember_host::scene::PreparedScene;
 use ember_tests::chi2::sidak;
 use ember_tests::reference::{Reference, push_film_blocks, read_exr};
 use ember_tests::stats::{MeanVar, normal_two_sided_p};
@@ -47,7 +50,7 @@ fn renderer(kind: EstimatorKind, width: Option<u32>) -> CoreRenderer {
     assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
     let (scene, geometry, warnings) = loaded.builder.build().expect("scene builds");
     assert_eq!(warnings, Default::default());
-    let accel = ember_cli::accel::Accel::new(&geometry);
+    let accel = ember_host::accel::Accel::new(&geometry);
     let prepared = PreparedScene { name: "textured".into(), scene, accel, max_depth: None, spp: None, warnings: Vec::new(), inputs: Vec::new() };
     CoreRenderer::new(prepared, kind, -1, 7).expect("renderer")
 }

@@ -16,7 +16,7 @@
 //!
 //! # Same primitives tests as the CLI
 //! The watertight triangle test and the exact f64 sphere test are the CLI's own source
-//! files (`host-cli/src/accel/{triangle,sphere}.rs`), compiled here through `#[path]`:
+//! files (`host/src/accel/{triangle,sphere}.rs`), compiled here through `#[path]`:
 //! one implementation, so a closest hit is the same bit pattern on both hosts. Leaf
 //! boxes are padded by the same few ulps of the scene's scale (obvhs's slab test is not
 //! conservative; see `box_padding` in the CLI's `accel/hit.rs`).
@@ -26,11 +26,11 @@
 //! triangles first with `t_max` cut to the triangle hit (closest) and spheres first
 //! (occlusion), as the CLI does for up to 8 spheres.
 
-#[path = "../../host-cli/src/accel/hit.rs"]
+#[path = "../../host/src/accel/hit.rs"]
 mod hit;
-#[path = "../../host-cli/src/accel/sphere.rs"]
+#[path = "../../host/src/accel/sphere.rs"]
 mod sphere;
-#[path = "../../host-cli/src/accel/triangle.rs"]
+#[path = "../../host/src/accel/triangle.rs"]
 mod triangle;
 
 use glam::{Vec3, Vec3A};

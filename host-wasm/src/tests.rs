@@ -18,11 +18,13 @@
 use std::time::Instant;
 
 use ember_cli::cli::{Cli, Command, RenderArgs};
-use ember_cli::driver::{DriverConfig, Limits};
-use ember_cli::estimators::{CoreRenderer, prepare_builtin};
+use ember_cli::estimators::CoreRenderer;
 use ember_cli::film::Film;
+use ember_cli::progress::DriverConfig;
+use ember_cli::setup::prepare_builtin;
 use ember_core::render::EstimatorKind;
 use ember_core::render::wire::Part;
+use ember_host::driver::Limits;
 
 use crate::compare::{Criteria, LinearImage, compare, parse_pfm};
 use crate::{Failure, Role, Session};

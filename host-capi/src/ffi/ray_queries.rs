@@ -1,8 +1,8 @@
 //! The engine's ray queries behind the core's `RayQuery`: the built-in BVH, or the
 //! embedder's callbacks with every hit they return checked against their contract.
 
-use ember_cli::accel::Accel;
 use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
+use ember_host::accel::Accel;
 
 use super::{Callbacks, EmberHit, EmberRay};
 use crate::{EmberStatus, Error, Result, SceneData};

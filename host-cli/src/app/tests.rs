@@ -1,6 +1,8 @@
 use super::*;
 
 use crate::cli::{Cli, Command};
+use crate::estimators::Render;
+use crate::setup::builtin_resolution;
 use clap::Parser;
 use ember_core::Rgb;
 use ember_core::estimators::ChunkOutput;
@@ -42,7 +44,7 @@ impl<Q: ember_core::geometry::RayQuery + ?Sized> Phased<Q> for Ramp {
 struct RampHost {
     ramp: Ramp,
     scene: ember_core::scene::Scene,
-    accel: crate::accel::Accel,
+    accel: ember_host::accel::Accel,
 }
 
 impl Render for RampHost {
@@ -51,13 +53,13 @@ impl Render for RampHost {
     }
     fn render(&mut self, film: &mut Film, limits: Limits, config: DriverConfig, start: Instant) -> Result<RenderSummary, DriverError> {
         let ctx = Context { scene: &self.scene, tracer: &self.accel };
-        crate::driver::render(&mut self.ramp, &ctx, film, limits, config, start)
+        config.render(&mut self.ramp, &ctx, film, limits, start)
     }
 }
 
 fn ramp_host(w: u32, h: u32) -> RampHost {
     let (scene, geometry, _) = ember_core::scene::builtin::cornell_box(w, h).build().expect("built-in scene");
-    RampHost { ramp: Ramp { w, h, cursor: Cursor::new(0, 1) }, scene, accel: crate::accel::Accel::new(&geometry) }
+    RampHost { ramp: Ramp { w, h, cursor: Cursor::new(0, 1) }, scene, accel: ember_host::accel::Accel::new(&geometry) }
 }
 
 fn args(extra: &[&str]) -> RenderArgs {
@@ -99,7 +101,7 @@ fn render_writes_exr_and_png_and_reports() {
 
 #[test]
 fn a_missing_scene_file_is_reported_with_its_name() {
-    let e = render(&args(&["no-such-scene.xml"]), Instant::now(), false, crate::estimators::make_built).unwrap_err();
+    let e = render(&args(&["no-such-scene.xml"]), Instant::now(), false, crate::setup::make_built).unwrap_err();
     assert!(e.to_string().contains("no-such-scene.xml"), "{e}");
 }
 
@@ -126,7 +128,7 @@ fn a_held_film_is_continued_not_restarted() {
         let out = dir.join(name);
         let a = args(&["--spp", spp, "--threads", "2", "--width", "16", "--height", "12", "--seed", "7", "-o", out.to_str().unwrap()]);
         let report = render(&a, Instant::now(), false, |a| {
-            let mut r = crate::estimators::make_core_renderer(a)?;
+            let mut r = crate::setup::make_core_renderer(a)?;
             let film = (held > 0).then(|| {
                 let mut film = Film::with_filter(16, 12, r.camera_filter());
                 let limits = Limits { spp: held, deadline: None, interrupt: None, first_pass: 0 };

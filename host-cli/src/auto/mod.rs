@@ -72,8 +72,11 @@ use std::time::{Duration, Instant};
 use ember_core::render::{EstimatorConfig, EstimatorKind, Film};
 
 use crate::cli::RenderArgs;
-use crate::driver::{DriverConfig, Limits};
-use crate::estimators::{CoreRenderer, PreparedScene};
+use ember_host::driver::Limits;
+use ember_host::scene::PreparedScene;
+
+use crate::estimators::CoreRenderer;
+use crate::progress::DriverConfig;
 
 mod estimates;
 mod spread;
@@ -281,7 +284,7 @@ pub fn choose(
         if spp > 1 && Instant::now() >= deadline {
             break;
         }
-        let limits = Limits { spp, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass: 0 };
+        let limits = Limits { spp, deadline: Some(deadline), interrupt: Some(ember_host::interrupt::flag()), first_pass: 0 };
         let summary = pt.render(&mut pt_film, limits, driver, start).map_err(|e| e.to_string())?;
         let per_pass = summary.render_seconds / summary.passes.max(1) as f64;
         if spp == 1 {
@@ -326,7 +329,7 @@ pub fn choose(
         let (mut held, mut prev) = (0u32, vec![[0.0f32; 3]; (w * h) as usize]);
         for b in 0..BATCHES {
             let deadline = Instant::now() + Duration::from_secs_f64(slice / BATCHES as f64);
-            let limits = Limits { spp: u32::MAX, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass: 0 };
+            let limits = Limits { spp: u32::MAX, deadline: Some(deadline), interrupt: Some(ember_host::interrupt::flag()), first_pass: 0 };
             let summary = r.render(&mut film, limits, driver, start).map_err(|e| e.to_string())?;
             render_seconds += summary.render_seconds;
             if b >= 1 && summary.passes > 0 {
@@ -437,7 +440,7 @@ pub fn choose(
         for b in 0..BATCHES {
             let mut film = Film::with_filter(w, h, probe.camera_filter());
             let deadline = Instant::now() + Duration::from_secs_f64(PROBE_SHARE * budget / BATCHES as f64);
-            let limits = Limits { spp: u32::MAX, deadline: Some(deadline), interrupt: Some(crate::interrupt::flag()), first_pass };
+            let limits = Limits { spp: u32::MAX, deadline: Some(deadline), interrupt: Some(ember_host::interrupt::flag()), first_pass };
             let summary = probe.render(&mut film, limits, driver, start).map_err(|e| e.to_string())?;
             first_pass += film.passes();
             moments.push(film.to_rgb_f32());

@@ -64,7 +64,7 @@ fn output_names_take_the_task_and_the_range() {
 
 fn header(passes: PassRange) -> PartialHeader {
     PartialHeader {
-        program: program_version(),
+        program: ember_host::program_version(),
         scene: "box".into(),
         scene_hash: 0xfeed,
         estimator: "pt".into(),
@@ -166,7 +166,7 @@ fn damaged_or_foreign_files_are_refused() {
     assert!(e.contains("truncated.exr"), "{e}");
 
     let plain = temp("plain.exr");
-    crate::image_io::write_exr(&plain, 3, 2, &[[1.0; 3]; 6]).unwrap();
+    ember_formats::image_io::write_exr(&plain, 3, 2, &[[1.0; 3]; 6]).unwrap();
     let e = read_partial(&plain).unwrap_err();
     assert!(e.contains("plain.exr is not a partial image"), "{e}");
 

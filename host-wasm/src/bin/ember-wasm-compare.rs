@@ -27,7 +27,7 @@ fn main() {
         std::process::exit(2)
     };
     let read_native = |p: &String| {
-        ember_cli::image_io::read_exr(Path::new(p))
+        ember_formats::image_io::read_exr(Path::new(p))
             .map(|n| ember_wasm::compare::LinearImage { width: n.width as usize, height: n.height as usize, pixels: n.pixels })
             .unwrap_or_else(|e| {
                 eprintln!("error: {p}: {e}");

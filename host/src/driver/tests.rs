@@ -1,4 +1,5 @@
 use super::*;
+use std::time::Duration;
 
 use crate::accel::Accel;
 use ember_core::Rgb;
@@ -119,9 +120,8 @@ fn run(threads: usize, spp: u32) -> (Film, RenderSummary) {
     let mut fake = fake(61, 47, 1001);
     let (scene, accel) = scene(61, 47);
     let mut film = Film::new(61, 47);
-    let config = DriverConfig { threads, progress: false };
     let ctx = Context { scene: &scene, tracer: &accel };
-    let summary = render(&mut fake, &ctx, &mut film, Limits { spp, deadline: None, interrupt: None, first_pass: 0 }, config, Instant::now()).unwrap();
+    let summary = render(&mut fake, &ctx, &mut film, Limits { spp, deadline: None, interrupt: None, first_pass: 0 }, threads, None, Instant::now()).unwrap();
     (film, summary)
 }
 
@@ -175,16 +175,16 @@ fn deadline_stops_between_passes() {
     let (scene, accel) = scene(8, 8);
     let ctx = Context { scene: &scene, tracer: &accel };
     let mut film = Film::new(8, 8);
-    let config = DriverConfig { threads: 2, progress: false };
+    let threads = 2;
     let past = Instant::now();
     let limits = Limits { spp: u32::MAX, deadline: Some(past), interrupt: None, first_pass: 0 };
-    let s = render(&mut fake, &ctx, &mut film, limits, config, past).unwrap();
+    let s = render(&mut fake, &ctx, &mut film, limits, threads, None, past).unwrap();
     assert_eq!(s.passes, 1);
     assert_eq!(film.passes(), 1);
 
     let mut film = Film::new(8, 8);
     let soon = Instant::now() + Duration::from_millis(50);
-    let s = render(&mut fake, &ctx, &mut film, Limits { spp: u32::MAX, deadline: Some(soon), interrupt: None, first_pass: 0 }, config, past).unwrap();
+    let s = render(&mut fake, &ctx, &mut film, Limits { spp: u32::MAX, deadline: Some(soon), interrupt: None, first_pass: 0 }, threads, None, past).unwrap();
     assert!(Instant::now() >= soon);
     assert!(s.passes > 1 && s.passes == film.passes());
 }
@@ -195,8 +195,8 @@ fn resolution_mismatch_is_an_error() {
     let (scene, accel) = scene(8, 8);
     let ctx = Context { scene: &scene, tracer: &accel };
     let mut film = Film::new(8, 9);
-    let config = DriverConfig::with_threads(1);
-    let r = render(&mut fake, &ctx, &mut film, Limits { spp: 1, deadline: None, interrupt: None, first_pass: 0 }, config, Instant::now());
+    let threads = 1;
+    let r = render(&mut fake, &ctx, &mut film, Limits { spp: 1, deadline: None, interrupt: None, first_pass: 0 }, threads, None, Instant::now());
     assert!(matches!(r, Err(DriverError::Resolution { .. })));
 }
 
@@ -210,10 +210,12 @@ fn an_interrupt_stops_before_the_next_pass() {
     let (scene, accel) = scene(8, 8);
     let ctx = Context { scene: &scene, tracer: &accel };
     let mut film = Film::new(8, 8);
-    let config = DriverConfig { threads: 2, progress: false };
-    let s = render(&mut fake, &ctx, &mut film, Limits { spp: 64, deadline: None, interrupt: Some(&STOP), first_pass: 0 }, config, Instant::now()).unwrap();
+    let threads = 2;
+    let s =
+        render(&mut fake, &ctx, &mut film, Limits { spp: 64, deadline: None, interrupt: Some(&STOP), first_pass: 0 }, threads, None, Instant::now()).unwrap();
     assert_eq!((s.passes, film.passes(), s.interrupted), (0, 0, true));
     STOP.store(false, std::sync::atomic::Ordering::SeqCst);
-    let s = render(&mut fake, &ctx, &mut film, Limits { spp: 64, deadline: None, interrupt: Some(&STOP), first_pass: 0 }, config, Instant::now()).unwrap();
+    let s =
+        render(&mut fake, &ctx, &mut film, Limits { spp: 64, deadline: None, interrupt: Some(&STOP), first_pass: 0 }, threads, None, Instant::now()).unwrap();
     assert_eq!((s.passes, s.interrupted), (64, false));
 }

@@ -16,10 +16,10 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-use ember_cli::accel::{AccelWith, TriangleBvh, Wide};
 use ember_core::geometry::{Ray, RayQuery, spawn_ray_to};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::shapes::{SceneGeometry, Triangle};
+use ember_host::accel::{AccelWith, TriangleBvh, Wide};
 use glam::Vec3;
 use obvhs::bvh2::Bvh2;
 use obvhs::cwbvh::CwBvh;

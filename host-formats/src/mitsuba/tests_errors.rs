@@ -316,7 +316,7 @@ fn envmap_files_fail_with_their_name() {
 /// `std::fs::read` for the scene file again reads `/dev/zero` until it fails with "out of
 /// memory"; `File::open` without a bound in `mesh::load_obj` aborts the test process
 /// ("memory allocation of 4294967296 bytes failed"); `std::fs::read` in
-/// `textures::read_exr` blocks on the FIFO until `timeout` kills the test.
+/// `images::read_exr` blocks on the FIFO until `timeout` kills the test.
 #[test]
 fn inputs_that_are_not_regular_files_are_refused_by_name() {
     let dir = temp_dir("not_regular");

@@ -2,10 +2,10 @@
 //! and spheres, closest hit and occlusion, with both hierarchies and both sphere paths
 //! (list and BVH); and rays spawned from hits never re-hit their own surface.
 
-use ember_cli::accel::{AccelWith, PrimitiveRef, SPHERE_LIST_MAX, TriangleBvh, Wide};
 use ember_core::geometry::{Ray, RayQuery, spawn_ray};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::shapes::{SceneGeometry, Sphere, Triangle};
+use ember_host::accel::{AccelWith, PrimitiveRef, SPHERE_LIST_MAX, TriangleBvh, Wide};
 use glam::{DVec3, Vec3};
 use obvhs::bvh2::Bvh2;
 use obvhs::cwbvh::CwBvh;
@@ -385,6 +385,6 @@ fn closed_box_does_not_leak_at_edges() {
 #[test]
 fn accel_is_sync_and_send() {
     fn shareable<T: Sync + Send>() {}
-    shareable::<ember_cli::accel::Accel>();
+    shareable::<ember_host::accel::Accel>();
     shareable::<AccelWith<Bvh2>>();
 }

@@ -47,6 +47,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 mod build;
+mod images;
 mod materials;
 mod mesh;
 mod ply;

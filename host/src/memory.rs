@@ -6,6 +6,17 @@
 
 use std::fs;
 
+use ember_core::camera::PerspectiveCamera;
+use ember_core::render::{EstimatorConfig, FILM_BYTES_PER_PIXEL, MemoryEstimate};
+
+/// What `config` would hold for a film of `camera`'s size: its estimate, with the bytes
+/// at least the film's own.
+pub fn need(camera: &PerspectiveCamera, config: &EstimatorConfig) -> (u64, MemoryEstimate) {
+    let pixels = camera.width() as u64 * camera.height() as u64;
+    let estimate = config.memory_estimate(pixels.min(u32::MAX as u64) as u32);
+    (estimate.bytes.max(pixels * FILM_BYTES_PER_PIXEL), estimate)
+}
+
 /// Bytes the process may still allocate: min(MemAvailable, cgroup limit − usage), or
 /// `None` where neither can be read (then nothing is refused).
 pub fn available_bytes() -> Option<u64> {

@@ -13,7 +13,7 @@ use glam::Vec2;
 #[test]
 fn kernel_projection_rays_along_normals_with_zero_components_hit_the_surface() {
     let (scene, geometry, _) = builtin::cornell_box(128, 128).build().unwrap();
-    let tracer = ember_cli::accel::Accel::new(&geometry);
+    let tracer = ember_host::accel::Accel::new(&geometry);
     // The short block's front face (twice), the tall block, the floor, the back wall.
     for (x, y) in [(80.0f32, 100.0f32), (64.0, 120.0), (40.0, 60.0), (64.0, 126.0), (64.0, 30.0)] {
         let ray = scene.camera.generate_ray(Vec2::new(x, y));

@@ -327,7 +327,7 @@ impl<'a> Ctx<'a> {
         if !is_exr {
             return Err(Fail::at(file_loc, format!("envmap \"{}\": only OpenEXR (.exr) environment maps are supported", path.display())));
         }
-        let image = super::textures::read_exr(&path).map_err(|e| Fail::at(file_loc, format!("envmap \"{}\": {e}", path.display())))?;
+        let image = super::images::read_exr(&path).map_err(|e| Fail::at(file_loc, format!("envmap \"{}\": {e}", path.display())))?;
         let texels: Vec<Rgb> = image.pixels.iter().map(|&[r, g, b]| Rgb::new(r, g, b)).collect();
         Light::environment_map(image.width, image.height, &texels, scale as f32, axes).map_err(|e| match e {
             EnvMapError::NotRotation => Fail::at(p.loc_of("to_world"), format!("envmap: {e}")),

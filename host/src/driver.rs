@@ -19,15 +19,13 @@
 //! included: the pass in progress is finished and the summary says so.
 //!
 //! # Progress
-//! On a terminal, a progress bar. Otherwise (a log file, a batch job) plain lines on
-//! stderr: when setup ends, after the first pass, then at most every
-//! [`LOG_INTERVAL`] seconds, and at the end.
+//! The driver prints nothing: it tells a [`Progress`] the host passes (the command
+//! line's progress bar and log lines) when setup phases start, when a pass ends and when
+//! it stops. A library host passes none.
 
-use std::io::IsTerminal;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 
 use ember_core::geometry::RayQuery;
@@ -169,8 +167,9 @@ fn commit_bands(bands: &mut [Band<'_>], work: &(dyn Fn(&mut Band<'_>) + Sync)) {
 }
 
 /// Run `est`'s setup phases (preprocessing) on `threads` threads; returns each phase's
-/// seconds. The setup touches no film.
-pub fn run_setup<E, Q>(est: &mut E, ctx: &Context<'_, Q>, threads: usize) -> Result<PhaseTimes, DriverError>
+/// seconds. The setup touches no film. `progress` hears of each phase as it starts
+/// (preprocessing can take a while: SPCBPT's training).
+pub fn run_setup<E, Q>(est: &mut E, ctx: &Context<'_, Q>, threads: usize, progress: Option<&dyn Progress>) -> Result<PhaseTimes, DriverError>
 where
     E: Phased<Q> + Sync + Send + ?Sized,
     E::Data: Send,
@@ -180,25 +179,32 @@ where
     let mut times = PhaseTimes::new();
     let mut film = Film::new(0, 0);
     let mut buffers = PhaseBuffers::new();
-    // Preprocessing can take a while (SPCBPT's training): say which phase runs, as a
-    // spinner on a terminal, as lines in a log.
-    let terminal = std::io::stderr().is_terminal();
-    let spinner = ProgressBar::with_draw_target(None, if terminal { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() });
     let start = Instant::now();
     while let Some(phase) = est.next_phase() {
-        if terminal {
-            spinner.set_message(format!("setup: {}", phase.name));
-            spinner.tick();
-        } else {
-            eprintln!("setup: {} ({} items) at {:.1} s", phase.name, phase.items, start.elapsed().as_secs_f64());
+        if let Some(p) = progress {
+            p.setup_phase(&phase, start.elapsed().as_secs_f64());
         }
         pool.install(|| run_phase(est, ctx, &phase, &mut film, &mut buffers, &mut times, never));
     }
-    spinner.finish_and_clear();
+    if let Some(p) = progress {
+        p.setup_end();
+    }
     Ok(times)
 }
 
-pub(crate) fn thread_pool(threads: usize, name: &'static str) -> Result<rayon::ThreadPool, DriverError> {
+/// The threads a host starts for `requested` (`None`: every core): capped, not refused,
+/// at 4 × the cores and at 1024 (more only add start-up time; `UINT32_MAX` threads ran
+/// for minutes before failing). The command line warns when it caps; a library does not.
+pub fn capped_threads(requested: Option<u32>) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    match requested {
+        Some(n) => (n as usize).min((4 * cores).min(1024)),
+        None => cores,
+    }
+}
+
+/// A rayon pool of `threads` threads named `name-i`.
+pub fn thread_pool(threads: usize, name: &'static str) -> Result<rayon::ThreadPool, DriverError> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads.max(1))
         .thread_name(move |i| format!("{name}-{i}"))
@@ -234,22 +240,22 @@ impl Limits {
     }
 }
 
-/// Seconds between progress lines when stderr is not a terminal.
-pub const LOG_INTERVAL: f64 = 10.0;
-
-/// How to run.
-#[derive(Clone, Copy, Debug)]
-pub struct DriverConfig {
-    pub threads: usize,
-    /// Draw a progress bar when stderr is a terminal.
-    pub progress: bool,
-}
-
-impl DriverConfig {
-    /// `threads` threads, progress bar on.
-    pub fn with_threads(threads: usize) -> Self {
-        Self { threads, progress: true }
-    }
+/// What the driver reports while it runs, for a host that shows it (the command line's
+/// progress bar or log lines). Every method does nothing by default.
+pub trait Progress: core::fmt::Debug {
+    /// A setup phase of [`run_setup`] starts, `seconds` after the setup began.
+    fn setup_phase(&self, _phase: &Phase, _seconds: f64) {}
+    /// [`run_setup`] ran its last phase.
+    fn setup_end(&self) {}
+    /// [`render`] starts under `limits`; `program_start` is when the program started.
+    fn start(&self, _limits: &Limits, _program_start: Instant) {}
+    /// The setup [`render`] ran before its passes (pending phases, replayed passes) took
+    /// `seconds`.
+    fn setup_done(&self, _seconds: f64) {}
+    /// `passes` passes are rendered in this call.
+    fn pass_done(&self, _passes: u32) {}
+    /// [`render`] stops after `passes` passes.
+    fn finish(&self, _passes: u32) {}
 }
 
 /// What a render did.
@@ -321,14 +327,16 @@ impl core::fmt::Display for DriverError {
 
 impl std::error::Error for DriverError {}
 
-/// Render passes of `est` into `film` until `limits` say stop (pending setup phases run
-/// first). `program_start` is when the program started (for the summary's total time).
+/// Render passes of `est` into `film` on `threads` threads until `limits` say stop
+/// (pending setup phases run first), telling `progress` how it goes. `program_start` is
+/// when the program started (for the summary's total time).
 pub fn render<E, Q>(
     est: &mut E,
     ctx: &Context<'_, Q>,
     film: &mut Film,
     limits: Limits,
-    config: DriverConfig,
+    threads: usize,
+    progress: Option<&dyn Progress>,
     program_start: Instant,
 ) -> Result<RenderSummary, DriverError>
 where
@@ -341,11 +349,13 @@ where
     if (film.width(), film.height()) != (w, h) {
         return Err(DriverError::Resolution { film: (film.width(), film.height()), renderer: (w, h) });
     }
-    let threads = config.threads.max(1);
+    let threads = threads.max(1);
     let pool = thread_pool(threads, "ember-render")?;
     let mut buffers = PhaseBuffers::new();
     let mut times = PhaseTimes::new();
-    let progress = Progress::new(config.progress, limits, program_start);
+    if let Some(p) = progress {
+        p.start(&limits, program_start);
+    }
     // Setup not yet run (a renderer built without `run_setup`) counts as setup time.
     let setup_start = Instant::now();
     pool.install(|| run_pending(est, ctx, &mut Film::new(0, 0), &mut buffers, &mut times));
@@ -360,7 +370,9 @@ where
             }
         });
     }
-    progress.setup_done(setup_start.elapsed().as_secs_f64());
+    if let Some(p) = progress {
+        p.setup_done(setup_start.elapsed().as_secs_f64());
+    }
 
     let loop_start = Instant::now();
     let discarded_before = film.discarded();
@@ -390,9 +402,13 @@ where
         }
         passes += 1;
         crate::interrupt::note_passes(film.passes());
-        progress.pass_done(passes);
+        if let Some(p) = progress {
+            p.pass_done(passes);
+        }
     }
-    progress.finish(passes);
+    if let Some(p) = progress {
+        p.finish(passes);
+    }
 
     let render_seconds = loop_start.elapsed().as_secs_f64();
     let per_second = |n: u64| if render_seconds > 0.0 { n as f64 / render_seconds } else { 0.0 };
@@ -408,66 +424,6 @@ where
         phase_seconds: times,
         interrupted,
     })
-}
-
-/// The progress bar: over passes when only `spp` limits the render, over the time
-/// budget when a deadline does; on a terminal only. Elsewhere, log lines.
-struct Progress {
-    bar: ProgressBar,
-    deadline: Option<(Instant, Duration)>,
-    /// Log lines instead of a bar: when the last one was printed.
-    log: Option<std::cell::Cell<Option<Instant>>>,
-    start: Instant,
-}
-
-impl Progress {
-    fn new(enabled: bool, limits: Limits, program_start: Instant) -> Self {
-        let terminal = std::io::stderr().is_terminal();
-        let target = if enabled && terminal { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() };
-        let by_time = limits.deadline.filter(|_| limits.spp == u32::MAX);
-        let (len, template) = match by_time {
-            Some(d) => (d.saturating_duration_since(program_start).as_millis() as u64, "{elapsed_precise} [{wide_bar}] {msg} (ETA {eta})"),
-            None => (limits.spp.saturating_sub(limits.first_pass) as u64, "{elapsed_precise} [{wide_bar}] {pos}/{len} passes (ETA {eta})"),
-        };
-        let bar = ProgressBar::with_draw_target(Some(len), target);
-        if let Ok(style) = ProgressStyle::with_template(template) {
-            bar.set_style(style.progress_chars("=> "));
-        }
-        let log = (enabled && !terminal).then(|| std::cell::Cell::new(None));
-        Self { bar, deadline: by_time.map(|d| (program_start, d.saturating_duration_since(program_start))), log, start: program_start }
-    }
-
-    fn setup_done(&self, seconds: f64) {
-        if self.log.is_some() && seconds >= 0.05 {
-            eprintln!("progress: setup done in {seconds:.1} s");
-        }
-    }
-
-    fn pass_done(&self, passes: u32) {
-        match self.deadline {
-            Some((start, budget)) => {
-                self.bar.set_position(start.elapsed().min(budget).as_millis() as u64);
-                self.bar.set_message(format!("{passes} passes"));
-            }
-            None => self.bar.set_position(passes as u64),
-        }
-        if let Some(last) = &self.log {
-            let now = Instant::now();
-            if last.get().is_none_or(|t| now.duration_since(t).as_secs_f64() >= LOG_INTERVAL) {
-                last.set(Some(now));
-                let s = if passes == 1 { "" } else { "es" };
-                eprintln!("progress: {passes} pass{s} at {:.1} s", now.duration_since(self.start).as_secs_f64());
-            }
-        }
-    }
-
-    fn finish(&self, passes: u32) {
-        self.bar.finish_and_clear();
-        if self.log.is_some() {
-            let s = if passes == 1 { "" } else { "es" };
-            eprintln!("progress: done, {passes} pass{s} at {:.1} s", self.start.elapsed().as_secs_f64());
-        }
-    }
 }
 
 #[cfg(test)]

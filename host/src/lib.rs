@@ -1,0 +1,23 @@
+//! `ember-host`: what every host with `std` shares around the `no_std` core — the
+//! ray queries ([`accel`]: BVH over triangles, exact spheres, the core's `RayQuery`), the
+//! render protocol on threads ([`driver`]), interrupts ([`interrupt`]), the memory check
+//! ([`memory`]), scene preparation that reads no files ([`scene`]) and the program's
+//! version ([`program_version`]).
+//!
+//! What code here may do: threads, clocks, reading `/proc` and installing signal
+//! handlers. What it may not: read or write scene and image files (that is
+//! `ember-formats`), parse command lines (`ember-cli`), or print — a library host (the C
+//! API) prints nothing, so progress goes through [`driver::Progress`], which the
+//! command line implements.
+
+pub mod accel;
+pub mod driver;
+pub mod interrupt;
+pub mod memory;
+pub mod scene;
+
+/// This program's version and build: parts of a split render and exported films from
+/// different builds are never merged, since any code change may change the passes' bits.
+pub fn program_version() -> String {
+    format!("ember {} ({})", env!("CARGO_PKG_VERSION"), env!("EMBER_BUILD"))
+}
