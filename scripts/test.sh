@@ -15,8 +15,11 @@ step "formatting (rustfmt.toml) and lints (clippy, warnings denied)"
 cargo fmt --check
 cargo clippy --workspace --all-targets -- -D warnings
 
-step "host crates by role (issue 49): no import cycles in the hosts, a C library without the CLI's or the file formats' crates"
-scripts/import-cycles.py host/src host-formats/src host-cli/src host-capi/src host-wasm/src
+step "one home per role (issue 49): no import cycles in the core or the hosts, a protocol that names no estimator, a C library without the CLI's or the file formats' crates"
+scripts/import-cycles.py core/src host/src host-formats/src host-cli/src host-capi/src host-wasm/src
+if grep -rnE 'crate::(estimators|path|subspace|segment|merge|plan)\b' core/src/render/; then
+  echo "core/src/render (the protocol) names an estimator or an estimator's data (above)"; exit 1
+fi
 if cargo tree -q -p ember-capi -e normal | grep -E ' (clap|roxmltree|tobj|exr|png|indicatif) v'; then
   echo "ember-capi links a crate of the command line or the file formats (above)"; exit 1
 fi

@@ -30,7 +30,6 @@ pub mod measure;
 pub mod merge;
 #[cfg(feature = "mmis")]
 pub mod mmis;
-pub mod options;
 #[cfg(feature = "path")]
 pub mod path;
 pub mod pixel_filter;
@@ -50,20 +49,3 @@ pub mod warp;
 pub use math::{Vec2, Vec3};
 pub use measure::{AreaPdf, SolidAnglePdf};
 pub use spectrum::Rgb;
-
-/// Old paths, kept while the hosts move to the new ones (issue 49); removed when they have.
-#[doc(hidden)]
-pub mod integrator {
-    #[cfg(feature = "bdpt")]
-    pub use crate::estimators::bdpt;
-    #[cfg(feature = "lvcbpt")]
-    pub use crate::estimators::lvcbpt;
-    #[cfg(feature = "spcbpt")]
-    pub use crate::estimators::spcbpt;
-    #[cfg(feature = "merging")]
-    pub use crate::estimators::vcm;
-    pub use crate::estimators::{lt, pt};
-    pub use crate::transport::*;
-}
-#[doc(hidden)]
-pub use pixel_filter as filter;

@@ -1,4 +1,4 @@
-//! SPCBPT's model file (`core/src/integrator/spcbpt/model_file.rs`, issue 22) never
+//! SPCBPT's model file (`core/src/estimators/spcbpt/model_file.rs`, issue 22) never
 //! panics on arbitrary bytes, and what it accepts is canonical and usable: decoding then
 //! encoding gives the input back, and both trees reach a leaf for any feature (a tree
 //! with a cycle would loop forever here). Each input is tried as given and again with its

@@ -5,11 +5,12 @@
 //! custom_tracer`; docs/embedding.md.)
 
 use ember_core::estimators::PhaseBuffers;
+use ember_core::estimators::{EstimatorKind, Renderer};
 use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
-use ember_core::integrator::{MaxDepth, RenderParams};
 use ember_core::math::Vec2;
-use ember_core::render::{Context, EstimatorKind, Film, Renderer, render_pass, run_phases};
+use ember_core::render::{Context, Film, render_pass, run_phases};
 use ember_core::shapes::SceneGeometry;
+use ember_core::transport::{MaxDepth, RenderParams};
 
 /// Every triangle for every ray (Möller–Trumbore).
 struct Linear {

@@ -32,7 +32,8 @@ use std::sync::{Arc, LazyLock, Mutex, MutexGuard, Once, RwLock, RwLockReadGuard,
 use std::time::Instant;
 
 use ember_core::estimators::ChunkOutput;
-use ember_core::render::{Context, EstimatorKind, Film, Phase, Phased, Renderer};
+use ember_core::estimators::{EstimatorKind, Renderer};
+use ember_core::render::{Context, Film, Phase, Phased};
 use ember_host::driver::{self, Limits};
 
 use ray_queries::{Fault, Tracer, fault_error, tracer};

@@ -19,12 +19,13 @@ use std::borrow::Cow;
 use std::sync::{Arc, OnceLock, RwLock, RwLockReadGuard, RwLockWriteGuard, TryLockError};
 
 use ember_core::camera::{FovAxis, PerspectiveCamera};
-use ember_core::integrator::{Heuristic, MaxDepth, RenderParams};
+use ember_core::estimators::options::{self, OptionError, Options};
+use ember_core::estimators::{EstimatorConfig, EstimatorKind, Renderer};
 use ember_core::math::Vec3;
-use ember_core::options::{self, OptionError, Options};
-use ember_core::render::{EstimatorConfig, EstimatorKind, Film, Renderer};
+use ember_core::render::Film;
 use ember_core::scene::{AreaEmission, Scene, SceneBuilder, SceneGeometry};
 use ember_core::spectrum::Rgb;
+use ember_core::transport::{Heuristic, MaxDepth, RenderParams};
 use ember_host::accel::Accel;
 
 /// What a call returned. Every function returns one; `Ok` is 0.
@@ -317,7 +318,7 @@ const MEMORY_LIMIT: &str = "memory-limit";
 
 impl Settings {
     /// The settings validated. The options go through the core's options table
-    /// ([`ember_core::options`], which the command line's flags are checked against), so
+    /// ([`ember_core::estimators::options`], which the command line's flags are checked against), so
     /// every configuration field the CLI sets is settable here with the same names and
     /// defaults, and the core validates each value; besides them only `memory-limit`
     /// (`ember render`'s, with its parser) is accepted.

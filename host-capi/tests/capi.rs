@@ -15,7 +15,8 @@ use ember_capi::EmberStatus;
 use ember_capi::ffi::*;
 use ember_cli::estimators::CoreRenderer;
 use ember_cli::progress::DriverConfig;
-use ember_core::render::{EstimatorKind, Film};
+use ember_core::estimators::EstimatorKind;
+use ember_core::render::Film;
 use ember_host::driver::Limits;
 use ember_host::scene::PreparedScene;
 

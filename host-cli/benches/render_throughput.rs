@@ -45,9 +45,9 @@ use ember_cli::cli::{Cli, Command, RenderArgs};
 use ember_cli::estimators::CoreRenderer;
 use ember_cli::setup::prepare_builtin;
 use ember_core::Rgb;
+use ember_core::estimators::pt;
 use ember_core::estimators::{ChunkOutput, PhaseData};
 use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
-use ember_core::integrator::pt;
 use ember_core::render::{Context, Cursor, Film, Phase, Phased, Stage};
 use ember_host::accel::Accel;
 use ember_host::driver::{self, Limits};
@@ -213,8 +213,11 @@ fn cpu_seconds() -> f64 {
 
 /// Logs every work item (chunk) the driver hands out, (pass, worker, start, end) in
 /// seconds, and times the reductions (the serial merge of each phase).
+/// Any estimator the bench drives, behind one pointer.
+type DynRenderer = dyn Phased<ember_host::accel::Accel, Data = PhaseData> + Sync + Send;
+
 struct Logged<'a> {
-    inner: &'a mut (dyn Phased<ember_host::accel::Accel, Data = PhaseData> + Sync + Send),
+    inner: &'a mut DynRenderer,
     t0: Instant,
     items: Mutex<Vec<(u32, usize, f64, f64)>>,
     reduce_seconds: f64,
@@ -285,7 +288,7 @@ struct Run {
     merge: f64,
 }
 
-fn drive(r: &mut (dyn Phased<ember_host::accel::Accel, Data = PhaseData> + Sync + Send), scene: &PreparedScene, threads: usize, spp: u32) -> (Run, Film) {
+fn drive(r: &mut DynRenderer, scene: &PreparedScene, threads: usize, spp: u32) -> (Run, Film) {
     let mut logged = Logged { inner: r, t0: Instant::now(), items: Mutex::new(Vec::new()), reduce_seconds: 0.0 };
     let camera = &scene.scene.camera;
     let mut film = Film::new(camera.width(), camera.height());
@@ -320,8 +323,7 @@ fn scaling() {
     println!("    {:<6} {:>7} {:>8} {:>8} {:>6} {:>7} {:>15}   rounds / speedup per round", "", "threads", "seconds", "speedup", "cores", "CPU s", "tail idle");
 
     let scene = prepare_builtin(&args(&[])).expect("built-in scene");
-    let mut renderers: Vec<(&str, Box<dyn Phased<ember_host::accel::Accel, Data = PhaseData> + Sync + Send>)> =
-        vec![("spin", Box::new(Spin { cursor: Cursor::new(0, 1) }))];
+    let mut renderers: Vec<(&str, Box<DynRenderer>)> = vec![("spin", Box::new(Spin { cursor: Cursor::new(0, 1) }))];
     for e in ["pt", "lt", "bdpt"] {
         let spp = SCALE_SPP.to_string();
         let a = args(&["--estimator", e, "--spp", &spp]);

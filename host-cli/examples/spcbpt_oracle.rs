@@ -6,7 +6,7 @@
 //! core's; 0 gives the old fixed batch of 10 000; REUSE: M0, default the core's),
 //! renders PASSES passes, and after each
 //! pass sums every connection's unweighted value by (eye subspace, light subspace)
-//! (`ember_core::integrator::spcbpt::oracle`). Prints the contribution-weighted
+//! (`ember_core::estimators::spcbpt::oracle`). Prints the contribution-weighted
 //! KL(oracle ‖ Γ), the same for a uniform Γ, and Γ's mass on light subspaces that gave
 //! an eye subspace nothing; writes OUT_DIR/heatmap.png: Γ(l|e) left, the oracle right,
 //! rows eye subspaces and columns light subspaces both ordered by the mean x of their
@@ -28,10 +28,10 @@ use ember_cli::estimators::CoreRenderer;
 use ember_cli::film::Film;
 use ember_cli::progress::DriverConfig;
 use ember_cli::setup::prepare_file;
-use ember_core::integrator::RenderParams;
-use ember_core::integrator::spcbpt::oracle::{ConnectionSums, connection_sums, distance};
-use ember_core::integrator::{Heuristic, MaxDepth};
-use ember_core::render::Renderer;
+use ember_core::estimators::Renderer;
+use ember_core::estimators::spcbpt::oracle::{ConnectionSums, connection_sums, distance};
+use ember_core::transport::RenderParams;
+use ember_core::transport::{Heuristic, MaxDepth};
 use ember_host::driver::Limits;
 use rayon::prelude::*;
 
@@ -169,7 +169,7 @@ fn colour(v: Option<f64>) -> [u8; 3] {
 
 fn write_heatmap(
     path: &std::path::Path,
-    model: &ember_core::integrator::spcbpt::Model,
+    model: &ember_core::estimators::spcbpt::Model,
     sums: &ConnectionSums,
     eye: &[usize],
     light: &[usize],

@@ -81,7 +81,7 @@ pub fn run(cli: &Cli, start: Instant) -> Result<(), AppError> {
         }
         Command::Convergence(args) => run_convergence(args),
         Command::Train(args) => {
-            if args.estimator != ember_core::render::EstimatorKind::Spcbpt {
+            if args.estimator != ember_core::estimators::EstimatorKind::Spcbpt {
                 // Refused before the scene loads: only SPCBPT's preprocessing is worth storing.
                 return Err(AppError::Estimator(format!("{} has no trained state to save: only spcbpt trains a model", args.estimator.name())));
             }

@@ -306,10 +306,10 @@ fn parse_region(text: &str) -> Result<[u32; 4], String> {
     }
 }
 
-use ember_core::merge::RadiusRule;
 /// The light-transport algorithm: the core's one list of estimators.
-pub use ember_core::render::EstimatorKind;
-use ember_core::render::{EstimatorConfig, FilterConfig, KernelChoice, LvcbptConfig, MergingConfig, SegmentConfig, SpcbptConfig};
+pub use ember_core::estimators::EstimatorKind;
+use ember_core::estimators::{EstimatorConfig, FilterConfig, KernelChoice, LvcbptConfig, MergingConfig, SegmentConfig, SpcbptConfig};
+use ember_core::merge::RadiusRule;
 
 /// Parses an estimator name; `--help` lists each with its summary.
 fn estimator_parser() -> impl clap::builder::TypedValueParser<Value = EstimatorKind> {
@@ -644,9 +644,9 @@ impl CacheArgs {
             max_segments: self.max_segments,
             beta: self.beta,
             reuse: match self.filter_reuse.as_str() {
-                "merges" => ember_core::render::FilterReuse::Merges,
-                "bridges" => ember_core::render::FilterReuse::Bridges,
-                _ => ember_core::render::FilterReuse::Every,
+                "merges" => ember_core::estimators::FilterReuse::Merges,
+                "bridges" => ember_core::estimators::FilterReuse::Bridges,
+                _ => ember_core::estimators::FilterReuse::Every,
             },
             glossy_alpha: self.glossy_alpha,
         }

@@ -19,7 +19,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use ember_core::render::EstimatorKind;
+use ember_core::estimators::EstimatorKind;
 use ember_host::driver::Limits;
 use ember_host::scene::PreparedScene;
 

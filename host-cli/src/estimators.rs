@@ -6,8 +6,9 @@ use std::fmt;
 use std::path::Path;
 use std::time::Instant;
 
-use ember_core::integrator::{Heuristic, MaxDepth, RenderParams};
-use ember_core::render::{Context, EstimatorConfig, EstimatorKind, Film, Renderer};
+use ember_core::estimators::{EstimatorConfig, EstimatorKind, Renderer};
+use ember_core::render::{Context, Film};
+use ember_core::transport::{Heuristic, MaxDepth, RenderParams};
 use ember_host::driver::{self, DriverError, Limits, PhaseTimes, RenderSummary};
 use ember_host::scene::PreparedScene;
 
@@ -92,7 +93,7 @@ impl CoreRenderer {
     }
 
     /// The camera's pixel filter (the film's).
-    pub fn camera_filter(&self) -> ember_core::filter::Filter {
+    pub fn camera_filter(&self) -> ember_core::pixel_filter::Filter {
         self.prepared.scene.camera.filter()
     }
 
@@ -190,7 +191,7 @@ impl CoreRenderer {
 
     /// The filtering estimators' report line: memory per pass and per pixel, reuse, depth
     /// and kernel.
-    fn filter_report(&self, pass: &ember_core::segment::filter::FilterPass, segments: u32, r0: f32) -> Vec<String> {
+    fn filter_report(&self, pass: &ember_core::estimators::filter::FilterPass, segments: u32, r0: f32) -> Vec<String> {
         let camera = &self.prepared.scene.camera;
         let pixels = (camera.width() as f64 * camera.height() as f64).max(1.0);
         vec![format!(
@@ -229,8 +230,8 @@ pub trait Render {
     /// The image size.
     fn size(&self) -> (u32, u32);
     /// The camera's pixel filter, which the film spreads splats with (box by default).
-    fn filter(&self) -> ember_core::filter::Filter {
-        ember_core::filter::Filter::Box
+    fn filter(&self) -> ember_core::pixel_filter::Filter {
+        ember_core::pixel_filter::Filter::Box
     }
     /// Render passes into `film` until `limits` say stop.
     fn render(&mut self, film: &mut Film, limits: Limits, config: DriverConfig, program_start: Instant) -> Result<RenderSummary, DriverError>;
@@ -264,7 +265,7 @@ impl Render for CoreRenderer {
     fn size(&self) -> (u32, u32) {
         (self.width(), self.height())
     }
-    fn filter(&self) -> ember_core::filter::Filter {
+    fn filter(&self) -> ember_core::pixel_filter::Filter {
         self.camera_filter()
     }
     fn render(&mut self, film: &mut Film, limits: Limits, config: DriverConfig, program_start: Instant) -> Result<RenderSummary, DriverError> {

@@ -1,9 +1,10 @@
 //! The scene plan on the host: the core's facts and decisions ([`ember_core::plan`]),
 //! its pilot mapped on threads, and `ember plan`'s report (text or JSON).
 
-use ember_core::integrator::{Heuristic, MaxDepth, RenderParams};
+use ember_core::estimators::{EstimatorConfig, EstimatorKind};
 use ember_core::plan::{PilotStats, Plan, SceneFacts, pilot};
-use ember_core::render::{Context, EstimatorConfig, EstimatorKind};
+use ember_core::render::Context;
+use ember_core::transport::{Heuristic, MaxDepth, RenderParams};
 use rayon::prelude::*;
 
 use ember_host::scene::PreparedScene;

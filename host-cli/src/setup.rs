@@ -6,7 +6,8 @@
 use std::path::Path;
 use std::time::Instant;
 
-use ember_core::render::{EstimatorConfig, Film, Renderer};
+use ember_core::estimators::{EstimatorConfig, Renderer};
+use ember_core::render::Film;
 use ember_core::scene::builtin;
 use ember_formats::mitsuba;
 use ember_host::scene::PreparedScene;

@@ -4,15 +4,15 @@
 //!
 //! The file: a text header, one `key: value` per line after the first line
 //! [`HEADER`], ended by an empty line, then the core's model bytes
-//! (`ember_core::integrator::spcbpt::model_file`: versioned, checksummed, validated on
+//! (`ember_core::estimators::spcbpt::model_file`: versioned, checksummed, validated on
 //! reading). The header names what the model is valid for: the program build, the scene
 //! hash, the estimator and its configuration, the seed and the resolution; a render
 //! loading it must match every one, else the file is refused naming the field.
 
 use std::path::Path;
 
-use ember_core::integrator::spcbpt::Model;
-use ember_core::render::Renderer;
+use ember_core::estimators::Renderer;
+use ember_core::estimators::spcbpt::Model;
 use ember_core::scene::Scene;
 
 use crate::distributed::RenderIdentity;

@@ -14,7 +14,7 @@
 //! left after construction +824 816 B against 824 608 B reported (trees 807 968 B, Γ 16 384 B).
 //!
 //! Injected-bug check (done once in a scratch copy, never in the tree): replacing
-//! `drop(set)` after training (now in `core/src/integrator/spcbpt/phases.rs`, then in `host-cli/src/cached.rs`) by `std::mem::forget(set)`
+//! `drop(set)` after training (now in `core/src/estimators/spcbpt/phases.rs`, then in `host-cli/src/cached.rs`) by `std::mem::forget(set)`
 //! (D leaks): check 2 fails (+3 787 888 B left against 824 608 B reported). Check 1
 //! alone does NOT catch it: the peak holds D about twice (the per-chunk sets and the
 //! merged set while they are appended), so peak − after still exceeds size(D); check 2
@@ -29,7 +29,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use ember_cli::cli::{CacheArgs, EstimatorKind};
 use ember_cli::estimators::CoreRenderer;
 use ember_cli::setup::prepare_file;
-use ember_core::render::Renderer;
+use ember_core::estimators::Renderer;
 
 struct Counting;
 static LIVE: AtomicUsize = AtomicUsize::new(0);

@@ -25,8 +25,9 @@ use std::time::Instant;
 
 use ember_cli::estimators::CoreRenderer;
 use ember_cli::progress::DriverConfig;
+use ember_core::estimators::EstimatorKind;
 use ember_core::geometry::{Ray, RayQuery, spawn_ray};
-use ember_core::render::{EstimatorKind, Film};
+use ember_core::render::Film;
 use ember_core::rng::{SampleStream, Stream};
 use ember_formats::mitsuba::{LoadOptions, load_scene_from_str};
 use ember_host::accel::{AccelWith, Wide};

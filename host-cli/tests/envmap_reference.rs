@@ -24,7 +24,8 @@ use std::time::Instant;
 use ember_cli::progress::DriverConfig;
 
 use ember_cli::estimators::CoreRenderer;
-use ember_core::render::{EstimatorKind, Film};
+use ember_core::estimators::EstimatorKind;
+use ember_core::render::Film;
 use ember_formats::mitsuba::{LoadOptions, load_scene_from_str};
 use ember_host::driver::Limits;
 use ember_host::scene::PreparedScene;

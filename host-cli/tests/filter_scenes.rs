@@ -30,8 +30,9 @@ use std::time::Instant;
 use ember_cli::progress::DriverConfig;
 
 use ember_cli::estimators::CoreRenderer;
+use ember_core::estimators::{EstimatorConfig, FilterConfig, FilterSide};
 use ember_core::merge::RadiusRule;
-use ember_core::render::{EstimatorConfig, Film, FilterConfig, FilterSide};
+use ember_core::render::Film;
 use ember_formats::mitsuba::{LoadOptions, load_scene_from_str};
 use ember_host::driver::Limits;
 use ember_host::scene::PreparedScene;

@@ -31,7 +31,7 @@
 //! centroids came from the dataset's light prefixes (issue 18, a
 //! different Γ by design; unbiasedness per block: `cached_agreement.rs`, `plan_suite.rs`).
 //! And every entry when Russian roulette moved one surface later, to Mitsuba's rule
-//! (`ember_core::integrator::survives_roulette`): per-block agreement with the previous
+//! (`ember_core::transport::survives_roulette`): per-block agreement with the previous
 //! binary, 8 seeds each on independent seeds, Welch z per 8×8 block and channel against a
 //! Bonferroni bound at 1 %: PT on the built-in box, glossy and ajar, LT and BDPT on the
 //! built-in box all agree (max |z| 2.2–3.5; image means within 0.1–0.4 %;
@@ -49,7 +49,8 @@ use ember_cli::film::Film;
 use ember_cli::progress::DriverConfig;
 use ember_cli::setup::{prepare_builtin, prepare_file};
 use ember_core::estimators::PhaseBuffers;
-use ember_core::render::{Context, Renderer, render_pass};
+use ember_core::estimators::Renderer;
+use ember_core::render::{Context, render_pass};
 use ember_host::driver::Limits;
 use ember_host::scene::PreparedScene;
 
@@ -112,10 +113,10 @@ fn render_hash(scene: &str, estimator: EstimatorKind, threads: usize) -> u64 {
 /// Through the core's serial runner, with the CLI's scene and ray queries.
 fn serial_hash(scene: &str, estimator: EstimatorKind) -> u64 {
     let p = prepared(scene);
-    let params = ember_core::integrator::RenderParams {
-        max_depth: ember_core::integrator::MaxDepth(depth(scene)),
+    let params = ember_core::transport::RenderParams {
+        max_depth: ember_core::transport::MaxDepth(depth(scene)),
         seed: SEED,
-        heuristic: ember_core::integrator::Heuristic::Power,
+        heuristic: ember_core::transport::Heuristic::Power,
         ..Default::default()
     };
     let mut renderer = Renderer::new(&p.scene, params, cache_args().config_for(estimator)).expect("valid configuration");

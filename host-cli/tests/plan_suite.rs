@@ -40,8 +40,8 @@ use ember_cli::progress::DriverConfig;
 use ember_cli::estimators::CoreRenderer;
 use ember_cli::film::Film;
 use ember_cli::setup::prepare_file;
+use ember_core::estimators::{EstimatorConfig, MergeMode, MergingConfig, SpcbptConfig};
 use ember_core::merge::RadiusRule;
-use ember_core::render::{EstimatorConfig, MergeMode, MergingConfig, SpcbptConfig};
 use ember_host::driver::Limits;
 use ember_host::scene::PreparedScene;
 use ember_tests::chi2::sidak;
@@ -111,7 +111,7 @@ fn blocks(scene: &str, config: EstimatorConfig, depth: i32) -> (Vec<[MeanVar; 3]
     }
     assert_eq!(film.discarded(), 0, "{scene}: discarded samples");
     // Left out means never allocated: VCM without merging holds no photon, grid or record.
-    if let (EstimatorConfig::Merging(MergeMode::Vcm, c), ember_core::render::Renderer::Merging(m)) = (config, &renderer.renderer) {
+    if let (EstimatorConfig::Merging(MergeMode::Vcm, c), ember_core::estimators::Renderer::Merging(m)) = (config, &renderer.renderer) {
         if !c.merging {
             assert_eq!((m.photons.capacity(), m.records.capacity(), m.grid.size_bytes()), (0, 0, 0), "{scene}: merging's storage allocated");
         }

@@ -33,7 +33,7 @@ use ember_cli::estimators::CoreRenderer;
 use ember_cli::film::Film;
 use ember_cli::progress::DriverConfig;
 use ember_cli::setup::prepare_file;
-use ember_core::integrator::ConnectionStats;
+use ember_core::transport::ConnectionStats;
 use ember_host::driver::Limits;
 
 const W: u32 = 160;

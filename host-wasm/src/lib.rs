@@ -36,7 +36,7 @@ mod tests;
 
 use core::cell::RefCell;
 
-use ember_core::render::EstimatorKind;
+use ember_core::estimators::EstimatorKind;
 use ember_core::render::wire::Part;
 use ember_core::scene::{SceneBuilder, builtin, builtin_glass};
 

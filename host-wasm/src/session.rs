@@ -19,10 +19,11 @@
 use core::fmt::Write as _;
 
 use ember_core::estimators::{ChunkOutput, PhaseBuffers};
-use ember_core::integrator::{Heuristic, MaxDepth, RenderParams};
+use ember_core::estimators::{EstimatorKind, Renderer};
 use ember_core::render::wire::Part;
-use ember_core::render::{Context, EstimatorKind, Film, Phase, Phased, Renderer};
+use ember_core::render::{Context, Film, Phase, Phased};
 use ember_core::scene::Scene;
+use ember_core::transport::{Heuristic, MaxDepth, RenderParams};
 
 use crate::WasmAccel;
 

@@ -22,7 +22,7 @@ use ember_cli::estimators::CoreRenderer;
 use ember_cli::film::Film;
 use ember_cli::progress::DriverConfig;
 use ember_cli::setup::prepare_builtin;
-use ember_core::render::EstimatorKind;
+use ember_core::estimators::EstimatorKind;
 use ember_core::render::wire::Part;
 use ember_host::driver::Limits;
 

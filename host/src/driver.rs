@@ -29,11 +29,11 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use ember_core::geometry::RayQuery;
-use ember_core::integrator::ConnectionStats;
 use ember_core::render::{Band, ChunkOutput, Context, Film, Phase, PhaseBuffers, Phased};
+use ember_core::transport::ConnectionStats;
 
 /// A contribution at a continuous film position: the core's type.
-pub use ember_core::integrator::Splat;
+pub use ember_core::transport::Splat;
 
 /// Work counted by a renderer.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

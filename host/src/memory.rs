@@ -1,5 +1,5 @@
 //! The memory check before large allocations: the core estimates what an estimator will
-//! hold ([`ember_core::render::MemoryEstimate`]); a render whose estimate exceeds the
+//! hold ([`ember_core::estimators::MemoryEstimate`]); a render whose estimate exceeds the
 //! memory available (the smaller of the kernel's MemAvailable and the cgroup's remaining
 //! limit, or `--memory-limit`) is refused with what to lower, instead of aborting with
 //! "memory allocation failed" in the middle of its setup.
@@ -7,7 +7,7 @@
 use std::fs;
 
 use ember_core::camera::PerspectiveCamera;
-use ember_core::render::{EstimatorConfig, FILM_BYTES_PER_PIXEL, MemoryEstimate};
+use ember_core::estimators::{EstimatorConfig, FILM_BYTES_PER_PIXEL, MemoryEstimate};
 
 /// What `config` would hold for a film of `camera`'s size: its estimate, with the bytes
 /// at least the film's own.

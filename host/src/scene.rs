@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use ember_core::render::{EstimatorConfig, MemoryEstimate};
+use ember_core::estimators::{EstimatorConfig, MemoryEstimate};
 use ember_core::scene::{BuildWarnings, Scene, SceneGeometry};
 
 use crate::accel::Accel;

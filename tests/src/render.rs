@@ -4,8 +4,9 @@
 
 use ember_core::estimators::PhaseBuffers;
 use ember_core::estimators::spcbpt::{Model, Spcbpt};
+use ember_core::estimators::{EstimatorConfig, EstimatorKind, Renderer, SpcbptConfig};
 use ember_core::geometry::RayQuery;
-use ember_core::render::{Context, EstimatorConfig, EstimatorKind, Film, Renderer, SpcbptConfig, render_pass as serial_pass, run_phases};
+use ember_core::render::{Context, Film, render_pass as serial_pass, run_phases};
 use ember_core::scene::Scene;
 use ember_core::transport::{Counters, RenderParams};
 
@@ -166,7 +167,7 @@ pub fn cornell_relmse(config: EstimatorConfig, checkpoints: &[u32]) -> Vec<f64> 
 }
 
 /// Give every fourth node a kernel half the pass's, or a quarter for every eighth (as
-/// `segment::filter::scale_kernels` does to glossy nodes), so that the filters'
+/// `estimators::filter::scale_kernels` does to glossy nodes), so that the filters'
 /// propagation-against-recursion tests check that every kernel is its centre's own.
 pub fn vary_kernels(nodes: &mut [ember_core::estimators::filter::Node]) {
     for (i, n) in nodes.iter_mut().enumerate() {

@@ -116,9 +116,8 @@ fn per_sample_functions_do_not_allocate() {
 #[test]
 fn protocol_passes_do_not_allocate_in_steady_state() {
     use ember_core::estimators::PhaseBuffers;
-    use ember_core::render::{
-        Context, EstimatorConfig, EstimatorKind, Film, KernelChoice, LvcbptConfig, Renderer, SegmentAlgorithm, SegmentConfig, render_pass,
-    };
+    use ember_core::estimators::{EstimatorConfig, EstimatorKind, KernelChoice, LvcbptConfig, Renderer, SegmentAlgorithm, SegmentConfig};
+    use ember_core::render::{Context, Film, render_pass};
     let (scene, geometry, _) = cornell_with_spheres(16, 16).build().unwrap();
     let tracer = BruteForce::new(geometry);
     let params = RenderParams { max_depth: MaxDepth::UNBOUNDED, seed: 3, ..RenderParams::default() };
@@ -171,7 +170,8 @@ fn protocol_passes_do_not_allocate_in_steady_state() {
 /// `FilterGraph::default()` instead of clearing it.
 #[test]
 fn filtering_passes_reuse_their_storage() {
-    use ember_core::render::{Context, EstimatorKind, Film, PhaseBuffers, Renderer, render_pass};
+    use ember_core::estimators::{EstimatorKind, PhaseBuffers, Renderer};
+    use ember_core::render::{Context, Film, render_pass};
     let (scene, geometry, _) = cornell_with_spheres(16, 16).build().unwrap();
     let tracer = BruteForce::new(geometry);
     let params = RenderParams { max_depth: MaxDepth::UNBOUNDED, seed: 3, ..RenderParams::default() };

@@ -374,8 +374,8 @@ fn bpf_denominators_are_finite_and_positive() {
 /// 376 at the worst pixel (a light sample over its continuation density alone).
 #[test]
 fn bpf_without_light_paths_is_mvf() {
+    use ember_core::estimators::{EstimatorConfig, FilterConfig, FilterSide};
     use ember_core::merge::RadiusRule;
-    use ember_core::render::{EstimatorConfig, FilterConfig, FilterSide};
     use ember_tests::render::Passes;
     let (scene, geometry, _) = cornell_with_spheres(24, 24).build().expect("scene");
     let tracer = BruteForce::new(geometry);
@@ -405,8 +405,8 @@ fn bpf_without_light_paths_is_mvf() {
 /// halved in the denominators (a bias): 2.05× from 16 to 256 passes.
 #[test]
 fn bpf_converges_to_the_reference_on_the_cornell_box() {
+    use ember_core::estimators::{EstimatorConfig, FilterConfig, FilterSide};
     use ember_core::merge::RadiusRule;
-    use ember_core::render::{EstimatorConfig, FilterConfig, FilterSide};
     let steps = [4, 16, 64, 256];
     let config = FilterConfig { radius: RadiusRule::Footprints(4.0), alpha: 0.67, max_segments: Some(12), beta: 0.25, ..FilterConfig::DEFAULT };
     let bpf = ember_tests::render::cornell_relmse(EstimatorConfig::Filter(FilterSide::Both, config), &steps);
@@ -424,7 +424,7 @@ type Block = (std::ops::Range<usize>, std::ops::Range<usize>);
 
 /// Mean of each block of every pass's image over `passes` passes at max depth `depth`,
 /// and its standard error (passes are independent).
-fn block_means(config: ember_core::render::EstimatorConfig, passes: u32, depth: u32, blocks: &[Block]) -> Vec<(f64, f64)> {
+fn block_means(config: ember_core::estimators::EstimatorConfig, passes: u32, depth: u32, blocks: &[Block]) -> Vec<(f64, f64)> {
     use ember_tests::render::Passes;
     const RES: u32 = 16;
     let (scene, geometry, _) = ember_tests::scenes::cornell(RES, RES).build().expect("scene");
@@ -447,7 +447,7 @@ fn block_means(config: ember_core::render::EstimatorConfig, passes: u32, depth: 
 }
 
 /// Mean of rows `rows` (all columns) at max depth 3, and its standard error.
-fn region_mean(config: ember_core::render::EstimatorConfig, passes: u32, rows: std::ops::Range<usize>) -> (f64, f64) {
+fn region_mean(config: ember_core::estimators::EstimatorConfig, passes: u32, rows: std::ops::Range<usize>) -> (f64, f64) {
     block_means(config, passes, 3, &[(rows, 0..16)])[0]
 }
 
@@ -466,8 +466,8 @@ fn region_mean(config: ember_core::render::EstimatorConfig, passes: u32, rows: s
 /// recursion test catches it at 5.8e-3, and the own path's emission counted at 1.2e-3).
 #[test]
 fn bpf_is_unbiased_at_small_fixed_kernels() {
+    use ember_core::estimators::{EstimatorConfig, FilterConfig, FilterSide};
     use ember_core::merge::RadiusRule;
-    use ember_core::render::{EstimatorConfig, FilterConfig, FilterSide};
     let rows = 4..16;
     let (pt, pt_se) = region_mean(EstimatorConfig::Pt, 4000, rows.clone());
     for footprints in [0.05f32, 0.3] {
@@ -499,8 +499,8 @@ fn bpf_is_unbiased_at_small_fixed_kernels() {
 /// is −3.6 %, where the kernel's blur is larger than the test could allow).
 #[test]
 fn bpf_with_merges_only_agrees_with_bpm() {
+    use ember_core::estimators::{EstimatorConfig, FilterConfig, FilterReuse, FilterSide, MergeMode, MergingConfig};
     use ember_core::merge::RadiusRule;
-    use ember_core::render::{EstimatorConfig, FilterConfig, FilterReuse, FilterSide, MergeMode, MergingConfig};
     let blocks: Vec<Block> = vec![(4..10, 0..8), (4..10, 8..16), (10..16, 0..8), (10..16, 8..16)];
     let (depth, footprints) = (4, 0.1f32);
     let radius = RadiusRule::Footprints(footprints);
@@ -657,8 +657,8 @@ fn bridge_ends_are_drawn_uniformly() {
 ///   own, +0.80 %, z = 4.5 (600 passes gave z = 2.5, hence 2400).
 #[test]
 fn bpf_with_bridges_is_unbiased_at_small_fixed_kernels() {
+    use ember_core::estimators::{EstimatorConfig, FilterConfig, FilterReuse, FilterSide};
     use ember_core::merge::RadiusRule;
-    use ember_core::render::{EstimatorConfig, FilterConfig, FilterReuse, FilterSide};
     let rows = 4..16;
     let (pt, pt_se) = region_mean(EstimatorConfig::Pt, 4000, rows.clone());
     for footprints in [0.1f32, 0.3] {

@@ -5,9 +5,9 @@
 //! escaped camera paths, light paths from the scene disk, next-event estimation). The χ²
 //! tests of its sampling are in `light_sampling.rs`.
 
+use ember_core::estimators::EstimatorKind;
 use ember_core::light::Light;
 use ember_core::math::{PI, Vec3};
-use ember_core::render::EstimatorKind;
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::spectrum::Rgb;
 use ember_core::transport::{MaxDepth, RenderParams};

@@ -9,7 +9,7 @@
 //! vertex connected directly to the camera in `lt` (the s = 1, t = 1 splat) fails LT
 //! against PT in the first block that sees the light (z = 18.9).
 
-use ember_core::render::EstimatorKind;
+use ember_core::estimators::EstimatorKind;
 use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
 use ember_tests::render::{block_means, render_pass};

@@ -10,9 +10,9 @@
 
 use ember_core::bsdf::Material;
 use ember_core::camera::{FovAxis, PerspectiveCamera};
+use ember_core::estimators::{EstimatorConfig, EstimatorKind, LvcbptConfig};
 use ember_core::light::Light;
 use ember_core::math::Mat4;
-use ember_core::render::{EstimatorConfig, EstimatorKind, LvcbptConfig};
 use ember_core::scene::{SceneBuilder, builtin};
 use ember_core::spectrum::Rgb;
 use ember_core::transport::{MaxDepth, RenderParams};

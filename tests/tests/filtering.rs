@@ -12,11 +12,11 @@
 //!   propagation differs from its recursion by 2.8e-1 at light node 2.
 
 use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
+use ember_core::estimators::FilterSide;
 use ember_core::estimators::filter::nodes::NONE;
 use ember_core::estimators::filter::{Denominators, FilterGraph, Neighbourhood, Node, kernel_points, trace_camera_nodes, trace_light_nodes};
 use ember_core::math::Frame;
 use ember_core::merge::HashGrid;
-use ember_core::render::FilterSide;
 use ember_core::scene::Scene;
 use ember_core::segment::Kernel;
 use ember_core::spectrum::Rgb;
@@ -328,8 +328,8 @@ fn denominators_are_finite_and_positive() {
 /// at the second step.
 #[test]
 fn mvf_and_phf_converge_to_the_reference_on_the_cornell_box() {
+    use ember_core::estimators::{EstimatorConfig, MergeMode, MergingConfig};
     use ember_core::merge::RadiusRule;
-    use ember_core::render::{EstimatorConfig, MergeMode, MergingConfig};
     let steps = [4, 16, 64, 256];
     let mvf = relmse_over_passes(FilterSide::Camera, &steps);
     let phf = relmse_over_passes(FilterSide::Light, &steps);
@@ -347,8 +347,8 @@ fn mvf_and_phf_converge_to_the_reference_on_the_cornell_box() {
 }
 
 fn relmse_over_passes(side: FilterSide, checkpoints: &[u32]) -> Vec<f64> {
+    use ember_core::estimators::{EstimatorConfig, FilterConfig};
     use ember_core::merge::RadiusRule;
-    use ember_core::render::{EstimatorConfig, FilterConfig};
     let config = FilterConfig { radius: RadiusRule::Footprints(4.0), alpha: 0.67, max_segments: Some(12), ..FilterConfig::DEFAULT };
     cornell_relmse(EstimatorConfig::Filter(side, config), checkpoints)
 }

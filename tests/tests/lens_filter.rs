@@ -4,9 +4,9 @@
 //! the filter on the film).
 
 use ember_core::camera::{FovAxis, Lens, PerspectiveCamera};
+use ember_core::estimators::EstimatorKind;
 use ember_core::math::{Vec2, Vec3};
 use ember_core::pixel_filter::Filter;
-use ember_core::render::EstimatorKind;
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::builtin::look_at;
 use ember_core::transport::{MaxDepth, RenderParams};

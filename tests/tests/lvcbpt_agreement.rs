@@ -17,7 +17,7 @@
 //! connections everywhere) only changes the weights, which still sum to one: this test
 //! cannot and need not see it (it passed); `lvcbpt_mis.rs` checks the counts themselves.
 
-use ember_core::render::{EstimatorConfig, EstimatorKind, LvcbptConfig, Renderer};
+use ember_core::estimators::{EstimatorConfig, EstimatorKind, LvcbptConfig, Renderer};
 use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
 use ember_tests::render::{Passes, assert_blocks_agree, push_block_means, render_pass};

@@ -12,7 +12,7 @@
 //! pbrt-style camera the suite README warns about) fails at the first block, the red
 //! wall's corner (z = −92).
 
-use ember_core::render::EstimatorKind;
+use ember_core::estimators::EstimatorKind;
 use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
 use ember_tests::reference::{read_exr, scenes_dir};

@@ -19,8 +19,8 @@
 //! density of arriving at the next vertex.
 
 use ember_core::bsdf::{Material, TextureSlot};
+use ember_core::estimators::{EstimatorConfig, EstimatorKind, LvcbptConfig};
 use ember_core::math::{Vec2, Vec3};
-use ember_core::render::{EstimatorConfig, EstimatorKind, LvcbptConfig};
 use ember_core::spectrum::Rgb;
 use ember_core::texture::{Bitmap, Texture, UvTransform, WrapMode};
 use ember_core::transport::{MaxDepth, RenderParams};

@@ -1,4 +1,4 @@
-//! The PT-moment probe (`EstimatorConfig::PtMoment`, `integrator::bdpt::probe`): BDPT's
+//! The PT-moment probe (`EstimatorConfig::PtMoment`, `estimators::bdpt::probe`): BDPT's
 //! samples, each strategy's contribution replaced by its term of PT's second moment,
 //! against PT's own squared samples.
 //!
@@ -33,9 +33,9 @@
 
 use ember_core::bsdf::{Material, MicrofacetKind};
 use ember_core::camera::{FovAxis, PerspectiveCamera};
+use ember_core::estimators::EstimatorConfig;
 use ember_core::light::Light;
 use ember_core::math::Mat4;
-use ember_core::render::EstimatorConfig;
 use ember_core::scene::{AreaEmission, SceneBuilder, builtin};
 use ember_core::spectrum::Rgb;
 use ember_core::transport::{Heuristic, MaxDepth, RenderParams};

@@ -15,11 +15,11 @@
 
 use ember_core::bsdf::{Material, MicrofacetKind};
 use ember_core::camera::{FovAxis, PerspectiveCamera};
+use ember_core::estimators::{EstimatorConfig, EstimatorKind, KernelChoice, SegmentAlgorithm, SegmentConfig};
 use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
 use ember_core::light::Light;
 use ember_core::math::{Mat4, Vec2};
 use ember_core::merge::RadiusRule;
-use ember_core::render::{EstimatorConfig, EstimatorKind, KernelChoice, SegmentAlgorithm, SegmentConfig};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::{AreaEmission, SceneBuilder, builtin};
 use ember_core::segment::sampler::{BsdfRaycast, Raycast, SegmentUniforms, Surfaces, Uniform};

@@ -16,10 +16,10 @@
 //! matters only at folds, a small share of these images.
 
 use ember_core::bsdf::{Material, MicrofacetKind};
+use ember_core::estimators::{EstimatorConfig, KernelChoice, SegmentAlgorithm, SegmentConfig};
 use ember_core::merge::RadiusRule;
 use ember_core::path::mis::mis_weight;
 use ember_core::path::{LightPointSample, camera_subpath_with_kernel, connect, light_subpath_with_kernel};
-use ember_core::render::{EstimatorConfig, KernelChoice, SegmentAlgorithm, SegmentConfig};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::Context;
 use ember_core::scene::Scene;

@@ -10,7 +10,7 @@
 //! of them EMPTY in every pass, so the restriction of stage 1 to non-empty subspaces
 //! matters in every pass.
 //!
-//! Injected-bug checks (each done once, reverted), all in `integrator/spcbpt/mod.rs`:
+//! Injected-bug checks (each done once, reverted), all in `estimators/spcbpt/mod.rs`:
 //! - dropping the mixture from the connection pdf (dividing by (Γ' − m/n)/(1 − m)
 //!   instead of the stage-1 pmf): fails, block 7 at z = 4.10;
 //! - counting the empty subspaces in the connection pdf (dividing by the unrestricted
@@ -29,8 +29,8 @@
 //!   block 0 at z = −25.4.
 
 use ember_core::estimators::spcbpt::{self, PassCache};
+use ember_core::estimators::{EstimatorConfig, EstimatorKind};
 use ember_core::geometry::RayQuery;
-use ember_core::render::{EstimatorConfig, EstimatorKind};
 use ember_core::spectrum::Rgb;
 use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
@@ -53,7 +53,7 @@ fn push(stats: &mut [[MeanVar; 3]], img: &[[f64; 3]]) {
 /// Passes sharing a cache are dependent, so the samples of the z-test are the means of
 /// independent CHAINS of passes (a fresh cache each, disjoint pass indices).
 ///
-/// Injected-bug checks (each done once, reverted), in `integrator/spcbpt/mod.rs`:
+/// Injected-bug checks (each done once, reverted), in `estimators/spcbpt/mod.rs`:
 /// - the retention factor dropped (dividing by j·M instead of j·M·M_r,k/M_k(j)):
 ///   fails, block 3 at z = 4.81 (PT 0.0583 vs 0.0557);
 /// - the paper's eq. 20 as printed (an extra M_r inside the sum: dividing by

@@ -1,4 +1,4 @@
-//! SPCBPT's model file (`core/src/integrator/spcbpt/model_file.rs`, issue 22's `ember
+//! SPCBPT's model file (`core/src/estimators/spcbpt/model_file.rs`, issue 22's `ember
 //! train`): a trained model round-trips to the same bytes and the same pass images; every
 //! truncation, every single-byte change and every structurally invalid model with a
 //! valid checksum is refused with an error, never a panic or a silently different model.
@@ -9,9 +9,9 @@
 //! - `decode` without the checksum comparison: byte flips in Γ are accepted as a
 //!   different model.
 
+use ember_core::estimators::EstimatorConfig;
 use ember_core::estimators::spcbpt::Model;
 use ember_core::estimators::spcbpt::model_file::{MAGIC, ModelError, VERSION};
-use ember_core::render::EstimatorConfig;
 use ember_core::scene::Scene;
 use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::render::{Passes, spcbpt_config, spcbpt_model};
@@ -45,7 +45,7 @@ fn a_model_round_trips_to_the_same_bytes_and_images() {
     let config = spcbpt_config(24, 6, 1500, 1500, 150, 0.2);
     let mut trained_here = Passes::new(&scene, &tracer, &params, EstimatorConfig::Spcbpt(config));
     let mut loaded = Passes::new(&scene, &tracer, &params, EstimatorConfig::Lt);
-    loaded.renderer = ember_core::render::Renderer::new(&scene, params, EstimatorConfig::Spcbpt(config)).unwrap();
+    loaded.renderer = ember_core::estimators::Renderer::new(&scene, params, EstimatorConfig::Spcbpt(config)).unwrap();
     loaded.spcbpt().unwrap().use_model(back).expect("model fits the configuration");
     for pass in 0..2 {
         assert_eq!(trained_here.pass_image(pass).0, loaded.pass_image(pass).0, "pass {pass}");
@@ -53,8 +53,8 @@ fn a_model_round_trips_to_the_same_bytes_and_images() {
     // A model trained for another N is refused.
     let mut other_n = config;
     other_n.connections = 5;
-    let mut r = ember_core::render::Renderer::new(&scene, params, EstimatorConfig::Spcbpt(other_n)).unwrap();
-    let ember_core::render::Renderer::Spcbpt(s) = &mut r else { unreachable!() };
+    let mut r = ember_core::estimators::Renderer::new(&scene, params, EstimatorConfig::Spcbpt(other_n)).unwrap();
+    let ember_core::estimators::Renderer::Spcbpt(s) = &mut r else { unreachable!() };
     assert!(s.use_model(model).unwrap_err().contains("connections"));
 }
 

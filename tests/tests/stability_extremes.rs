@@ -17,7 +17,7 @@
 //! Reverting that fix is the injected bug (1) catches.
 
 use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
-use ember_core::render::EstimatorKind;
+use ember_core::estimators::EstimatorKind;
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::{AreaEmission, SceneBuilder};
 use ember_core::spectrum::Rgb;

@@ -25,7 +25,7 @@
 //! |p| (`core/src/geometry.rs`), and PT's mean is the same to 1e-5 at every scale.
 
 use ember_core::camera::{FovAxis, PerspectiveCamera};
-use ember_core::render::EstimatorKind;
+use ember_core::estimators::EstimatorKind;
 use ember_core::scene::{AreaEmission, Scene, SceneBuilder};
 use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::render::render_pass;

@@ -19,10 +19,10 @@
 
 use ember_core::bsdf::Material;
 use ember_core::camera::{FovAxis, PerspectiveCamera};
+use ember_core::estimators::{EstimatorConfig, EstimatorKind, MergeMode, MergingConfig};
 use ember_core::light::Light;
 use ember_core::math::Mat4;
 use ember_core::merge::RadiusRule;
-use ember_core::render::{EstimatorConfig, EstimatorKind, MergeMode, MergingConfig};
 use ember_core::scene::{Scene, builtin};
 use ember_core::spectrum::Rgb;
 use ember_core::transport::{MaxDepth, RenderParams};

@@ -1,4 +1,4 @@
-//! VCM's recursive weights (prefix sums, `core::integrator::vcm::mis`) against an f64
+//! VCM's recursive weights (prefix sums, `core::estimators::vcm::mis`) against an f64
 //! brute force over every connection and merge technique, and VCM's special cases.
 //!
 //! Full paths x₀ … x_{n−1} come from traced light and camera sub-paths of the Cornell box
@@ -19,10 +19,10 @@
 
 use ember_core::bsdf::TransportMode;
 use ember_core::estimators::vcm::mis::{MergeDensities, Side, Techniques, connection_weight, merge_weight, prefix};
+use ember_core::estimators::{EstimatorConfig, MergeMode, MergingConfig, Renderer};
 use ember_core::merge::RadiusRule;
 use ember_core::path::mis::mis_weight;
 use ember_core::path::{LightPointSample, Vertex, VertexKind, camera_subpath, connect, light_subpath};
-use ember_core::render::{EstimatorConfig, MergeMode, MergingConfig, Renderer};
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::{Context, Scene};
 use ember_core::transport::{Counters, MaxDepth, RenderParams};

@@ -4,8 +4,9 @@
 //! film parts, never mapping) stays in step with the one that maps.
 
 use ember_core::estimators::{ChunkOutput, PhaseBuffers};
+use ember_core::estimators::{EstimatorKind, Renderer};
 use ember_core::render::wire::Part;
-use ember_core::render::{Context, EstimatorKind, Film, Phased, Renderer, run_phases};
+use ember_core::render::{Context, Film, Phased, run_phases};
 use ember_core::scene::builtin;
 use ember_core::transport::RenderParams;
 use ember_tests::tracer::BruteForce;

@@ -32,6 +32,7 @@ pub mod spcbpt;
 pub mod vcm;
 
 mod one_phase;
+pub mod options;
 mod payload;
 mod registry;
 mod renderer;

@@ -38,13 +38,6 @@ mod film;
 #[cfg(feature = "wire")]
 pub mod wire;
 
-/// Old paths, kept while the hosts move to the new ones (issue 49); removed when they have.
-#[doc(hidden)]
-pub use crate::estimators::{
-    ConfigError, DEFAULT_FILTER_SEGMENTS, EstimatorConfig, EstimatorKind, FILM_BYTES_PER_PIXEL, FilterConfig, FilterReuse, FilterSide, KernelChoice,
-    LvcbptConfig, MAX_DATASET, MAX_FILTER_SEGMENTS, MAX_LIGHT_PATHS, MemoryEstimate, MergeMode, MergingConfig, Renderer, RendererError, SegmentAlgorithm,
-    SegmentConfig, SpcbptConfig,
-};
 /// What every phase reads: the scene and the ray queries (defined with the scene).
 pub use crate::scene::Context;
 pub use film::{Band, Film, FilmError, ParallelBands, QUANTUM_BITS, Tallies};

@@ -167,11 +167,3 @@ pub fn start_cosine(y: &crate::transport::SurfacePoint, start: Option<&SurfaceHi
     };
     cos * shading_normal_correction(mode, y.wo, wi, y.hit.ng, y.hit.ns)
 }
-
-/// Old paths, kept while the hosts move to the new ones (issue 49); removed when they have.
-#[doc(hidden)]
-#[cfg(feature = "filtering")]
-pub use crate::estimators::filter;
-#[doc(hidden)]
-#[cfg(feature = "segments")]
-pub use crate::estimators::segment::{Segments, sbdpt, slt, spt};

@@ -69,7 +69,8 @@
 
 use std::time::{Duration, Instant};
 
-use ember_core::render::{EstimatorConfig, EstimatorKind, Film};
+use ember_core::estimators::{EstimatorConfig, EstimatorKind};
+use ember_core::render::Film;
 
 use crate::cli::RenderArgs;
 use ember_host::driver::Limits;

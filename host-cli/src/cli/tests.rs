@@ -147,14 +147,14 @@ fn help_mentions_the_pbrt_and_mitsuba_terms() {
     }
 }
 
-/// The clap flags of [`CacheArgs`] and the core's options table (`ember_core::options`,
+/// The clap flags of [`CacheArgs`] and the core's options table (`ember_core::estimators::options`,
 /// which the C API parses its options string with) name the same options: every table
 /// option is a flag of the same name, and every flag is in the table.
 #[test]
 fn cache_flags_are_the_options_table() {
     let command = CacheArgs::augment_args(clap::Command::new("options"));
     let flags: Vec<String> = command.get_arguments().filter_map(|a| a.get_long().map(str::to_string)).collect();
-    let table: Vec<&str> = ember_core::options::all().iter().map(|o| o.name).collect();
+    let table: Vec<&str> = ember_core::estimators::options::all().iter().map(|o| o.name).collect();
     for name in &table {
         assert!(flags.iter().any(|f| f == name), "table option '{name}' is no clap flag of CacheArgs");
     }
@@ -184,7 +184,7 @@ fn clap_and_the_options_table_configure_alike() {
         args.extend(flags.iter().map(String::as_str));
         let Command::Render(render) = Cli::try_parse_from(&args).unwrap_or_else(|e| panic!("{text}: {e}")).command else { unreachable!() };
         for kind in EstimatorKind::ALL {
-            let table = ember_core::options::parse(kind, text).unwrap_or_else(|e| panic!("{text}: {e}"));
+            let table = ember_core::estimators::options::parse(kind, text).unwrap_or_else(|e| panic!("{text}: {e}"));
             assert_eq!(table, render.cache.config_for(kind), "{} with '{text}'", kind.name());
         }
     }

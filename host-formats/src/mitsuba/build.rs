@@ -10,9 +10,9 @@ use glam::{DMat4, DVec3};
 
 use ember_core::bsdf::PlasticCoating;
 use ember_core::camera::{FovAxis, Lens, PerspectiveCamera};
-use ember_core::filter::Filter;
 use ember_core::geometry::MaterialId;
 use ember_core::light::{EnvMapError, Light};
+use ember_core::pixel_filter::Filter;
 use ember_core::scene::{AreaEmission, SceneBuilder};
 use ember_core::spectrum::Rgb;
 

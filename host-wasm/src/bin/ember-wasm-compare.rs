@@ -15,7 +15,7 @@ fn main() {
     use std::path::Path;
     let args: Vec<String> = std::env::args().skip(1).collect();
     if args.len() == 1 && args[0] == "--estimators" {
-        for kind in ember_core::render::EstimatorKind::ALL {
+        for kind in ember_core::estimators::EstimatorKind::ALL {
             println!("{}", kind.name());
         }
         return;

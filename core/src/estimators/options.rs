@@ -16,8 +16,8 @@
 use alloc::string::String;
 use core::fmt;
 
+use crate::estimators::{ConfigError, EstimatorConfig, EstimatorKind, FilterReuse, KernelChoice};
 use crate::merge::RadiusRule;
-use crate::render::{ConfigError, EstimatorConfig, EstimatorKind, FilterReuse, KernelChoice};
 
 /// What an option's value is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -397,7 +397,7 @@ pub fn parse(kind: EstimatorKind, text: &str) -> Result<EstimatorConfig, OptionE
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::{FilterConfig, MergingConfig};
+    use crate::estimators::{FilterConfig, MergingConfig};
     use alloc::string::ToString;
 
     /// Every option's range is what its configuration's `validate` says for a value
@@ -434,9 +434,12 @@ mod tests {
         let c = parse(K::Bpf, "beta=1 filter-reuse=bridges radius-scene=0.01 max-segments=8").unwrap();
         let want =
             FilterConfig { beta: 1.0, reuse: FilterReuse::Bridges, radius: RadiusRule::SceneFraction(0.01), max_segments: Some(8), ..FilterConfig::DEFAULT };
-        assert_eq!(c, EstimatorConfig::Filter(crate::render::FilterSide::Both, want));
+        assert_eq!(c, EstimatorConfig::Filter(crate::estimators::FilterSide::Both, want));
         let c = parse(K::Vcm, "light-paths=7 alpha=1 subspaces=64").unwrap();
-        assert_eq!(c, EstimatorConfig::Merging(crate::render::MergeMode::Vcm, MergingConfig { light_paths: Some(7), alpha: 1.0, ..MergingConfig::DEFAULT }));
+        assert_eq!(
+            c,
+            EstimatorConfig::Merging(crate::estimators::MergeMode::Vcm, MergingConfig { light_paths: Some(7), alpha: 1.0, ..MergingConfig::DEFAULT })
+        );
         assert_eq!(parse(K::Pt, "").unwrap(), EstimatorConfig::Pt);
     }
 
