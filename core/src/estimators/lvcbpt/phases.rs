@@ -53,15 +53,29 @@ impl Lvcbpt {
     }
 }
 
+/// LVCBPT's phase ids: the c̄ probe (setup), then per pass the light paths and the camera.
+mod phase {
+    pub const PROBE: u8 = 0;
+    pub const LIGHT_PATHS: u8 = 1;
+    pub const CAMERA: u8 = 2;
+}
+
 impl<Q: RayQuery + ?Sized> Phased<Q> for Lvcbpt {
     type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         Some(match self.cursor.stage()? {
-            Stage::Setup(_) => Phase { name: "c̄ probe", id: 0, pass: None, items: self.config.probe_paths, chunk: CHUNK, samples: false },
-            Stage::Pass(pass, 0) => {
-                Phase { name: "light paths", id: 1, pass: Some(pass), items: self.light_paths, chunk: chunk_for(self.light_paths), samples: true }
+            Stage::Setup(_) => Phase { name: "c̄ probe", id: phase::PROBE, pass: None, items: self.config.probe_paths, chunk: CHUNK, samples: false },
+            Stage::Pass(pass, 0) => Phase {
+                name: "light paths",
+                id: phase::LIGHT_PATHS,
+                pass: Some(pass),
+                items: self.light_paths,
+                chunk: chunk_for(self.light_paths),
+                samples: true,
+            },
+            Stage::Pass(pass, _) => {
+                Phase { name: "camera", id: phase::CAMERA, pass: Some(pass), items: self.pixels, chunk: chunk_for(self.pixels), samples: true }
             }
-            Stage::Pass(pass, _) => Phase { name: "camera", id: 2, pass: Some(pass), items: self.pixels, chunk: chunk_for(self.pixels), samples: true },
         })
     }
     fn start_pass(&mut self, pass: u32) {
@@ -71,19 +85,19 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Lvcbpt {
         let (scene, tracer, params) = (ctx.scene, ctx.tracer, &self.params);
         let items = out.items.clone();
         match (phase.id, phase.pass) {
-            (0, _) => {
+            (phase::PROBE, _) => {
                 let (n, counters) = count_cacheable(scene, tracer, params, items);
                 out.data = PhaseData::Count(n);
                 out.counters = counters;
             }
-            (1, Some(pass)) => {
+            (phase::LIGHT_PATHS, Some(pass)) => {
                 // The splat list is taken out while the light-path store is borrowed.
                 let mut splats = core::mem::take(&mut out.splats);
                 let (paths, _) = out.data.light_paths();
                 out.counters = trace_light_paths(scene, tracer, params, &self.counts, pass, items, paths, &mut |s| splats.push(s));
                 out.splats = splats;
             }
-            (_, Some(pass)) => {
+            (phase::CAMERA, Some(pass)) => {
                 let inputs = PassInputs {
                     paths: &self.paths,
                     cache: &self.cache,
@@ -98,12 +112,12 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Lvcbpt {
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         match phase.id {
-            0 => {
+            phase::PROBE => {
                 let cacheable: u64 = outputs.iter().map(|o| if let PhaseData::Count(n) = o.data { n } else { 0 }).sum();
                 let mean = cacheable as f64 / self.config.probe_paths.max(1) as f64;
                 self.counts = StrategyCounts::new(self.light_paths, self.config.connections, self.pixels, mean);
             }
-            1 => {
+            phase::LIGHT_PATHS => {
                 self.paths.clear();
                 self.cache.clear();
                 for out in outputs.iter() {

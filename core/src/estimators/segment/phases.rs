@@ -42,17 +42,23 @@ impl Segments {
     }
 }
 
+/// The segment estimators' phase ids: the footprint (setup), then the pass's one phase (camera or light paths).
+mod phase {
+    pub const FOOTPRINT: u8 = 0;
+    pub const PASS: u8 = 1;
+}
+
 impl<Q: RayQuery + ?Sized> Phased<Q> for Segments {
     type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         Some(match self.cursor.stage()? {
             Stage::Setup(_) => {
                 let needs = !self.kernel.is_dirac() && self.config.radius.needs_footprint();
-                Phase { name: "footprint", id: 0, pass: None, items: if needs { self.pixels } else { 0 }, chunk: CHUNK, samples: false }
+                Phase { name: "footprint", id: phase::FOOTPRINT, pass: None, items: if needs { self.pixels } else { 0 }, chunk: CHUNK, samples: false }
             }
             Stage::Pass(pass, _) => {
                 let name = if self.algorithm == SegmentAlgorithm::LightTracing { "light paths" } else { "camera" };
-                Phase { name, id: 1, pass: Some(pass), items: self.pixels, chunk: CHUNK, samples: true }
+                Phase { name, id: phase::PASS, pass: Some(pass), items: self.pixels, chunk: CHUNK, samples: true }
             }
         })
     }
@@ -63,8 +69,8 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Segments {
         let (scene, tracer, params) = (ctx.scene, ctx.tracer, &self.params);
         let items = out.items.clone();
         match (phase.id, phase.pass) {
-            (0, _) => crate::estimators::map_footprint(scene, tracer, out),
-            (_, Some(pass)) => match self.algorithm {
+            (phase::FOOTPRINT, _) => crate::estimators::map_footprint(scene, tracer, out),
+            (phase::PASS, Some(pass)) => match self.algorithm {
                 SegmentAlgorithm::PathTracing => {
                     out.counters = spt::render_pixels(scene, tracer, params, self.kernel, pass, items, out.pixel_buffer());
                 }
@@ -81,7 +87,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Segments {
         }
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
-        if phase.id == 0 {
+        if phase.id == phase::FOOTPRINT {
             if let Kernel::Disk { radius } = &mut self.kernel {
                 *radius = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs));
             }

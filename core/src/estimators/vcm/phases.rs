@@ -99,18 +99,32 @@ impl Vcm {
     }
 }
 
+/// The merging estimators' phase ids: the footprint (setup), then per pass the light paths and the camera.
+mod phase {
+    pub const FOOTPRINT: u8 = 0;
+    pub const LIGHT_PATHS: u8 = 1;
+    pub const CAMERA: u8 = 2;
+}
+
 impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
     type Data = PhaseData;
     fn next_phase(&self) -> Option<Phase> {
         Some(match self.cursor.stage()? {
             Stage::Setup(_) => {
                 let items = if self.config.merges(self.mode) && self.config.radius.needs_footprint() { self.pixels } else { 0 };
-                Phase { name: "footprint", id: 0, pass: None, items, chunk: CHUNK, samples: false }
+                Phase { name: "footprint", id: phase::FOOTPRINT, pass: None, items, chunk: CHUNK, samples: false }
             }
-            Stage::Pass(pass, 0) => {
-                Phase { name: "light paths", id: 1, pass: Some(pass), items: self.light_paths, chunk: chunk_for(self.light_paths), samples: true }
+            Stage::Pass(pass, 0) => Phase {
+                name: "light paths",
+                id: phase::LIGHT_PATHS,
+                pass: Some(pass),
+                items: self.light_paths,
+                chunk: chunk_for(self.light_paths),
+                samples: true,
+            },
+            Stage::Pass(pass, _) => {
+                Phase { name: "camera", id: phase::CAMERA, pass: Some(pass), items: self.pixels, chunk: chunk_for(self.pixels), samples: true }
             }
-            Stage::Pass(pass, _) => Phase { name: "camera", id: 2, pass: Some(pass), items: self.pixels, chunk: chunk_for(self.pixels), samples: true },
         })
     }
     fn start_pass(&mut self, pass: u32) {
@@ -120,15 +134,15 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
         let (scene, tracer, params) = (ctx.scene, ctx.tracer, &self.params);
         let items = out.items.clone();
         match (phase.id, phase.pass) {
-            (0, _) => crate::estimators::map_footprint(scene, tracer, out),
-            (1, Some(pass)) => {
+            (phase::FOOTPRINT, _) => crate::estimators::map_footprint(scene, tracer, out),
+            (phase::LIGHT_PATHS, Some(pass)) => {
                 let tech = self.techniques(pass);
                 let mut splats = core::mem::take(&mut out.splats);
                 let (paths, sums) = out.data.paths_with_sums();
                 out.counters = trace_light_paths(scene, tracer, params, &tech, pass, items, paths, sums, &mut |s| splats.push(s));
                 out.splats = splats;
             }
-            (_, Some(pass)) => {
+            (phase::CAMERA, Some(pass)) => {
                 let inputs = PassInputs {
                     paths: &self.paths,
                     prefix: &self.prefix,
@@ -144,8 +158,8 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
     }
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         match (phase.id, phase.pass) {
-            (0, _) => self.r0 = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs)),
-            (1, pass) => {
+            (phase::FOOTPRINT, _) => self.r0 = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs)),
+            (phase::LIGHT_PATHS, pass) => {
                 self.paths.clear();
                 self.prefix.clear();
                 self.photons.clear();
