@@ -162,6 +162,6 @@ fn trace_one<Q: RayQuery + ?Sized>(
         }
 
         // Sample the adjoint BSDF to continue.
-        let Leave::Continues(_) = WALK.scatter(params, &mut path, &sp, &material, None, roulette, rng) else { break };
+        let Leave::Continues(_) = WALK.scatter(params, &mut path, &sp, sp.frame.to_local(sp.wo), &material, None, roulette, rng) else { break };
     }
 }

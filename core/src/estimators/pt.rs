@@ -32,7 +32,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &R
 }
 
 /// [`render_pixels`] with `kernel` joining consecutive segments: segment PT
-/// ([`crate::estimators::estimators::spt`]); with the Dirac kernel it is PT.
+/// ([`crate::estimators::segment::spt`]); with the Dirac kernel it is PT.
 pub(crate) fn render_pixels_with_kernel<Q: RayQuery + ?Sized>(
     scene: &Scene,
     tracer: &Q,
@@ -122,14 +122,15 @@ fn walk<Q: RayQuery + ?Sized>(
         let start = moved.as_ref().map(|m| &m.at);
 
         // Sample a light (next-event estimation) unless the BSDF is all Dirac.
+        let wo_local = sp.frame.to_local(sp.wo);
         if !material.is_delta() {
-            let at = Shading { sp: &sp, material: &material, wo_local: sp.frame.to_local(sp.wo), start };
+            let at = Shading { sp: &sp, material: &material, wo_local, start };
             l += path.beta * next_event(scene, tracer, params, &path, &at, rng, counters);
         }
 
         // Sample the BSDF to continue the path.
         let roulette = Roulette::Throughput { reference: 1.0 };
-        let Leave::Continues(_) = WALK.scatter(params, &mut path, &sp, &material, start, roulette, rng) else { break };
+        let Leave::Continues(_) = WALK.scatter(params, &mut path, &sp, wo_local, &material, start, roulette, rng) else { break };
     }
     l
 }

@@ -232,7 +232,7 @@ fn random_walk<Q: RayQuery + ?Sized>(
         // (importance). Its cosine is taken there (eq. 6).
         let material = scene.material(shading.material, shading.uv);
         let moved_start = (mode == TransportMode::Radiance && moved.is_some()).then_some(&exit);
-        match walk.scatter(params, &mut state, &sp, &material, moved_start, roulette, rng) {
+        match walk.scatter(params, &mut state, &sp, sp.frame.to_local(sp.wo), &material, moved_start, roulette, rng) {
             Leave::Continues(b) => path[n].delta |= b.delta,
             Leave::Ended(b) => {
                 path[n].delta |= b.delta;

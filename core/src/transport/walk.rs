@@ -244,7 +244,8 @@ impl Walk {
         Some(LightDraw { light: chosen.index, pmf: chosen.pmf, sample })
     }
 
-    /// Leave the shading point `sp` (its `material`): sample the BSDF (dimensions `lobe`
+    /// Leave the shading point `sp` (`wo_local` its outgoing direction in its shading
+    /// frame, which the caller has for its own use too; `material` its material): sample the BSDF (dimensions `lobe`
     /// onward), multiply β by the draw's throughput, apply `roulette`, and spawn the next
     /// ray from `start` (a kernel-moved start of a radiance walk, whose normal takes the
     /// cosine) or from `sp`.
@@ -255,6 +256,7 @@ impl Walk {
         params: &RenderParams,
         state: &mut PathState,
         sp: &SurfacePoint,
+        wo_local: Vec3,
         material: &Material,
         start: Option<&SurfaceHit>,
         roulette: Roulette,
@@ -272,7 +274,7 @@ impl Walk {
         rng.set_dimension(state.dimension(&self.layout, self.layout.lobe));
         let u_lobe = rng.next_f32();
         let u_dir = rng.next_2d();
-        let Some(bs) = material.sample(sp.frame.to_local(sp.wo), u_lobe, u_dir, self.mode) else { return Leave::Stopped };
+        let Some(bs) = material.sample(wo_local, u_lobe, u_dir, self.mode) else { return Leave::Stopped };
         if !bs.pdf.is_positive() {
             return Leave::Stopped;
         }

@@ -507,7 +507,7 @@ fn continue_path(
         if albedo.is_nan() { MIN_SURVIVAL } else { albedo.clamp(MIN_SURVIVAL, 0.95) }
     };
     node.next.q = q;
-    let Leave::Continues(b) = walk.scatter(params, path, sp, material, None, Roulette::Fixed { q }, rng) else { return false };
+    let Leave::Continues(b) = walk.scatter(params, path, sp, sp.frame.to_local(sp.wo), material, None, Roulette::Fixed { q }, rng) else { return false };
     node.next.dir = b.wi;
     node.next.delta = b.delta;
     node.next.throughput = b.throughput / q;

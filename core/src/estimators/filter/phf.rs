@@ -239,7 +239,9 @@ fn gather_pixels<Q: RayQuery + ?Sized>(
             if pass_through && params.max_depth.allows(path.segments + 1) {
                 l += path.beta * dirac_light_at(scene, tracer, &sp, &material, &mut counters);
             }
-            let Leave::Continues(_) = CAMERA_WALK.scatter(params, &mut path, &sp, &material, None, Roulette::Never, &mut rng) else { break };
+            let Leave::Continues(_) = CAMERA_WALK.scatter(params, &mut path, &sp, sp.frame.to_local(sp.wo), &material, None, Roulette::Never, &mut rng) else {
+                break;
+            };
         }
         *slot = counters.sanitize(l);
     }
