@@ -44,7 +44,7 @@ pub fn trace_paths<Q: RayQuery + ?Sized>(
 }
 
 /// [`trace_paths`] with `kernel` joining consecutive segments: segment LT
-/// ([`crate::estimators::estimators::slt`]); with the Dirac kernel it is LT.
+/// ([`crate::estimators::segment::slt`]); with the Dirac kernel it is LT.
 pub(crate) fn trace_paths_with_kernel<Q: RayQuery + ?Sized>(
     scene: &Scene,
     tracer: &Q,
@@ -84,7 +84,7 @@ fn visible_sky<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, rng: &mut Sample
     }
 }
 
-/// One light path of LT, or of segment LT ([`crate::estimators::estimators::slt`]) when `junctions` is
+/// One light path of LT, or of segment LT ([`crate::estimators::segment::slt`]) when `junctions` is
 /// given: then at every surface the path reaches, the next segment starts at a point the
 /// kernel draws around it, and the shading point (BSDF, camera connection, continuation)
 /// moves there, which is where eq. (6) evaluates f_r in light order.

@@ -54,7 +54,7 @@ pub mod types {
 }
 
 /// The payload of a [`PhaseData`] variant whose estimators this build leaves out: a type
-/// with no values, so the variant cannot be made (see [`payload`]).
+/// with no values, so the variant cannot be made (see [`types`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub enum Absent {}

@@ -13,7 +13,7 @@
 //! (x_{i+1}). The segment between path-order neighbours a (camera side) and b (light
 //! side) runs from `a.exit` to `b.p`. With the Dirac kernel `exit` is `p` and every
 //! density below is the vertex one bit for bit; segment BDPT
-//! ([`crate::estimators::estimators::sbdpt`]) moves `exit` on camera vertices and `p` on light vertices
+//! ([`crate::estimators::segment::sbdpt`]) moves `exit` on camera vertices and `p` on light vertices
 //! (each sub-path moves the point its kernel samples). Which end of an edge a density
 //! lives at depends on the direction it is sampled in, so densities take the
 //! [`TransportMode`] of the walk that samples: `Radiance` walks toward the light side,

@@ -37,7 +37,7 @@ pub fn camera_subpath<Q: RayQuery + ?Sized>(
 }
 
 /// [`camera_subpath`] with the kernel of `junctions` moving each vertex's exit (segment
-/// BDPT, [`crate::estimators::estimators::sbdpt`]); `None` is the Dirac kernel.
+/// BDPT, [`crate::estimators::segment::sbdpt`]); `None` is the Dirac kernel.
 pub fn camera_subpath_with_kernel<Q: RayQuery + ?Sized>(
     scene: &Scene,
     tracer: &Q,

@@ -53,15 +53,16 @@
 //! - [`sampler`]: the uniform (eq. 12), ray-cast (eq. 13) and BSDF ray-cast (eq. 14)
 //!   segment samplers.
 //! - [`contribution`]: g (eq. 4) of an explicit segment path.
-//! - [`spt`] and [`slt`]: segment path tracing and segment light tracing, the sequential
-//!   samplers of eq. (15) from the camera and from the lights with the sequential
-//!   estimator (eq. 16), and in segment PT the light-sampled last segment combined by
-//!   eq. (17).
+//!
+//! The estimators built on them live with the other estimators: segment PT, LT and BDPT
+//! (the sequential samplers of eq. (15) from the camera and from the lights with the
+//! sequential estimator (eq. 16), and in segment PT the light-sampled last segment
+//! combined by eq. (17)) in `crate::estimators::segment`, path filtering in
+//! `crate::estimators::filter`.
 //!
 //! The kernels and [`start_cosine`] are always compiled: PT, LT and BDPT walk with an
-//! optional kernel, and with none they are the vertex estimators. The segment estimators,
-//! samplers and [`contribution`] need the cargo feature `segments`, the filters
-//! (`filter`) `filtering` (docs/features.md).
+//! optional kernel, and with none they are the vertex estimators. The samplers and
+//! `contribution` need the cargo feature `segments` (docs/features.md).
 //!
 //! docs/segments.md has the derivations and what each test proves.
 

@@ -51,7 +51,7 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
 }
 
 /// [`render_pixels`] with `kernel` joining consecutive segments on both sub-paths, and
-/// every connection a bridge segment: segment BDPT ([`crate::estimators::estimators::sbdpt`]). With the
+/// every connection a bridge segment: segment BDPT ([`crate::estimators::segment::sbdpt`]). With the
 /// Dirac kernel it is BDPT; the kernels draw from streams of their own.
 pub(crate) fn render_pixels_with_kernel<Q: RayQuery + ?Sized>(
     scene: &Scene,

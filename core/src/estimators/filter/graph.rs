@@ -147,7 +147,7 @@ impl<T: Real> FilterGraph<T> {
     }
 
     /// Make room for `rows` more rows and `pairs` more pairs, with headroom where the
-    /// storage must grow ([`reserve_headroom`]).
+    /// storage must grow (the module's `reserve_headroom`).
     pub fn reserve_headroom(&mut self, rows: usize, pairs: usize) {
         reserve_headroom(&mut self.emission, rows);
         reserve_headroom(&mut self.direct, rows);

@@ -6,11 +6,11 @@ use crate::transport::config::{ConfigError, check_radius};
 /// Which sequential segment estimator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SegmentAlgorithm {
-    /// Segments from the camera ([`crate::estimators::estimators::spt`]).
+    /// Segments from the camera ([`crate::estimators::segment::spt`]).
     PathTracing,
-    /// Segments from the lights ([`crate::estimators::estimators::slt`]).
+    /// Segments from the lights ([`crate::estimators::segment::slt`]).
     LightTracing,
-    /// Segments from both, joined by bridges ([`crate::estimators::estimators::sbdpt`]).
+    /// Segments from both, joined by bridges ([`crate::estimators::segment::sbdpt`]).
     Bidirectional,
 }
 

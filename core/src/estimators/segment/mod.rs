@@ -9,7 +9,7 @@
 //! - [`sbdpt`]: segment BDPT, camera and light segment sequences joined by bridge
 //!   segments under the balance heuristic over every technique; with the Dirac kernel
 //!   it is BDPT.
-//! - [`phases`]: their one phase per pass, after the footprint setup that resolves the
+//! - `phases`: their one phase per pass, after the footprint setup that resolves the
 //!   disk kernel's radius ([`Segments`]).
 //!
 //! docs/segments.md has the derivations and what each test proves.

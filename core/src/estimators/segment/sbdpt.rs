@@ -38,7 +38,7 @@
 //! With the Dirac kernel the junctions do not move and segment BDPT is BDPT bit for bit
 //! ([`crate::estimators::bdpt`], whose loop this is, with the kernels plugged into the
 //! walks); the kernels draw from random streams of their own
-//! ([`super::CAMERA_KERNEL_KEY`], [`super::LIGHT_KERNEL_KEY`]).
+//! ([`crate::segment::CAMERA_KERNEL_KEY`], [`crate::segment::LIGHT_KERNEL_KEY`]).
 
 use core::ops::Range;
 

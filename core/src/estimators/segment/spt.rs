@@ -18,7 +18,7 @@
 //! heuristic exactly as in [`crate::estimators::pt`]. The walk is PT's with the kernel
 //! plugged in: with the Dirac kernel segment PT is PT, bit for bit, with PT's random
 //! numbers; the kernel's random numbers come from a stream of their own
-//! ([`super::CAMERA_KERNEL_KEY`]).
+//! ([`crate::segment::CAMERA_KERNEL_KEY`]).
 
 use core::ops::Range;
 

@@ -3,7 +3,7 @@
 use crate::merge::RadiusRule;
 use crate::transport::config::{ConfigError, MAX_LIGHT_PATHS, check_f32, check_radius, check_u32};
 
-/// Which vertex-merging estimator ([`EstimatorConfig::Merging`]; also
+/// Which vertex-merging estimator ([`crate::estimators::EstimatorConfig::Merging`]; also
 /// `estimators::vcm::MergeMode`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum MergeMode {
