@@ -19,10 +19,11 @@ use ember_formats::metrics::{self, ErrorMetrics};
 use ember_host::driver::{DriverError, Limits, RenderSummary};
 
 use crate::cli::{Cli, Command, CompareArgs, ConvergenceArgs, MergeArgs, RenderArgs, SplitArgs};
-use crate::convergence::{self, ConvergenceSetup, Reference};
+use crate::convergence::{self, ConvergenceSetup};
 use crate::estimators::{Built, GUIDE_SAMPLES};
 use crate::progress::DriverConfig;
 use crate::{distributed, setup, suite};
+use ember_formats::error_time::Reference;
 
 /// Everything a command can fail with; each message says what to do or which file.
 #[derive(Debug)]

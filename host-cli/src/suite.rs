@@ -11,8 +11,9 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use crate::cli::{EstimatorKind, SuiteArgs};
-use crate::convergence::{self, Checkpoint, ConvergenceSetup, Reference};
+use crate::convergence::{self, ConvergenceSetup};
 use crate::setup;
+use ember_formats::error_time::{self, Checkpoint, Reference};
 
 /// One scene's outcome.
 #[derive(Clone, Debug)]
@@ -113,8 +114,8 @@ pub fn report(args: &SuiteArgs, threads: usize, results: &[SceneResult], command
         for &e in &args.estimators {
             let Some((_, rel, mape)) = final_point(&r.points, e) else { continue };
             let passes = r.points.iter().filter(|c| c.estimator == e).map(|c| c.passes).max().unwrap_or(0);
-            let curve: Vec<(f64, f64)> = convergence::averaged(&r.points, e).iter().map(|p| (p.0, p.2)).collect();
-            let reached = convergence::time_to_reach(&curve, target).map_or(format!("not reached ({mape:.1} %)"), |t| format!("{t:.1} s"));
+            let curve: Vec<(f64, f64)> = error_time::averaged(&r.points, e).iter().map(|p| (p.0, p.2)).collect();
+            let reached = error_time::time_to_reach(&curve, target).map_or(format!("not reached ({mape:.1} %)"), |t| format!("{t:.1} s"));
             let mark = if rel == best_rel { " **best**" } else { "" };
             let _ = writeln!(s, "| {} (floor {floor}, target {target:.1} %) | {} | {rel:.3e}{mark} | {mape:.2} | {passes} | {reached} |", r.name, e.name());
         }
@@ -123,7 +124,7 @@ pub fn report(args: &SuiteArgs, threads: usize, results: &[SceneResult], command
 }
 
 fn final_point(points: &[Checkpoint], e: EstimatorKind) -> Option<(f64, f64, f64)> {
-    convergence::averaged(points, e).last().copied()
+    error_time::averaged(points, e).last().copied()
 }
 
 #[cfg(test)]
