@@ -109,6 +109,19 @@ impl FilterChunk {
     }
 }
 
+/// What a pass's `links` and `values` (and a chunk's) hold, one per item of the paths
+/// phase.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LinksPer {
+    /// MVF, BPF: per pixel, its first node (or [`NONE`]) and the environment radiance
+    /// of its camera ray if it escaped.
+    #[default]
+    Pixel,
+    /// PhF: per node, its predecessor and its base flux; they move with the nodes when
+    /// the pass sorts them.
+    Node,
+}
+
 /// One pass's nodes and everything computed over them.
 #[derive(Clone, Debug, Default)]
 pub struct FilterPass {
@@ -131,8 +144,8 @@ pub struct FilterPass {
     pub graph: FilterGraph<f32>,
     /// The current L_i (A_i) per node.
     pub radiance: Vec<Rgb3<f32>>,
-    /// `links` and `values` are per node (PhF: predecessor and base flux), not per pixel.
-    pub per_node_links: bool,
+    /// What `links` and `values` hold.
+    pub links_per: LinksPer,
     /// Scratch: each gathered node's index in grid order ([`Self::sort_nodes`]).
     new_index: Vec<u32>,
 }
@@ -140,7 +153,7 @@ pub struct FilterPass {
 impl FilterPass {
     /// An empty pass whose `links` and `values` are per node (photon filtering's).
     pub fn with_links_per_node() -> Self {
-        Self { per_node_links: true, ..Self::default() }
+        Self { links_per: LinksPer::Node, ..Self::default() }
     }
 
     /// Bytes held (capacity).
@@ -239,8 +252,9 @@ impl FilterPass {
         }
         // Node i goes to new_index[i]: follow each cycle, swapping (no second copy of
         // the nodes); each swap puts one node in its place.
-        debug_assert!(!self.per_node_links || (self.links.len() == n && self.values.len() == n), "per-node links and values, one per node");
-        let per_node = self.per_node_links && self.links.len() == n && self.values.len() == n;
+        let per_node_links = self.links_per == LinksPer::Node;
+        debug_assert!(!per_node_links || (self.links.len() == n && self.values.len() == n), "per-node links and values, one per node");
+        let per_node = per_node_links && self.links.len() == n && self.values.len() == n;
         for i in 0..n {
             loop {
                 let j = self.new_index[i] as usize;
