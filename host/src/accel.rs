@@ -16,7 +16,7 @@
 //! the edge where two walls meet escaped a closed box).
 //!
 //! # Which hierarchy: measured
-//! `cargo bench -p ember-cli --bench bvh` (host-cli/benches/bvh.rs) builds obvhs's BVH2
+//! `cargo bench -p ember-host --bench bvh` (host/benches/bvh.rs) builds obvhs's BVH2
 //! and CWBVH and our BVH4 over a procedural scene of 131 084 triangles (a displaced
 //! sphere tessellated into 256 × 256 quads, inside a closed box, seen from inside the
 //! box) and traces 512² rays per set, one thread, through this very `RayQuery`
