@@ -3,14 +3,14 @@
 //!
 //! # What is compared, and how strictly
 //! The browser runs the same core code (estimators, libm-only math, counter-based RNG)
-//! and the same primitive tests (the CLI's watertight triangle and f64 sphere files,
-//! compiled into the module) as the CLI; wasm never fuses multiply-adds and neither does
-//! the default x86-64 build. So almost every pixel is the same number. What can differ:
-//! the f64 summation order of splats (the page sums per-worker splat films; the CLI
-//! sums per-chunk lists), a few ulps; and hits tied at a shared triangle edge, which
-//! the CLI's CWBVH and the browser's BVH2 may give to different triangles (the hit point
-//! moves by an ulp and the path diverges from there): measured, about 2 pixels in 1024
-//! at 32² and 2 passes. Hence two checks:
+//! and the same ray queries (ember-host's BVH4, its build and its watertight triangle and
+//! f64 sphere tests, compiled into the module) as the CLI; wasm never fuses
+//! multiply-adds and neither does the default x86-64 build. So almost every pixel is the
+//! same number. What could differ: the summation order of splats, and hits tied at a
+//! shared triangle edge where two hierarchies give them to different triangles (the hit
+//! point moves by an ulp and the path diverges from there: about 2 pixels in 1024 at 32²
+//! and 2 passes while the browser had a BVH2 of its own, before issue 49). Hence two
+//! checks:
 //! 1. all but `max_differing_fraction` (1 %) of the pixels agree to `pixel_tolerance`
 //!    (10⁻⁵ relative): this catches any change of seed, pass count, splat scale, band
 //!    or worker bookkeeping, which changes nearly every pixel;

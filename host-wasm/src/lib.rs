@@ -1,6 +1,6 @@
 //! ember in the browser: every estimator of the core, driven through the core's render
-//! protocol ([`ember_core::render`]) on Web Workers, over an obvhs BVH2 ([`accel`]),
-//! compiled to `wasm32-unknown-unknown` and driven by a static page (`host-wasm/www/`)
+//! protocol ([`ember_core::render`]) on Web Workers, over the CLI's own ray queries
+//! ([`Accel`]: ember-host's BVH4 and exact spheres, built without a clock), compiled to `wasm32-unknown-unknown` and driven by a static page (`host-wasm/www/`)
 //! through plain C exports. No wasm-bindgen, no imports: the module needs nothing from
 //! JavaScript, and JavaScript reads the results straight out of the module's linear
 //! memory.
@@ -24,10 +24,9 @@
 //!
 //! Random numbers derive from (seed, index, pass) only and every reduction takes the
 //! chunks in index order, so neither the worker count nor which worker maps which chunk
-//! changes the image: it is the CLI's bit for bit up to ray-query differences between
-//! the two BVHs.
+//! changes the image; and the hierarchy, its build and the primitive tests are the
+//! CLI's code (ember-host without its `threads` feature), so the hits are too.
 
-pub mod accel;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod compare;
 pub mod session;
@@ -40,7 +39,7 @@ use ember_core::estimators::EstimatorKind;
 use ember_core::render::wire::Part;
 use ember_core::scene::{SceneBuilder, builtin, builtin_glass};
 
-pub use accel::WasmAccel;
+pub use ember_host::accel::Accel;
 pub use session::{Failure, Role, Session};
 
 /// The built-in scenes the page offers, by the index it passes to `ember_setup`.

@@ -25,7 +25,7 @@ use ember_core::render::{Context, Film, Phase, Phased};
 use ember_core::scene::Scene;
 use ember_core::transport::{Heuristic, MaxDepth, RenderParams};
 
-use crate::WasmAccel;
+use ember_host::accel::Accel;
 
 /// Which instance: the page's holds the film.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -58,7 +58,7 @@ pub enum Failure {
 #[derive(Debug)]
 pub struct Session {
     pub scene: Scene,
-    pub accel: WasmAccel,
+    pub accel: Accel,
     pub renderer: Renderer,
     pub role: Role,
     pub film: Film,
@@ -87,7 +87,7 @@ impl Session {
         }
         let builder = crate::builtin_scene(scene, width, height).ok_or((Failure::UnknownScene, format!("no scene {scene}")))?;
         let (scene, geometry, _warnings) = builder.build().map_err(|e| (Failure::Setup, format!("the scene: {e}")))?;
-        let accel = WasmAccel::new(&geometry);
+        let accel = Accel::new(&geometry);
         // As the CLI: the power heuristic where an estimator has a choice.
         let params = RenderParams { max_depth: MaxDepth(max_depth), seed, heuristic: Heuristic::Power, ..RenderParams::default() };
         let renderer = Renderer::new(&scene, params, kind.default_config()).map_err(|e| (Failure::Setup, format!("{kind}: {e}")))?;
@@ -112,12 +112,12 @@ impl Session {
 
     /// Queue pass `pass` (behind any pending setup phases).
     pub fn start_pass(&mut self, pass: u32) {
-        Phased::<WasmAccel>::start_pass(&mut self.renderer, pass);
+        Phased::<Accel>::start_pass(&mut self.renderer, pass);
     }
 
     /// Take the next phase as the current one, or `None` when nothing is pending.
     pub fn next_phase(&mut self) -> Option<Phase> {
-        let phase = Phased::<WasmAccel>::next_phase(&self.renderer)?;
+        let phase = Phased::<Accel>::next_phase(&self.renderer)?;
         self.buffers.for_phase(&phase);
         self.received.clear();
         self.received.resize(phase.chunk_count(), (false, false));

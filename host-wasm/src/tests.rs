@@ -3,7 +3,8 @@
 //! protocol or ray-query structure in seconds and without one.
 //!
 //! Injected bugs these tests were seen to catch:
-//! * barycentrics of the closest hit replaced by (⅓, ⅓, ⅓) in `accel.rs` →
+//! * barycentrics of the closest hit replaced by (⅓, ⅓, ⅓) in the module's own
+//!   `accel.rs` (its BVH2, before issue 49 gave it ember-host's) →
 //!   `page_protocol_matches_the_cli_film` fails (cornell pt: 974 of 1024 pixels differ);
 //! * the page's instance skipping the state part of every chunk but the first →
 //!   `Session::reduce` refuses (LVCBPT's "c̄ probe reduced without chunk 1"); with that
@@ -94,7 +95,7 @@ fn render_seeded(scene: u32, estimator: u32, workers: usize, seed: u64) -> Linea
     LinearImage { width: SIZE as usize, height: SIZE as usize, pixels }
 }
 
-/// The CLI's render of the same scene (its CWBVH, its driver and film).
+/// The CLI's render of the same scene (its driver and film).
 fn render_with_the_cli(scene: &str, estimator: EstimatorKind) -> LinearImage {
     let size = SIZE.to_string();
     let a = args(&["--builtin", scene, "--width", &size, "--height", &size]);
@@ -107,7 +108,7 @@ fn render_with_the_cli(scene: &str, estimator: EstimatorKind) -> LinearImage {
 }
 
 /// Every estimator of the core, both scenes: the page's protocol (three workers) gives
-/// the CLI's image (same seed) up to the two BVHs' tie-breaking.
+/// the CLI's image (same seed).
 #[test]
 fn page_protocol_matches_the_cli_film() {
     for (scene, name) in crate::SCENES.iter().enumerate() {

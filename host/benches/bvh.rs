@@ -10,7 +10,7 @@
 //! - random closest: uniform origins in the box, uniform directions (path bounces);
 //! - random occlusion: segments between two uniform points in the box (connections).
 //!
-//! Run: `cargo bench -p ember-cli --bench bvh`. Prints Mrays/s per set (best of 7,
+//! Run: `cargo bench -p ember-host --bench bvh`. Prints Mrays/s per set (best of 7,
 //! the three structures taking turns) and the CWBVH / BVH2 and BVH4 / CWBVH ratios.
 
 use std::hint::black_box;

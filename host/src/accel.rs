@@ -1,5 +1,5 @@
-//! The CLI's ray-query structure: obvhs over the scene's triangles, exact analytic
-//! spheres beside it.
+//! The hosts' ray-query structure (the CLI's, the C library's and the browser's): a
+//! hierarchy over the scene's triangles, exact analytic spheres beside it.
 //!
 //! # Triangles
 //! One hierarchy over every triangle: by default our four-wide BVH ([`Wide`], module
@@ -16,7 +16,7 @@
 //! the edge where two walls meet escaped a closed box).
 //!
 //! # Which hierarchy: measured
-//! `cargo bench -p ember-cli --bench bvh` (host-cli/benches/bvh.rs) builds obvhs's BVH2
+//! `cargo bench -p ember-host --bench bvh` (host/benches/bvh.rs) builds obvhs's BVH2
 //! and CWBVH and our BVH4 over a procedural scene of 131 084 triangles (a displaced
 //! sphere tessellated into 256 × 256 quads, inside a closed box, seen from inside the
 //! box) and traces 512² rays per set, one thread, through this very `RayQuery`
@@ -35,7 +35,15 @@
 //! less. On the 36-triangle Cornell box the difference is larger: callgrind counts about
 //! 1 240 instructions per closest-hit query with obvhs's CWBVH and 940 with the BVH4,
 //! the hit record included (docs/performance.md). [`AccelWith`] keeps the obvhs variants for the benchmark and
-//! the tests.
+//! the tests (the CWBVH native only: obvhs's `build_cwbvh` reads the clock).
+//!
+//! # On every target
+//! Every hierarchy here is built by [`build_bvh2_without_clock`] (module `build`: obvhs's
+//! `build_bvh2` step for step, without its `Instant`, which traps in the browser), and
+//! the BVH4's lanes are glam's `Vec4` (SSE on x86-64, NEON on AArch64, `simd128` on
+//! wasm32), so this module compiles for `wasm32-unknown-unknown` and the browser's module
+//! (`host-wasm`) traces the CLI's hierarchy with the CLI's code: same boxes, same
+//! build, same tests, same hits.
 //!
 //! # Spheres
 //! Analytic spheres are intersected exactly, in f64 (module `sphere`). Scenes hold a handful
@@ -53,23 +61,24 @@
 //! A ray with a non-finite origin or direction, a zero direction, or a `t_max` that is
 //! not positive hits nothing.
 
+mod build;
 mod hit;
 mod sphere;
 mod triangle;
 mod wide;
 
-use std::time::Duration;
-
 use glam::{Vec3, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
+#[cfg(not(target_arch = "wasm32"))]
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray as BvhRay, RayHit};
 
 use ember_core::geometry::{LightId, MaterialId, Ray, RayQuery, SurfaceHit};
 use ember_core::shapes::{SceneGeometry, Sphere};
 
+pub use build::build_bvh2_without_clock;
 pub use triangle::WatertightRay;
 pub use wide::Wide;
 
@@ -133,7 +142,7 @@ fn any_hit_callback(tris: &[[Vec3A; 3]], wt: &WatertightRay) -> impl FnMut(&BvhR
 impl TriangleBvh for Bvh2 {
     const NAME: &'static str = "BVH2";
     fn build(_: &[[Vec3A; 3]], boxes: &[Aabb]) -> Self {
-        obvhs::bvh2::builder::build_bvh2(boxes, BvhBuildParams::medium_build(), &mut Duration::default())
+        build_bvh2_without_clock(boxes, BvhBuildParams::medium_build())
     }
     fn primitive_indices(&self) -> &[u32] {
         &self.primitive_indices
@@ -146,10 +155,12 @@ impl TriangleBvh for Bvh2 {
     }
 }
 
+/// Native only: obvhs's `build_cwbvh` reads the clock, which traps in the browser.
+#[cfg(not(target_arch = "wasm32"))]
 impl TriangleBvh for CwBvh {
     const NAME: &'static str = "CWBVH";
     fn build(_: &[[Vec3A; 3]], boxes: &[Aabb]) -> Self {
-        obvhs::cwbvh::builder::build_cwbvh(boxes, BvhBuildParams::medium_build(), &mut Duration::default())
+        obvhs::cwbvh::builder::build_cwbvh(boxes, BvhBuildParams::medium_build(), &mut std::time::Duration::default())
     }
     fn primitive_indices(&self) -> &[u32] {
         &self.primitive_indices
@@ -199,9 +210,12 @@ impl TriangleBvh for Wide {
 /// bias growing as scenes shrink. The CWBVH is traversed with the direction divided by
 /// 2²⁴ (t in units 2²⁴ times larger, exact: a power of two), which moves that cut to
 /// 6·10⁻¹² of a unit; the closure and the caller keep the ray's own units.
+#[cfg(not(target_arch = "wasm32"))]
 const T_STRETCH: f32 = 16_777_216.0;
+#[cfg(not(target_arch = "wasm32"))]
 const INV_T_STRETCH: f32 = 1.0 / T_STRETCH;
 
+#[cfg(not(target_arch = "wasm32"))]
 #[inline]
 fn stretched(ray: &BvhRay) -> BvhRay {
     // The inverse direction scaled, not recomputed: obvhs's `safe_inverse` clamps tiny
@@ -309,7 +323,7 @@ impl<B: TriangleBvh> AccelWith<B> {
                     Aabb::new(c - r, c + r).padded(pad)
                 })
                 .collect();
-            let bvh = obvhs::bvh2::builder::build_bvh2(&boxes, BvhBuildParams::medium_build(), &mut Duration::default());
+            let bvh = build_bvh2_without_clock(&boxes, BvhBuildParams::medium_build());
             let ids = bvh.primitive_indices.iter().map(|&k| sphere_ids[k as usize]).collect();
             (Some(bvh), ids)
         } else {

@@ -4,14 +4,18 @@
 //! ([`memory`]), scene preparation that reads no files ([`scene`]) and the program's
 //! version ([`program_version`]).
 //!
-//! What code here may do: threads, clocks, reading `/proc` and installing signal
-//! handlers. What it may not: read or write scene and image files (that is
-//! `ember-formats`), parse command lines (`ember-cli`), or print — a library host (the C
-//! API) prints nothing, so progress goes through [`driver::Progress`], which the
-//! command line implements.
+//! What code here may do: threads, clocks and signal handlers (in [`driver`] and
+//! [`interrupt`] only, behind the default cargo feature `threads`: without it the crate
+//! compiles for `wasm32-unknown-unknown`, and the browser's module traces with its
+//! [`accel`]), and reading `/proc`. What it may not: read or write scene and image files
+//! (that is `ember-formats`), parse command lines (`ember-cli`), or print — a library
+//! host (the C API) prints nothing, so progress goes through [`driver::Progress`], which
+//! the command line implements.
 
 pub mod accel;
+#[cfg(feature = "threads")]
 pub mod driver;
+#[cfg(feature = "threads")]
 pub mod interrupt;
 pub mod memory;
 pub mod scene;

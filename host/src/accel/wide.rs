@@ -1,5 +1,6 @@
 //! A four-wide BVH traversed with 4-lane SIMD (glam's `Vec4`: SSE on x86-64, NEON on
-//! AArch64), with triangles tested four at a time.
+//! AArch64, `simd128` on wasm32, where the browser's module traces with it), with
+//! triangles tested four at a time.
 //!
 //! # Why our own
 //! obvhs's CWBVH spent about 1 240 instructions per closest-hit query and 1 300 per
@@ -11,11 +12,11 @@
 //!
 //! # Build
 //! obvhs builds the binary hierarchy (PLOC with reinsertion, `medium_build`, one
-//! triangle per leaf); it is then collapsed top-down: a subtree of at most
-//! [`PACKET`] triangles becomes one leaf packet, small sibling subtrees merge into one
-//! packet where the surface-area heuristic favours it, and a node adopts the children
-//! of its largest (by surface area) inner child until it has four children or none of
-//! them can be opened further. Empty child slots hold the point at +∞ as their box,
+//! triangle per leaf; `build::build_bvh2_without_clock`, the same on every target); it
+//! is then collapsed top-down: a subtree of at most [`PACKET`] triangles becomes one
+//! leaf packet, small sibling subtrees merge into one packet where the surface-area
+//! heuristic favours it, and a node adopts the children of its largest (by surface
+//! area) inner child until it has four children or none of them can be opened further. Empty child slots hold the point at +∞ as their box,
 //! which no ray enters.
 //!
 //! # Exactness
@@ -288,7 +289,7 @@ impl Wide {
     /// equal length.
     pub fn build(tris: &[[Vec3A; 3]], boxes: &[Aabb]) -> Self {
         let params = BvhBuildParams { max_prims_per_leaf: 1, ..BvhBuildParams::medium_build() };
-        let bvh2 = obvhs::bvh2::builder::build_bvh2(boxes, params, &mut core::time::Duration::default());
+        let bvh2 = super::build::build_bvh2_without_clock(boxes, params);
         Collapse::new(&bvh2, tris).run()
     }
 
