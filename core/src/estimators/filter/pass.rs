@@ -40,6 +40,19 @@ pub(super) fn node_chunk(nodes: u32, paths: u32) -> u32 {
     nodes.div_ceil(chunks).max(MIN_NODE_CHUNK)
 }
 
+/// Clear `into` and fill it with each chunk's `part`, in chunk order, reserving (with
+/// headroom) room for `n` elements once, and only where some chunk has any.
+fn gather<T: Copy>(into: &mut Vec<T>, n: usize, outputs: &mut [ChunkOutput], part: impl Fn(&FilterChunk) -> &[T]) {
+    into.clear();
+    if outputs.iter_mut().all(|out| part(out.data.filter_chunk()).is_empty()) {
+        return;
+    }
+    reserve_headroom(into, n);
+    for out in outputs.iter_mut() {
+        into.extend_from_slice(part(out.data.filter_chunk()));
+    }
+}
+
 /// A node's position in the grid: emission nodes (all on the lights, and never anyone's
 /// neighbour) are left out, so that queries near a small light do not visit every light
 /// path's origin.
@@ -311,22 +324,11 @@ impl FilterPass {
         count as f64 / probes as f64
     }
 
-    /// Gather the chunks' denominators.
+    /// Gather the chunks' denominators: MVF's and PhF's into `dens`, BPF's into
+    /// `bidir_dens` (the other stays empty, its storage untouched).
     pub fn gather_denominators(&mut self, outputs: &mut [ChunkOutput]) {
-        self.dens.clear();
-        self.bidir_dens.clear();
-        for out in outputs.iter_mut() {
-            let chunk = out.data.filter_chunk();
-            // One of the two is empty: MVF and PhF fill `dens`, BPF `bidir_dens`.
-            if !chunk.dens.is_empty() {
-                reserve_headroom(&mut self.dens, self.nodes.len());
-                self.dens.extend_from_slice(&chunk.dens);
-            }
-            if !chunk.bidir_dens.is_empty() {
-                reserve_headroom(&mut self.bidir_dens, self.nodes.len());
-                self.bidir_dens.extend_from_slice(&chunk.bidir_dens);
-            }
-        }
+        gather(&mut self.dens, self.nodes.len(), outputs, |c| &c.dens);
+        gather(&mut self.bidir_dens, self.nodes.len(), outputs, |c| &c.bidir_dens);
     }
 
     /// Gather the chunks' rows; L₀ = the rows' emission.
@@ -344,11 +346,7 @@ impl FilterPass {
 
     /// Gather one sweep's L_i.
     pub fn gather_sweep(&mut self, outputs: &mut [ChunkOutput]) {
-        self.radiance.clear();
-        reserve_headroom(&mut self.radiance, self.nodes.len());
-        for out in outputs.iter_mut() {
-            self.radiance.extend_from_slice(&out.data.filter_chunk().radiance);
-        }
+        gather(&mut self.radiance, self.nodes.len(), outputs, |c| &c.radiance);
     }
 
     /// Reduction of the phases both estimators share, by phase id: 1 the nodes (for
