@@ -52,14 +52,72 @@ pub struct SurfaceHit {
     pub emitter: Option<LightId>,
 }
 
-/// Ray queries against the scene's geometry. Implemented by hosts (obvhs in the CLI and
-/// the browser) or by an embedding engine's own tracer. Implementations must be
+/// Ray queries against the scene's geometry. Implemented by hosts (our BVH4 in the CLI
+/// and the browser) or by an embedding engine's own tracer. Implementations must be
 /// thread-safe to share (`Sync`) if a host renders in parallel.
+///
+/// The batch methods answer many rays at once, structure-of-arrays in and out, so that a
+/// tracer can use wide SIMD over rays (packets for coherent rays, streams) and keep its
+/// code and data in cache across a batch. The lane loop of the estimators
+/// (`transport::lanes`) asks through them. Their defaults loop over the single-ray
+/// methods, so an implementor that has only those (the C ABI's callbacks, the tests'
+/// brute-force tracer) answers batches unchanged, and a tracer that overrides them must
+/// answer exactly as the single-ray methods would: the estimators' images do not depend
+/// on how a query was asked.
 pub trait RayQuery {
     /// Closest intersection with t in (0, ray.t_max), or `None`.
     fn intersect(&self, ray: &Ray) -> Option<SurfaceHit>;
     /// True if anything blocks the ray for t in (0, ray.t_max). May stop at the first hit.
     fn occluded(&self, ray: &Ray) -> bool;
+
+    /// [`Self::intersect`] for rays `0..n` of `rays` into `hits[..n]`, where `n` is the
+    /// shorter of `rays.len()` and `hits.len()`; the rest of `hits` is left as it was.
+    fn intersect_batch(&self, rays: RayBatch<'_>, hits: &mut [Option<SurfaceHit>]) {
+        for (i, hit) in hits.iter_mut().take(rays.len()).enumerate() {
+            *hit = self.intersect(&rays.ray(i));
+        }
+    }
+
+    /// [`Self::occluded`] for rays `0..n` of `rays` into `occluded[..n]`, `n` as for
+    /// [`Self::intersect_batch`].
+    fn occluded_batch(&self, rays: RayBatch<'_>, occluded: &mut [bool]) {
+        for (i, o) in occluded.iter_mut().take(rays.len()).enumerate() {
+            *o = self.occluded(&rays.ray(i));
+        }
+    }
+}
+
+/// Rays in structure-of-arrays form, borrowed: ray `i` starts at
+/// (`origin[0][i]`, `origin[1][i]`, `origin[2][i]`), goes along `dir[·][i]` and ends at
+/// `t_max[i]`. Its length is the shortest slice's, so a batch never reads past any of
+/// them.
+#[derive(Clone, Copy, Debug)]
+pub struct RayBatch<'a> {
+    pub origin: [&'a [f32]; 3],
+    pub dir: [&'a [f32]; 3],
+    pub t_max: &'a [f32],
+}
+
+impl RayBatch<'_> {
+    /// Rays in the batch: the shortest of the seven slices.
+    #[inline]
+    pub fn len(&self) -> usize {
+        let shortest = |a: &[&[f32]; 3]| a[0].len().min(a[1].len()).min(a[2].len());
+        shortest(&self.origin).min(shortest(&self.dir)).min(self.t_max.len())
+    }
+
+    /// True if the batch holds no ray.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Ray `i` (`i < len()`).
+    #[inline]
+    pub fn ray(&self, i: usize) -> Ray {
+        let (o, d) = (&self.origin, &self.dir);
+        Ray::new(Vec3::new(o[0][i], o[1][i], o[2][i]), Vec3::new(d[0][i], d[1][i], d[2][i]), self.t_max[i])
+    }
 }
 
 /// Offset a ray origin off a surface, robustly at every scale: move `p` along `n` (the

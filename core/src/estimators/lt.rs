@@ -15,16 +15,22 @@
 //! host's 1/M makes an unbiased estimate of every pixel's directly visible sky
 //! (Mitsuba's particle tracer also renders the visible environment). Its random numbers
 //! come from a stream of their own, so the light paths are unchanged.
+//!
+//! The light paths run on the lane loop ([`crate::transport::lanes`]): a batch of a
+//! chunk's paths in flight, their closest-hit rays and their camera connections' shadow
+//! rays asked in batches. The first vertex's own connection and the visible-sky ray are
+//! asked when a path starts.
 
 use core::ops::Range;
 
 use crate::bsdf::TransportMode;
-use crate::geometry::{RayQuery, spawn_ray_to};
+use crate::geometry::{Ray, RayQuery, SurfaceHit, spawn_ray_to};
 use crate::math::{Vec2, Vec3};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::segment::{Junctions, Kernel, LIGHT_KERNEL_KEY};
 use crate::spectrum::Rgb;
+use crate::transport::lanes::{self, Arrival, LaneProgram};
 use crate::transport::walk::{Layout, Leave, PathState, Roulette, Walk};
 use crate::transport::{Counters, RenderParams, Splat, SurfacePoint};
 
@@ -54,14 +60,9 @@ pub(crate) fn trace_paths_with_kernel<Q: RayQuery + ?Sized>(
     paths: Range<u32>,
     splat: &mut dyn FnMut(Splat),
 ) -> Counters {
-    let mut counters = Counters::default();
-    for path in paths {
-        let mut rng = SampleStream::for_sample(params.seed, Stream::Light, path, pass, 0);
-        let mut sky = SampleStream::for_sample(params.seed, Stream::Aux, path, pass, SKY_KEY);
-        let mut junctions = Junctions::for_path(kernel, params.seed, path, pass, LIGHT_KERNEL_KEY);
-        trace_one(scene, tracer, params, &mut rng, &mut sky, junctions.as_mut(), &mut counters, splat);
-    }
-    counters
+    let mut program = LightPaths { scene, tracer, params, kernel, pass, splat, counters: Counters::default() };
+    lanes::run(&mut program, tracer, paths);
+    program.counters
 }
 
 /// Last key of the visible-sky stream, keeping it apart from every other `Stream::Aux` stream.
@@ -84,84 +85,124 @@ fn visible_sky<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, rng: &mut Sample
     }
 }
 
-/// One light path of LT, or of segment LT ([`crate::estimators::segment::slt`]) when `junctions` is
-/// given: then at every surface the path reaches, the next segment starts at a point the
-/// kernel draws around it, and the shading point (BSDF, camera connection, continuation)
-/// moves there, which is where eq. (6) evaluates f_r in light order.
-#[allow(clippy::too_many_arguments)]
-fn trace_one<Q: RayQuery + ?Sized>(
-    scene: &Scene,
-    tracer: &Q,
-    params: &RenderParams,
-    rng: &mut SampleStream,
-    sky_rng: &mut SampleStream,
-    mut junctions: Option<&mut Junctions>,
-    counters: &mut Counters,
-    splat: &mut dyn FnMut(Splat),
-) {
-    let Some(table) = scene.light_selection.as_ref() else { return };
-    if params.max_depth.allows(1) && scene.infinite_lights().next().is_some() {
-        visible_sky(scene, tracer, sky_rng, counters, splat);
-    }
-    // Sample the light path's first vertex and direction.
-    let chosen = table.sample(rng.next_f32());
-    let light = &scene.lights[chosen.index];
-    let (u_pos, u_dir) = (rng.next_2d(), rng.next_2d());
-    let Some(es) = light.sample_le(u_pos, u_dir) else { return };
-    let pdf_pos = chosen.pmf * if es.delta_pos { 1.0 } else { es.pdf_pos.0 };
-    if !(pdf_pos > 0.0) || !es.pdf_dir.is_positive() {
-        return;
-    }
+/// LT's light paths over a range of path indices, on the lane loop; segment LT's
+/// ([`crate::estimators::segment::slt`]) when a kernel is given: then at every surface the
+/// path reaches, the next segment starts at a point the kernel draws around it, and the
+/// shading point (BSDF, camera connection, continuation) moves there, which is where
+/// eq. (6) evaluates f_r in light order.
+struct LightPaths<'a, Q: ?Sized> {
+    scene: &'a Scene,
+    tracer: &'a Q,
+    params: &'a RenderParams,
+    kernel: Kernel,
+    pass: u32,
+    splat: &'a mut dyn FnMut(Splat),
+    counters: Counters,
+}
 
-    // Connect the light vertex itself to the camera (a directly visible emitter).
-    if params.max_depth.allows(1) && !light.is_infinite() {
-        let u_lens = scene.camera.lens_u(sky_rng);
-        if let Some(cs) = scene.camera.sample_wi(es.p, u_lens) {
-            let le = light.radiance(es.p, es.n, cs.wi);
-            let cos_light = if es.n == Vec3::ZERO { 1.0 } else { es.n.dot(cs.wi).abs() };
-            let value = le * (cos_light * scene.camera.arriving_importance(&cs) / pdf_pos);
-            if !value.is_black() {
-                counters.rays += 1;
-                if !tracer.occluded(&spawn_ray_to(es.p, es.n, cs.position, Vec3::ZERO)) {
-                    splat(Splat { film: cs.film, value: counters.sanitize(value) });
-                }
-            }
+/// One light path in flight.
+struct LightPath {
+    rng: SampleStream,
+    /// The visible-sky stream, which also draws the lens points of camera connections.
+    sky: SampleStream,
+    junctions: Option<Junctions>,
+    state: PathState,
+    roulette: Roulette,
+    /// The camera connection waiting for its shadow ray.
+    pending: Option<Splat>,
+}
+
+impl<Q: RayQuery + ?Sized> LaneProgram for LightPaths<'_, Q> {
+    type Path = LightPath;
+
+    fn start(&mut self, index: u32) -> Option<LightPath> {
+        let (scene, params, tracer) = (self.scene, self.params, self.tracer);
+        let mut rng = SampleStream::for_sample(params.seed, Stream::Light, index, self.pass, 0);
+        let mut sky = SampleStream::for_sample(params.seed, Stream::Aux, index, self.pass, SKY_KEY);
+        let junctions = Junctions::for_path(self.kernel, params.seed, index, self.pass, LIGHT_KERNEL_KEY);
+        let table = scene.light_selection.as_ref()?;
+        if params.max_depth.allows(1) && scene.infinite_lights().next().is_some() {
+            visible_sky(scene, tracer, &mut sky, &mut self.counters, self.splat);
         }
-    }
+        // Sample the light path's first vertex and direction.
+        let chosen = table.sample(rng.next_f32());
+        let light = &scene.lights[chosen.index];
+        let (u_pos, u_dir) = (rng.next_2d(), rng.next_2d());
+        let es = light.sample_le(u_pos, u_dir)?;
+        let pdf_pos = chosen.pmf * if es.delta_pos { 1.0 } else { es.pdf_pos.0 };
+        if !(pdf_pos > 0.0) || !es.pdf_dir.is_positive() {
+            return None;
+        }
 
-    let cos0 = if es.n == Vec3::ZERO { 1.0 } else { es.n.dot(es.dir).abs() };
-    let beta = es.radiance * (cos0 / (pdf_pos * es.pdf_dir.0));
-    let roulette = Roulette::Throughput { reference: crate::transport::light_roulette_reference(beta) };
-    let ray = if es.n == Vec3::ZERO { crate::geometry::Ray::new(es.p, es.dir, f32::INFINITY) } else { crate::geometry::spawn_ray(es.p, es.n, es.dir) };
-    let first_dim = rng.dimension();
-    let mut path = PathState::new(ray, beta, first_dim + WALK.layout.per_bounce);
-    while let Some(arrived) = WALK.trace(tracer, &path, counters) {
-        // The next segment starts here, or where the kernel puts it (the shading point
-        // moves there, β takes the kernel's reversed ratio).
-        let hit = WALK.junction(tracer, &mut path, &arrived, junctions.as_deref_mut(), counters).map_or(arrived, |m| m.at);
-        let sp = SurfacePoint::new(hit, -path.ray.dir);
-        let material = sp.material(scene);
-
-        // Connect this vertex to the camera: segments + 1 segments in all.
-        if !material.is_delta() && params.max_depth.allows(path.segments + 1) {
-            // The lens point from the auxiliary stream, so the walk's dimensions stay.
-            let u_lens = scene.camera.lens_u(sky_rng);
-            if let Some(cs) = scene.camera.sample_wi(hit.p, u_lens) {
-                let f = sp.f_cos(scene, cs.wi, TransportMode::Importance);
-                let value = path.beta * f * scene.camera.arriving_importance(&cs);
+        // Connect the light vertex itself to the camera (a directly visible emitter).
+        if params.max_depth.allows(1) && !light.is_infinite() {
+            let u_lens = scene.camera.lens_u(&mut sky);
+            if let Some(cs) = scene.camera.sample_wi(es.p, u_lens) {
+                let le = light.radiance(es.p, es.n, cs.wi);
+                let cos_light = if es.n == Vec3::ZERO { 1.0 } else { es.n.dot(cs.wi).abs() };
+                let value = le * (cos_light * scene.camera.arriving_importance(&cs) / pdf_pos);
                 if !value.is_black() {
-                    counters.rays += 1;
-                    if !tracer.occluded(&sp.spawn_to(cs.position, Vec3::ZERO)) {
-                        splat(Splat { film: cs.film, value: counters.sanitize(value) });
+                    self.counters.rays += 1;
+                    if !tracer.occluded(&spawn_ray_to(es.p, es.n, cs.position, Vec3::ZERO)) {
+                        (self.splat)(Splat { film: cs.film, value: self.counters.sanitize(value) });
                     }
                 }
             }
         }
-        if !params.max_depth.allows(path.segments + 2) {
-            break;
+
+        let cos0 = if es.n == Vec3::ZERO { 1.0 } else { es.n.dot(es.dir).abs() };
+        let beta = es.radiance * (cos0 / (pdf_pos * es.pdf_dir.0));
+        let roulette = Roulette::Throughput { reference: crate::transport::light_roulette_reference(beta) };
+        let ray = if es.n == Vec3::ZERO { crate::geometry::Ray::new(es.p, es.dir, f32::INFINITY) } else { crate::geometry::spawn_ray(es.p, es.n, es.dir) };
+        let state = PathState::new(ray, beta, rng.dimension() + WALK.layout.per_bounce);
+        Some(LightPath { rng, sky, junctions, state, roulette, pending: None })
+    }
+
+    fn ray(&self, path: &LightPath) -> Ray {
+        path.state.ray
+    }
+
+    fn arrive(&mut self, path: &mut LightPath, arrived: Option<SurfaceHit>) -> Arrival {
+        let (scene, params) = (self.scene, self.params);
+        self.counters.rays += 1;
+        let Some(arrived) = arrived else { return Arrival { shadow: None, continues: false } };
+        // The next segment starts here, or where the kernel puts it (the shading point
+        // moves there, β takes the kernel's reversed ratio).
+        let hit = WALK.junction(self.tracer, &mut path.state, &arrived, path.junctions.as_mut(), &mut self.counters).map_or(arrived, |m| m.at);
+        let sp = SurfacePoint::new(hit, -path.state.ray.dir);
+        let material = sp.material(scene);
+
+        // Connect this vertex to the camera: segments + 1 segments in all.
+        let mut shadow = None;
+        path.pending = None;
+        if !material.is_delta() && params.max_depth.allows(path.state.segments + 1) {
+            // The lens point from the auxiliary stream, so the walk's dimensions stay.
+            let u_lens = scene.camera.lens_u(&mut path.sky);
+            if let Some(cs) = scene.camera.sample_wi(hit.p, u_lens) {
+                let f = sp.f_cos(scene, cs.wi, TransportMode::Importance);
+                let value = path.state.beta * f * scene.camera.arriving_importance(&cs);
+                if !value.is_black() {
+                    self.counters.rays += 1;
+                    shadow = Some(sp.spawn_to(cs.position, Vec3::ZERO));
+                    path.pending = Some(Splat { film: cs.film, value });
+                }
+            }
+        }
+        if !params.max_depth.allows(path.state.segments + 2) {
+            return Arrival { shadow, continues: false };
         }
 
         // Sample the adjoint BSDF to continue.
-        let Leave::Continues(_) = WALK.scatter(params, &mut path, &sp, sp.frame.to_local(sp.wo), &material, None, roulette, rng) else { break };
+        let leave = WALK.scatter(params, &mut path.state, &sp, sp.frame.to_local(sp.wo), &material, None, path.roulette, &mut path.rng);
+        Arrival { shadow, continues: matches!(leave, Leave::Continues(_)) }
     }
+
+    fn leave(&mut self, path: &mut LightPath, arrival: Arrival, occluded: Option<bool>) -> bool {
+        if let (Some(s), Some(false)) = (path.pending.take(), occluded) {
+            (self.splat)(Splat { film: s.film, value: self.counters.sanitize(s.value) });
+        }
+        arrival.continues
+    }
+
+    fn finish(&mut self, _: LightPath) {}
 }

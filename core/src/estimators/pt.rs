@@ -8,6 +8,11 @@
 //! balance or power heuristic, w_L = h(p_L, p_B), w_B = h(p_B, p_L) (Veach 1997,
 //! eq. 9.13/9.14); emitters reached after a Dirac bounce, or seen directly, carry weight 1.
 //! Throughput β = Π f |cos θ| / p_B; Russian roulette from `rr_depth` keeps it unbiased.
+//!
+//! The paths run on the lane loop ([`crate::transport::lanes`]): a batch of a chunk's
+//! pixels in flight, their closest-hit rays and their next-event shadow rays asked in
+//! batches, a finished lane refilled with the next pixel. One path's steps are the same
+//! whatever runs beside it, so the image is the same at every batch width.
 
 use core::ops::Range;
 
@@ -18,6 +23,7 @@ use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::segment::{CAMERA_KERNEL_KEY, Junctions, Kernel, start_cosine};
 use crate::spectrum::Rgb;
+use crate::transport::lanes::{self, Arrival, LaneProgram};
 use crate::transport::walk::{LastBounce, Layout, Leave, PathState, Roulette, Walk, light_origin, shadow_ray};
 use crate::transport::{Counters, RenderParams, SurfacePoint};
 
@@ -42,64 +48,104 @@ pub(crate) fn render_pixels_with_kernel<Q: RayQuery + ?Sized>(
     pixels: Range<u32>,
     out: &mut [Rgb],
 ) -> Counters {
-    let mut counters = Counters::default();
-    let width = scene.camera.width().max(1);
-    for (slot, pixel) in out.iter_mut().zip(pixels) {
-        let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
-        // Draw the film point from the pixel filter (and a lens point); outside the
-        // image the sample's weight is 0.
-        let Some(primary) = scene.camera.sample_ray(pixel % width, pixel / width, &mut rng) else {
-            *slot = Rgb::ZERO;
-            continue;
-        };
-        let mut junctions = Junctions::for_path(kernel, params.seed, pixel, pass, CAMERA_KERNEL_KEY);
-        let l = walk(scene, tracer, params, primary.ray, &mut rng, junctions.as_mut(), &mut counters);
-        *slot = counters.sanitize(l * primary.weight);
-    }
-    counters
+    let items = pixels.start..pixels.start.saturating_add(out.len() as u32).min(pixels.end);
+    let mut paths = CameraPaths { scene, tracer, params, kernel, pass, first: pixels.start, out, counters: Counters::default() };
+    lanes::run(&mut paths, tracer, items);
+    paths.counters
 }
 
 /// Radiance arriving along `ray` (a camera ray), estimated by one path.
 pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, ray: Ray, rng: &mut SampleStream, counters: &mut Counters) -> Rgb {
-    walk(scene, tracer, params, ray, rng, None, counters)
+    if !params.max_depth.allows(1) {
+        return Rgb::ZERO;
+    }
+    let mut paths = CameraPaths { scene, tracer, params, kernel: Kernel::Dirac, pass: 0, first: 0, out: &mut [], counters: Counters::default() };
+    let state = PathState::new(ray, Rgb::ONE, rng.dimension() + WALK.layout.per_bounce);
+    let path = CameraPath { pixel: 0, weight: 1.0, rng: rng.clone(), junctions: None, state, l: Rgb::ZERO, pending: Rgb::ZERO };
+    let path = lanes::run_one(&mut paths, tracer, path);
+    *rng = path.rng;
+    *counters += paths.counters;
+    path.l
 }
 
-/// The camera walk of PT and of segment PT ([`crate::estimators::segment::spt`]) on the one walk
-/// ([`crate::transport::walk`]): with `junctions` `None` (the Dirac kernel) each segment
-/// starts where the previous one ended, which is path tracing; otherwise each next
-/// segment starts at a point the kernel draws around the end of the previous one (eq.
-/// 15's p_K), from a random stream of its own, so the walk's own random numbers keep PT's
-/// layout. What PT records per vertex: emission weighted against light sampling, and
-/// next-event estimation.
-fn walk<Q: RayQuery + ?Sized>(
-    scene: &Scene,
-    tracer: &Q,
-    params: &RenderParams,
-    ray: Ray,
-    rng: &mut SampleStream,
-    mut junctions: Option<&mut Junctions>,
-    counters: &mut Counters,
-) -> Rgb {
-    let mut l = Rgb::ZERO;
-    // max_depth 0 allows no segment at all: not even the camera ray (black, as Mitsuba).
-    if !params.max_depth.allows(1) {
-        return l;
+/// PT's camera paths over a range of pixels, on the lane loop: the camera walk of PT and
+/// of segment PT ([`crate::estimators::segment::spt`]) on the one walk
+/// ([`crate::transport::walk`]). With no kernel (the Dirac kernel) each segment starts
+/// where the previous one ended, which is path tracing; otherwise each next segment
+/// starts at a point the kernel draws around the end of the previous one (eq. 15's p_K),
+/// from a random stream of its own, so the walk's own random numbers keep PT's layout.
+/// What PT records per vertex: emission weighted against light sampling, and next-event
+/// estimation.
+struct CameraPaths<'a, Q: ?Sized> {
+    scene: &'a Scene,
+    tracer: &'a Q,
+    params: &'a RenderParams,
+    kernel: Kernel,
+    pass: u32,
+    /// The pixel of `out[0]`.
+    first: u32,
+    out: &'a mut [Rgb],
+    counters: Counters,
+}
+
+/// One pixel's camera path in flight.
+struct CameraPath {
+    pixel: u32,
+    /// The camera sample's filter weight.
+    weight: f32,
+    rng: SampleStream,
+    junctions: Option<Junctions>,
+    state: PathState,
+    /// Radiance gathered so far (without the filter weight).
+    l: Rgb,
+    /// β times the next-event sample waiting for its shadow ray.
+    pending: Rgb,
+}
+
+impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
+    type Path = CameraPath;
+
+    fn start(&mut self, pixel: u32) -> Option<CameraPath> {
+        let width = self.scene.camera.width().max(1);
+        let mut rng = SampleStream::for_sample(self.params.seed, Stream::Camera, pixel, self.pass, 0);
+        // Draw the film point from the pixel filter (and a lens point); outside the
+        // image the sample's weight is 0.
+        let Some(primary) = self.scene.camera.sample_ray(pixel % width, pixel / width, &mut rng) else {
+            self.write(pixel, Rgb::ZERO);
+            return None;
+        };
+        // max_depth 0 allows no segment at all: not even the camera ray (black, as Mitsuba).
+        if !self.params.max_depth.allows(1) {
+            let black = self.counters.sanitize(Rgb::ZERO * primary.weight);
+            self.write(pixel, black);
+            return None;
+        }
+        let junctions = Junctions::for_path(self.kernel, self.params.seed, pixel, self.pass, CAMERA_KERNEL_KEY);
+        let state = PathState::new(primary.ray, Rgb::ONE, rng.dimension() + WALK.layout.per_bounce);
+        Some(CameraPath { pixel, weight: primary.weight, rng, junctions, state, l: Rgb::ZERO, pending: Rgb::ZERO })
     }
-    let first_dim = rng.dimension();
-    let mut path = PathState::new(ray, Rgb::ONE, first_dim + WALK.layout.per_bounce);
-    loop {
-        let ray = path.ray;
-        let Some(hit) = WALK.trace(tracer, &path, counters) else {
+
+    fn ray(&self, path: &CameraPath) -> Ray {
+        path.state.ray
+    }
+
+    fn arrive(&mut self, path: &mut CameraPath, hit: Option<SurfaceHit>) -> Arrival {
+        let (scene, params) = (self.scene, self.params);
+        let end = Arrival { shadow: None, continues: false };
+        let ray = path.state.ray;
+        self.counters.rays += 1;
+        let Some(hit) = hit else {
             // Escaped: add the infinite lights, weighted against light sampling.
             for (id, light) in scene.infinite_lights() {
                 let le = light.environment_radiance(ray.dir);
                 if le.is_black() {
                     continue;
                 }
-                let w = emission_weight(params, path.last, || scene.light_pmf(id) * light.pdf_li(prev_p(path.last), ray.dir, Vec3::ZERO, Vec3::ZERO).0);
-                l += path.beta * le * w;
+                let w =
+                    emission_weight(params, path.state.last, || scene.light_pmf(id) * light.pdf_li(prev_p(path.state.last), ray.dir, Vec3::ZERO, Vec3::ZERO).0);
+                path.l += path.state.beta * le * w;
             }
-            break;
+            return end;
         };
         let sp = SurfacePoint::new(hit, -ray.dir);
 
@@ -108,31 +154,87 @@ fn walk<Q: RayQuery + ?Sized>(
             let light = &scene.lights[id as usize];
             let le = light.radiance(hit.p, hit.ng, -ray.dir);
             if !le.is_black() {
-                let w = emission_weight(params, path.last, || scene.light_pmf(id) * light.pdf_li(prev_p(path.last), ray.dir, hit.p, hit.ng).0);
-                l += path.beta * le * w;
+                let w = emission_weight(params, path.state.last, || scene.light_pmf(id) * light.pdf_li(prev_p(path.state.last), ray.dir, hit.p, hit.ng).0);
+                path.l += path.state.beta * le * w;
             }
         }
-        if !params.max_depth.allows(path.segments + 1) {
-            break;
+        if !params.max_depth.allows(path.state.segments + 1) {
+            return end;
         }
         let material = sp.material(scene);
 
         // Start the next segment: at this vertex, or where the kernel puts it.
-        let moved = WALK.junction(tracer, &mut path, &hit, junctions.as_deref_mut(), counters);
+        let moved = WALK.junction(self.tracer, &mut path.state, &hit, path.junctions.as_mut(), &mut self.counters);
         let start = moved.as_ref().map(|m| &m.at);
 
-        // Sample a light (next-event estimation) unless the BSDF is all Dirac.
+        // Sample a light (next-event estimation) unless the BSDF is all Dirac; its
+        // shadow ray is tested with the batch's.
         let wo_local = sp.frame.to_local(sp.wo);
+        let mut shadow = None;
         if !material.is_delta() {
             let at = Shading { sp: &sp, material: &material, wo_local, start };
-            l += path.beta * next_event(scene, tracer, params, &path, &at, rng, counters);
+            if let Some((ray, value)) = self.next_event(&path.state, &at, &mut path.rng) {
+                path.pending = path.state.beta * value;
+                shadow = Some(ray);
+            }
         }
 
         // Sample the BSDF to continue the path.
         let roulette = Roulette::Throughput { reference: 1.0 };
-        let Leave::Continues(_) = WALK.scatter(params, &mut path, &sp, wo_local, &material, start, roulette, rng) else { break };
+        let continues = matches!(WALK.scatter(params, &mut path.state, &sp, wo_local, &material, start, roulette, &mut path.rng), Leave::Continues(_));
+        Arrival { shadow, continues }
     }
-    l
+
+    fn leave(&mut self, path: &mut CameraPath, arrival: Arrival, occluded: Option<bool>) -> bool {
+        if occluded == Some(false) {
+            path.l += path.pending;
+        }
+        arrival.continues
+    }
+
+    fn finish(&mut self, path: CameraPath) {
+        let value = self.counters.sanitize(path.l * path.weight);
+        self.write(path.pixel, value);
+    }
+}
+
+impl<Q: RayQuery + ?Sized> CameraPaths<'_, Q> {
+    fn write(&mut self, pixel: u32, value: Rgb) {
+        if let Some(slot) = self.out.get_mut(pixel.wrapping_sub(self.first) as usize) {
+            *slot = value;
+        }
+    }
+
+    /// One light sample from `at.sp` at the path's current bounce: choose a light ∝
+    /// power, sample a point on it, weight against BSDF sampling. Returns the shadow ray
+    /// and the weighted contribution (without β) it carries if unoccluded. With a
+    /// kernel-moved `start` (segment PT) the light is sampled from there, the BSDF is
+    /// still the one of `sp` (eq. 6) and the cosine the one at `start`.
+    fn next_event(&mut self, path: &PathState, at: &Shading, rng: &mut SampleStream) -> Option<(Ray, Rgb)> {
+        let (sp, start) = (at.sp, at.start);
+        let from = start.unwrap_or(&sp.hit);
+        // Seen from where reflected rays start (see `SurfacePoint::reflection_origin`).
+        let draw = WALK.draw_light(self.scene, path, light_origin(from, sp.wo), rng)?;
+        let ls = &draw.sample;
+        // f |cos| (eq. 6): the BSDF at `sp`, the cosine at the segment's start.
+        let wi_local = sp.frame.to_local(ls.wi);
+        // The BSDF's density is needed for the MIS weight unless the light is a Dirac
+        // one; evaluating both together shares their common terms (bit-identical).
+        let (f, bsdf_pdf) = if ls.is_delta {
+            (at.material.eval(at.wo_local, wi_local, TransportMode::Radiance), 0.0)
+        } else {
+            let (f, pdf) = at.material.eval_pdf(at.wo_local, wi_local, TransportMode::Radiance);
+            (f, pdf.0)
+        };
+        if f.is_black() {
+            return None;
+        }
+        let f = f * start_cosine(sp, start, ls.wi, wi_local, TransportMode::Radiance);
+        self.counters.rays += 1;
+        let light_pdf = draw.pmf * ls.pdf.0;
+        let w = if ls.is_delta { 1.0 } else { self.params.heuristic.weight(light_pdf, bsdf_pdf) };
+        Some((shadow_ray(from, ls), f * ls.radiance * (w / light_pdf)))
+    }
 }
 
 #[inline]
@@ -158,46 +260,4 @@ struct Shading<'a> {
     material: &'a Material,
     wo_local: Vec3,
     start: Option<&'a SurfaceHit>,
-}
-
-/// One light sample from `at.sp` at the path's current bounce: choose a light ∝ power,
-/// sample a point on it, trace the shadow ray, weight against BSDF sampling. Returns the
-/// weighted contribution (without β). With a kernel-moved `start` (segment PT) the light
-/// is sampled from there, the BSDF is still the one of `sp` (eq. 6) and the cosine the
-/// one at `start`.
-fn next_event<Q: RayQuery + ?Sized>(
-    scene: &Scene,
-    tracer: &Q,
-    params: &RenderParams,
-    path: &PathState,
-    at: &Shading,
-    rng: &mut SampleStream,
-    counters: &mut Counters,
-) -> Rgb {
-    let (sp, start) = (at.sp, at.start);
-    let from = start.unwrap_or(&sp.hit);
-    // Seen from where reflected rays start (see `SurfacePoint::reflection_origin`).
-    let Some(draw) = WALK.draw_light(scene, path, light_origin(from, sp.wo), rng) else { return Rgb::ZERO };
-    let ls = &draw.sample;
-    // f |cos| (eq. 6): the BSDF at `sp`, the cosine at the segment's start.
-    let wi_local = sp.frame.to_local(ls.wi);
-    // The BSDF's density is needed for the MIS weight unless the light is a Dirac one;
-    // evaluating both together shares their common terms (bit-identical).
-    let (f, bsdf_pdf) = if ls.is_delta {
-        (at.material.eval(at.wo_local, wi_local, TransportMode::Radiance), 0.0)
-    } else {
-        let (f, pdf) = at.material.eval_pdf(at.wo_local, wi_local, TransportMode::Radiance);
-        (f, pdf.0)
-    };
-    if f.is_black() {
-        return Rgb::ZERO;
-    }
-    let f = f * start_cosine(sp, start, ls.wi, wi_local, TransportMode::Radiance);
-    counters.rays += 1;
-    if tracer.occluded(&shadow_ray(from, ls)) {
-        return Rgb::ZERO;
-    }
-    let light_pdf = draw.pmf * ls.pdf.0;
-    let w = if ls.is_delta { 1.0 } else { params.heuristic.weight(light_pdf, bsdf_pdf) };
-    f * ls.radiance * (w / light_pdf)
 }
