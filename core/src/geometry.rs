@@ -70,19 +70,27 @@ pub trait RayQuery {
     /// True if anything blocks the ray for t in (0, ray.t_max). May stop at the first hit.
     fn occluded(&self, ray: &Ray) -> bool;
 
+    /// How many rays this tracer answers best at once: the number of paths the lane
+    /// loop keeps in flight (clamped to `transport::lanes::LANES`). 1, the default,
+    /// asks one ray at a time, as a depth-first path tracer does; the images are the
+    /// same at every width.
+    fn batch_width(&self) -> usize {
+        1
+    }
+
     /// [`Self::intersect`] for rays `0..n` of `rays` into `hits[..n]`, where `n` is the
     /// shorter of `rays.len()` and `hits.len()`; the rest of `hits` is left as it was.
     fn intersect_batch(&self, rays: RayBatch<'_>, hits: &mut [Option<SurfaceHit>]) {
-        for (i, hit) in hits.iter_mut().take(rays.len()).enumerate() {
-            *hit = self.intersect(&rays.ray(i));
+        for (hit, ray) in hits.iter_mut().zip(rays.iter()) {
+            *hit = self.intersect(&ray);
         }
     }
 
     /// [`Self::occluded`] for rays `0..n` of `rays` into `occluded[..n]`, `n` as for
     /// [`Self::intersect_batch`].
     fn occluded_batch(&self, rays: RayBatch<'_>, occluded: &mut [bool]) {
-        for (i, o) in occluded.iter_mut().take(rays.len()).enumerate() {
-            *o = self.occluded(&rays.ray(i));
+        for (o, ray) in occluded.iter_mut().zip(rays.iter()) {
+            *o = self.occluded(&ray);
         }
     }
 }
@@ -112,11 +120,23 @@ impl RayBatch<'_> {
         self.len() == 0
     }
 
-    /// Ray `i` (`i < len()`).
+    /// Ray `i`, or `None` past the end.
     #[inline]
-    pub fn ray(&self, i: usize) -> Ray {
-        let (o, d) = (&self.origin, &self.dir);
-        Ray::new(Vec3::new(o[0][i], o[1][i], o[2][i]), Vec3::new(d[0][i], d[1][i], d[2][i]), self.t_max[i])
+    pub fn ray(&self, i: usize) -> Option<Ray> {
+        (i < self.len()).then(|| {
+            let (o, d) = (&self.origin, &self.dir);
+            Ray::new(Vec3::new(o[0][i], o[1][i], o[2][i]), Vec3::new(d[0][i], d[1][i], d[2][i]), self.t_max[i])
+        })
+    }
+
+    /// The rays in order.
+    #[inline]
+    pub fn iter(&self) -> impl Iterator<Item = Ray> + '_ {
+        let ([ox, oy, oz], [dx, dy, dz]) = (self.origin, self.dir);
+        // Zipped slice iterators: no index, so no bounds check per component.
+        let origins = ox.iter().zip(oy).zip(oz).map(|((&x, &y), &z)| Vec3::new(x, y, z));
+        let dirs = dx.iter().zip(dy).zip(dz).map(|((&x, &y), &z)| Vec3::new(x, y, z));
+        origins.zip(dirs).zip(self.t_max).map(|((o, d), &t)| Ray::new(o, d, t))
     }
 }
 
