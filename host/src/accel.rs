@@ -62,6 +62,8 @@
 //! not positive hits nothing.
 
 mod build;
+#[cfg(feature = "embree")]
+pub mod embree;
 mod hit;
 mod sphere;
 mod triangle;
@@ -110,6 +112,30 @@ pub trait TriangleBvh: Send + Sync + Sized {
     fn closest(&self, tris: &[[Vec3A; 3]], ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])>;
     /// True if anything lies in (0, ray.tmax); stops at the first hit.
     fn occluded(&self, tris: &[[Vec3A; 3]], ray: &BvhRay, wt: &WatertightRay) -> bool;
+    /// Heap bytes of the hierarchy and what its leaves hold (0 where not counted).
+    fn heap_bytes(&self) -> u64 {
+        0
+    }
+}
+
+/// What a ray-query structure holds on the heap, in bytes (`Vec` capacities).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AccelBytes {
+    /// What traversal reads: nodes and the leaves' triangle data.
+    pub hierarchy: u64,
+    /// The vertices the hit record reads (ours: a leaf-ordered copy; Embree's
+    /// structure: the shared vertex and index arrays, which its traversal reads too).
+    pub vertices: u64,
+    /// Normals, texture coordinates, material, emitter and index per triangle.
+    pub attributes: u64,
+    /// The spheres and their boxes or hierarchy.
+    pub spheres: u64,
+}
+
+impl AccelBytes {
+    pub fn total(&self) -> u64 {
+        self.hierarchy + self.vertices + self.attributes + self.spheres
+    }
 }
 
 /// obvhs's hierarchies call back per triangle: the scalar watertight test.
@@ -199,6 +225,9 @@ impl TriangleBvh for Wide {
     #[inline]
     fn occluded(&self, _: &[[Vec3A; 3]], ray: &BvhRay, wt: &WatertightRay) -> bool {
         Wide::occluded(self, ray, wt)
+    }
+    fn heap_bytes(&self) -> u64 {
+        Wide::heap_bytes(self)
     }
 }
 
@@ -342,6 +371,21 @@ impl<B: TriangleBvh> AccelWith<B> {
     /// Number of spheres kept.
     pub fn sphere_count(&self) -> usize {
         self.spheres.len()
+    }
+
+    /// What the structure holds on the heap.
+    pub fn bytes(&self) -> AccelBytes {
+        let cap = |n: usize, size: usize| (n * size) as u64;
+        let spheres = cap(self.spheres.capacity(), size_of::<Sphere>())
+            + cap(self.sphere_boxes.capacity(), size_of::<sphere::SphereBox>())
+            + cap(self.sphere_ids.capacity(), 4)
+            + self.sphere_bvh.as_ref().map_or(0, |b| cap(b.nodes.capacity(), size_of::<obvhs::bvh2::node::Bvh2Node>()) + cap(b.primitive_indices.capacity(), 4));
+        AccelBytes {
+            hierarchy: self.bvh.as_ref().map_or(0, B::heap_bytes),
+            vertices: cap(self.tris.capacity(), size_of::<[Vec3A; 3]>()),
+            attributes: cap(self.attrs.capacity(), size_of::<TriangleAttributes>()),
+            spheres,
+        }
     }
 
     /// Feed every value of the geometry the queries see (vertices, shading normals,
