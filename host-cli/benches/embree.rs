@@ -199,20 +199,24 @@ fn occlusion(v: Variant, ours: &Accel, theirs: &EmbreeAccel, rays: &[Ray], out: 
     rays.len() as f64 / t.elapsed().as_secs_f64() / 1e6
 }
 
-/// Closest-hit agreement: (same answer, t off by > 1e-4 relative, only one hits).
-fn agree_closest(a: &[Answer], b: &[Answer]) -> (usize, usize, usize) {
-    let (mut same, mut far, mut one) = (0, 0, 0);
+/// Closest-hit agreement: (same answer, t off by > 1e-4 relative, the largest t among
+/// those, only one hits).
+fn agree_closest(a: &[Answer], b: &[Answer]) -> (usize, usize, f32, usize) {
+    let (mut same, mut far, mut far_t, mut one) = (0, 0, 0.0f32, 0);
     for (x, y) in a.iter().zip(b) {
         match (x, y) {
             (None, None) => same += 1,
             (Some((hx, px)), Some((hy, py))) => {
                 same += (px == py) as usize;
-                far += ((hx.t - hy.t).abs() > 1e-4 * hx.t.abs().max(hy.t.abs())) as usize;
+                if (hx.t - hy.t).abs() > 1e-4 * hx.t.abs().max(hy.t.abs()) {
+                    far += 1;
+                    far_t = far_t.max(hx.t);
+                }
             }
             _ => one += 1,
         }
     }
-    (same, far, one)
+    (same, far, far_t, one)
 }
 
 /// Whether the hit deciding a disagreement is grazing (see the module documentation).
@@ -308,7 +312,7 @@ fn run_scene(s: &Loaded, options: BuildOptions) -> SceneResult {
 
     // Agreement with ours.
     for (i, who) in [(1, "E-1"), (4, "E-16")] {
-        let (same, far, one) = agree_closest(&c_out[0], &c_out[i]);
+        let (same, far, far_t, one) = agree_closest(&c_out[0], &c_out[i]);
         let differ: Vec<usize> = (0..shadow_rays.len()).filter(|&k| s_out[0][k] != s_out[i][k]).collect();
         let graze = differ
             .iter()
@@ -319,9 +323,10 @@ fn run_scene(s: &Loaded, options: BuildOptions) -> SceneResult {
             })
             .count();
         println!(
-            "agreement ours / {who}: closest same {:.4} % ({} t off > 1e-4 rel., {} hit/miss); occlusion differs on {} of {} ({} grazing)",
+            "agreement ours / {who}: closest same {:.4} % ({} t off > 1e-4 rel., all at t <= {:.1e}; {} hit/miss); occlusion differs on {} of {} ({} grazing)",
             100.0 * same as f64 / closest_rays.len().max(1) as f64,
             far,
+            far_t,
             one,
             differ.len(),
             shadow_rays.len(),
