@@ -165,7 +165,8 @@ enum Variant {
     Embree(Lanes),
 }
 
-const VARIANTS: [Variant; 5] = [Variant::Ours, Variant::Embree(Lanes::One), Variant::Embree(Lanes::Four), Variant::Embree(Lanes::Eight), Variant::Embree(Lanes::Sixteen)];
+const VARIANTS: [Variant; 5] =
+    [Variant::Ours, Variant::Embree(Lanes::One), Variant::Embree(Lanes::Four), Variant::Embree(Lanes::Eight), Variant::Embree(Lanes::Sixteen)];
 
 fn label(v: Variant) -> &'static str {
     match v {
@@ -349,7 +350,10 @@ fn main() {
     let mut dirs: Vec<PathBuf> = std::fs::read_dir(suite_dir()).expect("../shared/scenes").filter_map(|e| e.ok().map(|e| e.path())).collect();
     dirs.sort();
     let mut results = Vec::new();
-    println!("# Ours (BVH4) against Embree {} (robust: {robust}), one thread, {ROUNDS} interleaved rounds, medians\n", "3.13");
+    println!("# Ours (BVH4) against Embree (robust: {robust}), one thread, {ROUNDS} interleaved rounds, medians\n");
+    if let Some(info) = EmbreeAccel::new(&probe_scene()).ok().and_then(|e| e.device_info()) {
+        println!("Embree device: version {}, native 4/8/16-wide packets {:?}, tasking {}\n", info.version, info.native, info.tasking);
+    }
     for dir in dirs.iter().filter(|d| d.join("scene.xml").exists()) {
         let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         if wants(&name) {
@@ -358,9 +362,6 @@ fn main() {
     }
     if wants("big") {
         results.push(run_scene(&big_scene(), options));
-    }
-    if let Some(info) = EmbreeAccel::new(&big_scene_probe()).ok().and_then(|e| e.device_info()) {
-        println!("Embree device: version {}, native 4/8/16-wide packets {:?}, tasking {}", info.version, info.native, info.tasking);
     }
 
     // The summary: ours against Embree one ray and 16 wide.
@@ -390,7 +391,7 @@ fn main() {
 }
 
 /// A one-triangle scene, only to ask the device what it supports.
-fn big_scene_probe() -> SceneGeometry {
+fn probe_scene() -> SceneGeometry {
     let mut g = SceneGeometry::default();
     g.triangles.push(ember_core::shapes::Triangle { p: [Vec3::ZERO, Vec3::X, Vec3::Y], n: None, uv: None, material: 0, emitter: None });
     g

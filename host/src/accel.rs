@@ -37,6 +37,14 @@
 //! the hit record included (docs/performance.md). [`AccelWith`] keeps the obvhs variants for the benchmark and
 //! the tests (the CWBVH native only: obvhs's `build_cwbvh` reads the clock).
 //!
+//! # Against Embree
+//! With the cargo feature `embree`, module `embree` answers the same queries through
+//! Embree 3.13 (robust scene, one ray or packets of 4/8/16), for comparison:
+//! `host-cli/benches/embree.rs` traces PT's recorded rays of every suite scene and of a
+//! million-triangle scene through both. On PT's single rays Embree was 0.68–1.05× our
+//! speed on the suite scenes and 1.08× on the big one (docs/performance.md, "Our BVH4
+//! against Embree 3.13"), so the renderer keeps ours.
+//!
 //! # On every target
 //! Every hierarchy here is built by [`build_bvh2_without_clock`] (module `build`: obvhs's
 //! `build_bvh2` step for step, without its `Instant`, which traps in the browser), and
@@ -379,7 +387,10 @@ impl<B: TriangleBvh> AccelWith<B> {
         let spheres = cap(self.spheres.capacity(), size_of::<Sphere>())
             + cap(self.sphere_boxes.capacity(), size_of::<sphere::SphereBox>())
             + cap(self.sphere_ids.capacity(), 4)
-            + self.sphere_bvh.as_ref().map_or(0, |b| cap(b.nodes.capacity(), size_of::<obvhs::bvh2::node::Bvh2Node>()) + cap(b.primitive_indices.capacity(), 4));
+            + self
+                .sphere_bvh
+                .as_ref()
+                .map_or(0, |b| cap(b.nodes.capacity(), size_of::<obvhs::bvh2::node::Bvh2Node>()) + cap(b.primitive_indices.capacity(), 4));
         AccelBytes {
             hierarchy: self.bvh.as_ref().map_or(0, B::heap_bytes),
             vertices: cap(self.tris.capacity(), size_of::<[Vec3A; 3]>()),

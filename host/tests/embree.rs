@@ -80,7 +80,12 @@ fn answers_match_ours_at_every_width() {
     let mut s = SampleStream::for_sample(32, Stream::Aux, 0, 0, 0);
     let rays: Vec<Ray> = (0..20_000)
         .map(|i| Ray::new(point(&mut s, -1.5, 1.5), direction(&mut s), if i % 3 == 0 { 0.1 + s.next_f32() } else { f32::INFINITY }))
-        .chain([Ray::new(Vec3::ZERO, Vec3::ZERO, 1.0), Ray::new(Vec3::ZERO, Vec3::X, 0.0), Ray::new(Vec3::NAN, Vec3::X, 1.0), Ray::new(Vec3::ZERO, Vec3::X, f32::NAN)])
+        .chain([
+            Ray::new(Vec3::ZERO, Vec3::ZERO, 1.0),
+            Ray::new(Vec3::ZERO, Vec3::X, 0.0),
+            Ray::new(Vec3::NAN, Vec3::X, 1.0),
+            Ray::new(Vec3::ZERO, Vec3::X, f32::NAN),
+        ])
         .collect();
     for lanes in Lanes::ALL {
         let mut hits = vec![None; rays.len()];

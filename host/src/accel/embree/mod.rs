@@ -128,7 +128,9 @@ impl EmbreeAccel {
             attrs.push(TriangleAttributes { ng, normals: t.n, texcoords: t.uv, material: t.material, emitter: t.emitter, original: original as u32 });
         }
         // Hold what is used (the buffers live as long as the scene).
-        (vertices.shrink_to_fit(), indices.shrink_to_fit(), attrs.shrink_to_fit());
+        vertices.shrink_to_fit();
+        indices.shrink_to_fit();
+        attrs.shrink_to_fit();
         let embree = if indices.is_empty() { None } else { Some(EmbreeScene::new(vertices, indices, options)?) };
         let spheres = AccelWith::<Wide>::new(&SceneGeometry { triangles: Vec::new(), spheres: geometry.spheres.clone() });
         Ok(Self { embree, attrs, spheres })
