@@ -38,6 +38,17 @@ cargo build --release -p ember-core --target thumbv7em-none-eabihf --no-default-
 step "workspace tests (optimised)"
 cargo test --release --workspace
 
+step "Embree's ray queries against ours (feature embree: our FFI, its lints, its test)"
+if [ ! -e /usr/include/embree3/rtcore.h ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+  apt-get install -y libembree-dev >/dev/null || { apt-get update >/dev/null && apt-get install -y libembree-dev >/dev/null; } || true
+fi
+if [ -e /usr/include/embree3/rtcore.h ]; then
+  cargo clippy -p ember-host -p ember-cli --all-targets --features ember-cli/embree -- -D warnings
+  cargo test --release -p ember-host --features embree --test embree
+else
+  echo "skipped: Embree 3 is not installed (apt-get install libembree-dev, as root)"
+fi
+
 step "the C API from C: the example and the error table under AddressSanitizer and UBSan"
 scripts/test-capi.sh
 

@@ -37,6 +37,14 @@
 //! the hit record included (docs/performance.md). [`AccelWith`] keeps the obvhs variants for the benchmark and
 //! the tests (the CWBVH native only: obvhs's `build_cwbvh` reads the clock).
 //!
+//! # Against Embree
+//! With the cargo feature `embree`, module `embree` answers the same queries through
+//! Embree 3.13 (robust scene, one ray or packets of 4/8/16), for comparison:
+//! `host-cli/benches/embree.rs` traces PT's recorded rays of every suite scene and of a
+//! million-triangle scene through both. On PT's single rays Embree was 0.68–1.05× our
+//! speed on the suite scenes and 1.08× on the big one (docs/performance.md, "Our BVH4
+//! against Embree 3.13"), so the renderer keeps ours.
+//!
 //! # On every target
 //! Every hierarchy here is built by [`build_bvh2_without_clock`] (module `build`: obvhs's
 //! `build_bvh2` step for step, without its `Instant`, which traps in the browser), and
@@ -62,6 +70,8 @@
 //! not positive hits nothing.
 
 mod build;
+#[cfg(feature = "embree")]
+pub mod embree;
 mod hit;
 mod sphere;
 mod triangle;
@@ -110,6 +120,30 @@ pub trait TriangleBvh: Send + Sync + Sized {
     fn closest(&self, tris: &[[Vec3A; 3]], ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])>;
     /// True if anything lies in (0, ray.tmax); stops at the first hit.
     fn occluded(&self, tris: &[[Vec3A; 3]], ray: &BvhRay, wt: &WatertightRay) -> bool;
+    /// Heap bytes of the hierarchy and what its leaves hold (0 where not counted).
+    fn heap_bytes(&self) -> u64 {
+        0
+    }
+}
+
+/// What a ray-query structure holds on the heap, in bytes (`Vec` capacities).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AccelBytes {
+    /// What traversal reads: nodes and the leaves' triangle data.
+    pub hierarchy: u64,
+    /// The vertices the hit record reads (ours: a leaf-ordered copy; Embree's
+    /// structure: the shared vertex and index arrays, which its traversal reads too).
+    pub vertices: u64,
+    /// Normals, texture coordinates, material, emitter and index per triangle.
+    pub attributes: u64,
+    /// The spheres and their boxes or hierarchy.
+    pub spheres: u64,
+}
+
+impl AccelBytes {
+    pub fn total(&self) -> u64 {
+        self.hierarchy + self.vertices + self.attributes + self.spheres
+    }
 }
 
 /// obvhs's hierarchies call back per triangle: the scalar watertight test.
@@ -199,6 +233,9 @@ impl TriangleBvh for Wide {
     #[inline]
     fn occluded(&self, _: &[[Vec3A; 3]], ray: &BvhRay, wt: &WatertightRay) -> bool {
         Wide::occluded(self, ray, wt)
+    }
+    fn heap_bytes(&self) -> u64 {
+        Wide::heap_bytes(self)
     }
 }
 
@@ -342,6 +379,24 @@ impl<B: TriangleBvh> AccelWith<B> {
     /// Number of spheres kept.
     pub fn sphere_count(&self) -> usize {
         self.spheres.len()
+    }
+
+    /// What the structure holds on the heap.
+    pub fn bytes(&self) -> AccelBytes {
+        let cap = |n: usize, size: usize| (n * size) as u64;
+        let spheres = cap(self.spheres.capacity(), size_of::<Sphere>())
+            + cap(self.sphere_boxes.capacity(), size_of::<sphere::SphereBox>())
+            + cap(self.sphere_ids.capacity(), 4)
+            + self
+                .sphere_bvh
+                .as_ref()
+                .map_or(0, |b| cap(b.nodes.capacity(), size_of::<obvhs::bvh2::node::Bvh2Node>()) + cap(b.primitive_indices.capacity(), 4));
+        AccelBytes {
+            hierarchy: self.bvh.as_ref().map_or(0, B::heap_bytes),
+            vertices: cap(self.tris.capacity(), size_of::<[Vec3A; 3]>()),
+            attributes: cap(self.attrs.capacity(), size_of::<TriangleAttributes>()),
+            spheres,
+        }
     }
 
     /// Feed every value of the geometry the queries see (vertices, shading normals,

@@ -10,7 +10,9 @@
 //! [`accel`]), and reading `/proc`. What it may not: read or write scene and image files
 //! (that is `ember-formats`), parse command lines (`ember-cli`), or print — a library
 //! host (the C API) prints nothing, so progress goes through [`driver::Progress`], which
-//! the command line implements.
+//! the command line implements. `unsafe` appears in one module only,
+//! `accel/embree/ffi.rs` (our bindings to Embree, behind the off-by-default feature
+//! `embree`).
 
 pub mod accel;
 #[cfg(feature = "threads")]

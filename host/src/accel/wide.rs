@@ -298,6 +298,11 @@ impl Wide {
         &self.order
     }
 
+    /// Heap bytes of the nodes, the leaf packets and the leaf order.
+    pub fn heap_bytes(&self) -> u64 {
+        (self.nodes.capacity() * size_of::<Node>() + self.packets.capacity() * size_of::<Packet>() + self.order.capacity() * size_of::<u32>()) as u64
+    }
+
     /// Closest hit in (0, ray.tmax): leaf slot, distance and barycentrics.
     #[inline]
     pub fn closest(&self, ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])> {
