@@ -184,7 +184,7 @@ fn closest(v: Variant, ours: &Accel, theirs: &EmbreeAccel, rays: &[Ray], coheren
     let t = Instant::now();
     match v {
         Variant::Ours => rays.iter().zip(out.iter_mut()).for_each(|(r, o)| *o = ours.intersect_primitive(black_box(r))),
-        Variant::Embree(lanes) => theirs.intersect_batch(black_box(rays), lanes, coherent, out),
+        Variant::Embree(lanes) => theirs.intersect_packets_of(black_box(rays), lanes, coherent, out),
     }
     black_box(&*out);
     rays.len() as f64 / t.elapsed().as_secs_f64() / 1e6
@@ -194,7 +194,7 @@ fn occlusion(v: Variant, ours: &Accel, theirs: &EmbreeAccel, rays: &[Ray], out: 
     let t = Instant::now();
     match v {
         Variant::Ours => rays.iter().zip(out.iter_mut()).for_each(|(r, o)| *o = ours.occluded(black_box(r))),
-        Variant::Embree(lanes) => theirs.occluded_batch(black_box(rays), lanes, false, out),
+        Variant::Embree(lanes) => theirs.occluded_packets_of(black_box(rays), lanes, false, out),
     }
     black_box(&*out);
     rays.len() as f64 / t.elapsed().as_secs_f64() / 1e6
@@ -342,6 +342,50 @@ fn suite_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes")
 }
 
+/// Embree answering one ray per call: the lane loop at width 1.
+struct OneAtATime<'a>(&'a EmbreeAccel);
+
+impl RayQuery for OneAtATime<'_> {
+    fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
+        self.0.intersect(ray)
+    }
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.0.occluded(ray)
+    }
+}
+
+/// PT itself (`pt::render_pixels`, `PASSES` passes of the whole image, one thread) through
+/// ours (width 1), Embree one ray per call (width 1) and Embree 16 rays per call (the
+/// lane loop at width 16), `ROUNDS` interleaved rounds: ksamples/s, medians. The two
+/// Embree images must be equal bit for bit (the lane loop's width does not change them).
+fn pt_on_lanes(s: &Loaded, options: BuildOptions) {
+    let r = &s.renderer;
+    let embree = EmbreeAccel::with_options(&s.geometry, options).expect("Embree builds");
+    let cam = &r.prepared.scene.camera;
+    let pixels = cam.width() * cam.height();
+    let render = |tracer: &dyn RayQuery| {
+        let mut out = vec![Rgb::ZERO; pixels as usize];
+        let mut images = Vec::new();
+        let start = Instant::now();
+        for pass in 0..PASSES {
+            pt::render_pixels(&r.prepared.scene, tracer, r.renderer.params(), pass, 0..pixels, &mut out);
+            images.push(out.clone());
+        }
+        ((PASSES * pixels) as f64 / start.elapsed().as_secs_f64() / 1e3, images)
+    };
+    let (mut ours, mut e1, mut e16) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..ROUNDS {
+        ours.push(render(&r.prepared.accel).0);
+        let (a, image1) = render(&OneAtATime(&embree));
+        let (b, image16) = render(&embree);
+        assert!(image1 == image16, "{}: Embree's image at width 16 differs from width 1", s.name);
+        e1.push(a);
+        e16.push(b);
+    }
+    let (o, a, b) = (median(ours), median(e1), median(e16));
+    println!("| {} | {o:.0} | {a:.0} | {b:.0} | {:.2} | {:.2} |", s.name, a / o, b / o);
+}
+
 fn main() {
     let robust = std::env::var("EMBREE_NOT_ROBUST").map_or(true, |v| v != "1");
     let options = BuildOptions { robust, threads: 0 };
@@ -349,6 +393,18 @@ fn main() {
     let wants = |n: &str| wanted.as_ref().is_none_or(|w| w.iter().any(|x| x == n));
     let mut dirs: Vec<PathBuf> = std::fs::read_dir(suite_dir()).expect("../shared/scenes").filter_map(|e| e.ok().map(|e| e.path())).collect();
     dirs.sort();
+    if std::env::var("EMBER_BENCH_PT").is_ok_and(|v| v == "1") {
+        println!("# PT on the lane loop, ksamples/s, one thread, {ROUNDS} interleaved rounds, medians\n");
+        println!("| scene | ours (width 1) | Embree, width 1 | Embree, width 16 | E-1 / ours | E-16 / ours |");
+        println!("|---|---|---|---|---|---|");
+        for dir in dirs.iter().filter(|d| d.join("scene.xml").exists()) {
+            let name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            if wants(&name) {
+                pt_on_lanes(&load_file(&dir.join("scene.xml")), options);
+            }
+        }
+        return;
+    }
     let mut results = Vec::new();
     println!("# Ours (BVH4) against Embree (robust: {robust}), one thread, {ROUNDS} interleaved rounds, medians\n");
     if let Some(info) = EmbreeAccel::new(&probe_scene()).ok().and_then(|e| e.device_info()) {

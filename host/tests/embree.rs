@@ -90,9 +90,9 @@ fn answers_match_ours_at_every_width() {
         .collect();
     for lanes in Lanes::ALL {
         let mut hits = vec![None; rays.len()];
-        theirs.intersect_batch(&rays, lanes, lanes == Lanes::Sixteen, &mut hits);
+        theirs.intersect_packets_of(&rays, lanes, lanes == Lanes::Sixteen, &mut hits);
         let mut blocked = vec![false; rays.len()];
-        theirs.occluded_batch(&rays, lanes, false, &mut blocked);
+        theirs.occluded_packets_of(&rays, lanes, false, &mut blocked);
         for (i, ray) in rays.iter().enumerate() {
             match (ours.intersect_primitive(ray), hits[i]) {
                 (None, None) => {}
@@ -159,10 +159,10 @@ fn robust_scenes_do_not_leak_at_edges() {
     let ours_escaped = rays.iter().filter(|r| ours.intersect(r).is_none()).count();
     let mut hits = vec![None; rays.len()];
     for lanes in Lanes::ALL {
-        robust.intersect_batch(&rays, lanes, false, &mut hits);
+        robust.intersect_packets_of(&rays, lanes, false, &mut hits);
         assert_eq!(escapes(&hits), 0, "{lanes:?}: rays escaped the robust scene");
     }
-    fast.intersect_batch(&rays, Lanes::One, false, &mut hits);
+    fast.intersect_packets_of(&rays, Lanes::One, false, &mut hits);
     println!("escaped of {}: ours {ours_escaped}, Embree robust 0, Embree not robust {}", rays.len(), escapes(&hits));
     assert_eq!(ours_escaped, 0);
 }

@@ -38,10 +38,12 @@
 //! BVH2, pads that BVH's boxes by the spheres' scale rather than the whole scene's.)
 //!
 //! # Packets
-//! [`EmbreeAccel::intersect_batch`] and [`EmbreeAccel::occluded_batch`] answer a slice of
-//! rays one at a time ([`Lanes::One`]) or in consecutive groups of 4, 8 or 16 through
-//! `rtcIntersect4/8/16` / `rtcOccluded4/8/16`, lanes of refused rays masked off; the
-//! `coherent` hint is Embree's context flag (Mitsuba sets it for camera rays only).
+//! [`EmbreeAccel::intersect_packets_of`] and [`EmbreeAccel::occluded_packets_of`] answer a
+//! slice of rays one at a time ([`Lanes::One`]) or in consecutive groups of 4, 8 or 16
+//! through `rtcIntersect4/8/16` / `rtcOccluded4/8/16`, lanes of refused rays masked off;
+//! the `coherent` hint is Embree's context flag (Mitsuba sets it for camera rays only).
+//! The core's batch queries (`RayQuery::intersect_batch`, `occluded_batch`) go 16 at a
+//! time, and its lane loop then keeps 16 paths in flight (`batch_width`).
 //!
 //! The `unsafe` calls are all in `ffi` (the crate's one unsafe module).
 
@@ -49,7 +51,7 @@ mod ffi;
 
 use std::collections::HashMap;
 
-use ember_core::geometry::{Ray, RayQuery, SurfaceHit};
+use ember_core::geometry::{Ray, RayBatch, RayQuery, SurfaceHit};
 use ember_core::shapes::SceneGeometry;
 use glam::{Vec3, Vec3A};
 
@@ -192,7 +194,7 @@ impl EmbreeAccel {
     }
 
     /// Closest hits of `rays` into `out` (same length), `lanes` rays per Embree call.
-    pub fn intersect_batch(&self, rays: &[Ray], lanes: Lanes, coherent: bool, out: &mut [Option<(SurfaceHit, PrimitiveRef)>]) {
+    pub fn intersect_packets_of(&self, rays: &[Ray], lanes: Lanes, coherent: bool, out: &mut [Option<(SurfaceHit, PrimitiveRef)>]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
         match lanes {
             Lanes::One => {
@@ -239,7 +241,7 @@ impl EmbreeAccel {
     }
 
     /// Occlusion of `rays` into `out` (same length), `lanes` rays per Embree call.
-    pub fn occluded_batch(&self, rays: &[Ray], lanes: Lanes, coherent: bool, out: &mut [bool]) {
+    pub fn occluded_packets_of(&self, rays: &[Ray], lanes: Lanes, coherent: bool, out: &mut [bool]) {
         assert_eq!(rays.len(), out.len(), "one answer per ray");
         match lanes {
             Lanes::One => rays.iter().zip(out).for_each(|(ray, o)| *o = self.occluded_one(ray, coherent)),
@@ -318,6 +320,9 @@ fn set_lane<const N: usize>(p: &mut ffi::RayN<N>, l: usize, r: &Ray1) {
     (p.tfar[l], p.mask[l], p.id[l], p.flags[l]) = (r.tfar, r.mask, r.id, r.flags);
 }
 
+/// Rays per Embree call when the lane loop asks in batches ([`RayQuery::batch_width`]).
+const BATCH: usize = 16;
+
 impl RayQuery for EmbreeAccel {
     fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
         self.intersect_primitive(ray).map(|(h, _)| h)
@@ -325,5 +330,38 @@ impl RayQuery for EmbreeAccel {
 
     fn occluded(&self, ray: &Ray) -> bool {
         self.occluded_one(ray, false)
+    }
+
+    /// 16: the lane loop then keeps 16 paths in flight and every batch is one
+    /// `rtcIntersect16` / `rtcOccluded16` (incoherent: the batch mixes camera rays with
+    /// bounces).
+    fn batch_width(&self) -> usize {
+        BATCH
+    }
+
+    fn intersect_batch(&self, rays: RayBatch<'_>, hits: &mut [Option<SurfaceHit>]) {
+        let mut group = [Ray::new(Vec3::ZERO, Vec3::ZERO, 0.0); BATCH];
+        let mut answers = [None; BATCH];
+        for (chunk, out) in hits.chunks_mut(BATCH).zip(0..) {
+            let n = chunk.len().min(rays.len().saturating_sub(out * BATCH));
+            for (i, ray) in rays.iter().skip(out * BATCH).take(n).enumerate() {
+                group[i] = ray;
+            }
+            self.intersect_packets::<BATCH>(&group[..n], false, &mut answers[..n]);
+            for (h, a) in chunk.iter_mut().zip(&answers[..n]) {
+                *h = a.map(|(hit, _)| hit);
+            }
+        }
+    }
+
+    fn occluded_batch(&self, rays: RayBatch<'_>, occluded: &mut [bool]) {
+        let mut group = [Ray::new(Vec3::ZERO, Vec3::ZERO, 0.0); BATCH];
+        for (chunk, out) in occluded.chunks_mut(BATCH).zip(0..) {
+            let n = chunk.len().min(rays.len().saturating_sub(out * BATCH));
+            for (i, ray) in rays.iter().skip(out * BATCH).take(n).enumerate() {
+                group[i] = ray;
+            }
+            self.occluded_packets::<BATCH>(&group[..n], false, &mut chunk[..n]);
+        }
     }
 }
