@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 step() { printf '\n==> %s\n' "$*"; }
 
 step "toolchain targets for the no_std proof, rustfmt and clippy"
-rustup target add thumbv7em-none-eabihf x86_64-unknown-none wasm32-unknown-unknown >/dev/null
+rustup target add thumbv7em-none-eabihf x86_64-unknown-none wasm32-unknown-unknown aarch64-unknown-linux-gnu >/dev/null
 rustup component add rustfmt clippy >/dev/null
 
 step "formatting (rustfmt.toml) and lints (clippy, warnings denied)"
@@ -34,6 +34,8 @@ for features in "" bdpt lvcbpt spcbpt merging segments filtering mmis path hash-
   cargo check -q -p ember-core --target x86_64-unknown-none --no-default-features ${features:+--features "$features"}
 done
 cargo build --release -p ember-core --target thumbv7em-none-eabihf --no-default-features
+# AArch64 (glam's NEON in the host's BVH4 traversal): the core and the host type-check.
+cargo check -q -p ember-core -p ember-host --target aarch64-unknown-linux-gnu
 
 step "workspace tests (optimised)"
 cargo test --release --workspace
