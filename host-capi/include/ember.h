@@ -165,6 +165,39 @@ typedef struct EmberRayCallbacks {
 // A renderer handle (0 is never valid).
 typedef uint64_t EmberRenderer;
 
+// Rays in structure-of-arrays form, for the batch callbacks: ray `i` (below `count`)
+// starts at (`origin_x[i]`, `origin_y[i]`, `origin_z[i]`), goes along (`dir_x[i]`,
+// `dir_y[i]`, `dir_z[i]`) and covers t in (0, `t_max[i]`). Every pointer holds `count`
+// floats, valid during the call only.
+typedef struct EmberRayBatch {
+  const float *origin_x;
+  const float *origin_y;
+  const float *origin_z;
+  const float *dir_x;
+  const float *dir_y;
+  const float *dir_z;
+  const float *t_max;
+  uint32_t count;
+} EmberRayBatch;
+
+// The engine's ray tracer answering rays in batches (`ember_renderer_create_batched`).
+// `intersect` writes, for each ray `i` of the batch, `found[i]` (a closest hit with t in
+// (0, t_max)) and, where found, `hits[i]` (checked as `EmberHit` says); `occluded`
+// writes `occluded[i]`, true if anything is hit in (0, t_max). `width` (1 to 4096) is
+// the batch size the engine answers best: the renderer keeps up to that many paths in
+// flight (at most 32 today; the path tracers and light tracers do, the other estimators
+// ask one ray at a time) and never asks more rays in one call. The image does not depend
+// on `width`. Called from the render threads as `EmberRayCallbacks` are.
+typedef struct EmberRayBatchCallbacks {
+  void *user_data;
+  uint32_t width;
+  void (*intersect)(void *user_data,
+                    const struct EmberRayBatch *rays,
+                    struct EmberHit *hits,
+                    bool *found);
+  void (*occluded)(void *user_data, const struct EmberRayBatch *rays, bool *occluded);
+} EmberRayBatchCallbacks;
+
 // The phase `ember_phase_begin` opened.
 typedef struct EmberPhaseInfo {
   // Chunks to map, `0..chunks`, each once, on any threads.
@@ -221,6 +254,17 @@ enum EmberStatus ember_renderer_create(EmberScene scene,
                                        const struct EmberRenderSettings *settings,
                                        const struct EmberRayCallbacks *callbacks,
                                        EmberRenderer *renderer);
+
+// A renderer for `scene` with `settings` whose rays go to the engine's batch callbacks
+// (`EmberRayBatchCallbacks`; not null).
+//
+// # Safety
+// As `ember_renderer_create`; `callbacks` must stay valid (with its `user_data`) until
+// the renderer is destroyed.
+enum EmberStatus ember_renderer_create_batched(EmberScene scene,
+                                               const struct EmberRenderSettings *settings,
+                                               const struct EmberRayBatchCallbacks *callbacks,
+                                               EmberRenderer *renderer);
 
 // Destroy a renderer handle (its film with it).
 enum EmberStatus ember_renderer_destroy(EmberRenderer renderer);

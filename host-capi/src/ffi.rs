@@ -24,9 +24,10 @@ mod film;
 mod ray_queries;
 
 pub use film::{ember_film_export, ember_film_import};
+pub use ray_queries::{Callbacks, EmberHit, EmberRay, EmberRayBatch, EmberRayBatchCallbacks, EmberRayCallbacks};
 
 use std::cell::{Cell, RefCell};
-use std::ffi::{CStr, CString, c_char, c_void};
+use std::ffi::{CStr, CString, c_char};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::{Arc, LazyLock, Mutex, MutexGuard, Once, RwLock, RwLockReadGuard, RwLockWriteGuard};
 use std::time::Instant;
@@ -36,7 +37,7 @@ use ember_core::estimators::{EstimatorKind, Renderer};
 use ember_core::render::{Context, Film, Phase, Phased};
 use ember_host::driver::{self, Limits};
 
-use ray_queries::{Fault, Tracer, fault_error, tracer};
+use ray_queries::{Fault, MAX_BATCH_WIDTH, Tracer, fault_error, tracer};
 
 use crate::{Config, EmberStatus, Error, MaterialDesc, Registry, RenderIdentity, RendererState, Result, SceneData, SceneDesc, Settings};
 
@@ -153,51 +154,6 @@ pub struct EmberRenderSettings {
     pub options: *const c_char,
 }
 
-/// A ray: points `origin + t·dir` for t in (0, t_max).
-#[repr(C)]
-#[derive(Clone, Copy, Debug)]
-pub struct EmberRay {
-    pub origin: [f32; 3],
-    pub dir: [f32; 3],
-    pub t_max: f32,
-}
-
-/// The closest hit an engine's tracer found: the distance, the triangle's index in the
-/// scene description, and the barycentrics of the hit point
-/// `(1 − b1 − b2)·p0 + b1·p1 + b2·p2`. Checked: t in (0, t_max), the index below the
-/// triangle count, and the point in the triangle, `b1 ≥ 0`, `b2 ≥ 0`, `b1 + b2 ≤ 1`, each
-/// with a tolerance of 1e-4 for the tracer's rounding; any other hit (NaN included) fails
-/// the call with `EMBER_STATUS_CALLBACK_ERROR`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default)]
-pub struct EmberHit {
-    pub t: f32,
-    pub primitive: u32,
-    pub b1: f32,
-    pub b2: f32,
-}
-
-/// The engine's ray tracer. `intersect` fills `hit` and returns true for the closest hit
-/// with t in (0, t_max), false for none; `occluded` returns true if anything is hit in
-/// (0, t_max). Both are called from the render threads, concurrently unless `threads` is 1.
-/// A callback written in Rust may panic (the call returns `EMBER_STATUS_PANIC`); a C++
-/// exception must not leave a callback.
-#[repr(C)]
-#[derive(Clone, Copy, Debug)]
-pub struct EmberRayCallbacks {
-    pub user_data: *mut c_void,
-    // "C-unwind", so a Rust callback's panic reaches ember's `catch_unwind` instead of
-    // aborting; for C the ABI is "C"'s. (Spelled out, not as the aliases below: cbindgen
-    // would not see through `Option<alias>`.)
-    pub intersect: Option<extern "C-unwind" fn(user_data: *mut c_void, ray: *const EmberRay, hit: *mut EmberHit) -> bool>,
-    pub occluded: Option<extern "C-unwind" fn(user_data: *mut c_void, ray: *const EmberRay) -> bool>,
-}
-
-/// `EmberRayCallbacks::intersect`.
-type IntersectFn = extern "C-unwind" fn(*mut c_void, *const EmberRay, *mut EmberHit) -> bool;
-/// `EmberRayCallbacks::occluded`.
-type OccludedFn = extern "C-unwind" fn(*mut c_void, *const EmberRay) -> bool;
-
 /// The phase `ember_phase_begin` opened.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
@@ -207,20 +163,6 @@ pub struct EmberPhaseInfo {
     /// The pass it belongs to, or -1 for a setup phase.
     pub pass: i64,
 }
-
-/// The engine's callbacks, checked non-null.
-#[derive(Clone, Copy, Debug)]
-pub struct Callbacks {
-    user_data: *mut c_void,
-    intersect: IntersectFn,
-    occluded: OccludedFn,
-}
-
-// SAFETY: the embedder promises (ember.h, docs/embedding.md) that `user_data` and the
-// callbacks may be used from several threads at once when `threads` is not 1.
-unsafe impl Send for Callbacks {}
-// SAFETY: as above.
-unsafe impl Sync for Callbacks {}
 
 /// One chunk of an open phase: its output and whether it has been mapped.
 type ChunkSlot = Mutex<(ChunkOutput, bool)>;
@@ -474,56 +416,85 @@ pub unsafe extern "C" fn ember_renderer_create(
     renderer: *mut EmberRenderer,
 ) -> EmberStatus {
     guard(|| {
-        let data = scene_of(scene)?;
         // SAFETY: null or valid, by the caller's contract.
-        let s = unsafe { settings.as_ref() }.ok_or_else(|| null("settings"))?;
-        if s.estimator.is_null() {
-            return Err(null("settings.estimator"));
-        }
-        // SAFETY: non-null and NUL-terminated by the caller's contract.
-        let estimator = unsafe { CStr::from_ptr(s.estimator) }.to_string_lossy().into_owned();
-        // SAFETY: null or NUL-terminated by the caller's contract.
-        let options = if s.options.is_null() { String::new() } else { unsafe { CStr::from_ptr(s.options) }.to_string_lossy().into_owned() };
-        let settings = Settings {
-            estimator,
-            seed: s.seed,
-            max_depth: s.max_depth,
-            threads: s.threads,
-            light_paths: s.light_paths,
-            connections: s.connections,
-            radius_footprints: s.radius_footprints,
-            options,
-        };
         let callbacks = match unsafe { callbacks.as_ref() } {
             None => None,
             Some(cb) => match (cb.intersect, cb.occluded) {
-                (Some(intersect), Some(occluded)) => Some(Callbacks { user_data: cb.user_data, intersect, occluded }),
+                (Some(intersect), Some(occluded)) => Some(Callbacks::Single { user_data: cb.user_data, intersect, occluded }),
                 _ => return Err(null("callbacks.intersect or callbacks.occluded")),
             },
         };
-        let out = unsafe { out(renderer, "renderer") }?;
-        let config = settings.config()?;
-        let identity = RenderIdentity::of(&config);
-        let Config { estimator, params, memory_limit, threads } = config;
-        crate::check_memory(&data, &estimator, memory_limit)?;
-        let r = Renderer::new(&data.scene, params, estimator).map_err(|e| Error::new(EmberStatus::InvalidConfig, e.to_string()))?;
-        let film = Film::for_camera(&data.scene.camera);
-        let state = RendererState {
-            scene: data,
-            renderer: r,
-            film,
-            imported: None,
-            identity,
-            threads,
-            callbacks,
-            ready: false,
-            pass_started: false,
-            out_of_order: None,
-        };
-        let shared = Arc::new(Shared { state: RwLock::new(state), phase: RwLock::new(None) });
-        *out = renderers()?.insert(shared);
-        Ok(EmberStatus::Ok)
+        // SAFETY: the caller's contract, passed on.
+        unsafe { create(scene, settings, callbacks, renderer) }
     })
+}
+
+/// A renderer for `scene` with `settings` whose rays go to the engine's batch callbacks
+/// (`EmberRayBatchCallbacks`; not null).
+///
+/// # Safety
+/// As `ember_renderer_create`; `callbacks` must stay valid (with its `user_data`) until
+/// the renderer is destroyed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn ember_renderer_create_batched(
+    scene: EmberScene,
+    settings: *const EmberRenderSettings,
+    callbacks: *const EmberRayBatchCallbacks,
+    renderer: *mut EmberRenderer,
+) -> EmberStatus {
+    guard(|| {
+        // SAFETY: null or valid, by the caller's contract.
+        let cb = unsafe { callbacks.as_ref() }.ok_or_else(|| null("callbacks"))?;
+        let (Some(intersect), Some(occluded)) = (cb.intersect, cb.occluded) else {
+            return Err(null("callbacks.intersect or callbacks.occluded"));
+        };
+        if !(1..=MAX_BATCH_WIDTH).contains(&cb.width) {
+            return Err(Error::arg(format!("callbacks.width = {} outside 1..={MAX_BATCH_WIDTH}", cb.width)));
+        }
+        let callbacks = Callbacks::Batch { user_data: cb.user_data, width: cb.width as usize, intersect, occluded };
+        // SAFETY: the caller's contract, passed on.
+        unsafe { create(scene, settings, Some(callbacks), renderer) }
+    })
+}
+
+/// What both constructors share.
+///
+/// # Safety
+/// `settings` null or valid, its strings null or NUL-terminated; `renderer` null or
+/// writable.
+unsafe fn create(scene: EmberScene, settings: *const EmberRenderSettings, callbacks: Option<Callbacks>, renderer: *mut EmberRenderer) -> Result<EmberStatus> {
+    let data = scene_of(scene)?;
+    // SAFETY: null or valid, by the caller's contract.
+    let s = unsafe { settings.as_ref() }.ok_or_else(|| null("settings"))?;
+    if s.estimator.is_null() {
+        return Err(null("settings.estimator"));
+    }
+    // SAFETY: non-null and NUL-terminated by the caller's contract.
+    let estimator = unsafe { CStr::from_ptr(s.estimator) }.to_string_lossy().into_owned();
+    // SAFETY: null or NUL-terminated by the caller's contract.
+    let options = if s.options.is_null() { String::new() } else { unsafe { CStr::from_ptr(s.options) }.to_string_lossy().into_owned() };
+    let settings = Settings {
+        estimator,
+        seed: s.seed,
+        max_depth: s.max_depth,
+        threads: s.threads,
+        light_paths: s.light_paths,
+        connections: s.connections,
+        radius_footprints: s.radius_footprints,
+        options,
+    };
+    let out = unsafe { out(renderer, "renderer") }?;
+    let config = settings.config()?;
+    let identity = RenderIdentity::of(&config);
+    let Config { estimator, params, memory_limit, threads } = config;
+    crate::check_memory(&data, &estimator, memory_limit)?;
+    let r = Renderer::new(&data.scene, params, estimator).map_err(|e| Error::new(EmberStatus::InvalidConfig, e.to_string()))?;
+    let film = Film::for_camera(&data.scene.camera);
+    let state =
+        RendererState { scene: data, renderer: r, film, imported: None, identity, threads, callbacks, ready: false, pass_started: false, out_of_order: None };
+    let shared = Arc::new(Shared { state: RwLock::new(state), phase: RwLock::new(None) });
+    *out = renderers()?.insert(shared);
+    Ok(EmberStatus::Ok)
 }
 
 /// Destroy a renderer handle (its film with it).
