@@ -46,15 +46,15 @@ pub(crate) fn render_pixels_with_kernel<Q: RayQuery + ?Sized>(
     let width = scene.camera.width().max(1);
     for (slot, pixel) in out.iter_mut().zip(pixels) {
         let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
-        // Draw the film point from the pixel filter (and a lens point); outside the
-        // image the sample's weight is 0.
+        // Draw the film point in the pixel (and a lens point).
         let Some(primary) = scene.camera.sample_ray(pixel % width, pixel / width, &mut rng) else {
             *slot = Rgb::ZERO;
             continue;
         };
         let mut junctions = Junctions::for_path(kernel, params.seed, pixel, pass, CAMERA_KERNEL_KEY);
         let l = walk(scene, tracer, params, primary.ray, &mut rng, junctions.as_mut(), &mut counters);
-        *slot = counters.sanitize(l * primary.weight);
+        // The film spreads the sample under the pixel filter (`render::Film`).
+        *slot = counters.sanitize(l);
     }
     counters
 }

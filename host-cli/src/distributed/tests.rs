@@ -130,7 +130,7 @@ fn film_with(passes: u32, value: f32) -> Film {
     let mut f = Film::new(3, 2);
     for p in 0..passes {
         let px: Vec<_> = (0..6).map(|i| ember_core::spectrum::Rgb::new(value * (i + 1) as f32, 1e-12 * p as f32, 1.0e12)).collect();
-        f.set_camera_samples(0..6, &px);
+        f.set_camera_samples(ember_core::camera::CameraPass { seed: 0, pass: p }, 0..6, &px);
         f.end_pass(1.0);
     }
     f
