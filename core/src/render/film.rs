@@ -391,11 +391,16 @@ impl Film {
     /// The image: the mean over passes (black before the first pass), plus under a wide
     /// filter the camera samples' weighted mean Σ f L / Σ f.
     pub fn to_rgb_f32(&self) -> Vec<[f32; 3]> {
+        self.to_rgb_f64().into_iter().map(|p| p.map(|v| v as f32)).collect()
+    }
+
+    /// [`Self::to_rgb_f32`] before its rounding to f32.
+    pub fn to_rgb_f64(&self) -> Vec<[f64; 3]> {
         let inv = if self.passes == 0 { 0.0 } else { INV_SCALE / self.passes as f64 };
         if self.weighted.is_empty() {
-            return self.sum.iter().map(|s| s.map(|v| (v as f64 * inv) as f32)).collect();
+            return self.sum.iter().map(|s| s.map(|v| v as f64 * inv)).collect();
         }
-        self.sum.iter().zip(&self.weighted).map(|(s, w)| core::array::from_fn(|c| (s[c] as f64 * inv + w.ratio(c)) as f32)).collect()
+        self.sum.iter().zip(&self.weighted).map(|(s, w)| core::array::from_fn(|c| s[c] as f64 * inv + w.ratio(c))).collect()
     }
 }
 
