@@ -521,7 +521,9 @@ mod tests {
     /// outside the image and invalid; and a film with camera samples alone. Seen to fail
     /// on injected bugs: a splat listed only under the band of its first row (the
     /// Gaussian's lower rows lost), a band's rows starting one row late, the last sort
-    /// segment ending one splat short, and a band skipping its camera samples.
+    /// segment ending one splat short, and a band skipping its camera samples; and (issue
+    /// 52) a band spreading only the camera samples of its own rows (`spread`'s reach 0),
+    /// which loses its neighbours' samples near its edges.
     #[test]
     fn banded_commit_equals_the_sequential_one() {
         use super::bands::{PARALLEL_PIXELS, PARALLEL_SPLATS};
@@ -558,6 +560,8 @@ mod tests {
             assert!(one.splats_outside() > 0 && one.discarded() == 4, "{:?}", one.tallies());
             assert_eq!(one.tallies(), banded.tallies(), "{filter:?}");
             assert!(one.exact_sums() == banded.exact_sums(), "{filter:?}");
+            assert!(one.weighted_sums() == banded.weighted_sums(), "{filter:?}: the camera samples' weighted sums");
+            assert_eq!(one.weighted_sums().is_empty(), filter.is_box());
             // Too few splats to cut: committed on the calling thread, the same film.
             let mut few = Film::with_filter(w, h, filter);
             let mut few_banded = Film::with_filter(w, h, filter);
