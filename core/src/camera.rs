@@ -46,8 +46,12 @@
 //! pinhole, and the camera vertex keeps the pinhole's MIS bookkeeping.
 //!
 //! # Pixel filter
-//! The camera carries the film's [`Filter`]; [`PerspectiveCamera::sample_ray`] draws a
-//! pixel's film point from it and returns the weight of `crate::pixel_filter`'s eq. (3).
+//! Every camera sample's film point is uniform in its pixel, x = pixel corner + u, for
+//! every filter, as Mitsuba's `hdrfilm` draws it; the filter enters only where the film
+//! spreads the sample over the pixels around x (`crate::render::Film`, `crate::pixel_filter`'s
+//! "Camera samples"). The film does not receive x: it draws it again from the pass's
+//! [`CameraPass`] ([`camera_film_point`]), the same numbers [`PerspectiveCamera::sample_ray`]
+//! drew, so no estimator carries film points in its chunks.
 
 use crate::geometry::Ray;
 use crate::math::{Mat3, Mat4, Vec2, Vec3, sqrt, tan};
@@ -78,10 +82,34 @@ impl Lens {
 pub struct PrimaryRay {
     /// From the lens point (the pinhole without a lens), unit direction.
     pub ray: Ray,
-    /// The film point, continuous pixel coordinates.
+    /// The film point, continuous pixel coordinates (uniform in the pixel).
     pub film: Vec2,
-    /// The filter weight h_c(x)/p (`crate::pixel_filter` eq. 3): exactly 1 for the box.
-    pub weight: f32,
+}
+
+/// Which pass a film's staged camera samples belong to: with it the film draws each
+/// sample's film point again ([`camera_film_point`]) to spread it under a wide filter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CameraPass {
+    /// The render's seed.
+    pub seed: u64,
+    /// The pass index (the sample index of every pixel's camera stream).
+    pub pass: u32,
+}
+
+/// The film point of pixel `pixel`'s (y·`width` + x) camera sample in `at`: the first
+/// 2-D number of its camera stream, which every estimator's camera sample draws first
+/// ([`PerspectiveCamera::sample_ray`]), put in the pixel.
+pub fn camera_film_point(at: CameraPass, pixel: u32, width: u32) -> Vec2 {
+    let width = width.max(1);
+    let mut rng = SampleStream::for_sample(at.seed, Stream::Camera, pixel, at.pass, 0);
+    film_point(pixel % width, pixel / width, rng.next_2d())
+}
+
+/// The film point of pixel (`x`, `y`) for `u` ∈ [0, 1)²: its corner + u (the box's
+/// historical arithmetic, now every filter's).
+#[inline]
+fn film_point(x: u32, y: u32, u: Vec2) -> Vec2 {
+    Vec2::new(x as f32, y as f32) + u
 }
 
 /// Last key of the lens streams of splatting estimators ([`lens_stream`]), apart from
@@ -248,43 +276,14 @@ impl PerspectiveCamera {
         }
     }
 
-    /// The primary ray of pixel (`x`, `y`): a film point drawn from the filter (one 2-D
-    /// number), a lens point (another, only with a lens), and the filter weight. `None`
-    /// where the film point falls outside the image (weight 0: trace nothing).
+    /// The primary ray of pixel (`x`, `y`): a film point uniform in the pixel (one 2-D
+    /// number; the film applies the filter, module notes) and a lens point (another, only
+    /// with a lens). Always `Some` today: the `Option` is kept for callers that trace
+    /// nothing for a sample without a ray.
     pub fn sample_ray(&self, x: u32, y: u32, rng: &mut SampleStream) -> Option<PrimaryRay> {
-        let (film, weight) = self.sample_film(x, y, rng.next_2d())?;
+        let film = film_point(x, y, rng.next_2d());
         let u_lens = self.lens_u(rng);
-        Some(PrimaryRay { ray: self.generate_ray_lens(film, u_lens), film, weight })
-    }
-
-    /// The weight of the camera sample that [`Self::sample_ray`] draws for pixel index
-    /// `pixel` (y·W + x) from the pixel's camera stream of pass `pass`, drawn again: for
-    /// estimators that keep no per-pixel throughput. 1 for the box.
-    pub fn camera_sample_weight(&self, seed: u64, pixel: u32, pass: u32) -> f32 {
-        if self.filter.is_box() {
-            return 1.0;
-        }
-        let mut rng = SampleStream::for_sample(seed, Stream::Camera, pixel, pass, 0);
-        self.sample_film(pixel % self.width, pixel / self.width, rng.next_2d()).map_or(0.0, |(_, w)| w)
-    }
-
-    /// Film point and filter weight of pixel (`x`, `y`) from `u` (module notes).
-    fn sample_film(&self, x: u32, y: u32, u: Vec2) -> Option<(Vec2, f32)> {
-        Some(match self.filter {
-            // The historical arithmetic: pixel corner + u, weight 1.
-            Filter::Box => (Vec2::new(x as f32, y as f32) + u, 1.0),
-            f => {
-                let c = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                let d = Vec2::new(f.sample_offset(u.x), f.sample_offset(u.y));
-                let film = c + d;
-                let (w, h) = (self.width as f32, self.height as f32);
-                if !(film.x >= 0.0 && film.y >= 0.0 && film.x < w && film.y < h) {
-                    return None;
-                }
-                let k = f.border_factor(c.x, w) * f.border_factor(c.y, h);
-                (film, k * f.sample_ratio(d.x) * f.sample_ratio(d.y))
-            }
-        })
+        Some(PrimaryRay { ray: self.generate_ray_lens(film, u_lens), film })
     }
 
     #[inline]

@@ -1,5 +1,6 @@
 //! Pixel reconstruction filters with Mitsuba 3's definitions (`src/rfilters/*.cpp`),
-//! and the two ways the film applies them.
+//! and the two ways the film applies them: camera samples by Mitsuba's weighted film,
+//! splats by normalised weights.
 //!
 //! A filter is separable, f(x, y) = f(x) f(y), each factor with support [−r, r]:
 //! - `box`: f = 1 on [−½, ½] (r = ½), one pixel; ember's filter before issue 25;
@@ -18,24 +19,24 @@
 //! (separable), which is 1 wherever the filter's support lies inside F. Then
 //! I_c = ∫_F h_c(x) L(x) dx and ∫_F h_c = 1: a normalised per-pixel measurement.
 //!
-//! # Camera samples: filter importance sampling
-//! Each camera sample still writes only its own pixel. The offset d = x − c is drawn per
-//! axis from a density p, and the sample's radiance is multiplied by
-//!   w = h_c(x)/p(d) = K_c · f(d_x) f(d_y) / (p(d_x) p(d_y) (∫f)²),            (3)
-//! zero (and no ray) where x falls outside F; E[w L] = I_c. For box and tent p = f/∫f
-//! exactly (tent by the analytic inverse of its CDF), so w = K_c. For the gaussian p is
-//! the truncated normal with the same σ on [−r, r], sampled exactly through erfinv (pbrt
-//! tabulates instead; the truncated normal needs no table and keeps the filter `Copy`
-//! and small): f/p ∝ 1 − g(r)/g(d) ∈ [0, 1], within 3.4·10⁻⁴ of constant over most of
-//! the support. The box keeps ember's historical arithmetic (x = pixel corner + u, w = 1)
-//! so that every box image is unchanged bit for bit.
+//! # Camera samples: Mitsuba's weighted film
+//! A camera sample's film point x is uniform in its pixel (the box's arithmetic, for
+//! every filter), and the film adds f(x − c) L and f(x − c) to every pixel c within r of
+//! x; each pixel's camera part is Σ f L / Σ f over all its passes, which converges to
+//! eq. (1) (`crate::render::Film`; the essay on the estimator, a consistent ratio, is
+//! in `render/film/spread.rs`). The box reaches one pixel with weight 1, so it keeps
+//! `sum / passes` and every box image is unchanged bit for bit. Until issue 52 each
+//! sample went to one pixel, its offset drawn from the filter (filter importance
+//! sampling, weight h_c/p): unbiased, but each pixel then averaged one sample per pass
+//! where the weighted film averages the 4–16 around it, and on `scenes-extra/textured`
+//! it was 1.8–3.6× noisier per sample (docs/pixel-filters.md).
 //!
 //! # Splats
 //! A splat at x ∈ F (light tracing, BDPT t = 1, ...) estimates the measurement density
 //! at x, so it adds value · h_c(x) to every pixel c with |x − c| < r per axis
 //! ([`Filter::splat_weight`]). The box reduces to the pixel containing x with weight 1.
 
-use crate::math::{erf, erfinv, exp, sqrt};
+use crate::math::{erf, exp};
 
 /// √(π/2).
 const SQRT_HALF_PI: f32 = 1.253_314_1;
@@ -136,57 +137,6 @@ impl Filter {
         self.cdf(self.radius())
     }
 
-    /// Draw an offset d ∈ [−r, r] with density [`Self::pdf_offset`] from `u` ∈ [0, 1).
-    pub fn sample_offset(&self, u: f32) -> f32 {
-        match *self {
-            Self::Box => u - 0.5,
-            // Inverse of the tent's CDF, one half at a time.
-            Self::Tent { radius } => {
-                if u < 0.5 {
-                    radius * (sqrt(2.0 * u) - 1.0)
-                } else {
-                    radius * (1.0 - sqrt(2.0 - 2.0 * u))
-                }
-            }
-            // Truncated normal: Φ⁻¹ through erfinv, scaled to [−r, r].
-            Self::Gaussian { stddev } => {
-                let s = stddev * core::f32::consts::SQRT_2;
-                let e = erf(4.0 * stddev / s);
-                (s * erfinv((2.0 * u - 1.0) * e)).clamp(-4.0 * stddev, 4.0 * stddev)
-            }
-        }
-    }
-
-    /// Density of [`Self::sample_offset`] per unit offset: f/∫f for box and tent, the
-    /// truncated normal g(d)/(σ√(2π) erf(2√2)) for the gaussian; 0 outside [−r, r].
-    pub fn pdf_offset(&self, d: f32) -> f32 {
-        let r = self.radius();
-        if !(d.abs() <= r) {
-            return 0.0;
-        }
-        match *self {
-            Self::Box => 1.0,
-            Self::Tent { radius } => (1.0 - d.abs() / radius) / radius,
-            Self::Gaussian { stddev } => {
-                let s = stddev * core::f32::consts::SQRT_2;
-                gauss(d, stddev) / (2.0 * stddev * SQRT_HALF_PI * erf(r / s))
-            }
-        }
-    }
-
-    /// f(d)/(p(d) ∫f) for an offset drawn by [`Self::sample_offset`]: 1 for box and tent
-    /// (eq. 3 without K_c).
-    #[inline]
-    pub fn sample_ratio(&self, d: f32) -> f32 {
-        match *self {
-            Self::Box | Self::Tent { .. } => 1.0,
-            Self::Gaussian { .. } => {
-                let p = self.pdf_offset(d);
-                if p > 0.0 { self.eval(d) / (p * self.integral()) } else { 0.0 }
-            }
-        }
-    }
-
     /// K for one axis (eq. 2): ∫f / ∫_0^extent f(x − c) dx for a pixel centre c; exactly
     /// 1 where the support around c lies inside [0, extent].
     pub fn border_factor(&self, c: f32, extent: f32) -> f32 {
@@ -232,7 +182,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn cdf_integrates_eval_and_ratio_is_bounded() {
+    fn cdf_integrates_eval() {
         for f in [Filter::Box, Filter::Tent { radius: 1.0 }, Filter::Tent { radius: 1.7 }, Filter::Gaussian { stddev: 0.5 }, Filter::Gaussian { stddev: 1.3 }] {
             let r = f.radius();
             let n = 4000;
@@ -240,12 +190,6 @@ mod tests {
             let riemann: f32 = (0..n).map(|i| f.eval(-r + (i as f32 + 0.5) * h) * h).sum();
             assert!((riemann - f.integral()).abs() < 1e-3 * f.integral(), "{f:?}: {riemann} vs {}", f.integral());
             assert!((f.cdf(0.0) - 0.5 * f.integral()).abs() < 1e-5, "{f:?}");
-            for i in 0..100 {
-                let d = f.sample_offset((i as f32 + 0.5) / 100.0);
-                assert!(d.abs() <= r);
-                let w = f.sample_ratio(d);
-                assert!((0.0..1.01).contains(&w), "{f:?} {d} {w}");
-            }
         }
         assert_eq!(Filter::Gaussian { stddev: 0.5 }.border_factor(10.0, 20.0), 1.0);
         assert!(Filter::Gaussian { stddev: 0.5 }.border_factor(0.5, 20.0) > 1.0);

@@ -184,6 +184,39 @@ pub fn invert_uniform_triangle(b: Vec2) -> Vec2 {
     Vec2::new(unit(su0 * su0), unit(u1))
 }
 
+// ---------------------------------------------------------------- linear
+
+/// x ∈ [0, 1) with density ∝ (1 − x) a + x b ([`linear_pdf`]); `a`, `b` ≥ 0, not both 0
+/// (pbrt-v4 `SampleLinear`). Inverts the CDF a x + (b − a) x²/2 = u (a + b)/2 in the
+/// form without cancellation, x = u (a + b) / (a + √(a² + u (b² − a²))): x = u where
+/// a = b, √u where a = 0.
+#[inline]
+pub fn sample_linear(u: f32, a: f32, b: f32) -> f32 {
+    let den = a + sqrt((a * a + u * (b * b - a * a)).max(0.0));
+    if !(den > 0.0) {
+        return u;
+    }
+    unit(u * (a + b) / den)
+}
+
+/// Density of [`sample_linear`] at x ∈ [0, 1]: 2 ((1 − x) a + x b) / (a + b).
+#[inline]
+pub fn linear_pdf(x: f32, a: f32, b: f32) -> f32 {
+    if !(0.0..=1.0).contains(&x) || !(a + b > 0.0) {
+        return 0.0;
+    }
+    2.0 * ((1.0 - x) * a + x * b) / (a + b)
+}
+
+/// Inverse of [`sample_linear`]: the CDF at x.
+#[inline]
+pub fn invert_linear(x: f32, a: f32, b: f32) -> f32 {
+    if !(a + b > 0.0) {
+        return unit(x);
+    }
+    unit(x * ((2.0 - x) * a + x * b) / (a + b))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -206,7 +239,26 @@ mod tests {
             assert!(close(invert_uniform_sphere(sample_uniform_sphere(u)), u), "sphere {u}");
             assert!(close(invert_uniform_cone(sample_uniform_cone(u, 0.3), 0.3), u), "cone {u}");
             assert!(close(invert_uniform_triangle(sample_uniform_triangle(u)), u), "tri {u}");
+            for (a, b) in [(1.0, 1.0), (0.0, 3.0), (5.0, 0.0), (0.2, 7.0)] {
+                let x = sample_linear(u.x, a, b);
+                assert!((invert_linear(x, a, b) - u.x).abs() < 2e-4, "linear {a} {b} {u}");
+            }
         });
+    }
+
+    /// The linear density integrates to 1 and its CDF is [`invert_linear`].
+    #[test]
+    fn linear_density_is_its_cdfs_derivative() {
+        for (a, b) in [(1.0f32, 1.0f32), (0.0, 3.0), (5.0, 0.0), (0.2, 7.0)] {
+            let n = 1000;
+            let mut cdf = 0.0f64;
+            for i in 0..n {
+                let x = (i as f32 + 0.5) / n as f32;
+                cdf += linear_pdf(x, a, b) as f64 / n as f64;
+                let expected = invert_linear((i + 1) as f32 / n as f32, a, b) as f64;
+                assert!((cdf - expected).abs() < 1e-3, "{a} {b} at {x}: {cdf} vs {expected}");
+            }
+        }
     }
 
     #[test]

@@ -40,7 +40,7 @@ typedef enum EmberStatus {
   // wrong (the message names which).
   EMBER_STATUS_INVALID_FILM = 10,
   // `ember_film_import`: the film is of another render: another estimator,
-  // configuration, seed, max depth, tracer, size, scene or ember build (the message
+  // configuration, seed, max depth, tracer, size, scene, film kind or ember build (the message
   // names the field and both values).
   EMBER_STATUS_FILM_MISMATCH = 11,
 } EmberStatus;
@@ -316,7 +316,7 @@ enum EmberStatus ember_phase_end(EmberRenderer renderer);
 
 // The film's state as bytes, to continue the render later with `ember_film_import` (in
 // this process or another): the passes, their exact sums, and what they depend on
-// (estimator, configuration, seed, max depth, tracer, scene, size, ember build;
+// (estimator, configuration, seed, max depth, tracer, scene, size, film kind, ember build;
 // docs/embedding.md). With `bytes` null, `*written` gets the size needed and nothing is
 // written; else `capacity` must be at least that size (if not: `*written` gets it and
 // the call fails) and `*written` gets the bytes written.

@@ -62,7 +62,7 @@ pub enum EmberStatus {
     /// wrong (the message names which).
     InvalidFilm = 10,
     /// `ember_film_import`: the film is of another render: another estimator,
-    /// configuration, seed, max depth, tracer, size, scene or ember build (the message
+    /// configuration, seed, max depth, tracer, size, scene, film kind or ember build (the message
     /// names the field and both values).
     FilmMismatch = 11,
 }
@@ -508,6 +508,7 @@ impl RendererState {
             scene_hash: self.scene.hash(),
             width: self.film.width(),
             height: self.film.height(),
+            weighted: !self.film.weighted_sums().is_empty(),
         }
     }
 }

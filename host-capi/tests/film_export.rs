@@ -142,7 +142,7 @@ fn damaged_and_foreign_films_are_refused_naming_the_field() {
     let (s2, fresh) = renderer("pt", 1);
     let cases: Vec<(&str, Vec<u8>, EmberStatus, &str)> = vec![
         ("magic", [b"NOTAFILM".as_slice(), &bytes[8..]].concat(), EmberStatus::InvalidFilm, "magic"),
-        ("version", [&bytes[..8], &2u32.to_le_bytes(), &bytes[12..]].concat(), EmberStatus::InvalidFilm, "format version: the film's is 2"),
+        ("version", [&bytes[..8], &3u32.to_le_bytes(), &bytes[12..]].concat(), EmberStatus::InvalidFilm, "format version: the film's is 3"),
         ("truncated header", bytes[..30].to_vec(), EmberStatus::InvalidFilm, "the buffer is truncated"),
         ("truncated sums", bytes[..bytes.len() - 9].to_vec(), EmberStatus::InvalidFilm, "truncated"),
         ("extended", [bytes.as_slice(), &[0]].concat(), EmberStatus::InvalidFilm, "bytes past its end"),

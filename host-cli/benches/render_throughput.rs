@@ -192,9 +192,9 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spin {
             out.pixels.push(spin(i));
         }
     }
-    fn reduce(&mut self, _: &Context<'_, Q>, _: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
+    fn reduce(&mut self, _: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         for o in outputs.iter() {
-            film.set_camera_samples(o.items.clone(), &o.pixels);
+            film.set_camera_samples(ember_core::camera::CameraPass { seed: 0, pass: phase.pass.unwrap_or(0) }, o.items.clone(), &o.pixels);
         }
         if self.cursor.advance() {
             film.end_pass(1.0);

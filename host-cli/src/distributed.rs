@@ -13,6 +13,9 @@
 //!   film's exact per-pixel sums, each a `u128` count of 2⁻⁶⁴ split into four 32-bit
 //!   words, w0 the least significant. Mean = sum · 2⁻⁶⁴ / passes in f64 (what
 //!   `Film::to_rgb_f32` computes);
+//! - under a tent or gaussian pixel filter, also `wsum.R.w0` … `wsum.B.w3` and
+//!   `wsum.W.w0` … `wsum.W.w3` (the same encoding): the camera samples' weighted sums
+//!   Σ f L and Σ f (`Film::weighted_sums`), whose ratio that mean adds;
 //! - the text attribute `ember.partial` ([`PartialHeader`]), one `key: value` per line:
 //!   the format and program version, the scene's name and hash, the estimator and its
 //!   configuration, the seed, the pass range held, the total, the quantum and the
@@ -238,6 +241,16 @@ pub fn write_partial(path: &Path, header: &PartialHeader, film: &Film) -> Result
             channels.push(AnyChannel::new(format!("sum.{name}.w{word}").as_str(), FlatSamples::U32(samples)));
         }
     }
+    // A wide filter's camera samples: Σ f L per channel and Σ f.
+    let weighted = film.weighted_sums();
+    if !weighted.is_empty() {
+        for (c, name) in ["R", "G", "B", "W"].iter().enumerate() {
+            for word in 0..4 {
+                let samples = weighted.iter().map(|p| ((if c < 3 { p.value[c] } else { p.weight }) >> (32 * word)) as u32).collect();
+                channels.push(AnyChannel::new(format!("wsum.{name}.w{word}").as_str(), FlatSamples::U32(samples)));
+            }
+        }
+    }
     // One attribute holding every field, one `key: value` line each: the crate stores
     // attributes in a hash map written in a per-process random order, and a part must
     // have the same bytes every time it is rendered.
@@ -362,7 +375,28 @@ fn partial_from_image(path: &Path, image: &exr::image::FlatImage) -> Result<(Par
             }
         }
     }
-    let film = Film::from_exact(width, height, sums, passes.len(), header.tallies).map_err(|e| format!("{name}: {e}"))?;
+    // A wide filter's weighted sums, where the part has them.
+    let mut weighted = Vec::new();
+    if layer.channel_data.list.iter().any(|x| x.name == text("wsum.W.w0")) {
+        weighted = vec![ember_core::render::WeightedSum::default(); pixels];
+        for (c, ch) in ["R", "G", "B", "W"].iter().enumerate() {
+            for word in 0..4 {
+                let channel_name = format!("wsum.{ch}.w{word}");
+                let channel =
+                    layer.channel_data.list.iter().find(|x| x.name == text(&channel_name)).ok_or_else(|| format!("{name}: no channel {channel_name}"))?;
+                let FlatSamples::U32(values) = &channel.sample_data else { return Err(format!("{name}: channel {channel_name} is not UINT")) };
+                if values.len() != pixels {
+                    return Err(format!("{name}: channel {channel_name} holds {} samples for {pixels} pixels", values.len()));
+                }
+                for (s, &v) in weighted.iter_mut().zip(values) {
+                    let sum = if c < 3 { &mut s.value[c] } else { &mut s.weight };
+                    *sum |= (v as u128) << (32 * word);
+                }
+            }
+        }
+    }
+    let film =
+        Film::from_exact(width, height, sums, passes.len(), header.tallies).and_then(|f| f.with_weighted_sums(weighted)).map_err(|e| format!("{name}: {e}"))?;
     // The R, G, B channels are the film's mean (`write_partial` stores exactly
     // `to_rgb_f32`): sums over another number of passes than the header's give another mean.
     let mean = film.to_rgb_f32();

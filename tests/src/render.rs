@@ -33,14 +33,25 @@ impl<'a, Q: RayQuery + ?Sized> Passes<'a, Q> {
         Self { renderer, ctx, buffers }
     }
 
-    /// Pass `pass` alone: its image (the film's sums after one pass) and the counters,
-    /// with the film's discarded samples added to the estimator's.
+    /// Pass `pass` alone: its image (the film's after one pass) and the counters, with
+    /// the film's discarded samples added to the estimator's. Under a tent or gaussian
+    /// filter a pass's camera samples are a ratio estimate (`render::Film`), biased
+    /// for one pass: average [`Self::passes_image`]s of many passes each instead.
     pub fn pass_image(&mut self, pass: u32) -> (Vec<[f64; 3]>, Counters) {
+        self.passes_image(pass..pass + 1)
+    }
+
+    /// Passes `passes` in one film: its image and the summed counters (as
+    /// [`Self::pass_image`]).
+    pub fn passes_image(&mut self, passes: core::ops::Range<u32>) -> (Vec<[f64; 3]>, Counters) {
         let camera = &self.ctx.scene.camera;
         let mut film = Film::for_camera(camera);
-        let (mut counters, _) = serial_pass(&mut self.renderer, &self.ctx, &mut film, &mut self.buffers, pass);
+        let mut counters = Counters::default();
+        for pass in passes {
+            counters += serial_pass(&mut self.renderer, &self.ctx, &mut film, &mut self.buffers, pass).0;
+        }
         counters.discarded += film.discarded();
-        (film.sums().to_vec(), counters)
+        (film.to_rgb_f64(), counters)
     }
 
     /// The SPCBPT state (model, pass cache), if this is SPCBPT.

@@ -1,18 +1,20 @@
-//! Thin lens and pixel filters (issue 25): χ² of the lens and filter-offset samplers,
-//! the filter weight's normalisation, and PT/LT/BDPT agreement through a thin lens with
-//! a gaussian filter (camera samples by filter importance sampling, splats spread by
-//! the filter on the film).
+//! Thin lens and pixel filters (issues 25, 52): χ² of the lens sampler, the splat
+//! weights' normalisation, the spread film's convergence to the filtered image, and
+//! PT/LT/BDPT agreement through a thin lens with a gaussian filter (camera samples
+//! spread by the film with Mitsuba's weighted normalisation, splats spread by h_c).
 
-use ember_core::camera::{FovAxis, Lens, PerspectiveCamera};
+use ember_core::camera::{CameraPass, FovAxis, Lens, PerspectiveCamera, camera_film_point};
 use ember_core::estimators::EstimatorKind;
 use ember_core::math::{Vec2, Vec3};
 use ember_core::pixel_filter::Filter;
+use ember_core::render::Film;
 use ember_core::rng::{SampleStream, Stream};
 use ember_core::scene::builtin::look_at;
+use ember_core::spectrum::Rgb;
 use ember_core::transport::{MaxDepth, RenderParams};
 use ember_core::warp::invert_concentric_disk;
 use ember_tests::chi2::sidak;
-use ember_tests::render::{assert_blocks_agree, push_block_means, render_pass};
+use ember_tests::render::{Passes, assert_blocks_agree, push_block_means};
 use ember_tests::stats::{MeanVar, chi2_survival};
 use ember_tests::tracer::BruteForce;
 
@@ -93,71 +95,12 @@ fn lens_connection_inverts_the_primary_ray() {
     assert!(checked > 10_000, "{checked}");
 }
 
-/// The filter offsets follow `pdf_offset`, for tent and gaussian.
-/// Passing: χ² = 32.4 (tent), 35.3 (gaussian) over 39 dof, p = 0.76, 0.64. Injected bugs:
-/// the gaussian sampled with σ for σ√2 in erfinv's scale: χ² = 3.1·10⁴, p = 0; the tent's
-/// left half sampled uniformly: χ² = 3.9·10⁴, p = 0. (Leaving out the truncation constant
-/// erf(2√2) = 0.99994 was not seen: p = 0.036; it moves 6·10⁻⁵ of the mass.)
+/// A splat's weights h_c are normalised: ∫_F h_c(x) dx = 1 at border pixels too (h_c is
+/// separable, so a product of 1-D midpoint rules over [max(0, c − r), min(W, c + r)]).
+/// Injected bug (issue 25): K_c computed as ∫_F f / ∫f (inverted).
 #[test]
-fn filter_offsets_follow_their_density() {
-    for f in [Filter::Tent { radius: 1.0 }, Filter::Tent { radius: 1.6 }, Filter::Gaussian { stddev: 0.5 }, Filter::Gaussian { stddev: 1.1 }] {
-        let r = f.radius() as f64;
-        let bins = 40;
-        let n = 200_000;
-        let mut counts = vec![0.0; bins];
-        let mut rng = SampleStream::for_sample(7, Stream::Aux, 1, 0, 0);
-        for _ in 0..n {
-            let d = f.sample_offset(rng.next_f32()) as f64;
-            counts[(((d + r) / (2.0 * r) * bins as f64) as usize).min(bins - 1)] += 1.0;
-        }
-        // Expected counts by Simpson's rule on each bin.
-        let expected: Vec<f64> = (0..bins)
-            .map(|b| {
-                let (a, h) = (-r + 2.0 * r * b as f64 / bins as f64, 2.0 * r / bins as f64);
-                let k = 16;
-                let mut s = 0.0;
-                for i in 0..=k {
-                    let w = if i == 0 || i == k {
-                        1.0
-                    } else if i % 2 == 1 {
-                        4.0
-                    } else {
-                        2.0
-                    };
-                    s += w * f.pdf_offset((a + h * i as f64 / k as f64) as f32) as f64;
-                }
-                s * h / (3.0 * k as f64) * n as f64
-            })
-            .collect();
-        let (stat, p) = chi2(&counts, &expected);
-        println!("{f:?}: χ² = {stat:.1}, p = {p:.3}");
-        assert!(p > 1e-3, "{f:?}: χ² = {stat}, p = {p}");
-    }
-}
-
-/// E[w] over a pixel's camera samples is 1 in the interior (the weight's f/(p ∫f) has
-/// mean 1) and K_c's integral ∫_F h_c = 1 holds at the border (midpoint quadrature).
-/// Injected bug: K_c computed as ∫_F f / ∫f (inverted): E[w] at the corner pixel = 0.432
-/// for the tent (z = −576).
-#[test]
-fn filter_weights_are_normalised() {
+fn splat_weights_are_normalised() {
     for f in [Filter::Tent { radius: 1.3 }, Filter::Gaussian { stddev: 0.5 }, Filter::Gaussian { stddev: 0.8 }] {
-        let (scene, _, _) = ember_core::scene::builtin::cornell_box(12, 12).build().expect("scene");
-        let cam = scene.camera.with_filter(f);
-        // E[w] = ∫_F h_c = 1 for an interior pixel and for the corner one (whose samples
-        // outside F weigh 0).
-        for (px, py) in [(6u32, 5u32), (0, 0)] {
-            let mut m = MeanVar::default();
-            for s in 0..100_000u32 {
-                let mut rng = SampleStream::for_sample(3, Stream::Camera, py * 12 + px, s, 0);
-                m.push(cam.sample_ray(px, py, &mut rng).map_or(0.0, |p| p.weight as f64));
-            }
-            let z = (m.mean() - 1.0) / m.std_error().max(1e-12);
-            println!("{f:?}: E[w] at pixel ({px}, {py}) = {:.6} (z = {z:.2})", m.mean());
-            assert!(z.abs() < 4.0 || (m.mean() - 1.0).abs() < 1e-6, "{f:?} ({px}, {py}): E[w] = {} (z = {z:.2})", m.mean());
-        }
-        // ∫_F h_c(x) dx = 1 at border pixels: h_c is separable, so a product of 1-D
-        // midpoint rules over [max(0, c − r), min(W, c + r)].
         let axis = |i: u32, extent: u32| {
             let c = i as f64 + 0.5;
             let (lo, hi) = ((c - f.radius() as f64).max(0.0), (c + f.radius() as f64).min(extent as f64));
@@ -173,17 +116,99 @@ fn filter_weights_are_normalised() {
     }
 }
 
+/// A smooth test image on the film: L(x, y) at film point (x, y), positive, varying on
+/// the pixel scale.
+fn test_radiance(x: f32, y: f32) -> f64 {
+    let (x, y) = (x as f64, y as f64);
+    1.0 + 0.8 * (2.1 * x + 0.3).sin() * (1.7 * y).cos()
+}
+
+/// The spread film (`render/film/spread.rs`) converges to eq. (1) of `pixel_filter`,
+/// I_c = ∫_F f(x − c) L(x) dx / ∫_F f(x − c) dx, border pixels included, for a tent and
+/// a gaussian. Camera samples of an analytic image (`test_radiance` at each sample's film
+/// point, the point the film draws again) go through the film's own staging and commit;
+/// 16 independent films (seeds) of 40 passes each give a per-pixel standard error, and
+/// their merged film (640 passes) must lie within 5 of them of the quadrature in every
+/// pixel (9 × 7 pixels, two filters: a t-statistic with 15 dof, P(|t| > 5) = 1.6·10⁻⁴
+/// each). The ratio's O(1/n) bias at 640 passes is far below the bound (at 6400 passes
+/// the largest |z| is 3.2 and 3.8: no growth like a bias's √10). Passing: largest |z| 2.7 (tent), 3.0 (gaussian).
+/// Injected bugs: the normalisation forgotten (Σ f L / passes, which weighs the tent's
+/// pixels by (∫f)² = 2.25): |z| = 113; the weights centred on the pixel's corner instead
+/// of its centre (f(x − c + ½)): |z| = 60.
+#[test]
+fn spread_film_converges_to_the_filtered_image() {
+    let (w, h) = (9u32, 7u32);
+    let (films, passes) = (16u32, 40u32);
+    for f in [Filter::Tent { radius: 1.5 }, Filter::Gaussian { stddev: 0.5 }] {
+        // Eq. (1) by 2-D midpoint quadrature over the support ∩ F.
+        let expected: Vec<f64> = (0..w * h)
+            .map(|p| {
+                let c = Vec2::new((p % w) as f32 + 0.5, (p / w) as f32 + 0.5);
+                let r = f.radius();
+                let (x0, x1) = ((c.x - r).max(0.0), (c.x + r).min(w as f32));
+                let (y0, y1) = ((c.y - r).max(0.0), (c.y + r).min(h as f32));
+                let k = 400;
+                let (mut num, mut den) = (0.0f64, 0.0f64);
+                for i in 0..k {
+                    let x = x0 + (i as f32 + 0.5) / k as f32 * (x1 - x0);
+                    for j in 0..k {
+                        let y = y0 + (j as f32 + 0.5) / k as f32 * (y1 - y0);
+                        let wgt = (f.eval(x - c.x) * f.eval(y - c.y)) as f64;
+                        num += wgt * test_radiance(x, y);
+                        den += wgt;
+                    }
+                }
+                num / den
+            })
+            .collect();
+        let mut merged = Film::with_filter(w, h, f);
+        let mut spread = vec![MeanVar::default(); (w * h) as usize];
+        for seed in 0..films as u64 {
+            let mut film = Film::with_filter(w, h, f);
+            for pass in 0..passes {
+                let at = CameraPass { seed: 100 + seed, pass };
+                let values: Vec<Rgb> = (0..w * h)
+                    .map(|p| {
+                        let x = camera_film_point(at, p, w);
+                        Rgb::splat(test_radiance(x.x, x.y) as f32)
+                    })
+                    .collect();
+                film.set_camera_samples(at, 0..w * h, &values);
+                film.end_pass(1.0);
+            }
+            for (m, v) in spread.iter_mut().zip(film.to_rgb_f64()) {
+                m.push(v[1]);
+            }
+            merged.merge(&film).expect("same size");
+        }
+        let image = merged.to_rgb_f64();
+        let mut worst = (0.0f64, 0usize);
+        for (p, ((v, m), e)) in image.iter().zip(&spread).zip(&expected).enumerate() {
+            // The merged film's error has about the sub-films' standard error over √16.
+            let z = (v[1] - e) / m.std_error().max(1e-9);
+            if z.abs() > worst.0 {
+                worst = (z.abs(), p);
+            }
+        }
+        let p = worst.1;
+        println!("{f:?}: largest |z| = {:.2} at pixel {p} ({:.5} against {:.5})", worst.0, image[p][1], expected[p]);
+        assert!(worst.0 < 5.0, "{f:?}: pixel {p}: {} against eq. (1)'s {} (|z| = {:.1})", image[p][1], expected[p], worst.0);
+    }
+}
+
 /// PT, LT and BDPT agree per 2×2 block (12×12 image, Šidák over 324 z-tests at family
 /// α = 0.01) on the Cornell box seen through a thin lens focused on the back wall with
 /// Mitsuba's default gaussian filter: the lens connection (W_e cosθ/d² at the lens
-/// point), the filtered splats and the importance-sampled filter weights all estimate
-/// the same image. Passing: smallest p = 0.0086 (PT–LT), 0.016, 0.098 (seeds 18, 19:
+/// point), the filtered splats and the spread camera samples all estimate the same
+/// image. (Before issue 52 PT drew its film points from the filter and weighted them;
+/// its injected bugs below were seen then.) Passing: smallest p = 0.0086 (PT–LT), 0.016, 0.098 (seeds 18, 19:
 /// 0.0052, 0.0015). Injected bugs: a lens connection's film point taken as the pinhole's
 /// (focus plane ignored): z = 13.8 (PT vs LT); splats added to one pixel with weight 1
 /// while camera samples are filtered: z = 5.3; PT ignoring the filter weight: z = −10.7;
 /// BDPT's camera walk ignoring it: z = 4.5 (PT vs BDPT).
 #[test]
 fn pt_lt_bdpt_agree_through_a_thin_lens_with_a_gaussian_filter() {
+    const BATCH: u32 = 32;
     let (w, h, block) = (12usize, 12usize, 2usize);
     let (mut scene, geometry, _) = ember_core::scene::builtin::cornell_box(w as u32, h as u32).build().expect("scene");
     // Focused on the back wall (7.8 from the lens); the front of the floor is 0.5 px out of focus.
@@ -201,9 +226,12 @@ fn pt_lt_bdpt_agree_through_a_thin_lens_with_a_gaussian_filter() {
     let stats: Vec<Vec<[MeanVar; 3]>> = estimators
         .iter()
         .map(|&(est, passes)| {
+            // Films of 32 passes each: the camera samples' ratio estimate (Σ f L / Σ f) is
+            // biased for one pass; over 32 its bias is below the test's resolution.
             let mut stats = vec![[MeanVar::default(); 3]; count];
-            for pass in 0..passes {
-                let (img, counters) = render_pass(est, &scene, &tracer, &params, pass);
+            let mut runner = Passes::new(&scene, &tracer, &params, est.default_config());
+            for batch in 0..passes / BATCH {
+                let (img, counters) = runner.passes_image(batch * BATCH..(batch + 1) * BATCH);
                 assert_eq!(counters.discarded, 0);
                 push_block_means(&mut stats, &img, w, block);
             }

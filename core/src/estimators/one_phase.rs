@@ -6,6 +6,7 @@
 #[cfg(feature = "bdpt")]
 use super::bdpt;
 use super::{ChunkOutput, PhaseData, lt, pt};
+use crate::camera::CameraPass;
 use crate::geometry::RayQuery;
 use crate::render::{Context, Cursor, Film, Phase, Phased, Stage, chunk_for};
 use crate::transport::RenderParams;
@@ -80,10 +81,10 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for OnePhase {
             }
         };
     }
-    fn reduce(&mut self, _ctx: &Context<'_, Q>, _phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
+    fn reduce(&mut self, _ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         for out in outputs.iter() {
             if self.which != Simple::Lt {
-                film.set_camera_samples(out.items.clone(), &out.pixels);
+                film.set_camera_samples(CameraPass { seed: self.params.seed, pass: phase.pass.unwrap_or(0) }, out.items.clone(), &out.pixels);
             }
             film.push_splats(&out.splats);
         }

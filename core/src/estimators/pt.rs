@@ -61,7 +61,7 @@ pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Render
     }
     let mut paths = CameraPaths { scene, tracer, params, kernel: Kernel::Dirac, pass: 0, first: 0, out: &mut [], counters: Counters::default() };
     let state = PathState::new(ray, Rgb::ONE, rng.dimension() + WALK.layout.per_bounce);
-    let path = CameraPath { pixel: 0, weight: 1.0, rng: rng.clone(), junctions: None, state, l: Rgb::ZERO, pending: Rgb::ZERO };
+    let path = CameraPath { pixel: 0, rng: rng.clone(), junctions: None, state, l: Rgb::ZERO, pending: Rgb::ZERO };
     let path = lanes::run_one(&mut paths, tracer, path);
     *rng = path.rng;
     *counters += paths.counters;
@@ -91,12 +91,10 @@ struct CameraPaths<'a, Q: ?Sized> {
 /// One pixel's camera path in flight.
 struct CameraPath {
     pixel: u32,
-    /// The camera sample's filter weight.
-    weight: f32,
     rng: SampleStream,
     junctions: Option<Junctions>,
     state: PathState,
-    /// Radiance gathered so far (without the filter weight).
+    /// Radiance gathered so far.
     l: Rgb,
     /// β times the next-event sample waiting for its shadow ray.
     pending: Rgb,
@@ -108,21 +106,20 @@ impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
     fn start(&mut self, pixel: u32) -> Option<CameraPath> {
         let width = self.scene.camera.width().max(1);
         let mut rng = SampleStream::for_sample(self.params.seed, Stream::Camera, pixel, self.pass, 0);
-        // Draw the film point from the pixel filter (and a lens point); outside the
-        // image the sample's weight is 0.
+        // Draw the film point in the pixel (and a lens point).
         let Some(primary) = self.scene.camera.sample_ray(pixel % width, pixel / width, &mut rng) else {
             self.write(pixel, Rgb::ZERO);
             return None;
         };
         // max_depth 0 allows no segment at all: not even the camera ray (black, as Mitsuba).
         if !self.params.max_depth.allows(1) {
-            let black = self.counters.sanitize(Rgb::ZERO * primary.weight);
+            let black = self.counters.sanitize(Rgb::ZERO);
             self.write(pixel, black);
             return None;
         }
         let junctions = Junctions::for_path(self.kernel, self.params.seed, pixel, self.pass, CAMERA_KERNEL_KEY);
         let state = PathState::new(primary.ray, Rgb::ONE, rng.dimension() + WALK.layout.per_bounce);
-        Some(CameraPath { pixel, weight: primary.weight, rng, junctions, state, l: Rgb::ZERO, pending: Rgb::ZERO })
+        Some(CameraPath { pixel, rng, junctions, state, l: Rgb::ZERO, pending: Rgb::ZERO })
     }
 
     fn ray(&self, path: &CameraPath) -> Ray {
@@ -193,7 +190,8 @@ impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
     }
 
     fn finish(&mut self, path: CameraPath) {
-        let value = self.counters.sanitize(path.l * path.weight);
+        // The film spreads the sample under the pixel filter (`render::Film`).
+        let value = self.counters.sanitize(path.l);
         self.write(path.pixel, value);
     }
 }

@@ -1,6 +1,6 @@
 //! The image-based environment (Mitsuba 3 `envmap`): radiance at infinity from a
-//! latitude–longitude image, importance-sampled by a piecewise-constant distribution
-//! over the image.
+//! latitude–longitude image, importance-sampled by a piecewise-bilinear distribution
+//! over the image, the interpolation the radiance itself uses.
 //!
 //! **Mapping** (Mitsuba 3.9's `EnvironmentMapEmitter`, so that its renders are the
 //! references). A unit direction d in the map's local frame has
@@ -10,19 +10,31 @@
 //! centres, wrapping around in φ) and y = v(H − 1) (rows at the poles' corners, clamped),
 //! times `scale`. The local frame is `to_world`'s rotation.
 //!
-//! **Sampling.** The image is cut into W × H cells in (u, v), cell (i, j) covering
-//! [i/W, (i+1)/W) × [j/H, (j+1)/H), weighted by the largest luminance of the texels its
-//! bilinear interpolation reads (so every direction with radiance has density: light
-//! tracing draws its directions only from here) times sin θ at the cell's centre. Rows
-//! are drawn from one alias table and the cell within the row from the row's own; the
-//! remapped uniforms place the point inside the cell. The density of (u, v) is
-//! p(u, v) = P(j) P(i | j) W H, and per unit solid angle p_ω = p(u, v) / (2π² sin θ)
-//! (dω = 2π² sin θ du dv), with sin θ = √(d.x² + d.z²) of the direction itself on both
-//! the sampling and the density side (the sampler takes the drawn cell's probabilities,
-//! the density finds the cell again from the direction). Mitsuba samples a bilinear (`Hierarchical2D`)
-//! distribution instead; any density positive where the radiance is gives the same
-//! expectation.
+//! **Sampling.** The density follows the radiance's own interpolation. On the lattice of
+//! the lookup, column k at x = k (texel centres, k = 0..W, column W being column 0) and
+//! row j at y = j (j = 0..R−1, R = max(H, 2), reading texel row min(j, H − 1)), the
+//! lattice value is g_jk = lum(texel) · s_j with s_j = sin θ_j, θ_j = πj/(R − 1), except
+//! that the pole rows take the sine a quarter row inside (so that radiance there keeps a
+//! density). Between lattice points the density of (x, y) is the bilinear interpolation
+//! of g, divided by its integral T = Σ_cells (sum of the cell's corners)/4; it is
+//! positive exactly where the radiance is, and L sin θ / p is nearly constant even
+//! across a sun a few texels wide, where a piecewise-constant density is not (the
+//! density before issue 52: cells weighted by the brightest texel a lookup reads, which
+//! spread a 5-texel sun's samples over about 15 cells, most of them dim; ours was 1.6×
+//! Mitsuba's relMSE on `scenes-extra/textured`, docs/pixel-filters.md).
 //!
+//! Drawing (x, y) (Mitsuba's `Hierarchical2D`, drawn as pbrt-v4's bilinear patches are):
+//! the row cell j from an alias table of the cells' masses (G_j + G_{j+1})/2, G_j = Σ_k g_jk
+//! the lattice row's integral; y − j from the linear density between G_j and G_{j+1}
+//! ([`crate::warp::sample_linear`]); the column cell k from the mixture of the two
+//! lattice rows' cell tables, row j with weight (1 − f_y) G_j and row j + 1 with f_y
+//! G_{j+1} (each cell's mass at height f_y is that mixture); x − k from the linear
+//! density between the cell's two edge values at f_y. Then u = (x + ½)/W wrapped to
+//! [0, 1), v = y/(R − 1), and p(u, v) = p(x, y) W (R − 1); per unit solid angle
+//! p_ω = p(u, v) / (2π² sin θ) (dω = 2π² sin θ du dv), with sin θ = √(d.x² + d.z²) of the
+//! direction itself. The sampler evaluates the density at the (x, y) it drew, with the
+//! function the density uses for a direction, which finds (x, y) again.
+
 //! Direct lighting and emission then work as for the constant environment
 //! ([`super::infinite`]): shadow-ray targets beyond the scene's bounding sphere, emission
 //! through the scene disk.
@@ -36,6 +48,10 @@ use crate::alias::AliasTable;
 use crate::math::{PI, Vec2, Vec3};
 use crate::measure::{AreaPdf, SolidAnglePdf};
 use crate::spectrum::Rgb;
+use crate::warp::sample_linear;
+
+/// The largest f32 below 1.
+const ONE_BELOW: f32 = 1.0 - f32::EPSILON * 0.5;
 
 /// Why an image cannot be an environment map.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,9 +84,18 @@ struct Map {
     /// Local → world rotation (columns) and its inverse.
     to_world: [Vec3; 3],
     to_local: [Vec3; 3],
-    /// Rows, then cells within each row; `None` when the map is black.
+    /// Lattice rows R = max(H, 2) (see the module notes).
+    lattice_rows: usize,
+    /// g_jk, R × W, row-major.
+    lattice: Vec<f32>,
+    /// G_j = Σ_k g_jk per lattice row.
+    row_sums: Vec<f32>,
+    /// The R − 1 row cells, weighted (G_j + G_{j+1})/2; `None` when the map is black.
     rows: Option<AliasTable>,
+    /// Per lattice row, its W column cells weighted (g_jk + g_j,k+1)/2.
     cells: Vec<Option<AliasTable>>,
+    /// W (R − 1) / T: turns a lattice cell's interpolated g into p(u, v).
+    density_scale: f32,
     /// ∫ L̄ dω over the sphere (channel mean), for the light's power.
     integral: f32,
 }
@@ -118,32 +143,48 @@ impl EnvMapLight {
             Vec3::new(to_world[0].y, to_world[1].y, to_world[2].y),
             Vec3::new(to_world[0].z, to_world[1].z, to_world[2].z),
         ];
-        // Cell weights: the largest luminance among the texels the cell's bilinear
-        // lookups read (columns i−1..=i+1, wrapped; the rows its v range touches).
-        let lum: Vec<f32> = texels.iter().map(|&t| luminance(t)).collect();
-        let mut weights = Vec::with_capacity(n);
+        // The power: texel means times sin θ at the texel rows' centres.
         let mut integral = 0.0f64;
         for j in 0..h {
-            let y0 = (j * (h - 1)) / h;
-            let y1 = (((j + 1) * (h - 1)) / h + 1).min(h - 1);
-            let theta = (j as f32 + 0.5) / h as f32 * PI;
-            let sin_theta = libm::sinf(theta);
-            for i in 0..w {
-                let mut m = 0.0f32;
-                for y in y0..=y1 {
-                    for di in [w - 1, 0, 1] {
-                        m = m.max(lum[y * w + (i + di) % w]);
-                    }
-                }
-                weights.push(m * sin_theta);
-                integral += f64::from(texels[j * w + i].average()) * f64::from(sin_theta);
-            }
+            let sin_theta = f64::from(libm::sinf((j as f32 + 0.5) / h as f32 * PI));
+            integral += texels[j * w..(j + 1) * w].iter().map(|t| f64::from(t.average())).sum::<f64>() * sin_theta;
         }
         let integral = (integral * 2.0 * f64::from(PI) * f64::from(PI) / n as f64) as f32;
-        let row_sums: Vec<f32> = weights.chunks_exact(w).map(|r| r.iter().sum()).collect();
-        let rows = AliasTable::new(&row_sums);
-        let cells = weights.chunks_exact(w).map(AliasTable::new).collect();
-        Ok(Self { map: Arc::new(Map { width: w, height: h, texels, to_world, to_local, rows, cells, integral }), disk: SceneDisk::default() })
+        // The lattice g_jk = lum · s_j, its rows' integrals and cell tables.
+        let r = h.max(2);
+        let last = (r - 1) as f32;
+        let mut lattice = Vec::with_capacity(r * w);
+        for j in 0..r {
+            let s = libm::sinf(PI * (j as f32).clamp(0.25, last - 0.25) / last);
+            let texel_row = j.min(h - 1) * w;
+            lattice.extend(texels[texel_row..texel_row + w].iter().map(|&t| luminance(t) * s));
+        }
+        let mut row_sums = Vec::with_capacity(r);
+        let mut cells = Vec::with_capacity(r);
+        let mut masses = Vec::with_capacity(w);
+        for row in lattice.chunks_exact(w) {
+            masses.clear();
+            masses.extend((0..w).map(|k| 0.5 * (row[k] + row[(k + 1) % w])));
+            row_sums.push(row.iter().map(|&g| f64::from(g)).sum::<f64>() as f32);
+            cells.push(AliasTable::new(&masses));
+        }
+        let row_cells: Vec<f32> = row_sums.windows(2).map(|p| 0.5 * (p[0] + p[1])).collect();
+        let total: f64 = row_cells.iter().map(|&m| f64::from(m)).sum();
+        let rows = AliasTable::new(&row_cells);
+        let density_scale = if total > 0.0 { (w as f64 * f64::from(last) / total) as f32 } else { 0.0 };
+        let map = Map { width: w, height: h, texels, to_world, to_local, lattice_rows: r, lattice, row_sums, rows, cells, density_scale, integral };
+        Ok(Self { map: Arc::new(map), disk: SceneDisk::default() })
+    }
+
+    /// p(u, v) in lattice cell (`k`, `j`) at (`fx`, `fy`) ∈ [0, 1]²: the bilinear
+    /// interpolation of its corners' g, times W (R − 1) / T.
+    #[inline]
+    fn density_uv(m: &Map, k: usize, j: usize, fx: f32, fy: f32) -> f32 {
+        let w = m.width;
+        let g = |j: usize, k: usize| m.lattice[j * w + k % w];
+        let top = g(j, k) * (1.0 - fx) + g(j, k + 1) * fx;
+        let bottom = g(j + 1, k) * (1.0 - fx) + g(j + 1, k + 1) * fx;
+        (top * (1.0 - fy) + bottom * fy) * m.density_scale
     }
 
     /// (u, v) of a local unit direction.
@@ -182,16 +223,30 @@ impl EnvMapLight {
     /// density per steradian.
     fn sample_dir(&self, u: Vec2) -> Option<(Vec3, SolidAnglePdf)> {
         let m = &*self.map;
+        // Draw the row cell, then the height within it.
         let row = m.rows.as_ref()?.sample(u.y);
-        let cell = m.cells[row.index].as_ref()?.sample(u.x);
-        let uu = (cell.index as f32 + cell.u_remapped) / m.width as f32;
-        let vv = (row.index as f32 + row.u_remapped) / m.height as f32;
+        let j = row.index;
+        let (a, b) = (m.row_sums[j], m.row_sums[j + 1]);
+        let fy = sample_linear(row.u_remapped, a, b);
+        // Draw the column cell from the two lattice rows' tables, mixed at that height.
+        let (wa, wb) = ((1.0 - fy) * a, fy * b);
+        let p_top = if wa + wb > 0.0 { wa / (wa + wb) } else { f32::from(u8::from(a > 0.0)) };
+        let (table, uc) = if u.x < p_top { (j, u.x / p_top) } else { (j + 1, (u.x - p_top) / (1.0 - p_top)) };
+        let cell = m.cells[table].as_ref()?.sample(uc.min(ONE_BELOW));
+        let k = cell.index;
+        // Draw the position within the cell, between its edges' values at that height.
+        let w = m.width;
+        let edge = |k: usize| (1.0 - fy) * m.lattice[j * w + k % w] + fy * m.lattice[(j + 1) * w + k % w];
+        let fx = sample_linear(cell.u_remapped, edge(k), edge(k + 1));
+        let uu = (k as f32 + fx + 0.5) / w as f32;
+        let uu = if uu < 1.0 { uu } else { uu - 1.0 };
+        let vv = (j as f32 + fy) / (m.lattice_rows - 1) as f32;
         let (sin_phi, cos_phi) = libm::sincosf(2.0 * PI * uu);
         let (sin_t, cos_t) = libm::sincosf(PI * vv);
         let local = Vec3::new(sin_phi * sin_t, cos_t, -cos_phi * sin_t);
-        // The sampled cell's own probabilities (what `pdf_local` finds again from the
+        // The density at the drawn lattice point (what `pdf_local` finds again from the
         // direction, without its atan2 and acos).
-        let pdf = Self::solid_angle(row.pmf * cell.pmf * (m.width * m.height) as f32, local);
+        let pdf = Self::solid_angle(Self::density_uv(m, k, j, fx, fy), local);
         (pdf.value() > 0.0).then(|| (apply(&m.to_world, local).normalize(), pdf))
     }
 
@@ -208,12 +263,19 @@ impl EnvMapLight {
     /// Density per steradian of a local unit direction.
     fn pdf_local(&self, d: Vec3) -> SolidAnglePdf {
         let m = &*self.map;
-        let Some(rows) = &m.rows else { return SolidAnglePdf::ZERO };
+        if m.rows.is_none() {
+            return SolidAnglePdf::ZERO;
+        }
         let uv = Self::uv(d);
-        let i = ((uv.x * m.width as f32) as usize).min(m.width - 1);
-        let j = ((uv.y * m.height as f32) as usize).min(m.height - 1);
-        let Some(cells) = &m.cells[j] else { return SolidAnglePdf::ZERO };
-        Self::solid_angle(rows.pmf(j) * cells.pmf(i) * (m.width * m.height) as f32, d)
+        // The lattice point of (u, v): x = uW − ½ wrapped to [0, W), y = v (R − 1).
+        let w = m.width as f32;
+        let x = uv.x * w - 0.5;
+        let x = if x < 0.0 { x + w } else { x };
+        let k = (libm::floorf(x) as usize).min(m.width - 1);
+        let y = uv.y * (m.lattice_rows - 1) as f32;
+        let j = (libm::floorf(y) as usize).min(m.lattice_rows - 2);
+        let (fx, fy) = ((x - k as f32).clamp(0.0, 1.0), (y - j as f32).clamp(0.0, 1.0));
+        Self::solid_angle(Self::density_uv(m, k, j, fx, fy), d)
     }
 
     /// Density per steradian with which [`Self::sample_li`] returns world direction `wi`.

@@ -52,12 +52,12 @@ pub fn camera_subpath_with_kernel<Q: RayQuery + ?Sized>(
         return SubPath::new();
     }
     let u_lens = scene.camera.lens_u(rng);
-    let primary = PrimaryRay { ray: scene.camera.generate_ray_lens(film, u_lens), film, weight: 1.0 };
+    let primary = PrimaryRay { ray: scene.camera.generate_ray_lens(film, u_lens), film };
     camera_subpath_from(scene, tracer, params, Some(primary), max_vertices, rng, junctions, counters)
 }
 
-/// Camera sub-path from a drawn primary ray, its throughput starting at the filter
-/// weight; `None` (a film point outside the image) leaves only the camera vertex, so the
+/// Camera sub-path from a drawn primary ray, its throughput starting at 1 (the film
+/// applies the pixel filter); `None` (no primary ray) leaves only the camera vertex, so the
 /// t = 1 strategies, which replace it, still run.
 #[allow(clippy::too_many_arguments)]
 pub fn camera_subpath_from<Q: RayQuery + ?Sized>(
@@ -79,7 +79,7 @@ pub fn camera_subpath_from<Q: RayQuery + ?Sized>(
         return path;
     };
     let ray = primary.ray;
-    let beta = Rgb::splat(primary.weight);
+    let beta = Rgb::ONE;
     let _ = path.push(Vertex::camera(ray.origin, beta));
     random_walk(scene, tracer, params, ray, beta, max_vertices, TransportMode::Radiance, rng, junctions, counters, &mut path);
     path

@@ -8,8 +8,8 @@
 //! texture coordinates ([`crate::bsdf::Material::albedo_hint`], clamped to [0, 1]) and the
 //! world-space shading normal facing the ray. A ray that escapes, or stays on Dirac
 //! surfaces, gives zero for both: OIDN reads zero albedo as "no texture detail to keep".
-//! Each pixel averages `samples` camera rays drawn as the estimators draw them (through the
-//! reconstruction filter, weighted, and the lens); random numbers
+//! Each pixel averages `samples` camera rays drawn as the estimators draw them (film points
+//! uniform in the pixel, and the lens; the pixel filter is not applied); random numbers
 //! come from their own stream per pixel, so the guides do not depend on the thread count
 //! or on the estimator.
 
@@ -64,14 +64,14 @@ pub fn render_guides<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, seed: u64,
         let (mut sum_a, mut sum_n, mut sum_w) = (Rgb::ZERO, Vec3::ZERO, 0.0f32);
         for s in 0..n {
             let mut rng = SampleStream::for_sample(seed, Stream::Camera, pixel, GUIDE_PASS + s, 0);
-            // The camera's own sampling: the reconstruction filter and the lens.
+            // The camera's own sampling: the film point in the pixel and the lens.
             let Some(primary) = scene.camera.sample_ray(pixel % width, pixel / width, &mut rng) else { continue };
             let g = first_surface(scene, tracer, primary.ray, &mut rng);
-            sum_a += g.albedo * primary.weight;
-            sum_n += g.normal * primary.weight;
-            sum_w += primary.weight;
+            sum_a += g.albedo;
+            sum_n += g.normal;
+            sum_w += 1.0;
         }
-        // The filter-weighted mean (the weights average 1 but vary a little per sample).
+        // The mean over film points uniform in the pixel (guides ignore the pixel filter).
         let inv = if sum_w > 0.0 { 1.0 / sum_w } else { 0.0 };
         *a = sum_a * inv;
         *nrm = sum_n * inv;

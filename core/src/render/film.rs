@@ -25,14 +25,18 @@
 //! times the built-in box's renders linearly (`tests/tests/stability_extremes.rs`).
 //!
 //! # The pixel filter
-//! Camera samples arrive already weighted by the camera's filter (`crate::pixel_filter`, filter
-//! importance sampling), so the film adds each to its own pixel whatever the filter.
-//! A splat at x is spread over the pixels c within the filter's radius with the weights
+//! Under the box a camera sample is added to its own pixel, as it always was, and the
+//! image is `sum / passes`. Under a tent or a gaussian the film spreads each camera sample
+//! over the pixels around its film point and keeps, per pixel, Σ f L and Σ f apart from
+//! the splats' sums ([`WeightedSum`]): Mitsuba's weighted film, a ratio estimator,
+//! consistent but not unbiased ([`spread`] holds its essay). Such a pixel's image is
+//! Σ f L / Σ f + `sum / passes`. A splat at x is spread over the pixels c within the filter's radius with the weights
 //! h_c(x) of `crate::pixel_filter` (eq. 1–2); each weighted addition is rounded on its own, so
 //! the sums stay order independent. The box film ([`Film::new`]) adds a splat to the
 //! pixel containing it with weight 1, as it always did. Merged films are not checked for
 //! equal filters: committed sums are already filtered, and a film read back by
-//! [`Film::from_exact`] (a box film) only merges.
+//! [`Film::from_exact`] (a box film, given its weighted sums by
+//! [`Film::with_weighted_sums`]) only merges.
 //!
 //! A sample with a NaN, infinite or negative channel is never added: it counts as zero
 //! (the pass still counts) and is tallied in [`Film::discarded`], so an estimator bug shows
@@ -49,9 +53,13 @@ use crate::spectrum::Rgb;
 use crate::transport::Splat;
 
 mod bands;
+mod spread;
 
+use crate::camera::CameraPass;
 pub use bands::{Band, ParallelBands};
 use bands::{Lists, commit_camera_sample};
+pub use spread::WeightedSum;
+use spread::spread_camera_rows;
 
 /// Bits of a sum below the binary point: a sum is an integer count of 2⁻⁶⁴.
 pub const QUANTUM_BITS: u32 = 64;
@@ -69,7 +77,10 @@ pub struct Film {
     tallies: Tallies,
     /// The pass being staged: one camera sample per pixel (zero where no phase wrote one).
     camera: Vec<Rgb>,
-    has_camera: bool,
+    /// The staged camera samples' pass, once a phase wrote some.
+    camera_pass: Option<CameraPass>,
+    /// Per pixel, the camera samples spread by a wide filter (empty for the box).
+    weighted: Vec<WeightedSum>,
     /// The pass's splats, in staging order.
     splats: Vec<Splat>,
     /// How splats are spread over pixels.
@@ -164,7 +175,8 @@ impl Film {
             passes: 0,
             tallies: Tallies::default(),
             camera: vec![Rgb::ZERO; n],
-            has_camera: false,
+            camera_pass: None,
+            weighted: if filter.is_box() { Vec::new() } else { vec![WeightedSum::default(); n] },
             splats: Vec::new(),
             filter,
             workers: Workers(None),
@@ -203,6 +215,16 @@ impl Film {
         film.passes = passes;
         film.tallies = tallies;
         Ok(film)
+    }
+
+    /// This film with the camera samples' weighted sums `weighted` (as
+    /// [`Film::weighted_sums`] gave them; empty: none, a box film's).
+    pub fn with_weighted_sums(mut self, weighted: Vec<WeightedSum>) -> Result<Self, FilmError> {
+        if !weighted.is_empty() && weighted.len() != self.sum.len() {
+            return Err(FilmError::Pixels { expected: self.sum.len(), got: weighted.len() });
+        }
+        self.weighted = weighted;
+        Ok(self)
     }
 
     /// Image width in pixels.
@@ -251,19 +273,29 @@ impl Film {
         &self.sum
     }
 
-    /// The per-pixel sums as f64 (each rounded once from the exact sum).
+    /// The camera samples' weighted sums under a wide filter, per pixel; empty for the box,
+    /// whose camera samples are in [`Film::exact_sums`].
+    pub fn weighted_sums(&self) -> &[WeightedSum] {
+        &self.weighted
+    }
+
+    /// The per-pixel sums as f64 (each rounded once from the exact sum): the camera
+    /// samples and splats of a box film, the splats alone of a wide one.
     pub fn sums(&self) -> Vec<[f64; 3]> {
         self.sum.iter().map(|s| s.map(|v| v as f64 * INV_SCALE)).collect()
     }
 
-    /// Stage this pass's camera samples of `pixels` (`samples[i]` for pixel
-    /// `pixels.start + i`); pixels beyond the image or the slice are ignored.
-    pub fn set_camera_samples(&mut self, pixels: Range<u32>, samples: &[Rgb]) {
+    /// Stage the camera samples of `pixels` drawn in pass `at` (`samples[i]` for pixel
+    /// `pixels.start + i`); pixels beyond the image or the slice are ignored. A wide
+    /// filter spreads each from the film point `at` gives it
+    /// (`crate::camera::camera_film_point`); every call of a pass names the same `at`.
+    pub fn set_camera_samples(&mut self, at: CameraPass, pixels: Range<u32>, samples: &[Rgb]) {
+        debug_assert!(self.camera_pass.is_none_or(|p| p == at), "one pass's camera samples, one key");
         let start = (pixels.start as usize).min(self.camera.len());
         let end = (pixels.end as usize).clamp(start, self.camera.len());
         let n = (end - start).min(samples.len());
         self.camera[start..start + n].copy_from_slice(&samples[..n]);
-        self.has_camera = true;
+        self.camera_pass = Some(at);
     }
 
     /// Stage splats of this pass (added after the camera samples, in this order).
@@ -280,7 +312,7 @@ impl Film {
             Some(run) => self.commit_in_bands(run, &splats, splat_scale),
             None => self.commit_here(&splats, splat_scale),
         }
-        self.has_camera = false;
+        self.camera_pass = None;
         self.splats = splats;
         self.splats.clear();
         self.passes += 1;
@@ -305,6 +337,14 @@ impl Film {
                 };
             }
         }
+        if !other.weighted.is_empty() {
+            if self.weighted.is_empty() {
+                self.weighted = vec![WeightedSum::default(); self.sum.len()];
+            }
+            for (a, b) in self.weighted.iter_mut().zip(&other.weighted) {
+                self.tallies.saturated += a.merge(b);
+            }
+        }
         self.passes = passes;
         self.tallies.add(&other.tallies);
         Ok(())
@@ -313,6 +353,7 @@ impl Film {
     /// Back to a black film with no passes and no tallies (the buffers are kept).
     pub fn clear(&mut self) {
         self.sum.fill([0; 3]);
+        self.weighted.fill(WeightedSum::default());
         self.passes = 0;
         self.tallies = Tallies::default();
         self.discard_staged();
@@ -321,18 +362,25 @@ impl Film {
     /// Drop a staged, uncommitted pass.
     pub fn discard_staged(&mut self) {
         self.camera.fill(Rgb::ZERO);
-        self.has_camera = false;
+        self.camera_pass = None;
         self.splats.clear();
     }
 
     /// [`Self::end_pass`] on the calling thread.
     fn commit_here(&mut self, splats: &[Splat], scale: f64) {
-        if self.has_camera {
-            for (acc, v) in self.sum.iter_mut().zip(&mut self.camera) {
-                commit_camera_sample(&mut self.tallies, acc, v);
+        let (width, height, filter) = (self.width, self.height, self.filter);
+        match self.camera_pass {
+            None => {}
+            Some(_) if filter.is_box() || self.weighted.is_empty() => {
+                for (acc, v) in self.sum.iter_mut().zip(&mut self.camera) {
+                    commit_camera_sample(&mut self.tallies, acc, v);
+                }
+            }
+            Some(at) => {
+                spread_camera_rows(filter, at, width, height, &self.camera, &mut self.weighted, 0..height, &mut self.tallies);
+                self.camera.fill(Rgb::ZERO);
             }
         }
-        let (width, height, filter) = (self.width, self.height, self.filter);
         for s in splats {
             if admit(&mut self.tallies, s, width, height) {
                 self.tallies.saturated += splat_rows(filter, width, height, &mut self.sum, 0..height, s, scale);
@@ -340,10 +388,19 @@ impl Film {
         }
     }
 
-    /// The image: the mean over passes (black before the first pass).
+    /// The image: the mean over passes (black before the first pass), plus under a wide
+    /// filter the camera samples' weighted mean Σ f L / Σ f.
     pub fn to_rgb_f32(&self) -> Vec<[f32; 3]> {
+        self.to_rgb_f64().into_iter().map(|p| p.map(|v| v as f32)).collect()
+    }
+
+    /// [`Self::to_rgb_f32`] before its rounding to f32.
+    pub fn to_rgb_f64(&self) -> Vec<[f64; 3]> {
         let inv = if self.passes == 0 { 0.0 } else { INV_SCALE / self.passes as f64 };
-        self.sum.iter().map(|s| s.map(|v| (v as f64 * inv) as f32)).collect()
+        if self.weighted.is_empty() {
+            return self.sum.iter().map(|s| s.map(|v| v as f64 * inv)).collect();
+        }
+        self.sum.iter().zip(&self.weighted).map(|(s, w)| core::array::from_fn(|c| s[c] as f64 * inv + w.ratio(c))).collect()
     }
 }
 
@@ -449,6 +506,9 @@ mod tests {
     use super::*;
     use crate::math::Vec2;
 
+    /// The pass key of the tests' camera samples.
+    const AT: CameraPass = CameraPass { seed: 1, pass: 0 };
+
     /// Bands in reverse order, as a parallel runner may take them.
     fn reversed(bands: &mut [Band<'_>], work: &(dyn Fn(&mut Band<'_>) + Sync)) {
         for band in bands.iter_mut().rev() {
@@ -461,7 +521,9 @@ mod tests {
     /// outside the image and invalid; and a film with camera samples alone. Seen to fail
     /// on injected bugs: a splat listed only under the band of its first row (the
     /// Gaussian's lower rows lost), a band's rows starting one row late, the last sort
-    /// segment ending one splat short, and a band skipping its camera samples.
+    /// segment ending one splat short, and a band skipping its camera samples; and (issue
+    /// 52) a band spreading only the camera samples of its own rows (`spread`'s reach 0),
+    /// which loses its neighbours' samples near its edges.
     #[test]
     fn banded_commit_equals_the_sequential_one() {
         use super::bands::{PARALLEL_PIXELS, PARALLEL_SPLATS};
@@ -490,7 +552,7 @@ mod tests {
             banded.set_parallel_splats(Some(reversed));
             for film in [&mut one, &mut banded] {
                 for pass in 0..2 {
-                    film.set_camera_samples(0..w * h, &camera);
+                    film.set_camera_samples(AT, 0..w * h, &camera);
                     film.push_splats(&splats[pass * 100..]);
                     film.end_pass(0.125);
                 }
@@ -498,6 +560,8 @@ mod tests {
             assert!(one.splats_outside() > 0 && one.discarded() == 4, "{:?}", one.tallies());
             assert_eq!(one.tallies(), banded.tallies(), "{filter:?}");
             assert!(one.exact_sums() == banded.exact_sums(), "{filter:?}");
+            assert!(one.weighted_sums() == banded.weighted_sums(), "{filter:?}: the camera samples' weighted sums");
+            assert_eq!(one.weighted_sums().is_empty(), filter.is_box());
             // Too few splats to cut: committed on the calling thread, the same film.
             let mut few = Film::with_filter(w, h, filter);
             let mut few_banded = Film::with_filter(w, h, filter);
@@ -516,7 +580,7 @@ mod tests {
         banded.set_parallel_splats(Some(reversed));
         for film in [&mut one, &mut banded] {
             for _ in 0..2 {
-                film.set_camera_samples(0..w * h, &camera);
+                film.set_camera_samples(AT, 0..w * h, &camera);
                 film.end_pass(1.0);
             }
         }
@@ -527,7 +591,7 @@ mod tests {
     #[test]
     fn invalid_samples_are_discarded_and_counted() {
         let mut f = Film::new(3, 1);
-        f.set_camera_samples(0..3, &[Rgb::new(f32::NAN, 0.0, 0.0), Rgb::new(1.0, 2.0, 3.0), Rgb::new(0.0, -1e-9, 0.0)]);
+        f.set_camera_samples(AT, 0..3, &[Rgb::new(f32::NAN, 0.0, 0.0), Rgb::new(1.0, 2.0, 3.0), Rgb::new(0.0, -1e-9, 0.0)]);
         let bad = [
             Splat { film: Vec2::new(0.5, 0.5), value: Rgb::splat(f32::INFINITY) },
             Splat { film: Vec2::new(f32::NAN, 0.5), value: Rgb::ONE },
@@ -548,7 +612,7 @@ mod tests {
     fn mean_over_passes_and_staging_is_per_pass() {
         let mut f = Film::new(2, 2);
         for pass in 0..4 {
-            f.set_camera_samples(0..4, &[Rgb::splat(pass as f32); 4]);
+            f.set_camera_samples(AT, 0..4, &[Rgb::splat(pass as f32); 4]);
             f.push_splats(&[Splat { film: Vec2::new(1.99, 1.0), value: Rgb::splat(8.0) }]);
             f.end_pass(0.25);
         }
@@ -565,10 +629,10 @@ mod tests {
     #[test]
     fn a_staged_pass_that_never_ends_changes_nothing() {
         let mut f = Film::new(2, 1);
-        f.set_camera_samples(0..2, &[Rgb::ONE; 2]);
+        f.set_camera_samples(AT, 0..2, &[Rgb::ONE; 2]);
         f.end_pass(1.0);
         let before = f.clone();
-        f.set_camera_samples(0..2, &[Rgb::splat(5.0); 2]);
+        f.set_camera_samples(AT, 0..2, &[Rgb::splat(5.0); 2]);
         f.push_splats(&[Splat { film: Vec2::new(0.5, 0.5), value: Rgb::ONE }]);
         f.discard_staged();
         assert_eq!(f.sums(), before.sums());
@@ -593,7 +657,7 @@ mod tests {
 
         // Passes 0..8 in one film against ((0..3) + (6..8)) + (3..6) merged.
         let pass = |f: &mut Film, p: usize| {
-            f.set_camera_samples(0..2, &[Rgb::splat(0.1 * p as f32 + 1e-7), Rgb::new(3.3e-9, 1e5, 0.7)]);
+            f.set_camera_samples(AT, 0..2, &[Rgb::splat(0.1 * p as f32 + 1e-7), Rgb::new(3.3e-9, 1e5, 0.7)]);
             f.push_splats(&splats[p * 8..p * 8 + 8]);
             f.end_pass(1.0 / 7.0);
         };
@@ -648,7 +712,7 @@ mod tests {
         assert_eq!(to_fixed(f64::MIN_POSITIVE / 2.0), Some(0));
         let mut f = Film::new(1, 1);
         for _ in 0..3 {
-            f.set_camera_samples(0..1, &[Rgb::new(7e18, 1.0, 0.0)]);
+            f.set_camera_samples(AT, 0..1, &[Rgb::new(7e18, 1.0, 0.0)]);
             f.end_pass(1.0);
         }
         assert_eq!(f.saturated(), 1, "the third 7e18 passes 2^64");

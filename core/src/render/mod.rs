@@ -40,7 +40,7 @@ pub mod wire;
 
 /// What every phase reads: the scene and the ray queries (defined with the scene).
 pub use crate::scene::Context;
-pub use film::{Band, Film, FilmError, ParallelBands, QUANTUM_BITS, Tallies};
+pub use film::{Band, Film, FilmError, ParallelBands, QUANTUM_BITS, Tallies, WeightedSum};
 
 use alloc::vec::Vec;
 use core::ops::Range;

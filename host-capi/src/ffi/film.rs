@@ -5,7 +5,7 @@ use super::*;
 
 /// The film's state as bytes, to continue the render later with `ember_film_import` (in
 /// this process or another): the passes, their exact sums, and what they depend on
-/// (estimator, configuration, seed, max depth, tracer, scene, size, ember build;
+/// (estimator, configuration, seed, max depth, tracer, scene, size, film kind, ember build;
 /// docs/embedding.md). With `bytes` null, `*written` gets the size needed and nothing is
 /// written; else `capacity` must be at least that size (if not: `*written` gets it and
 /// the call fails) and `*written` gets the bytes written.

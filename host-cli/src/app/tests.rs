@@ -30,9 +30,9 @@ impl<Q: ember_core::geometry::RayQuery + ?Sized> Phased<Q> for Ramp {
             out.counters.rays += 1;
         }
     }
-    fn reduce(&mut self, _: &Context<'_, Q>, _: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
+    fn reduce(&mut self, _: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         for out in outputs.iter() {
-            film.set_camera_samples(out.items.clone(), &out.pixels);
+            film.set_camera_samples(ember_core::camera::CameraPass { seed: 0, pass: phase.pass.unwrap_or(0) }, out.items.clone(), &out.pixels);
         }
         if self.cursor.advance() {
             film.end_pass(1.0);

@@ -130,7 +130,7 @@ fn film_with(passes: u32, value: f32) -> Film {
     let mut f = Film::new(3, 2);
     for p in 0..passes {
         let px: Vec<_> = (0..6).map(|i| ember_core::spectrum::Rgb::new(value * (i + 1) as f32, 1e-12 * p as f32, 1.0e12)).collect();
-        f.set_camera_samples(0..6, &px);
+        f.set_camera_samples(ember_core::camera::CameraPass { seed: 0, pass: p }, 0..6, &px);
         f.end_pass(1.0);
     }
     f
@@ -151,6 +151,35 @@ fn partial_images_round_trip_exactly() {
     assert_eq!(restored.to_rgb_f32(), film.to_rgb_f32());
     // The top word is in use (1e12 × 4 passes ≈ 2^106 units).
     assert!(film.exact_sums()[0][2] >> 96 > 0);
+}
+
+/// Under a gaussian filter the partial image keeps the camera samples' weighted sums too
+/// (issue 52), and the merged parts equal the whole film. Injected bug: `wsum` channels
+/// not read back: the restored film's image lost its camera samples.
+#[test]
+fn partial_images_keep_a_wide_filters_weighted_sums() {
+    let filter = ember_core::pixel_filter::Filter::Gaussian { stddev: 0.7 };
+    let pass = |f: &mut Film, p: u32| {
+        let px: Vec<_> = (0..6).map(|i| ember_core::spectrum::Rgb::new(0.3 * (i + p + 1) as f32, 2.0, 1.0e9)).collect();
+        f.set_camera_samples(ember_core::camera::CameraPass { seed: 3, pass: p }, 0..6, &px);
+        f.end_pass(1.0);
+    };
+    let mut whole = Film::with_filter(3, 2, filter);
+    let mut first = Film::with_filter(3, 2, filter);
+    let mut second = Film::with_filter(3, 2, filter);
+    for p in 0..4 {
+        pass(&mut whole, p);
+        pass(if p < 2 { &mut first } else { &mut second }, p);
+    }
+    let path = temp("round-trip-gaussian.exr");
+    write_partial(&path, &header(PassRange { start: 0, end: 2 }), &first).unwrap();
+    let (_, mut restored) = read_partial(&path).unwrap();
+    assert!(!restored.weighted_sums().is_empty());
+    assert_eq!(restored.weighted_sums(), first.weighted_sums());
+    assert_eq!(restored.to_rgb_f32(), first.to_rgb_f32());
+    restored.merge(&second).unwrap();
+    assert_eq!(restored.weighted_sums(), whole.weighted_sums());
+    assert_eq!(restored.to_rgb_f32(), whole.to_rgb_f32());
 }
 
 /// Damaged, truncated and foreign files are refused with their name, never merged.

@@ -95,7 +95,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Fake {
     fn reduce(&mut self, _: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         for out in outputs.iter() {
             if phase.id == 0 {
-                film.set_camera_samples(out.items.clone(), &out.pixels);
+                film.set_camera_samples(ember_core::camera::CameraPass { seed: 0, pass: phase.pass.unwrap_or(0) }, out.items.clone(), &out.pixels);
             }
             film.push_splats(&out.splats);
         }

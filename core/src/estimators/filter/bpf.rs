@@ -46,6 +46,7 @@ use super::bidir::Bidirectional;
 use super::bridge::{bridge_end, trace_bridges};
 use super::nodes::{scale_kernels, trace_camera_nodes, trace_light_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk, phase};
+use crate::camera::CameraPass;
 use crate::estimators::FilterConfig;
 use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
@@ -204,7 +205,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
             }
         }
         if self.cursor.advance() {
-            self.pass.commit_pixels(&ctx.scene.camera, self.params.seed, phase.pass.unwrap_or(0), &mut self.pixel_values, film);
+            self.pass.commit_pixels(CameraPass { seed: self.params.seed, pass: phase.pass.unwrap_or(0) }, &mut self.pixel_values, film);
         }
     }
 }

@@ -14,6 +14,7 @@ use alloc::vec::Vec;
 
 use super::nodes::{scale_kernels, trace_camera_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk, phase};
+use crate::camera::CameraPass;
 use crate::estimators::FilterConfig;
 use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
@@ -104,7 +105,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Mvf {
         }
         // The pass ends after `filter` (no sweep) or after the last sweep: L is final.
         if self.cursor.advance() {
-            self.pass.commit_pixels(&ctx.scene.camera, self.params.seed, phase.pass.unwrap_or(0), &mut self.pixel_values, film);
+            self.pass.commit_pixels(CameraPass { seed: self.params.seed, pass: phase.pass.unwrap_or(0) }, &mut self.pixel_values, film);
         }
     }
 }

@@ -214,8 +214,7 @@ pub fn trace_camera_nodes<Q: RayQuery + ?Sized>(
     let width = scene.camera.width().max(1);
     for pixel in pixels {
         let mut rng = SampleStream::for_sample(params.seed, Stream::Camera, pixel, pass, 0);
-        // The filter weight is applied when the pixel's value is final
-        // (`PerspectiveCamera::camera_sample_weight`); outside the image, nothing.
+        // The film applies the pixel filter when the pass is committed.
         let primary = scene.camera.sample_ray(pixel % width, pixel / width, &mut rng);
         let (node, escaped) = match primary {
             Some(p) if max_segments >= 1 => walk(scene, tracer, params, max_segments, p.ray, &mut rng, nodes, &mut counters),

@@ -8,7 +8,7 @@ use super::bidir::BidirDenominators;
 use super::graph::{FilterGraph, Rgb3, reserve_headroom};
 use super::nodes::{NONE, Node};
 use super::weights::{Denominators, KernelPoint, Neighbourhood};
-use crate::camera::PerspectiveCamera;
+use crate::camera::CameraPass;
 use crate::estimators::ChunkOutput;
 use crate::merge::HashGrid;
 use crate::render::Film;
@@ -391,16 +391,14 @@ impl FilterPass {
     }
 
     /// End a camera-side pass (MVF, BPF): each pixel's value, its first node's L or the
-    /// sky its camera ray escaped to, times the filter weight of its camera sample
-    /// (`PerspectiveCamera::camera_sample_weight`, 1 for the box), committed to `film`.
-    /// `buffer` is the estimator's, kept across passes.
-    pub fn commit_pixels(&self, camera: &PerspectiveCamera, seed: u64, pass: u32, buffer: &mut Vec<Rgb>, film: &mut Film) {
+    /// sky its camera ray escaped to, committed to `film` as the camera samples of `at`
+    /// (the film applies the pixel filter). `buffer` is the estimator's, kept across passes.
+    pub fn commit_pixels(&self, at: CameraPass, buffer: &mut Vec<Rgb>, film: &mut Film) {
         buffer.clear();
-        for (pixel, (&first, &sky)) in self.links.iter().zip(&self.values).enumerate() {
-            let l = if first == NONE { sky } else { self.value(first) };
-            buffer.push(l * camera.camera_sample_weight(seed, pixel as u32, pass));
+        for (&first, &sky) in self.links.iter().zip(&self.values) {
+            buffer.push(if first == NONE { sky } else { self.value(first) });
         }
-        film.set_camera_samples(0..buffer.len() as u32, buffer);
+        film.set_camera_samples(at, 0..buffer.len() as u32, buffer);
         film.end_pass(1.0);
     }
 

@@ -40,6 +40,7 @@
 use super::nodes::{near_specular, scale_kernels, trace_light_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk, phase};
 use crate::bsdf::TransportMode;
+use crate::camera::CameraPass;
 use crate::estimators::FilterConfig;
 use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
@@ -166,7 +167,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
             phase::FOOTPRINT => self.r0 = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs)),
             id if id == phase::FIRST_SWEEP + self.sweeps => {
                 for out in outputs.iter() {
-                    film.set_camera_samples(out.items.clone(), &out.pixels);
+                    film.set_camera_samples(CameraPass { seed: self.params.seed, pass: phase.pass.unwrap_or(0) }, out.items.clone(), &out.pixels);
                 }
             }
             id => self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0))),
@@ -214,9 +215,9 @@ fn gather_pixels<Q: RayQuery + ?Sized>(
             *slot = Rgb::ZERO;
             continue;
         };
-        // The path's throughput starts at the filter weight.
+        // The film applies the pixel filter (`render::Film`): the throughput starts at 1.
         let first_dim = rng.dimension();
-        let mut path = PathState::new(primary.ray, Rgb::splat(primary.weight), first_dim);
+        let mut path = PathState::new(primary.ray, Rgb::ONE, first_dim);
         let mut l = Rgb::ZERO;
         while params.max_depth.allows(path.segments) && path.segments <= MAX_CAMERA_BOUNCES {
             let Some(hit) = CAMERA_WALK.trace(tracer, &path, &mut counters) else {

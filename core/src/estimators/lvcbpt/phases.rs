@@ -9,6 +9,7 @@
 use alloc::vec::Vec;
 
 use super::{PassInputs, StrategyCounts, count_cacheable, render_pixels, trace_light_paths};
+use crate::camera::CameraPass;
 use crate::estimators::LvcbptConfig;
 use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
@@ -130,7 +131,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Lvcbpt {
             }
             _ => {
                 for out in outputs.iter() {
-                    film.set_camera_samples(out.items.clone(), &out.pixels);
+                    film.set_camera_samples(CameraPass { seed: self.params.seed, pass: phase.pass.unwrap_or(0) }, out.items.clone(), &out.pixels);
                 }
             }
         }

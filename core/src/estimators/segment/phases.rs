@@ -6,6 +6,7 @@
 //! | pass 0 | `camera` (segment PT, segment BDPT) or `light paths` (segment LT, W·H paths) | W·H | camera samples staged, splats pushed (LT, BDPT's t = 1); pass committed with splat factor 1/(W·H) |
 
 use super::{sbdpt, slt, spt};
+use crate::camera::CameraPass;
 use crate::estimators::{ChunkOutput, PhaseData};
 use crate::estimators::{KernelChoice, SegmentAlgorithm, SegmentConfig};
 use crate::geometry::RayQuery;
@@ -94,7 +95,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Segments {
         } else {
             for out in outputs.iter() {
                 if self.algorithm != SegmentAlgorithm::LightTracing {
-                    film.set_camera_samples(out.items.clone(), &out.pixels);
+                    film.set_camera_samples(CameraPass { seed: self.params.seed, pass: phase.pass.unwrap_or(0) }, out.items.clone(), &out.pixels);
                 }
                 film.push_splats(&out.splats);
             }

@@ -19,6 +19,7 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use super::{Classifier, Model, PassCache, build_buckets, build_gamma_tables, light_source_bins, prepare, render_pixels, splat_light_paths, trace_light_paths};
+use crate::camera::CameraPass;
 use crate::estimators::SpcbptConfig;
 use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
@@ -387,7 +388,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Spcbpt {
             }
             _ => {
                 for out in outputs.iter() {
-                    film.set_camera_samples(out.items.clone(), &out.pixels);
+                    film.set_camera_samples(CameraPass { seed: self.params.seed, pass: phase.pass.unwrap_or(0) }, out.items.clone(), &out.pixels);
                 }
             }
         }

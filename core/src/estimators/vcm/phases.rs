@@ -10,6 +10,7 @@ use alloc::vec::Vec;
 
 use super::mis::Techniques;
 use super::{MergeMode, PassInputs, Photon, photon_position, render_pixels, trace_light_paths};
+use crate::camera::CameraPass;
 use crate::estimators::MergingConfig;
 use crate::estimators::{ChunkOutput, PhaseData};
 use crate::geometry::RayQuery;
@@ -191,7 +192,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Vcm {
             }
             _ => {
                 for out in outputs.iter() {
-                    film.set_camera_samples(out.items.clone(), &out.pixels);
+                    film.set_camera_samples(CameraPass { seed: self.params.seed, pass: phase.pass.unwrap_or(0) }, out.items.clone(), &out.pixels);
                 }
             }
         }

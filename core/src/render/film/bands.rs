@@ -4,8 +4,10 @@
 //! 1. **Sort.** The pass's splats are cut into contiguous segments; each segment's task
 //!    checks its splats ([`super::admit`]) and lists each admitted one under every band of
 //!    rows its filter footprint reaches, in staging order.
-//! 2. **Rows.** Each band's task adds the camera samples of its rows, then the splats
-//!    listed under it by segment 0, 1, … in turn: the staging order again.
+//! 2. **Rows.** Each band's task adds the camera samples of its rows (under a wide filter:
+//!    the staged samples of its rows and of the rows around them that reach its rows,
+//!    [`super::spread`]), then the splats listed under it by segment 0, 1, … in turn: the
+//!    staging order again.
 //!
 //! Every pixel receives exactly the additions of the sequential commit, and the sums are
 //! fixed-point integers (order-free anyway), so the film is the same bit for bit
@@ -17,6 +19,7 @@
 use alloc::vec::Vec;
 use core::ops::Range;
 
+use super::spread::{WeightedSum, spread_camera_rows};
 use super::{Film, Tallies, add, admit, rows_reached, splat_rows};
 use crate::spectrum::Rgb;
 use crate::transport::Splat;
@@ -31,8 +34,17 @@ enum Share<'a> {
     /// List the admitted splats among `splats` (indices into the pass's splats) under
     /// every band they reach: `lists[b]` for band `b`.
     Sort { splats: Range<usize>, lists: &'a mut [Vec<u32>], tallies: Tallies },
-    /// Band `band`: rows `rows`, their sums and their staged camera samples.
-    Rows { band: usize, rows: Range<u32>, sums: &'a mut [[u128; 3]], camera: &'a mut [Rgb], tallies: Tallies },
+    /// Band `band`: rows `rows`, their sums and where their camera samples go.
+    Rows { band: usize, rows: Range<u32>, sums: &'a mut [[u128; 3]], camera: CameraRows<'a>, tallies: Tallies },
+}
+
+/// A band's camera samples: its own staged ones (the box: each to its pixel, then
+/// cleared), or its rows' weighted sums (a wide filter: every staged sample that reaches
+/// the rows, read from the whole image's staging).
+#[derive(Debug)]
+enum CameraRows<'a> {
+    Own(&'a mut [Rgb]),
+    Spread(&'a mut [WeightedSum]),
 }
 
 /// How a host with threads commits a pass: call `work` once for every band, in any order,
@@ -72,7 +84,7 @@ impl core::fmt::Debug for Lists {
 impl Film {
     /// Whether a pass of `splats` splats is worth committing through a runner.
     pub(super) fn worth_bands(&self, splats: usize) -> bool {
-        self.height >= 2 && self.width >= 1 && (splats >= PARALLEL_SPLATS || (self.has_camera && self.sum.len() >= PARALLEL_PIXELS))
+        self.height >= 2 && self.width >= 1 && (splats >= PARALLEL_SPLATS || (self.camera_pass.is_some() && self.sum.len() >= PARALLEL_PIXELS))
     }
 
     /// Commit the staged camera samples and `splats` × `scale` through `run`.
@@ -121,12 +133,18 @@ impl Film {
         drop(sorts);
 
         // 2. Rows.
-        let (has_camera, lists) = (self.has_camera, &self.lists.0[..segments * bands]);
+        let (camera_pass, lists) = (self.camera_pass, &self.lists.0[..segments * bands]);
         let band_len = rows_per as usize * width as usize;
+        let spread = !filter.is_box() && !self.weighted.is_empty();
+        let (targets, staged): (Vec<CameraRows>, &[Rgb]) = if spread {
+            (self.weighted.chunks_mut(band_len).map(CameraRows::Spread).collect(), &self.camera)
+        } else {
+            (self.camera.chunks_mut(band_len).map(CameraRows::Own).collect(), &[])
+        };
         let mut rows: Vec<Band> = self
             .sum
             .chunks_mut(band_len)
-            .zip(self.camera.chunks_mut(band_len))
+            .zip(targets)
             .enumerate()
             .map(|(band, (sums, camera))| {
                 let first = band as u32 * rows_per;
@@ -135,10 +153,14 @@ impl Film {
             .collect();
         run(&mut rows, &|task: &mut Band| {
             let Share::Rows { band, rows, sums, camera, tallies } = &mut task.0 else { return };
-            if has_camera {
-                for (acc, v) in sums.iter_mut().zip(camera.iter_mut()) {
-                    commit_camera_sample(tallies, acc, v);
+            match (camera_pass, camera) {
+                (None, _) => {}
+                (Some(_), CameraRows::Own(camera)) => {
+                    for (acc, v) in sums.iter_mut().zip(camera.iter_mut()) {
+                        commit_camera_sample(tallies, acc, v);
+                    }
                 }
+                (Some(at), CameraRows::Spread(weighted)) => spread_camera_rows(filter, at, width, height, staged, weighted, rows.clone(), tallies),
             }
             for segment in lists.chunks(bands) {
                 for &i in &segment[*band] {
@@ -150,6 +172,10 @@ impl Film {
             if let Share::Rows { tallies, .. } = &task.0 {
                 self.tallies.add(tallies);
             }
+        }
+        drop(rows);
+        if spread && camera_pass.is_some() {
+            self.camera.fill(Rgb::ZERO);
         }
     }
 }
