@@ -40,6 +40,8 @@ use crate::math::{erf, exp};
 
 /// √(π/2).
 const SQRT_HALF_PI: f32 = 1.253_314_1;
+/// g(r) = g(4σ) = exp(−8), the gaussian's cut-off value for every σ.
+const EXP_MINUS_8: f32 = 3.354_626_3e-4;
 
 /// A separable pixel reconstruction filter (see the module notes).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -107,7 +109,7 @@ impl Filter {
                 }
             }
             Self::Tent { radius } => (1.0 - x.abs() / radius).max(0.0),
-            Self::Gaussian { stddev } => (gauss(x, stddev) - gauss(4.0 * stddev, stddev)).max(0.0),
+            Self::Gaussian { stddev } => (gauss(x, stddev) - EXP_MINUS_8).max(0.0),
         }
     }
 
@@ -126,7 +128,7 @@ impl Filter {
             }
             Self::Gaussian { stddev } => {
                 let s = stddev * core::f32::consts::SQRT_2;
-                stddev * SQRT_HALF_PI * (erf(t / s) + erf(r / s)) - gauss(r, stddev) * (t + r)
+                stddev * SQRT_HALF_PI * (erf(t / s) + erf(r / s)) - EXP_MINUS_8 * (t + r)
             }
         }
     }

@@ -200,9 +200,10 @@ fn spread_film_converges_to_the_filtered_image() {
 /// α = 0.01) on the Cornell box seen through a thin lens focused on the back wall with
 /// Mitsuba's default gaussian filter: the lens connection (W_e cosθ/d² at the lens
 /// point), the filtered splats and the spread camera samples all estimate the same
-/// image. (Before issue 52 PT drew its film points from the filter and weighted them;
-/// its injected bugs below were seen then.) Passing: smallest p = 0.0086 (PT–LT), 0.016, 0.098 (seeds 18, 19:
-/// 0.0052, 0.0015). Injected bugs: a lens connection's film point taken as the pinhole's
+/// image. Passing (issue 52: films of 32 passes): smallest p = 0.0004 (PT–LT), 0.0043,
+/// 0.057 (seeds 18, 19: 0.0011, 0.0028; the Šidák level is 10⁻⁵). Before issue 52 PT
+/// drew its film points from the filter and weighted them, and these injected bugs were
+/// seen to fail it: a lens connection's film point taken as the pinhole's
 /// (focus plane ignored): z = 13.8 (PT vs LT); splats added to one pixel with weight 1
 /// while camera samples are filtered: z = 5.3; PT ignoring the filter weight: z = −10.7;
 /// BDPT's camera walk ignoring it: z = 4.5 (PT vs BDPT).

@@ -110,9 +110,13 @@ pub(super) fn spread_camera_rows(
     rows: Range<u32>,
     tallies: &mut Tallies,
 ) {
-    // A sample of row y lies in [y, y + 1) and reaches centres within r of it.
-    let reach = math::ceil(filter.radius()) as u32 + 1;
+    // A sample of row y lies in [y, y + 1) and reaches the rows whose centre is within r
+    // of it: rows y − k with k + ½ < r + 1, that is k ≤ ⌈r + ½⌉ − 1.
+    let reach = (math::ceil(filter.radius() + 0.5) as u32).saturating_sub(1);
     let sources = rows.start.saturating_sub(reach)..rows.end.saturating_add(reach).min(height);
+    // The filter along x of the sample at hand, evaluated once per sample (the taps of
+    // filters up to 8 pixels wide; wider ones evaluate at every pixel).
+    let mut taps = [0.0f32; TAPS];
     for sy in sources {
         for sx in 0..width {
             let p = sy * width + sx;
@@ -124,17 +128,23 @@ pub(super) fn spread_camera_rows(
                 v = Rgb::ZERO;
             }
             let x = camera_film_point(at, p, width);
-            for py in filter.splat_range(x.y, height) {
-                if !rows.contains(&py) {
-                    continue;
+            let columns = filter.splat_range(x.x, width);
+            let tapped = columns.len() <= TAPS;
+            if tapped {
+                for (t, px) in taps.iter_mut().zip(columns.clone()) {
+                    *t = filter.eval(x.x - (px as f32 + 0.5));
                 }
+            }
+            let filter_rows = filter.splat_range(x.y, height);
+            for py in filter_rows.start.max(rows.start)..filter_rows.end.min(rows.end) {
                 let wy = filter.eval(x.y - (py as f32 + 0.5));
                 if wy <= 0.0 {
                     continue;
                 }
                 let row = (py - rows.start) as usize * width as usize;
-                for px in filter.splat_range(x.x, width) {
-                    let w = wy * filter.eval(x.x - (px as f32 + 0.5));
+                for (k, px) in columns.clone().enumerate() {
+                    let wx = if tapped { taps[k] } else { filter.eval(x.x - (px as f32 + 0.5)) };
+                    let w = wy * wx;
                     if w > 0.0 {
                         tallies.saturated += sums[row + px as usize].add(v, w);
                     }
@@ -143,3 +153,7 @@ pub(super) fn spread_camera_rows(
         }
     }
 }
+
+/// Filter taps along x kept per sample: a support up to 8 pixels wide (a gaussian of
+/// σ ≤ 1, a tent of radius ≤ 4).
+const TAPS: usize = 9;
