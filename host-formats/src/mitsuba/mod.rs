@@ -65,6 +65,8 @@ mod tests;
 mod tests_errors;
 #[cfg(test)]
 mod tests_textures;
+#[cfg(test)]
+mod tests_principled;
 
 use std::fmt;
 use std::path::{Path, PathBuf};
