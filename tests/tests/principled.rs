@@ -149,7 +149,13 @@ fn chi2_principled() {
     let alpha = sidak(0.01, cases.len());
     for (i, (set, wo)) in cases.iter().enumerate() {
         let m = set.material();
-        let c = if set.alpha() <= 0.01 { 2.5 } else if set.alpha() <= 0.05 { 2.0 } else { 1.0 };
+        let c = if set.alpha() <= 0.01 {
+            2.5
+        } else if set.alpha() <= 0.05 {
+            2.0
+        } else {
+            1.0
+        };
         let binning = SphereBinning::around(Vec3::new(-wo.x, -wo.y, wo.z), c);
         let cfg = Chi2Config { samples: 400_000, seed: 0x9e1 + i as u64, ..Chi2Config::default() };
         let name = format!("principled {} θo={:.0}°{}", set.name, wo.z.abs().acos().to_degrees(), if wo.z < 0.0 { " inside" } else { "" });
@@ -271,7 +277,13 @@ fn stratified(n: usize, seed: u64, axis: Vec3, c: f64, keep: impl Fn(Vec3) -> bo
 /// direction, the transmission one around the refracted direction (the far pole under
 /// total internal reflection).
 fn stratified_sphere(set: &Set, wo: Vec3, seed: u64, g: impl Fn(Vec3) -> f64) -> (f64, f64) {
-    let c = if set.alpha() <= 0.01 { 3.0 } else if set.alpha() <= 0.1 { 2.0 } else { 1.0 };
+    let c = if set.alpha() <= 0.01 {
+        3.0
+    } else if set.alpha() <= 0.1 {
+        2.0
+    } else {
+        1.0
+    };
     let mirror = Vec3::new(-wo.x, -wo.y, wo.z);
     let (r, r_se) = stratified(300, seed, mirror, c, |w| w.z * wo.z > 0.0, &g);
     if !set.transmits() {
@@ -361,7 +373,11 @@ fn furnace_bounds() {
     let mut sets = Vec::new();
     for roughness in [0.05f32, 0.3, 0.7, 1.0] {
         for anisotropic in [0.0f32, 0.9] {
-            sets.push((format!("metallic r={roughness} an={anisotropic}"), PrincipledParams { base_color: Rgb::ONE, metallic: 1.0, roughness, anisotropic, ..d }, false));
+            sets.push((
+                format!("metallic r={roughness} an={anisotropic}"),
+                PrincipledParams { base_color: Rgb::ONE, metallic: 1.0, roughness, anisotropic, ..d },
+                false,
+            ));
         }
         for inside in [false, true] {
             sets.push((format!("glass r={roughness} inside={inside}"), PrincipledParams { base_color: Rgb::ONE, spec_trans: 1.0, roughness, ..d }, inside));

@@ -136,7 +136,8 @@ impl Ctx<'_> {
             Ok(v as f32)
         };
         let (anisotropic, metallic, spec_tint) = (unit("anisotropic", d.anisotropic)?, unit("metallic", d.metallic)?, unit("spec_tint", d.spec_tint)?);
-        let (sheen_tint, flatness, clearcoat_gloss) = (unit("sheen_tint", d.sheen_tint)?, unit("flatness", d.flatness)?, unit("clearcoat_gloss", d.clearcoat_gloss)?);
+        let (sheen_tint, flatness, clearcoat_gloss) =
+            (unit("sheen_tint", d.sheen_tint)?, unit("flatness", d.flatness)?, unit("clearcoat_gloss", d.clearcoat_gloss)?);
         let spec_trans = unit("spec_trans", d.spec_trans)?;
         let mut non_negative = |name: &'static str, default: f64| -> Res<f32> {
             let v = p.float(name, default)?;

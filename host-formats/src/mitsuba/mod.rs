@@ -64,9 +64,9 @@ mod tests;
 #[cfg(test)]
 mod tests_errors;
 #[cfg(test)]
-mod tests_textures;
-#[cfg(test)]
 mod tests_principled;
+#[cfg(test)]
+mod tests_textures;
 
 use std::fmt;
 use std::path::{Path, PathBuf};

@@ -21,7 +21,12 @@ fn material(test: &str, bsdf: &str) -> Result<(ember_core::scene::Scene, Materia
 /// Same values at a few direction pairs (reflection and transmission).
 fn same(a: &Material, b: &Material) -> bool {
     let dirs = [Vec3::new(0.3, 0.1, 0.9).normalize(), Vec3::new(-0.5, 0.2, 0.7).normalize(), Vec3::new(0.2, -0.4, -0.8).normalize(), Vec3::Z];
-    dirs.iter().all(|&wo| dirs.iter().all(|&wi| a.eval(wo, wi, TransportMode::Radiance) == b.eval(wo, wi, TransportMode::Radiance) && a.pdf(wo, wi, TransportMode::Radiance) == b.pdf(wo, wi, TransportMode::Radiance)))
+    dirs.iter().all(|&wo| {
+        dirs.iter().all(|&wi| {
+            a.eval(wo, wi, TransportMode::Radiance) == b.eval(wo, wi, TransportMode::Radiance)
+                && a.pdf(wo, wi, TransportMode::Radiance) == b.pdf(wo, wi, TransportMode::Radiance)
+        })
+    })
 }
 
 /// Defaults are Mitsuba's (base 0.5, roughness 0.5, specular 0.5 → η = 1.5); every
@@ -59,7 +64,8 @@ fn principled_parameters_and_defaults() {
     // `specular` maps to η as Mitsuba: 2/(1 − √(0.08 s)) − 1; 0 with transmission is 10⁻³.
     let (_, m) = material("principled_specular", r#"<bsdf type="principled"><float name="specular" value="0.8"/></bsdf>"#).unwrap();
     assert!(same(&m, &Material::principled(PrincipledParams { eta: PrincipledParams::eta_from_specular(0.8), ..PrincipledParams::default() })));
-    let (_, m) = material("principled_specular0", r#"<bsdf type="principled"><float name="specular" value="0"/><float name="spec_trans" value="1"/></bsdf>"#).unwrap();
+    let (_, m) =
+        material("principled_specular0", r#"<bsdf type="principled"><float name="specular" value="0"/><float name="spec_trans" value="1"/></bsdf>"#).unwrap();
     let p = PrincipledParams { eta: PrincipledParams::eta_from_specular(1e-3), spec_trans: 1.0, ..PrincipledParams::default() };
     assert!(same(&m, &Material::principled(p)));
 }
