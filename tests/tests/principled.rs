@@ -26,7 +26,8 @@
 //! - the sampler refracting with the reflection share: `chi2_principled` (sampled 0.50
 //!   against ∫pdf 0.97), `sample_matches_eval_and_pdf`, `sampled_albedo_…`,
 //!   `reciprocity_and_adjoint`.
-//! (`scripts/principled-inject.py` applies them one at a time.)
+//!
+//! `scripts/principled-inject.py` applies them one at a time.
 
 use ember_core::bsdf::{Material, MicrofacetKind, PrincipledParams, TransportMode};
 use ember_core::math::Vec3;
