@@ -9,7 +9,7 @@
 //!
 //! The models and their conventions are Mitsuba 3's (the suite's references are Mitsuba
 //! renders): `diffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`
-//! `plastic`, `roughplastic` and the `twosided` adapter. Smooth `plastic` is the one
+//! `plastic`, `roughplastic`, `principled` and the `twosided` adapter. Smooth `plastic` is the one
 //! model with lobes of both kinds: `eval` and `pdf` describe its continuous lobe, and a
 //! sample says whether it drew the Dirac one (see `plastic.rs`). Microfacet models use Smith's separable masking and
 //! sample visible normals (see `microfacet.rs`).
@@ -33,6 +33,7 @@ mod diffuse;
 mod fresnel;
 mod microfacet;
 mod plastic;
+mod principled;
 mod rough_conductor;
 mod rough_dielectric;
 mod rough_plastic;
@@ -45,6 +46,8 @@ use dielectric::Dielectric;
 use diffuse::Diffuse;
 use microfacet::Microfacet;
 use plastic::Plastic;
+use principled::Principled;
+pub use principled::PrincipledParams;
 use rough_conductor::RoughConductor;
 use rough_dielectric::RoughDielectric;
 pub use rough_plastic::PlasticCoating;
@@ -128,17 +131,21 @@ enum Kind {
     RoughDielectric(RoughDielectric),
     RoughPlastic(RoughPlastic),
     Plastic(Plastic),
+    Principled(Principled),
 }
 
 /// A material parameter a texture can drive (Mitsuba's parameter names in brackets).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TextureSlot {
-    /// The diffuse albedo: `reflectance` of `diffuse`, `diffuse_reflectance` of the plastics.
+    /// The diffuse albedo: `reflectance` of `diffuse`, `diffuse_reflectance` of the
+    /// plastics, `base_color` of `principled`.
     Diffuse,
     /// `specular_reflectance` of conductors, dielectrics and plastics.
     SpecularReflectance,
     /// `specular_transmittance` of dielectrics.
     SpecularTransmittance,
+    /// `roughness` of `principled`, a float parameter: the texel's luminance.
+    Roughness,
 }
 
 /// A surface's scattering model (a closed enum) and whether it is mirrored to the back.
@@ -237,12 +244,19 @@ impl Material {
         Self::new(Kind::Plastic(Plastic::new(relative_ior(int_ior, ext_ior), diffuse, specular_reflectance, nonlinear)))
     }
 
+    /// Mitsuba 3's `principled` (see `principled.rs`): Burley's Disney BSDF with its
+    /// diffuse, sheen, anisotropic GGX specular, clearcoat and rough transmission lobes.
+    pub fn principled(params: PrincipledParams) -> Self {
+        Self::new(Kind::Principled(Principled::new(params)))
+    }
+
     /// Which texture slots this model has.
     pub fn has_slot(&self, slot: TextureSlot) -> bool {
         use TextureSlot as S;
         match (&self.kind, slot) {
-            (Kind::Diffuse(_) | Kind::Plastic(_) | Kind::RoughPlastic(_), S::Diffuse) => true,
-            (_, S::SpecularReflectance) => !matches!(self.kind, Kind::Diffuse(_)),
+            (Kind::Diffuse(_) | Kind::Plastic(_) | Kind::RoughPlastic(_) | Kind::Principled(_), S::Diffuse) => true,
+            (Kind::Principled(_), S::Roughness) => true,
+            (_, S::SpecularReflectance) => !matches!(self.kind, Kind::Diffuse(_) | Kind::Principled(_)),
             (Kind::Dielectric(_) | Kind::RoughDielectric(_), S::SpecularTransmittance) => true,
             _ => false,
         }
@@ -267,6 +281,8 @@ impl Material {
             (Kind::RoughDielectric(b), S::SpecularReflectance) => b.specular_reflectance = value,
             (Kind::Dielectric(b), S::SpecularTransmittance) => b.specular_transmittance = value,
             (Kind::RoughDielectric(b), S::SpecularTransmittance) => b.specular_transmittance = value,
+            (Kind::Principled(b), S::Diffuse) => b.p.base_color = value,
+            (Kind::Principled(b), S::Roughness) => *b = Principled::new(PrincipledParams { roughness: value.luminance(), ..b.p }),
             _ => {}
         }
         m
@@ -301,6 +317,7 @@ impl Material {
             Kind::RoughDielectric(b) => b.eval(wo, wi, mode),
             Kind::RoughPlastic(b) => b.eval(wo, wi),
             Kind::Plastic(b) => b.eval(wo, wi),
+            Kind::Principled(b) => b.eval(wo, wi, mode),
             Kind::Conductor(_) | Kind::Dielectric(_) => Rgb::ZERO,
         };
         if f.is_finite() { f } else { Rgb::ZERO }
@@ -353,6 +370,7 @@ impl Material {
             Kind::RoughDielectric(b) => b.pdf(wo, wi),
             Kind::RoughPlastic(b) => b.pdf(wo, wi),
             Kind::Plastic(b) => b.pdf(wo, wi),
+            Kind::Principled(b) => b.pdf(wo, wi),
             Kind::Conductor(_) | Kind::Dielectric(_) => SolidAnglePdf::ZERO,
         };
         Self::checked_pdf(pdf)
@@ -397,6 +415,7 @@ impl Material {
             Kind::RoughDielectric(b) => b.sample(wo, u_lobe, u, mode),
             Kind::RoughPlastic(b) => b.sample(wo, u_lobe, u),
             Kind::Plastic(b) => b.sample(wo, u_lobe, u),
+            Kind::Principled(b) => b.sample(wo, u_lobe, u, mode),
         }?;
         // No sample rather than a non-finite one.
         (s.f.is_finite() && s.pdf.value().is_finite() && s.pdf_rev.value().is_finite()).then_some(s)
@@ -422,13 +441,17 @@ impl Material {
             Kind::RoughConductor(b) => Some(b.distr.alpha),
             Kind::RoughDielectric(b) => Some(b.distr.alpha),
             Kind::RoughPlastic(b) => Some(b.distr.alpha),
+            Kind::Principled(b) => Some(b.min_alpha()),
             _ => None,
         }
     }
 
     /// The material can transmit light to the other side.
     pub fn has_transmission(&self) -> bool {
-        matches!(self.kind, Kind::Dielectric(_) | Kind::RoughDielectric(_))
+        match &self.kind {
+            Kind::Principled(b) => b.has_transmission(),
+            k => matches!(k, Kind::Dielectric(_) | Kind::RoughDielectric(_)),
+        }
     }
 
     /// A rough reflectance-like colour, for Russian roulette and SPCBPT features:
@@ -443,6 +466,7 @@ impl Material {
             Kind::RoughDielectric(b) => b.albedo_hint(),
             Kind::RoughPlastic(b) => b.albedo_hint(),
             Kind::Plastic(b) => b.albedo_hint(),
+            Kind::Principled(b) => b.albedo_hint(),
         }
     }
 }

@@ -61,8 +61,9 @@ pub struct Scene {
 }
 
 /// How many [`TextureSlot`]s there are.
-pub const TEXTURE_SLOTS: usize = 3;
-const SLOTS: [TextureSlot; TEXTURE_SLOTS] = [TextureSlot::Diffuse, TextureSlot::SpecularReflectance, TextureSlot::SpecularTransmittance];
+pub const TEXTURE_SLOTS: usize = 4;
+const SLOTS: [TextureSlot; TEXTURE_SLOTS] =
+    [TextureSlot::Diffuse, TextureSlot::SpecularReflectance, TextureSlot::SpecularTransmittance, TextureSlot::Roughness];
 
 impl Scene {
     /// Material `id` at texture coordinates `uv`: the stored material itself, or, where

@@ -1,9 +1,10 @@
 //! BSDF plugins: `diffuse`, `conductor`, `roughconductor`, `dielectric`,
-//! `roughdielectric`, `plastic`, `roughplastic`, `twosided`, with Mitsuba 3's parameter
-//! names and defaults. Colour parameters take a nested or referenced `<texture>` of that
-//! name instead of a value (see `textures.rs`).
+//! `roughdielectric`, `plastic`, `roughplastic`, `principled`, `twosided`, with Mitsuba
+//! 3's parameter names and defaults. Colour parameters (and `principled`'s `roughness`)
+//! take a nested or referenced `<texture>` of that name instead of a value (see
+//! `textures.rs`).
 
-use ember_core::bsdf::{Material, MicrofacetKind, TextureSlot};
+use ember_core::bsdf::{Material, MicrofacetKind, PrincipledParams, TextureSlot};
 use ember_core::geometry::MaterialId;
 use ember_core::spectrum::Rgb;
 
@@ -15,7 +16,7 @@ use super::{Fail, Res};
 /// `twosided` chains (through `ref`) deeper than this are rejected.
 const MAX_BSDF_DEPTH: u32 = 8;
 
-const BSDF_TYPES: &str = "diffuse, conductor, roughconductor, dielectric, roughdielectric, plastic, roughplastic, twosided";
+const BSDF_TYPES: &str = "diffuse, conductor, roughconductor, dielectric, roughdielectric, plastic, roughplastic, principled, twosided";
 
 /// The textures a material's parameters read: (slot, texture id).
 type Bindings = Vec<(TextureSlot, u32)>;
@@ -97,6 +98,100 @@ impl Ctx<'_> {
         Ok(mean)
     }
 
+    /// A float parameter that may be a `<texture>` child named `name` (its mean luminance
+    /// is the value, the binding goes to `bindings`), else the property (default `default`).
+    fn float_param(&mut self, idx: usize, p: &mut Props, name: &'static str, default: f64, slot: TextureSlot, bindings: &mut Bindings) -> Res<f64> {
+        let obj = self.obj(idx)?;
+        let Some(child) = obj.children.iter().find(|c| c.name.as_deref() == Some(name)) else {
+            return p.float(name, default);
+        };
+        if p.has(name) {
+            return Err(Fail::at(child.loc, format!("`{name}` is given both as a value (line {}) and as a texture", self.line(p.loc_of(name)))));
+        }
+        let (id, mean) = self.texture(child.obj)?;
+        bindings.push((slot, id));
+        Ok(mean.luminance() as f64)
+    }
+
+    /// Mitsuba's `principled`: its parameters and defaults (`PrincipledParams`); `eta` and
+    /// `specular` exclude each other, and with a transmission lobe an index-matched η
+    /// (η = 1 or specular = 0) is moved off 1 as Mitsuba does. `base_color` and `roughness`
+    /// may be textures; the other parameters are floats.
+    fn principled(&mut self, idx: usize, p: &mut Props, bindings: &mut Bindings) -> Res<Material> {
+        const TEXTURED: [&str; 2] = ["base_color", "roughness"];
+        self.check_textures(idx, &TEXTURED)?;
+        let d = PrincipledParams::default();
+        let base_color = self.color_param(idx, p, "base_color", d.base_color, TextureSlot::Diffuse, bindings)?;
+        if !(base_color.is_valid_radiance()) {
+            return Err(Fail::at(p.loc_of("base_color"), "`base_color` must be non-negative"));
+        }
+        let roughness = self.float_param(idx, p, "roughness", d.roughness as f64, TextureSlot::Roughness, bindings)?;
+        // Weights in [0, 1] (outside it the model's lobes lose meaning: negative weights,
+        // or √(1 − 0.9 anisotropic) of a negative number).
+        let mut unit = |name: &'static str, default: f32| -> Res<f32> {
+            let v = p.float(name, default as f64)?;
+            if !(0.0..=1.0).contains(&v) {
+                return Err(Fail::at(p.loc_of(name), format!("`{name}` must lie in [0, 1], got {v}")));
+            }
+            Ok(v as f32)
+        };
+        let (anisotropic, metallic, spec_tint) = (unit("anisotropic", d.anisotropic)?, unit("metallic", d.metallic)?, unit("spec_tint", d.spec_tint)?);
+        let (sheen_tint, flatness, clearcoat_gloss) =
+            (unit("sheen_tint", d.sheen_tint)?, unit("flatness", d.flatness)?, unit("clearcoat_gloss", d.clearcoat_gloss)?);
+        let spec_trans = unit("spec_trans", d.spec_trans)?;
+        let mut non_negative = |name: &'static str, default: f64| -> Res<f32> {
+            let v = p.float(name, default)?;
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(Fail::at(p.loc_of(name), format!("`{name}` must be finite and non-negative, got {v}")));
+            }
+            Ok(v as f32)
+        };
+        let (sheen, clearcoat) = (non_negative("sheen", d.sheen as f64)?, non_negative("clearcoat", d.clearcoat as f64)?);
+        let diffuse_sampling_rate = non_negative("diffuse_reflectance_sampling_rate", 1.0)?;
+        let specular_sampling_rate = non_negative("main_specular_sampling_rate", 1.0)?;
+        let clearcoat_sampling_rate = non_negative("clearcoat_sampling_rate", 1.0)?;
+        if !(roughness >= 0.0 && roughness.is_finite()) {
+            return Err(Fail::at(p.loc_of("roughness"), format!("`roughness` must be finite and non-negative, got {roughness}")));
+        }
+        let transmits = spec_trans > 0.0;
+        let eta = match (p.has("eta"), p.has("specular")) {
+            (true, true) => return Err(Fail::at(p.loc_of("specular"), "give either `eta` or `specular`, not both (as Mitsuba)")),
+            (true, false) => {
+                let eta = p.float("eta", 1.5)?;
+                if !(eta > 0.0 && eta.is_finite()) {
+                    return Err(Fail::at(p.loc_of("eta"), format!("`eta` must be positive, got {eta}")));
+                }
+                if transmits && eta == 1.0 { 1.001 } else { eta as f32 }
+            }
+            _ => {
+                let specular = p.float("specular", 0.5)?;
+                // specular = 12.5 would put R0 at 1 (η = ∞).
+                if !((0.0..12.5).contains(&specular)) {
+                    return Err(Fail::at(p.loc_of("specular"), format!("`specular` must lie in [0, 12.5), got {specular}")));
+                }
+                let specular = if transmits && specular == 0.0 { 1e-3 } else { specular as f32 };
+                PrincipledParams::eta_from_specular(specular)
+            }
+        };
+        Ok(Material::principled(PrincipledParams {
+            base_color,
+            roughness: roughness as f32,
+            anisotropic,
+            metallic,
+            spec_tint,
+            sheen,
+            sheen_tint,
+            flatness,
+            clearcoat,
+            clearcoat_gloss,
+            spec_trans,
+            eta,
+            diffuse_sampling_rate,
+            specular_sampling_rate,
+            clearcoat_sampling_rate,
+        }))
+    }
+
     /// Textures nested in BSDF `idx` must be named for parameters it reads (`names`).
     fn check_textures(&self, idx: usize, names: &[&str]) -> Res<()> {
         let obj = self.obj(idx)?;
@@ -174,6 +269,7 @@ impl Ctx<'_> {
                 let coating = *self.plastic_coatings.entry(key).or_insert_with(|| Material::plastic_coating(kind, alpha, int_ior, ext_ior));
                 Material::rough_plastic_coated(&coating, diffuse, specular, nonlinear)
             }
+            "principled" => self.principled(idx, &mut p, bindings)?,
             "twosided" => {
                 self.check_children(obj, &[Tag::Bsdf])?;
                 let inner = match obj.children[..] {

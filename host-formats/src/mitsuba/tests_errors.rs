@@ -51,7 +51,7 @@ fn unknown_plugins_name_the_supported_ones() {
     check(&e, 4, col(c, 4, "<shape"), &["unsupported shape type \"torus\"", "obj, ply, rectangle, cube, sphere, disk"]);
     let c = "<shape type=\"cube\">\n   <bsdf type=\"hair\"/></shape>";
     let e = fail("plugin_bsdf", c);
-    check(&e, 5, col(c, 5, "<bsdf"), &["unsupported bsdf type \"hair\"", "roughdielectric, plastic, roughplastic, twosided"]);
+    check(&e, 5, col(c, 5, "<bsdf"), &["unsupported bsdf type \"hair\"", "roughdielectric, plastic, roughplastic, principled, twosided"]);
     let c = "<shape type=\"cube\"><bsdf type=\"diffuse\">\n   <texture type=\"noise\" name=\"reflectance\"/></bsdf></shape>";
     let e = fail("plugin_texture", c);
     check(&e, 5, col(c, 5, "<texture"), &["unsupported texture type \"noise\"", "bitmap, checkerboard"]);
