@@ -64,6 +64,8 @@ mod tests;
 #[cfg(test)]
 mod tests_errors;
 #[cfg(test)]
+mod tests_images;
+#[cfg(test)]
 mod tests_textures;
 
 use std::fmt;

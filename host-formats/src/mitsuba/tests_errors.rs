@@ -282,7 +282,7 @@ fn garbage_never_panics() {
     }
 }
 
-/// Environment maps: a missing, corrupt or non-EXR file and a `to_world` that is not a
+/// Environment maps: a missing, corrupt or unsupported file and a `to_world` that is not a
 /// rotation each name the file (or the transform) and the problem; the scene's other
 /// content is never reached.
 #[test]
@@ -295,7 +295,10 @@ fn envmap_files_fail_with_their_name() {
     check(&e, 4, col(c, 4, "<string"), &["envmap", "sky.exr"]);
     let c = "<emitter type=\"envmap\"><string name=\"filename\" value=\"sky.png\"/></emitter>";
     let e = fail_with("envmap_png", c, &[("sky.png", b"\x89PNG")], &LoadOptions::default());
-    check(&e, 4, col(c, 4, "<string"), &["sky.png", "only OpenEXR"]);
+    check(&e, 4, col(c, 4, "<string"), &["sky.png", "not a readable PNG"]);
+    let c = "<emitter type=\"envmap\"><string name=\"filename\" value=\"sky.tga\"/></emitter>";
+    let e = fail_with("envmap_tga", c, &[("sky.tga", b"\0\0\x02")], &LoadOptions::default());
+    check(&e, 4, col(c, 4, "<string"), &["sky.tga", "unsupported image format", ".hdr"]);
     let c = "<emitter type=\"envmap\"/>";
     let e = fail("envmap_no_file", c);
     check(&e, 4, col(c, 4, "<emitter"), &["needs a `filename`"]);
