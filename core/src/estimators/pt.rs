@@ -148,6 +148,8 @@ impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
             return end;
         };
         let sp = SurfacePoint::new(hit, -ray.dir);
+        // Attenuate by an absorbing medium the segment crossed.
+        Walk::pass_medium(scene, &mut path.state, &hit);
 
         // Add emission found by BSDF sampling (or seen directly).
         if let Some(id) = hit.emitter {

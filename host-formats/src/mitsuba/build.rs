@@ -102,7 +102,7 @@ pub(crate) fn instantiate(parsed: Parsed, positions: &Positions, base_dir: &Path
     let mut shapes = 0;
     for &idx in &parsed.top {
         let obj = ctx.obj(idx)?;
-        if !matches!(obj.tag, Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler | Tag::Texture) {
+        if !matches!(obj.tag, Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler | Tag::Texture | Tag::Medium) {
             ctx.mark(idx);
         }
         match obj.tag {
@@ -125,7 +125,7 @@ pub(crate) fn instantiate(parsed: Parsed, positions: &Positions, base_dir: &Path
                 integrator = Some((ctx.integrator(idx)?, obj.loc));
             }
             // Declarations, instantiated where a `ref` uses them.
-            Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler | Tag::Texture => {}
+            Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler | Tag::Texture | Tag::Medium => {}
         }
     }
     for &idx in &parsed.top {
@@ -523,7 +523,14 @@ impl<'a> Ctx<'a> {
             None => None,
         };
         p.finish()?;
-        if obj.kind != "path" {
+        if obj.kind == "volpath" {
+            // The media ember models (absorption inside dielectric shapes) are rendered by
+            // every estimator; a scattering medium is refused where it is declared.
+            self.warnings.push(format!(
+                "line {}: integrator \"volpath\" is rendered as \"path\" (PT unless the command line chooses another estimator): only absorbing media (albedo 0) are modelled",
+                self.line(obj.loc)
+            ));
+        } else if obj.kind != "path" {
             self.warnings.push(format!(
                 "line {}: integrator type \"{}\" is not used: the command line chooses the estimator (only max_depth is read)",
                 self.line(obj.loc),

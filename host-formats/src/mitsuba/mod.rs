@@ -49,6 +49,7 @@
 mod build;
 mod images;
 mod materials;
+mod media;
 mod mesh;
 mod ply;
 mod positions;
