@@ -31,7 +31,10 @@ impl Ctx<'_> {
             match c.name.as_deref() {
                 Some("interior") => {}
                 Some("exterior") => {
-                    return Err(Fail::at(c.loc, "an `exterior` medium is not supported: ember's camera and lights are in vacuum (only a shape's absorbing `interior` is)"));
+                    return Err(Fail::at(
+                        c.loc,
+                        "an `exterior` medium is not supported: ember's camera and lights are in vacuum (only a shape's absorbing `interior` is)",
+                    ));
                 }
                 Some(other) => return Err(Fail::at(c.loc, format!("a shape's medium is named \"{other}\" (supported: interior)"))),
                 None => return Err(Fail::at(c.loc, "a shape's <medium> needs name=\"interior\"")),

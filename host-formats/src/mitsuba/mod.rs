@@ -67,6 +67,8 @@ mod tests_errors;
 #[cfg(test)]
 mod tests_images;
 #[cfg(test)]
+mod tests_media;
+#[cfg(test)]
 mod tests_textures;
 
 use std::fmt;
