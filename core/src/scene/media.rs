@@ -26,17 +26,19 @@
 //!
 //! [`Scene::transmittance`] gives T for a traced segment; the walks multiply β by it
 //! where a segment arrives (`transport::walk::Walk::pass_medium`: PT, LT, segment PT/LT
-//! and the BDPT family's sub-paths). Shadow rays need no factor as long as the medium's
-//! boundary is a smooth dielectric (it blocks them: a next-event ray or a connection
-//! never crosses it). What is not covered yet is listed in `docs/scene-features.md`:
-//! connections and merges whose segment crosses the interior of a medium bounded by a
-//! rough dielectric, and the filter estimators' node walks.
+//! and the BDPT family's sub-paths, so BDPT, LVCBPT, SPCBPT and VCM/PPM/BPM, whose
+//! merges read the sub-paths' β). A smooth dielectric boundary blocks shadow rays, so
+//! no connection crosses its medium; a rough one does not, and there
+//! [`Scene::transmittance_to`] gives T for a connection: PT's next-event estimation and
+//! BDPT's connections (light sample, interior join, cached light source) apply it. Not
+//! covered yet (`docs/scene-features.md`): the filter estimators' node walks (MVF, BPF,
+//! PhF) and a camera or light inside a medium.
 
 use alloc::vec::Vec;
 
 use super::{Scene, SceneBuilder, TEXTURE_SLOTS};
 use crate::geometry::{MaterialId, Ray, SurfaceHit};
-use crate::math::exp;
+use crate::math::{Vec3, exp};
 use crate::spectrum::Rgb;
 
 /// exp(−σ_t d) per channel.
@@ -61,11 +63,29 @@ impl Scene {
         if self.interiors.is_empty() {
             return None;
         }
-        let sigma_t = self.interior(hit.material)?;
-        if !(hit.ng.dot(ray.dir) > 0.0) {
+        self.transmittance_to(ray.origin, hit.p, hit.ng, hit.material)
+    }
+
+    /// The transmittance of a connection from `from` to the surface point `to` (normal
+    /// `to_ng`, material `to_material`): next-event and bidirectional connections, by the
+    /// same rule as [`Self::transmittance`]. `None` (T = 1) outside media, and for a
+    /// segment of infinite length (a direction toward a light at infinity, whose shadow
+    /// ray the shape's far side blocks).
+    #[inline]
+    pub fn transmittance_to(&self, from: Vec3, to: Vec3, to_ng: Vec3, to_material: MaterialId) -> Option<Rgb> {
+        if self.interiors.is_empty() {
             return None;
         }
-        Some(absorption_transmittance(sigma_t, (hit.p - ray.origin).length()))
+        let sigma_t = self.interior(to_material)?;
+        let d = to - from;
+        if !(to_ng.dot(d) > 0.0) {
+            return None;
+        }
+        let len = d.length();
+        if !len.is_finite() {
+            return None;
+        }
+        Some(absorption_transmittance(sigma_t, len))
     }
 }
 
