@@ -1,5 +1,6 @@
 //! `ember-formats`: the files around the core — the Mitsuba 3 XML reader ([`mitsuba`],
-//! with its OBJ and PLY meshes and bitmap textures), EXR and PNG images ([`image_io`]),
+//! with its OBJ and PLY meshes and bitmap textures), EXR and PNG images ([`image_io`]), Radiance RGBE and PFM decoding
+//! ([`float_images`]),
 //! bounded reads of inputs ([`files`]), image error metrics ([`metrics`]) and the record of
 //! error against run time ([`error_time`]); what the
 //! command line and a later Python package share.
@@ -10,6 +11,7 @@
 
 pub mod error_time;
 pub mod files;
+pub mod float_images;
 pub mod image_io;
 pub mod metrics;
 pub mod mitsuba;

@@ -166,6 +166,8 @@ impl<Q: RayQuery + ?Sized> LaneProgram for LightPaths<'_, Q> {
         let (scene, params) = (self.scene, self.params);
         self.counters.rays += 1;
         let Some(arrived) = arrived else { return Arrival { shadow: None, continues: false } };
+        // Attenuate by an absorbing medium the segment crossed.
+        Walk::pass_medium(scene, &mut path.state, &arrived);
         // The next segment starts here, or where the kernel puts it (the shading point
         // moves there, β takes the kernel's reversed ratio).
         let hit = WALK.junction(self.tracer, &mut path.state, &arrived, path.junctions.as_mut(), &mut self.counters).map_or(arrived, |m| m.at);

@@ -145,6 +145,8 @@ impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
             return end;
         };
         let sp = SurfacePoint::new(hit, -ray.dir);
+        // Attenuate by an absorbing medium the segment crossed.
+        Walk::pass_medium(scene, &mut path.state, &hit);
 
         // Add emission found by BSDF sampling (or seen directly).
         if let Some(id) = hit.emitter {
@@ -231,7 +233,9 @@ impl<Q: RayQuery + ?Sized> CameraPaths<'_, Q> {
         self.counters.rays += 1;
         let light_pdf = draw.pmf * ls.pdf.0;
         let w = if ls.is_delta { 1.0 } else { self.params.heuristic.weight(light_pdf, bsdf_pdf) };
-        Some((shadow_ray(from, ls), f * ls.radiance * (w / light_pdf)))
+        // Through an absorbing medium behind the vertex (a rough dielectric's interior).
+        let tr = self.scene.transmittance_to(ls.p, from.p, from.ng, sp.hit.material).unwrap_or(Rgb::ONE);
+        Some((shadow_ray(from, ls), f * ls.radiance * tr * (w / light_pdf)))
     }
 }
 

@@ -143,6 +143,9 @@ pub fn connect<Q: RayQuery + ?Sized>(
         if pt.is_on_surface() {
             v *= ls.wi.dot(pt.exit.ns).abs();
         }
+        if let Some(tr) = scene.transmittance_to(ls.p, pt.exit.p, pt.exit.ng, pt.material) {
+            v *= tr;
+        }
         if v.is_black() {
             return None;
         }
@@ -165,6 +168,10 @@ pub fn connect<Q: RayQuery + ?Sized>(
             return None;
         }
         v *= geometry_term(qs, pt);
+        // Through an absorbing medium (a rough dielectric's interior) between them.
+        if let Some(tr) = scene.transmittance_to(qs.p, pt.exit.p, pt.exit.ng, pt.material) {
+            v *= tr;
+        }
         if v.is_black() {
             return None;
         }
@@ -203,7 +210,8 @@ pub fn connect_light_source<Q: RayQuery + ?Sized>(
     if pt.kind != VertexKind::Surface || !pt.is_connectible(scene) {
         return None;
     }
-    let value = pt.beta * pt.f(scene, y0, TransportMode::Radiance) * y0.le(scene, pt) * (geometry_term(y0, pt) / y0.pdf_fwd.value());
+    let tr = scene.transmittance_to(y0.p, pt.exit.p, pt.exit.ng, pt.material).unwrap_or(Rgb::ONE);
+    let value = pt.beta * pt.f(scene, y0, TransportMode::Radiance) * y0.le(scene, pt) * tr * (geometry_term(y0, pt) / y0.pdf_fwd.value());
     if value.is_black() || !value.is_finite() {
         return None;
     }

@@ -198,6 +198,8 @@ fn random_walk<Q: RayQuery + ?Sized>(
             }
             return;
         };
+        // Attenuate by an absorbing medium the segment crossed.
+        Walk::pass_medium(scene, &mut state, &hit);
         // The junction: which point keeps the BSDF and which starts the next segment.
         let moved = walk.junction(tracer, &mut state, &hit, junctions.as_deref_mut(), counters);
         let (shading, exit, kernel_ratio) = match (moved, mode) {

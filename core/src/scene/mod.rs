@@ -10,6 +10,9 @@
 
 pub mod builtin;
 pub mod builtin_glass;
+mod media;
+
+pub use media::absorption_transmittance;
 
 use alloc::borrow::Cow;
 use alloc::vec::Vec;
@@ -58,6 +61,9 @@ pub struct Scene {
     /// only these, and not at all when the scene has none.
     pub infinite: Vec<LightId>,
     pub bounds: Bounds3,
+    /// Per material, σ_t of the absorbing medium behind its surfaces, if any
+    /// ([`Scene::transmittance`]); empty when the scene has no medium.
+    pub interiors: Vec<Option<Rgb>>,
 }
 
 /// How many [`TextureSlot`]s there are.
@@ -127,6 +133,8 @@ pub enum SceneError {
     BadTexture(MaterialId),
     /// A position, radius or radiance is NaN or infinite.
     NonFinite(&'static str),
+    /// A medium given to this material's surfaces has a negative or non-finite σ_t.
+    BadMedium(MaterialId),
 }
 
 impl core::fmt::Display for SceneError {
@@ -136,6 +144,7 @@ impl core::fmt::Display for SceneError {
             Self::UnknownMaterial(m) => write!(f, "a shape refers to material {m}, which does not exist"),
             Self::BadTexture(m) => write!(f, "material {m} is bound to a texture that does not exist or to a parameter it does not have"),
             Self::NonFinite(what) => write!(f, "non-finite value in {what}"),
+            Self::BadMedium(m) => write!(f, "the medium inside material {m}'s surfaces has a negative or non-finite sigma_t"),
         }
     }
 }
@@ -158,6 +167,7 @@ pub struct SceneBuilder {
     materials: Vec<Material>,
     textures: Vec<Texture>,
     material_textures: Vec<[Option<u32>; TEXTURE_SLOTS]>,
+    interiors: Vec<Option<Rgb>>,
     lights: Vec<Light>,
     geometry: SceneGeometry,
     warnings: BuildWarnings,
@@ -376,6 +386,7 @@ impl SceneBuilder {
         if !self.material_textures.is_empty() {
             self.material_textures.resize(self.materials.len(), [None; TEXTURE_SLOTS]);
         }
+        media::finish_interiors(&mut self.interiors, self.materials.len());
         let scene = Scene {
             camera,
             materials: self.materials,
@@ -385,6 +396,7 @@ impl SceneBuilder {
             light_selection,
             infinite,
             bounds,
+            interiors: self.interiors,
         };
         Ok((scene, self.geometry, self.warnings))
     }

@@ -9,7 +9,8 @@
 //! between them:
 //!
 //! 1. **Arrive.** [`Walk::trace`] traces the ray: the surface it reaches, or `None` (the
-//!    path escaped, to the lights at infinity: [`environment`]). Where a segment kernel
+//!    path escaped, to the lights at infinity: [`environment`]). A segment that ran
+//!    inside an absorbing medium multiplies β by its transmittance ([`Walk::pass_medium`]). Where a segment kernel
 //!    joins segments (segment PT, LT and BDPT), [`Walk::junction`] draws the next
 //!    segment's start x around the hit y (eq. 15's p_K, from the kernel's own stream): a
 //!    camera walk (radiance) keeps the BSDF at y and leaves from x; a light walk
@@ -201,6 +202,17 @@ impl Walk {
     pub fn trace<Q: RayQuery + ?Sized>(&self, tracer: &Q, state: &PathState, counters: &mut Counters) -> Option<SurfaceHit> {
         counters.rays += 1;
         tracer.intersect(&state.ray)
+    }
+
+    /// The segment the state's ray traced to `hit` crossed an absorbing medium: multiply
+    /// β by its transmittance (`crate::scene` media notes: a segment that reaches the
+    /// back face of a surface with an interior ran inside it). Nothing changes where the
+    /// scene has no medium.
+    #[inline]
+    pub fn pass_medium(scene: &Scene, state: &mut PathState, hit: &SurfaceHit) {
+        if let Some(t) = scene.transmittance(&state.ray, hit) {
+            state.beta *= t;
+        }
     }
 
     /// The junction at `hit` (the state's ray reached it): `None` where it stays at the

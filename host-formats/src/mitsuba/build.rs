@@ -102,7 +102,7 @@ pub(crate) fn instantiate(parsed: Parsed, positions: &Positions, base_dir: &Path
     let mut shapes = 0;
     for &idx in &parsed.top {
         let obj = ctx.obj(idx)?;
-        if !matches!(obj.tag, Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler | Tag::Texture) {
+        if !matches!(obj.tag, Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler | Tag::Texture | Tag::Medium) {
             ctx.mark(idx);
         }
         match obj.tag {
@@ -125,7 +125,7 @@ pub(crate) fn instantiate(parsed: Parsed, positions: &Positions, base_dir: &Path
                 integrator = Some((ctx.integrator(idx)?, obj.loc));
             }
             // Declarations, instantiated where a `ref` uses them.
-            Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler | Tag::Texture => {}
+            Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler | Tag::Texture | Tag::Medium => {}
         }
     }
     for &idx in &parsed.top {
@@ -310,11 +310,12 @@ impl<'a> Ctx<'a> {
         Ok(())
     }
 
-    /// Mitsuba's `envmap`: a latitude–longitude EXR (linear RGB) at `filename`, relative
+    /// Mitsuba's `envmap`: a latitude–longitude image (EXR, RGBE or PFM linear; PNG or JPEG
+    /// through the sRGB curve) at `filename`, relative
     /// to the scene file, times `scale`, in the frame of `to_world` (a rotation).
     fn envmap(&mut self, obj: &Obj, p: &mut Props) -> Res<Light> {
         let file_loc = p.loc_of("filename");
-        let filename = p.string_opt("filename")?.ok_or_else(|| Fail::at(obj.loc, "the envmap needs a `filename` (a latitude-longitude EXR)"))?;
+        let filename = p.string_opt("filename")?.ok_or_else(|| Fail::at(obj.loc, "the envmap needs a `filename` (a latitude-longitude image)"))?;
         let scale = p.float("scale", 1.0)?;
         if !(scale >= 0.0 && scale.is_finite()) {
             return Err(Fail::at(p.loc_of("scale"), format!("`scale` must be non-negative and finite, got {scale}")));
@@ -323,13 +324,9 @@ impl<'a> Ctx<'a> {
         let axes = [m.x_axis.truncate().as_vec3(), m.y_axis.truncate().as_vec3(), m.z_axis.truncate().as_vec3()];
         let path = self.base_dir.join(filename);
         self.inputs.push(path.clone());
-        let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-        if !is_exr {
-            return Err(Fail::at(file_loc, format!("envmap \"{}\": only OpenEXR (.exr) environment maps are supported", path.display())));
-        }
-        let image = super::images::read_exr(&path).map_err(|e| Fail::at(file_loc, format!("envmap \"{}\": {e}", path.display())))?;
-        let texels: Vec<Rgb> = image.pixels.iter().map(|&[r, g, b]| Rgb::new(r, g, b)).collect();
-        Light::environment_map(image.width, image.height, &texels, scale as f32, axes).map_err(|e| match e {
+        // Any image a bitmap reads: float formats as stored, 8-bit ones through the sRGB curve.
+        let (width, height, texels) = super::images::read_image(&path, false).map_err(|e| Fail::at(file_loc, format!("envmap \"{}\": {e}", path.display())))?;
+        Light::environment_map(width, height, &texels, scale as f32, axes).map_err(|e| match e {
             EnvMapError::NotRotation => Fail::at(p.loc_of("to_world"), format!("envmap: {e}")),
             _ => Fail::at(file_loc, format!("envmap \"{}\": {e}", path.display())),
         })
@@ -526,7 +523,14 @@ impl<'a> Ctx<'a> {
             None => None,
         };
         p.finish()?;
-        if obj.kind != "path" {
+        if obj.kind == "volpath" {
+            // The media ember models (absorption inside dielectric shapes) are rendered by
+            // every estimator; a scattering medium is refused where it is declared.
+            self.warnings.push(format!(
+                "line {}: integrator \"volpath\" is rendered as \"path\" (PT unless the command line chooses another estimator): only absorbing media (albedo 0) are modelled",
+                self.line(obj.loc)
+            ));
+        } else if obj.kind != "path" {
             self.warnings.push(format!(
                 "line {}: integrator type \"{}\" is not used: the command line chooses the estimator (only max_depth is read)",
                 self.line(obj.loc),

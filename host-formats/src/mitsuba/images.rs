@@ -1,34 +1,83 @@
-//! Image files a scene reads (bitmap textures, environment maps): PNG and OpenEXR
-//! decoded to linear RGB, through [`super::read_input`] (regular files only, of bounded
-//! size) and with bounded sizes, so a header cannot make the loader allocate without
-//! bound.
+//! Image files a scene reads (bitmap textures, environment maps), decoded to linear RGB:
+//! OpenEXR, Radiance RGBE (`.hdr`, `.pic`) and PFM as stored (linear floats); PNG and
+//! JPEG (8-bit, grey or colour, baseline or progressive) through the sRGB curve unless
+//! `raw`, as Mitsuba does. Every file is read through [`super::read_input`] (regular
+//! files only, of bounded size) and every header's size is checked before a pixel buffer
+//! is made, so a header cannot make the loader allocate without bound.
 
 use std::path::Path;
 
 use ember_core::spectrum::Rgb;
 use ember_core::texture::{srgb_decode, srgb_to_linear};
 
+use crate::float_images::{MAX_SIDE, check_dimensions, decode_pfm, decode_rgbe};
 use crate::image_io::{ImageErrorKind, RgbImage};
 
-/// The largest bitmap side read.
-const MAX_SIDE: u32 = 1 << 15;
-/// The most texels a PNG may declare: 64 Mpixel (768 MiB as linear f32 RGB), the EXR
-/// reader's limit, so a header cannot make the loader allocate without bound.
-const MAX_TEXELS: u64 = 1 << 26;
+/// The image formats read, for messages.
+pub(super) const SUPPORTED: &str = ".png, .jpg/.jpeg, .exr, .hdr/.pic (Radiance RGBE), .pfm";
 
-/// Decode `path` to linear RGB texels, row 0 at the top: OpenEXR as stored; PNG (8 or 16
-/// bits, grey, grey + alpha, RGB, RGBA or palette; alpha dropped) through the sRGB curve
-/// unless `raw`, as Mitsuba does.
+/// Decode `path` to linear RGB texels, row 0 at the top: OpenEXR, RGBE and PFM as stored;
+/// PNG (8 or 16 bits, grey, grey + alpha, RGB, RGBA or palette; alpha dropped) and JPEG
+/// (8-bit grey or colour) through the sRGB curve unless `raw`, as Mitsuba does.
 pub(super) fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Rgb>), String> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let linear = |image: RgbImage| (image.width, image.height, image.pixels.iter().map(|&[r, g, b]| Rgb::new(r, g, b)).collect());
+    let bytes = || super::read_input(path).map_err(|e| format!("cannot open: {e}"));
     match ext.as_deref() {
-        Some("exr") => {
-            let image = read_exr(path)?;
-            Ok((image.width, image.height, image.pixels.iter().map(|&[r, g, b]| Rgb::new(r, g, b)).collect()))
-        }
+        Some("exr") => Ok(linear(read_exr(path)?)),
+        Some("hdr" | "pic" | "rgbe") => Ok(linear(decode_rgbe(&bytes()?).map_err(|e| format!("not a readable Radiance RGBE file: {e}"))?)),
+        Some("pfm") => Ok(linear(decode_pfm(&bytes()?).map_err(|e| format!("not a readable PFM file: {e}"))?)),
         Some("png") => read_png(path, raw),
-        _ => Err("unsupported image format (supported: .png, .exr)".into()),
+        Some("jpg" | "jpeg") => decode_jpeg(&bytes()?, raw),
+        _ => Err(format!("unsupported image format (supported: {SUPPORTED})")),
     }
+}
+
+/// Most texels (times colour components) a JPEG may decode to per byte of file: a flat
+/// 8 × 8 block costs at least about two bits per component (a zero DC difference and an
+/// end of block), i.e. 64 samples in a quarter byte, so 4096 leaves a wide margin for
+/// real files while a 100-byte header cannot declare a 16384² image.
+const MAX_JPEG_EXPANSION: u64 = 4096;
+
+/// Decode a JPEG (baseline or progressive; grey, YCbCr, RGB, CMYK or YCCK, all turned to
+/// RGB by the decoder) in strict mode, so damaged entropy data is an error instead of
+/// grey blocks, and with the size checked from the header before anything is decoded.
+pub(super) fn decode_jpeg(bytes: &[u8], raw: bool) -> Result<(u32, u32, Vec<Rgb>), String> {
+    use zune_jpeg::JpegDecoder;
+    use zune_jpeg::zune_core::bytestream::ZCursor;
+    use zune_jpeg::zune_core::colorspace::ColorSpace;
+    use zune_jpeg::zune_core::options::DecoderOptions;
+    let options = DecoderOptions::default()
+        .set_strict_mode(true)
+        .set_max_width(MAX_SIDE as usize)
+        .set_max_height(MAX_SIDE as usize)
+        .jpeg_set_out_colorspace(ColorSpace::RGB);
+    // A file cut short must not decode: the decoder pads a truncated scan with zero bits,
+    // so the end-of-image marker must follow the last start-of-scan (entropy-coded data
+    // never holds a bare 0xFF 0xD9: a data byte 0xFF is followed by a stuffed 0x00).
+    let last_scan = bytes.windows(2).rposition(|w| w == [0xff, 0xda]);
+    let end = bytes.windows(2).rposition(|w| w == [0xff, 0xd9]);
+    if last_scan.is_some() && !(end > last_scan) {
+        return Err("not a readable JPEG: the file ends before its end-of-image marker (truncated?)".into());
+    }
+    let mut decoder = JpegDecoder::new_with_options(ZCursor::new(bytes), options);
+    decoder.decode_headers().map_err(|e| format!("not a readable JPEG: {e}"))?;
+    let info = decoder.info().ok_or("not a readable JPEG: no frame header")?;
+    let (width, height) = (info.width as u64, info.height as u64);
+    check_dimensions(width, height)?;
+    let samples = width * height * info.components.max(1) as u64;
+    if samples > (bytes.len() as u64).saturating_mul(MAX_JPEG_EXPANSION) {
+        return Err(format!("{width}x{height} pixels cannot be stored in a {}-byte JPEG", bytes.len()));
+    }
+    let size = decoder.output_buffer_size().ok_or("the image is too large")?;
+    let mut rgb = vec![0u8; size];
+    decoder.decode_into(&mut rgb).map_err(|e| format!("corrupt JPEG data: {e}"))?;
+    if rgb.len() != (width * height * 3) as usize {
+        return Err(format!("the decoder gave {} bytes for {width}x{height} RGB pixels", rgb.len()));
+    }
+    let lut: Vec<f32> = (0..=255u8).map(|v| if raw { v as f32 / 255.0 } else { srgb_to_linear(v) }).collect();
+    let texels = rgb.chunks_exact(3).map(|p| Rgb::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize])).collect();
+    Ok((width as u32, height as u32, texels))
 }
 
 /// An OpenEXR file's first RGB layer, read through [`super::read_input`] (a regular file
@@ -49,9 +98,7 @@ fn read_png(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Rgb>), String> {
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(|e| format!("not a readable PNG: {e}"))?;
     let (width, height) = (reader.info().width, reader.info().height);
-    if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE || width as u64 * height as u64 > MAX_TEXELS {
-        return Err(format!("{width}x{height} pixels (1 to {MAX_SIDE} a side and at most {MAX_TEXELS} in all are supported)"));
-    }
+    check_dimensions(width as u64, height as u64)?;
     let size = reader.output_buffer_size().ok_or("the image is too large")?;
     let mut buf = vec![0u8; size];
     let frame = reader.next_frame(&mut buf).map_err(|e| format!("corrupt PNG data: {e}"))?;

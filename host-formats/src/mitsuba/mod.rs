@@ -24,22 +24,26 @@
 //!   every attribute (overridable like `mitsuba -D`), `id` / `ref` (declared before use).
 //! - Shapes: `obj`, `ply` (ascii, binary_little_endian), `rectangle`, `cube`, `sphere`,
 //!   `disk` (tessellated into 128 triangles); `to_world`, `flip_normals`, `face_normals`;
-//!   one nested or referenced `bsdf` (default: `diffuse` 0.5, as Mitsuba) and one `area`
-//!   emitter.
+//!   one nested or referenced `bsdf` (default: `diffuse` 0.5, as Mitsuba), one `area`
+//!   emitter and one absorbing `interior` medium (`homogeneous`, albedo 0; scattering
+//!   and exterior media are refused).
 //! - BSDFs: `diffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`,
 //!   `plastic`, `roughplastic`, `twosided` (one nested BSDF).
 //! - Textures (nested in a BSDF or referenced, named for the colour parameter they set:
 //!   `reflectance`, `diffuse_reflectance`, `specular_reflectance`,
-//!   `specular_transmittance`): `bitmap` (PNG, 8 or 16 bits, sRGB-decoded unless `raw`;
-//!   OpenEXR linear; `filter_type`, `wrap_mode`, `to_uv`) and `checkerboard` (`color0`,
+//!   `specular_transmittance`): `bitmap` (PNG, 8 or 16 bits, and JPEG, 8 bits, baseline
+//!   or progressive, sRGB-decoded unless `raw`; OpenEXR, Radiance RGBE and PFM linear;
+//!   `filter_type`, `wrap_mode`, `to_uv`) and `checkerboard` (`color0`,
 //!   `color1`, `to_uv`). Meshes carry their texture coordinates (OBJ `vt`, PLY `u`/`v`,
 //!   `flip_tex_coords`).
-//! - Emitters: `area`, `point`, `spot`, `directional`, `constant`.
+//! - Emitters: `area`, `point`, `spot`, `directional`, `constant`, `envmap` (any image
+//!   format a bitmap reads).
 //! - `sensor` `perspective` and `thinlens` (`aperture_radius`, `focus_distance`;
 //!   `near_clip` and `far_clip` are checked but not modelled, with a warning: ember's
 //!   camera does not clip) with `hdrfilm` and any `sampler`; `rfilter` `box`, `tent`
 //!   (`radius`), `gaussian` (`stddev`; also a film without `rfilter`, as in Mitsuba);
-//!   any `integrator` (only `max_depth` is read).
+//!   any `integrator` (only `max_depth` is read; `volpath` is rendered as `path`, with a
+//!   warning saying so).
 //! - Values: `float`, `integer`, `boolean`, `string`, `rgb`, `spectrum` (one value),
 //!   `point`, `vector`, `transform` (`translate`, `rotate`, `scale`, `matrix`, `lookat`).
 
@@ -49,6 +53,7 @@
 mod build;
 mod images;
 mod materials;
+mod media;
 mod mesh;
 mod ply;
 mod positions;
@@ -63,6 +68,10 @@ mod xml;
 mod tests;
 #[cfg(test)]
 mod tests_errors;
+#[cfg(test)]
+mod tests_images;
+#[cfg(test)]
+mod tests_media;
 #[cfg(test)]
 mod tests_principled;
 #[cfg(test)]

@@ -1,7 +1,8 @@
 //! Shape plugins: `rectangle`, `cube`, `sphere`, `disk`, `obj`, `ply`.
 //!
 //! Each takes `to_world` and `flip_normals`, one `bsdf` (nested or `ref`; Mitsuba's
-//! default `diffuse` 0.5 when absent) and optionally one nested `area` emitter.
+//! default `diffuse` 0.5 when absent), optionally one nested `area` emitter and one
+//! absorbing `interior` medium ([`super::media`]).
 //! - `rectangle`, `disk`: the normal is Mitsuba's, `to_world`'s inverse transpose applied
 //!   to +z, so a mirroring `to_world` reverses the winding to keep it.
 //! - `disk`: tessellated into [`DISK_SEGMENTS`] triangles (a fan), which covers
@@ -51,7 +52,7 @@ impl Ctx<'_> {
         if !matches!(obj.kind.as_str(), "obj" | "ply" | "rectangle" | "cube" | "sphere" | "disk") {
             return Err(Fail::at(obj.loc, format!("unsupported shape type \"{}\" (supported: {SHAPE_TYPES})", obj.kind)));
         }
-        self.check_children(obj, &[Tag::Bsdf, Tag::Emitter])?;
+        self.check_children(obj, &[Tag::Bsdf, Tag::Emitter, Tag::Medium])?;
         let bsdf = self.single_child(obj, Tag::Bsdf)?;
         let emitter = self.single_child(obj, Tag::Emitter)?;
 
@@ -83,9 +84,15 @@ impl Ctx<'_> {
         };
         p.finish()?;
 
+        let interior = self.interior_medium(obj)?;
         let material = match bsdf {
             Some(b) => self.material(b)?,
             None => self.default_material(),
+        };
+        // A shape enclosing a medium gets its own copy of the material, carrying σ_t.
+        let material = match interior {
+            Some(sigma_t) => self.sb.add_interior(material, sigma_t),
+            None => material,
         };
         let emission = match emitter {
             Some(e) => Some(self.area_emission(e)?),

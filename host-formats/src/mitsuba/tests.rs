@@ -401,7 +401,7 @@ fn accepted_but_unmodelled_things_warn() {
     let loaded = load_scene(&dir.join("s.xml"), &LoadOptions::default()).unwrap();
     assert_eq!((loaded.width, loaded.height, loaded.spp, loaded.max_depth), (768, 576, Some(16), Some(4)));
     let w = loaded.warnings.join("\n");
-    for needle in ["volpath", "stratified", "png", "never"] {
+    for needle in ["\"volpath\" is rendered as \"path\"", "stratified", "png", "never"] {
         assert!(w.contains(needle), "no warning about {needle}: {w}");
     }
 }

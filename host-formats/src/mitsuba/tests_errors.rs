@@ -8,7 +8,7 @@ use super::tests::{SENSOR, suite_dir, temp_dir};
 use super::{LoadOptions, SceneFileError, load_scene};
 
 /// Write `<scene>` + sensor + `content` and load it, expecting an error.
-fn fail(test: &str, content: &str) -> SceneFileError {
+pub(super) fn fail(test: &str, content: &str) -> SceneFileError {
     fail_with(test, content, &[], &LoadOptions::default())
 }
 
@@ -28,14 +28,14 @@ fn fail_with(test: &str, content: &str, files: &[(&str, &[u8])], options: &LoadO
 
 /// 1-based column of `at` in the `n`th line (1-based) of `content`, which starts on
 /// line 4 of the file.
-fn col(content: &str, line: u32, at: &str) -> u32 {
+pub(super) fn col(content: &str, line: u32, at: &str) -> u32 {
     let text = content.lines().nth(line as usize - 4).expect("line exists");
     text.find(at).map(|i| i as u32 + 1).unwrap_or_else(|| panic!("`{at}` not in `{text}`"))
 }
 
 /// The error is at `line:col` of its file and its text contains every needle.
 #[track_caller]
-fn check(e: &SceneFileError, line: u32, col: u32, needles: &[&str]) {
+pub(super) fn check(e: &SceneFileError, line: u32, col: u32, needles: &[&str]) {
     let text = e.to_string();
     assert!(text.starts_with(&format!("{}:{line}:{col}: ", e.file.display())), "wrong position: {text}");
     assert!(e.file.ends_with("scene.xml"), "{text}");
@@ -282,7 +282,7 @@ fn garbage_never_panics() {
     }
 }
 
-/// Environment maps: a missing, corrupt or non-EXR file and a `to_world` that is not a
+/// Environment maps: a missing, corrupt or unsupported file and a `to_world` that is not a
 /// rotation each name the file (or the transform) and the problem; the scene's other
 /// content is never reached.
 #[test]
@@ -295,7 +295,10 @@ fn envmap_files_fail_with_their_name() {
     check(&e, 4, col(c, 4, "<string"), &["envmap", "sky.exr"]);
     let c = "<emitter type=\"envmap\"><string name=\"filename\" value=\"sky.png\"/></emitter>";
     let e = fail_with("envmap_png", c, &[("sky.png", b"\x89PNG")], &LoadOptions::default());
-    check(&e, 4, col(c, 4, "<string"), &["sky.png", "only OpenEXR"]);
+    check(&e, 4, col(c, 4, "<string"), &["sky.png", "not a readable PNG"]);
+    let c = "<emitter type=\"envmap\"><string name=\"filename\" value=\"sky.tga\"/></emitter>";
+    let e = fail_with("envmap_tga", c, &[("sky.tga", b"\0\0\x02")], &LoadOptions::default());
+    check(&e, 4, col(c, 4, "<string"), &["sky.tga", "unsupported image format", ".hdr"]);
     let c = "<emitter type=\"envmap\"/>";
     let e = fail("envmap_no_file", c);
     check(&e, 4, col(c, 4, "<emitter"), &["needs a `filename`"]);

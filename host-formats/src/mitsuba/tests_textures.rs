@@ -109,6 +109,7 @@ fn texture_errors_name_the_file() {
     let dir = temp_dir("tex_errors");
     std::fs::write(dir.join("bad.png"), b"\x89PNG\r\n\x1a\n garbage").unwrap();
     std::fs::write(dir.join("t.jpg"), b"\xff\xd8\xff").unwrap();
+    std::fs::write(dir.join("t.tga"), b"\0\0\x02").unwrap();
     write_png(&dir.join("ok.png"), [1, 2, 3], [4, 5, 6]);
     // A PNG declaring 20 000 × 20 000 texels with a token of data: refused from its header,
     // before anything that size is allocated.
@@ -117,7 +118,8 @@ fn texture_errors_name_the_file() {
     let cases = [
         (tex(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="missing.png"/></texture>"#), vec!["missing.png", "cannot open"]),
         (tex(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="bad.png"/></texture>"#), vec!["bad.png", "PNG"]),
-        (tex(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="t.jpg"/></texture>"#), vec!["t.jpg", "unsupported image format"]),
+        (tex(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="t.jpg"/></texture>"#), vec!["t.jpg", "not a readable JPEG"]),
+        (tex(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="t.tga"/></texture>"#), vec!["t.tga", "unsupported image format"]),
         (tex(r#"<texture type="bitmap" name="reflectance"/>"#), vec!["needs a `filename`"]),
         (tex(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="huge.png"/></texture>"#), vec!["huge.png", "20000x20000"]),
         (

@@ -29,6 +29,7 @@ pub(crate) enum Tag {
     Sampler,
     Integrator,
     Texture,
+    Medium,
 }
 
 impl Tag {
@@ -43,6 +44,7 @@ impl Tag {
             "sampler" => Self::Sampler,
             "integrator" => Self::Integrator,
             "texture" => Self::Texture,
+            "medium" => Self::Medium,
             _ => return None,
         })
     }
@@ -57,11 +59,12 @@ impl Tag {
             Self::Sampler => "sampler",
             Self::Integrator => "integrator",
             Self::Texture => "texture",
+            Self::Medium => "medium",
         }
     }
 }
 
-const OBJECT_TAGS: &str = "bsdf, shape, emitter, sensor, film, rfilter, sampler, integrator, texture";
+const OBJECT_TAGS: &str = "bsdf, shape, emitter, sensor, film, rfilter, sampler, integrator, texture, medium";
 const VALUE_TAGS: &str = "float, integer, boolean, string, rgb, spectrum, point, vector, transform";
 
 /// A typed property value.
