@@ -57,7 +57,7 @@ pub(super) fn decode_jpeg(bytes: &[u8], raw: bool) -> Result<(u32, u32, Vec<Rgb>
     // never holds a bare 0xFF 0xD9: a data byte 0xFF is followed by a stuffed 0x00).
     let last_scan = bytes.windows(2).rposition(|w| w == [0xff, 0xda]);
     let end = bytes.windows(2).rposition(|w| w == [0xff, 0xd9]);
-    if last_scan.is_some() && !(end > last_scan) {
+    if last_scan.is_some() && end <= last_scan {
         return Err("not a readable JPEG: the file ends before its end-of-image marker (truncated?)".into());
     }
     let mut decoder = JpegDecoder::new_with_options(ZCursor::new(bytes), options);
