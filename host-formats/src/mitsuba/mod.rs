@@ -75,6 +75,7 @@ mod tests_media;
 #[cfg(test)]
 mod tests_textures;
 
+pub use images::decode_image_bytes;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
