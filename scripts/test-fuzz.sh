@@ -24,16 +24,16 @@ cd "$(dirname "$0")/../fuzz"
 
 SECONDS_PER_TARGET="${FUZZ_SECONDS:-60}"
 # Inputs per target (≈ 25 s at the rates measured here: material 320k/s, light 460k/s,
-# parser 13k/s, EXR reader ~60k/s; weights 1.8k/s, so ≈ 55 s, with bidirectional
+# parser 13k/s, EXR reader ~60k/s, image readers 17k/s; weights 1.8k/s, so ≈ 55 s, with bidirectional
 # filtering's weights on one input in four, 3.4k/s without them); FUZZ_RUNS overrides all
 # (0 = unbounded).
-declare -A RUNS=([material_sampling]=8000000 [light_sampling]=11000000 [mis_weights]=100000 [mitsuba_parser]=330000 [exr_reader]=1500000 [model_file]=200000 [partial_reader]=400000 [wire_decode]=3000000)
+declare -A RUNS=([material_sampling]=8000000 [light_sampling]=11000000 [mis_weights]=100000 [mitsuba_parser]=330000 [exr_reader]=1500000 [image_readers]=400000 [model_file]=200000 [partial_reader]=400000 [wire_decode]=3000000)
 # A fixed libFuzzer seed makes a CI run explore the same inputs first (a crash it finds
 # reproduces); FUZZ_SEED=0 lets libFuzzer pick one, for longer exploratory runs.
 SEED="${FUZZ_SEED:-1}"
 TARGETS=("$@")
 if [ ${#TARGETS[@]} -eq 0 ]; then
-    TARGETS=(material_sampling light_sampling mis_weights mitsuba_parser exr_reader model_file partial_reader wire_decode)
+    TARGETS=(material_sampling light_sampling mis_weights mitsuba_parser exr_reader image_readers model_file partial_reader wire_decode)
 fi
 
 if ! cargo fuzz --version >/dev/null 2>&1; then

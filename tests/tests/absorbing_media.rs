@@ -162,3 +162,32 @@ fn bdpt_connections_across_a_rough_absorbing_slab_agree_with_pt() {
     let min_p = assert_blocks_agree("BDPT vs PT through a rough absorbing slab", &pt, &bdpt, sidak(0.01, BLOCKS * 3));
     println!("{} comparisons, smallest p = {min_p:.4}", BLOCKS * 3);
 }
+
+/// The filter estimators (MVF, BPF, PhF: kernel estimators, consistent but biased at a
+/// finite kernel) through the same smooth absorbing slab. Their node walks carry T on the
+/// continuation that crossed the medium, so the image's colour (green and blue against
+/// red, which T changes by channel: 0.89, 0.67, 0.30 across the slab) must be PT's within
+/// 3 %. Their level is checked loosely (20 %): BPF reads 14 % below PT on this scene with
+/// or without absorption (σ_t = 0 gives the same shortfall, every channel alike), a
+/// limitation of BPF here, not of the media. Seen failing with T removed from the light
+/// nodes' walk (`filter::nodes`: BPF's green/red 1.35× PT's) and from the camera nodes'
+/// (MVF's, 1.35×). PhF's own camera-side T is not pinned here: its camera paths stop at
+/// the floor, which the camera sees directly (its photons come from the light nodes).
+#[test]
+fn filter_estimators_see_the_absorbing_slab() {
+    let (scene, tracer) = lit_floor(false);
+    let mean = |kind: EstimatorKind, n: u32| {
+        let stats = block_stats(&scene, &tracer, kind, n);
+        [0, 1, 2].map(|c| stats.iter().map(|b| b[c].mean()).sum::<f64>() / stats.len() as f64)
+    };
+    let pt = mean(EstimatorKind::Pt, 200);
+    for kind in [EstimatorKind::Mvf, EstimatorKind::Bpf, EstimatorKind::Phf] {
+        let m = mean(kind, 60);
+        println!("{kind:?}: {m:?} against PT {pt:?}");
+        assert!((m[0] / pt[0] - 1.0).abs() < 0.2, "{kind:?}: red {} against PT's {}", m[0], pt[0]);
+        for c in 1..3 {
+            let balance = (m[c] / m[0]) / (pt[c] / pt[0]);
+            assert!((balance - 1.0).abs() < 0.03, "{kind:?} channel {c} against red: {balance} of PT's");
+        }
+    }
+}

@@ -30,9 +30,11 @@
 //! merges read the sub-paths' β). A smooth dielectric boundary blocks shadow rays, so
 //! no connection crosses its medium; a rough one does not, and there
 //! [`Scene::transmittance_to`] gives T for a connection: PT's next-event estimation and
-//! BDPT's connections (light sample, interior join, cached light source) apply it. Not
-//! covered yet (`docs/scene-features.md`): the filter estimators' node walks (MVF, BPF,
-//! PhF) and a camera or light inside a medium.
+//! BDPT's connections (light sample, interior join, cached light source) apply it. The
+//! filter estimators' node walks (MVF, BPF, PhF) put T on the continuation that crossed
+//! the medium, and PhF's camera walk on its β. Not covered yet (`docs/scene-features.md`):
+//! a camera or a light inside a medium, and the filters' next-event and connection
+//! segments across a rough boundary.
 
 use alloc::vec::Vec;
 

@@ -25,10 +25,22 @@ pub(super) fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Rgb>),
     let bytes = || super::read_input(path).map_err(|e| format!("cannot open: {e}"));
     match ext.as_deref() {
         Some("exr") => Ok(linear(read_exr(path)?)),
-        Some("hdr" | "pic" | "rgbe") => Ok(linear(decode_rgbe(&bytes()?).map_err(|e| format!("not a readable Radiance RGBE file: {e}"))?)),
-        Some("pfm") => Ok(linear(decode_pfm(&bytes()?).map_err(|e| format!("not a readable PFM file: {e}"))?)),
         Some("png") => read_png(path, raw),
-        Some("jpg" | "jpeg") => decode_jpeg(&bytes()?, raw),
+        Some(e @ ("hdr" | "pic" | "rgbe" | "pfm" | "jpg" | "jpeg")) => decode_image_bytes(e, &bytes()?, raw),
+        _ => Err(format!("unsupported image format (supported: {SUPPORTED})")),
+    }
+}
+
+/// Decode a JPEG, Radiance RGBE or PFM image held in memory, its format named by
+/// `extension` (lower case, as a file's): linear RGB texels, row 0 at the top, as
+/// [`read_image`] gives them. The fuzz target `image_readers` calls this; it never
+/// panics on malformed input.
+pub fn decode_image_bytes(extension: &str, bytes: &[u8], raw: bool) -> Result<(u32, u32, Vec<Rgb>), String> {
+    let linear = |image: RgbImage| (image.width, image.height, image.pixels.iter().map(|&[r, g, b]| Rgb::new(r, g, b)).collect());
+    match extension {
+        "hdr" | "pic" | "rgbe" => Ok(linear(decode_rgbe(bytes).map_err(|e| format!("not a readable Radiance RGBE file: {e}"))?)),
+        "pfm" => Ok(linear(decode_pfm(bytes).map_err(|e| format!("not a readable PFM file: {e}"))?)),
+        "jpg" | "jpeg" => decode_jpeg(bytes, raw),
         _ => Err(format!("unsupported image format (supported: {SUPPORTED})")),
     }
 }
@@ -57,7 +69,7 @@ pub(super) fn decode_jpeg(bytes: &[u8], raw: bool) -> Result<(u32, u32, Vec<Rgb>
     // never holds a bare 0xFF 0xD9: a data byte 0xFF is followed by a stuffed 0x00).
     let last_scan = bytes.windows(2).rposition(|w| w == [0xff, 0xda]);
     let end = bytes.windows(2).rposition(|w| w == [0xff, 0xd9]);
-    if last_scan.is_some() && !(end > last_scan) {
+    if last_scan.is_some() && end <= last_scan {
         return Err("not a readable JPEG: the file ends before its end-of-image marker (truncated?)".into());
     }
     let mut decoder = JpegDecoder::new_with_options(ZCursor::new(bytes), options);

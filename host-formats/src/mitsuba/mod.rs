@@ -77,6 +77,7 @@ mod tests_principled;
 #[cfg(test)]
 mod tests_textures;
 
+pub use images::decode_image_bytes;
 use std::fmt;
 use std::path::{Path, PathBuf};
 

@@ -266,6 +266,10 @@ fn walk<Q: RayQuery + ?Sized>(
             first = index;
         } else {
             nodes[parent as usize].next.node = index;
+            // The continuation crossed an absorbing medium: its throughput carries T.
+            if let Some(t) = scene.transmittance(&path.ray, &hit) {
+                nodes[parent as usize].next.throughput *= t;
+            }
         }
         let sp = SurfacePoint::new(hit, -path.ray.dir);
         let material = sp.material(scene);
@@ -437,6 +441,10 @@ fn light_walk<Q: RayQuery + ?Sized>(
         let index = out.nodes.len() as u32;
         if parent != NONE {
             out.nodes[parent as usize].next.node = index;
+            // The continuation crossed an absorbing medium: its throughput carries T.
+            if let Some(t) = scene.transmittance(&ray, &hit) {
+                out.nodes[parent as usize].next.throughput *= t;
+            }
         }
         let sp = SurfacePoint::new(hit, -ray.dir);
         let material = sp.material(scene);

@@ -224,6 +224,8 @@ fn gather_pixels<Q: RayQuery + ?Sized>(
                 l += path.beta * environment(scene, path.ray.dir);
                 break;
             };
+            // Attenuate by an absorbing medium the segment crossed.
+            Walk::pass_medium(scene, &mut path, &hit);
             let sp = SurfacePoint::new(hit, -path.ray.dir);
             if hit.emitter.is_some() {
                 l += path.beta * emitted(scene, &hit, sp.wo);
