@@ -287,6 +287,8 @@ pub(crate) struct Principled {
 
 impl Principled {
     pub fn new(p: PrincipledParams) -> Self {
+        // η as the other models read indices: invalid → index-matched, extremes clamped.
+        let p = PrincipledParams { eta: super::relative_ior(p.eta, 1.0), ..p };
         let r2 = p.roughness * p.roughness;
         let aspect = sqrt(1.0 - 0.9 * p.anisotropic);
         let (ax, ay) = if p.anisotropic == 0.0 { (r2, r2) } else { (r2 / aspect, r2 * aspect) };
