@@ -52,7 +52,7 @@
 //! of the macro-surface, or see the back of their facet, are absorbed (`None`), and their
 //! mass is missing from the density too.
 //!
-//! Two deliberate differences from Mitsuba (see docs/materials.md):
+//! Two deliberate differences from Mitsuba (docs/scene-features.md lists all):
 //! - seen from the back without a transmission lobe (bsdf = 0), Mitsuba's `pdf` is
 //!   positive where its `sample` draws nothing and its `eval` is zero; here the density is
 //!   zero there, so that `sample` and `pdf` describe one distribution;
