@@ -6,7 +6,8 @@
 //!   finite non-negative `pdf_rev` equal to `pdf_rev(wo, wi)`, and a finite η > 0;
 //! - `eval`, `pdf` and `pdf_rev` at an arbitrary second direction are finite and ≥ 0;
 //! Materials: diffuse, conductor, rough conductor, dielectric, rough dielectric, smooth
-//! plastic (any index) and rough plastic (over four prebuilt coatings), each optionally
+//! plastic (any index), rough plastic (over four prebuilt coatings) and principled (any
+//! weights in [0, 1], any index), each optionally
 //! two-sided, and any of them with a texel value set in one of its texture slots.
 //! - a diffuse surface seen from the front always samples, and at least 30 % of all
 //!   inputs not grazing within 1e-3 produce a sample (so the target cannot pass by
@@ -59,7 +60,7 @@ fn material(b: &mut Bytes) -> (Material, bool) {
         0 => b.finite().abs(),
         _ => b.log_uniform(1e-5, 1.0),
     };
-    let kind = b.u8() % 7;
+    let kind = b.u8() % 8;
     let m = match kind {
         0 => Material::diffuse(colour(b)),
         1 => Material::conductor(Rgb::splat(ior(b)), Rgb::splat(b.log_uniform(1e-3, 10.0)), colour(b)),
@@ -67,16 +68,32 @@ fn material(b: &mut Bytes) -> (Material, bool) {
         3 => Material::dielectric(ior(b), ior(b), colour(b), colour(b)),
         4 => Material::rough_dielectric(distr, alpha, ior(b), ior(b), colour(b), colour(b)),
         5 => Material::plastic(ior(b), ior(b), colour(b), colour(b), b.u8() & 1 == 1),
+        7 => Material::principled(ember_core::bsdf::PrincipledParams {
+            base_color: colour(b),
+            roughness: alpha.min(1e3),
+            anisotropic: b.unit(),
+            metallic: b.unit(),
+            spec_tint: b.unit(),
+            sheen: b.unit(),
+            sheen_tint: b.unit(),
+            flatness: b.unit(),
+            clearcoat: b.unit(),
+            clearcoat_gloss: b.unit(),
+            spec_trans: b.unit(),
+            eta: ior(b),
+            ..Default::default()
+        }),
         _ => {
             let c = &coatings()[b.u8() as usize % coatings().len()];
             Material::rough_plastic_coated(c, colour(b), colour(b), b.u8() & 1 == 1)
         }
     };
     // A texture's value at a hit replaces a parameter (the way `Scene::material` reads it).
-    let m = match b.u8() % 4 {
+    let m = match b.u8() % 5 {
         0 => m.with_texel(TextureSlot::Diffuse, colour(b)),
         1 => m.with_texel(TextureSlot::SpecularReflectance, colour(b)),
         2 => m.with_texel(TextureSlot::SpecularTransmittance, colour(b)),
+        3 => m.with_texel(TextureSlot::Roughness, colour(b)),
         _ => m,
     };
     (if b.u8() & 1 == 1 { m.two_sided() } else { m }, kind == 0)

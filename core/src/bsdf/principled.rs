@@ -52,7 +52,7 @@
 //! of the macro-surface, or see the back of their facet, are absorbed (`None`), and their
 //! mass is missing from the density too.
 //!
-//! Two deliberate differences from Mitsuba (see docs/materials.md):
+//! Two deliberate differences from Mitsuba (docs/scene-features.md lists all):
 //! - seen from the back without a transmission lobe (bsdf = 0), Mitsuba's `pdf` is
 //!   positive where its `sample` draws nothing and its `eval` is zero; here the density is
 //!   zero there, so that `sample` and `pdf` describe one distribution;
@@ -287,6 +287,8 @@ pub(crate) struct Principled {
 
 impl Principled {
     pub fn new(p: PrincipledParams) -> Self {
+        // η as the other models read indices: invalid → index-matched, extremes clamped.
+        let p = PrincipledParams { eta: super::relative_ior(p.eta, 1.0), ..p };
         let r2 = p.roughness * p.roughness;
         let aspect = sqrt(1.0 - 0.9 * p.anisotropic);
         let (ax, ay) = if p.anisotropic == 0.0 { (r2, r2) } else { (r2 / aspect, r2 * aspect) };
