@@ -43,6 +43,8 @@ pub(crate) struct Ctx<'a> {
     /// Material of each `bsdf` object already added.
     pub materials: HashMap<usize, MaterialId>,
     pub default_material: Option<MaterialId>,
+    /// The same for shapes that emit (black).
+    pub default_emitter_material: Option<MaterialId>,
     /// Objects that were instantiated (to warn about unused declarations).
     pub used: Vec<bool>,
     /// World → render frame: the translation by minus the camera position, composed in
@@ -92,6 +94,7 @@ pub(crate) fn instantiate(parsed: Parsed, positions: &Positions, base_dir: &Path
         base_dir,
         materials: HashMap::new(),
         default_material: None,
+        default_emitter_material: None,
         used: vec![false; parsed.objs.len()],
         render_frame: camera_centred_frame(&parsed),
         plastic_coatings: HashMap::new(),

@@ -78,9 +78,22 @@ impl Ctx<'_> {
         Ok(id)
     }
 
-    /// Mitsuba's default for a shape without a BSDF: `diffuse` with reflectance 0.5.
-    pub(crate) fn default_material(&mut self) -> MaterialId {
-        *self.default_material.get_or_insert_with(|| self.sb.add_material(Material::diffuse(Rgb::splat(0.5))))
+    /// Mitsuba's default for a shape without a BSDF: `diffuse` with reflectance 0.5, or
+    /// 0 (black) for a shape that emits (Mitsuba 3's `Shape` constructor: an emitter's
+    /// default BSDF reflects nothing). The grey one lit the glossy scene's bulb: light
+    /// bounced off the lamp and the image read brighter than Mitsuba's.
+    pub(crate) fn default_material(&mut self, emits: bool) -> MaterialId {
+        let existing = if emits { self.default_emitter_material } else { self.default_material };
+        if let Some(id) = existing {
+            return id;
+        }
+        let id = self.sb.add_material(Material::diffuse(Rgb::splat(if emits { 0.0 } else { 0.5 })));
+        if emits {
+            self.default_emitter_material = Some(id);
+        } else {
+            self.default_material = Some(id);
+        }
+        id
     }
 
     /// A colour parameter: a `<texture>` child named `name` (its mean is the value, the

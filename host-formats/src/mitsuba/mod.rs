@@ -24,7 +24,7 @@
 //!   every attribute (overridable like `mitsuba -D`), `id` / `ref` (declared before use).
 //! - Shapes: `obj`, `ply` (ascii, binary_little_endian), `rectangle`, `cube`, `sphere`,
 //!   `disk` (tessellated into 128 triangles); `to_world`, `flip_normals`, `face_normals`;
-//!   one nested or referenced `bsdf` (default: `diffuse` 0.5, as Mitsuba), one `area`
+//!   one nested or referenced `bsdf` (default: `diffuse` 0.5, black for an emitter, as Mitsuba 3), one `area`
 //!   emitter and one absorbing `interior` medium (`homogeneous`, albedo 0; scattering
 //!   and exterior media are refused).
 //! - BSDFs: `diffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`,

@@ -1,7 +1,7 @@
 //! Shape plugins: `rectangle`, `cube`, `sphere`, `disk`, `obj`, `ply`.
 //!
 //! Each takes `to_world` and `flip_normals`, one `bsdf` (nested or `ref`; Mitsuba's
-//! default `diffuse` 0.5 when absent), optionally one nested `area` emitter and one
+//! default `diffuse` 0.5 when absent, black for an emitter, as Mitsuba 3), optionally one nested `area` emitter and one
 //! absorbing `interior` medium ([`super::media`]).
 //! - `rectangle`, `disk`: the normal is Mitsuba's, `to_world`'s inverse transpose applied
 //!   to +z, so a mirroring `to_world` reverses the winding to keep it.
@@ -87,7 +87,7 @@ impl Ctx<'_> {
         let interior = self.interior_medium(obj)?;
         let material = match bsdf {
             Some(b) => self.material(b)?,
-            None => self.default_material(),
+            None => self.default_material(emitter.is_some()),
         };
         // A shape enclosing a medium gets its own copy of the material, carrying σ_t.
         let material = match interior {
