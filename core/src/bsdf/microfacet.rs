@@ -125,18 +125,8 @@ impl Microfacet {
         }
         let m = match self.kind {
             MicrofacetKind::Ggx => {
-                // Orthonormal basis around vh (T1 is horizontal).
-                let lensq = vh.x * vh.x + vh.y * vh.y;
-                let t1 = if lensq > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / sqrt(lensq) } else { Vec3::X };
-                let t2 = vh.cross(t1);
-                // Uniform point on the disk, warped onto the visible half of the projection.
-                let r = sqrt(u.x);
-                let (sp, cp) = sin_cos(TWO_PI * u.y);
-                let p1 = r * cp;
-                let s = 0.5 * (1.0 + vh.z);
-                let p2 = (1.0 - s) * safe_sqrt(1.0 - p1 * p1) + s * (r * sp);
-                // Reproject onto the hemisphere, then unstretch.
-                let nh = t1 * p1 + t2 * p2 + vh * safe_sqrt(1.0 - p1 * p1 - p2 * p2);
+                // Unstretch the stretched-space normal.
+                let nh = ggx_visible_stretched(vh, u);
                 Vec3::new(a * nh.x, a * nh.y, nh.z.max(0.0)).normalize_or_zero()
             }
             MicrofacetKind::Beckmann => {
@@ -187,6 +177,26 @@ impl Microfacet {
 /// Jakob's numerical inversion (Mitsuba's `sample_visible_11`): the x-slope CDF,
 /// parameterised in the erf domain, is inverted by three Newton steps from the analytic
 /// solution for grazing incidence; the y-slope is Gaussian, erf⁻¹(2u − 1).
+/// The GGX visible-normal draw in the stretched space where the distribution is the unit
+/// hemisphere (Heitz, "Sampling the GGX Distribution of Visible Normals", JCGT 7(4),
+/// 2018): `vh` the stretched unit view direction (z > 0), `u` uniform; the caller
+/// unstretches by its roughness (isotropic here, anisotropic in `principled`).
+#[inline]
+pub(super) fn ggx_visible_stretched(vh: Vec3, u: Vec2) -> Vec3 {
+    // Orthonormal basis around vh (T1 is horizontal).
+    let lensq = vh.x * vh.x + vh.y * vh.y;
+    let t1 = if lensq > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / sqrt(lensq) } else { Vec3::X };
+    let t2 = vh.cross(t1);
+    // Uniform point on the disk, warped onto the visible half of the projection.
+    let r = sqrt(u.x);
+    let (sp, cp) = sin_cos(TWO_PI * u.y);
+    let p1 = r * cp;
+    let s = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - s) * safe_sqrt(1.0 - p1 * p1) + s * (r * sp);
+    // Reproject onto the hemisphere.
+    t1 * p1 + t2 * p2 + vh * safe_sqrt(1.0 - p1 * p1 - p2 * p2)
+}
+
 fn beckmann_visible_slopes_11(cos_theta_i: f32, u: Vec2) -> Vec2 {
     let tan_theta_i = safe_sqrt(1.0 - cos_theta_i * cos_theta_i) / cos_theta_i;
     let cot_theta_i = 1.0 / tan_theta_i;

@@ -170,15 +170,7 @@ impl AnisoGgx {
         if !(vh.z > 0.0) {
             return None;
         }
-        let lensq = vh.x * vh.x + vh.y * vh.y;
-        let t1 = if lensq > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / sqrt(lensq) } else { Vec3::X };
-        let t2 = vh.cross(t1);
-        let r = sqrt(u.x);
-        let (sp, cp) = sin_cos(TWO_PI * u.y);
-        let p1 = r * cp;
-        let s = 0.5 * (1.0 + vh.z);
-        let p2 = (1.0 - s) * safe_sqrt(1.0 - p1 * p1) + s * (r * sp);
-        let nh = t1 * p1 + t2 * p2 + vh * safe_sqrt(1.0 - p1 * p1 - p2 * p2);
+        let nh = super::microfacet::ggx_visible_stretched(vh, u);
         let m = Vec3::new(self.ax * nh.x, self.ay * nh.y, nh.z.max(0.0)).normalize_or_zero();
         (m.z > 0.0 && m.is_finite()).then_some(m)
     }
