@@ -96,34 +96,37 @@ impl Ctx<'_> {
         id
     }
 
-    /// A colour parameter: a `<texture>` child named `name` (its mean is the value, the
-    /// binding goes to `bindings`) or the property (default `default`).
-    fn color_param(&mut self, idx: usize, p: &mut Props, name: &'static str, default: Rgb, slot: TextureSlot, bindings: &mut Bindings) -> Res<Rgb> {
+    /// A `<texture>` child named `name`, bound to `slot` in `bindings`, and its mean
+    /// value; `None` if there is no such child. Refused if `name` is also a property.
+    fn texture_param(&mut self, idx: usize, p: &Props, name: &'static str, slot: TextureSlot, bindings: &mut Bindings) -> Res<Option<Rgb>> {
         let obj = self.obj(idx)?;
         let Some(child) = obj.children.iter().find(|c| c.name.as_deref() == Some(name)) else {
-            return p.color(name, default);
+            return Ok(None);
         };
         if p.has(name) {
             return Err(Fail::at(child.loc, format!("`{name}` is given both as a value (line {}) and as a texture", self.line(p.loc_of(name)))));
         }
         let (id, mean) = self.texture(child.obj)?;
         bindings.push((slot, id));
-        Ok(mean)
+        Ok(Some(mean))
+    }
+
+    /// A colour parameter: a `<texture>` child named `name` (its mean is the value, the
+    /// binding goes to `bindings`) or the property (default `default`).
+    fn color_param(&mut self, idx: usize, p: &mut Props, name: &'static str, default: Rgb, slot: TextureSlot, bindings: &mut Bindings) -> Res<Rgb> {
+        match self.texture_param(idx, p, name, slot, bindings)? {
+            Some(mean) => Ok(mean),
+            None => p.color(name, default),
+        }
     }
 
     /// A float parameter that may be a `<texture>` child named `name` (its mean luminance
     /// is the value, the binding goes to `bindings`), else the property (default `default`).
     fn float_param(&mut self, idx: usize, p: &mut Props, name: &'static str, default: f64, slot: TextureSlot, bindings: &mut Bindings) -> Res<f64> {
-        let obj = self.obj(idx)?;
-        let Some(child) = obj.children.iter().find(|c| c.name.as_deref() == Some(name)) else {
-            return p.float(name, default);
-        };
-        if p.has(name) {
-            return Err(Fail::at(child.loc, format!("`{name}` is given both as a value (line {}) and as a texture", self.line(p.loc_of(name)))));
+        match self.texture_param(idx, p, name, slot, bindings)? {
+            Some(mean) => Ok(mean.luminance() as f64),
+            None => p.float(name, default),
         }
-        let (id, mean) = self.texture(child.obj)?;
-        bindings.push((slot, id));
-        Ok(mean.luminance() as f64)
     }
 
     /// Mitsuba's `principled`: its parameters and defaults (`PrincipledParams`); `eta` and
