@@ -177,6 +177,20 @@ impl Microfacet {
 /// Jakob's numerical inversion (Mitsuba's `sample_visible_11`): the x-slope CDF,
 /// parameterised in the erf domain, is inverted by three Newton steps from the analytic
 /// solution for grazing incidence; the y-slope is Gaussian, erf⁻¹(2u − 1).
+/// The generalised half vector (Walter et al. 2007, eq. 16): wo + wi for a reflection,
+/// wo + η wi for a refraction (η the index ratio the caller uses for that side), unit and
+/// turned to the upper hemisphere; `None` where it vanishes or is not finite.
+#[inline]
+pub(super) fn half_vector(wo: Vec3, wi: Vec3, reflect: bool, eta: f32) -> Option<Vec3> {
+    let h = if reflect { wo + wi } else { wo + wi * eta };
+    let l2 = h.length_squared();
+    if !(l2 > 0.0 && l2.is_finite()) {
+        return None;
+    }
+    let m = h / sqrt(l2);
+    Some(if m.z < 0.0 { -m } else { m })
+}
+
 /// The GGX visible-normal draw in the stretched space where the distribution is the unit
 /// hemisphere (Heitz, "Sampling the GGX Distribution of Visible Normals", JCGT 7(4),
 /// 2018): `vh` the stretched unit view direction (z > 0), `u` uniform; the caller

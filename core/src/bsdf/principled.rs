@@ -342,15 +342,7 @@ impl Principled {
         }
         let reflect = co * ci > 0.0;
         let eta_path = if front { self.p.eta } else { 1.0 / self.p.eta };
-        let hv = if reflect { wo + wi } else { wo + wi * eta_path };
-        let l2 = hv.length_squared();
-        if !(l2 > 0.0 && l2.is_finite()) {
-            return None;
-        }
-        let mut h = hv / sqrt(l2);
-        if h.z < 0.0 {
-            h = -h;
-        }
+        let h = super::microfacet::half_vector(wo, wi, reflect, eta_path)?;
         let s = if front { 1.0 } else { -1.0 };
         let (dot_o, dot_i) = (wo.dot(h) * s, wi.dot(h) * s);
         let compatible = dot_o > 0.0 && if reflect { dot_i > 0.0 } else { dot_i < 0.0 };

@@ -21,7 +21,7 @@
 
 use super::microfacet::Microfacet;
 use super::{BsdfSample, TransportMode, fresnel};
-use crate::math::{Vec2, Vec3, reflect, sqrt};
+use crate::math::{Vec2, Vec3, reflect};
 use crate::measure::SolidAnglePdf;
 use crate::spectrum::Rgb;
 
@@ -59,15 +59,7 @@ impl RoughDielectric {
         }
         let reflect = co * ci > 0.0;
         let eta = if co > 0.0 { self.eta } else { 1.0 / self.eta };
-        let h = if reflect { wo + wi } else { wo + wi * eta };
-        let l2 = h.length_squared();
-        if !(l2 > 0.0 && l2.is_finite()) {
-            return None;
-        }
-        let mut m = h / sqrt(l2);
-        if m.z < 0.0 {
-            m = -m;
-        }
+        let m = super::microfacet::half_vector(wo, wi, reflect, eta)?;
         let (dot_o, dot_i) = (wo.dot(m), wi.dot(m));
         if dot_o * co <= 0.0 || dot_i * ci <= 0.0 {
             return None;
