@@ -340,15 +340,14 @@ impl RayQuery for EmbreeAccel {
     }
 
     fn intersect_batch(&self, rays: RayBatch<'_>, hits: &mut [Option<SurfaceHit>]) {
-        let mut group = [Ray::new(Vec3::ZERO, Vec3::ZERO, 0.0); BATCH];
-        let mut answers = [None; BATCH];
-        for (chunk, out) in hits.chunks_mut(BATCH).zip(0..) {
-            let n = chunk.len().min(rays.len().saturating_sub(out * BATCH));
-            for (i, ray) in rays.iter().skip(out * BATCH).take(n).enumerate() {
-                group[i] = ray;
-            }
-            self.intersect_packets::<BATCH>(&group[..n], false, &mut answers[..n]);
-            for (h, a) in chunk.iter_mut().zip(&answers[..n]) {
+        let (mut group, mut answers) = ([Ray::new(Vec3::ZERO, Vec3::ZERO, 0.0); BATCH], [None; BATCH]);
+        let n = rays.len().min(hits.len());
+        let mut all = rays.iter();
+        for chunk in hits[..n].chunks_mut(BATCH) {
+            let k = chunk.len();
+            group.iter_mut().zip(all.by_ref().take(k)).for_each(|(g, ray)| *g = ray);
+            self.intersect_packets::<BATCH>(&group[..k], false, &mut answers[..k]);
+            for (h, a) in chunk.iter_mut().zip(&answers[..k]) {
                 *h = a.map(|(hit, _)| hit);
             }
         }
@@ -356,12 +355,12 @@ impl RayQuery for EmbreeAccel {
 
     fn occluded_batch(&self, rays: RayBatch<'_>, occluded: &mut [bool]) {
         let mut group = [Ray::new(Vec3::ZERO, Vec3::ZERO, 0.0); BATCH];
-        for (chunk, out) in occluded.chunks_mut(BATCH).zip(0..) {
-            let n = chunk.len().min(rays.len().saturating_sub(out * BATCH));
-            for (i, ray) in rays.iter().skip(out * BATCH).take(n).enumerate() {
-                group[i] = ray;
-            }
-            self.occluded_packets::<BATCH>(&group[..n], false, &mut chunk[..n]);
+        let n = rays.len().min(occluded.len());
+        let mut all = rays.iter();
+        for chunk in occluded[..n].chunks_mut(BATCH) {
+            let k = chunk.len();
+            group.iter_mut().zip(all.by_ref().take(k)).for_each(|(g, ray)| *g = ray);
+            self.occluded_packets::<BATCH>(&group[..k], false, chunk);
         }
     }
 }
