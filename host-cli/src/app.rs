@@ -254,6 +254,8 @@ pub struct RenderReport {
     pub height: u32,
     pub max_depth: i32,
     pub seed: u64,
+    /// The ray queries' instruction set.
+    pub simd: ember_host::accel::Isa,
     pub summary: RenderSummary,
     pub exr: PathBuf,
     /// The PNG beside the EXR (none for a partial image).
@@ -483,6 +485,7 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         height,
         max_depth: built.max_depth,
         seed: args.seed,
+        simd: built.simd,
         summary,
         exr: exr.clone(),
         png: None,
@@ -632,6 +635,8 @@ impl fmt::Display for RenderReport {
         writeln!(f, "rendered   {} with {}, {}x{}, max depth {}, seed {}", self.scene, self.estimator, self.width, self.height, depth, self.seed)?;
         let setup = (s.total_seconds - s.render_seconds).max(0.0);
         writeln!(f, "time       {:.2} s ({:.2} s setup, {:.2} s rendering) on {} threads", s.total_seconds, setup, s.render_seconds, s.threads)?;
+        // The kernels' lanes; the path loop walks one path at a time (docs/lanes.md).
+        writeln!(f, "simd       {}, {} lanes (ray queries; one path at a time)", self.simd, self.simd.lanes())?;
         writeln!(f, "passes     {} (samples per pixel)", s.passes)?;
         writeln!(f, "samples    {}samples/s ({}samples)", si(s.samples_per_second), si(s.stats.samples as f64))?;
         writeln!(f, "rays       {}rays/s ({}rays)", si(s.rays_per_second), si(s.stats.rays as f64))?;

@@ -402,6 +402,12 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
 
+    /// SIMD instruction set of the ray queries: scalar, sse, avx2, avx512, neon or
+    /// simd128, one this machine offers (overrides the environment's EMBER_SIMD). The
+    /// image does not depend on it [default: the widest the machine offers].
+    #[arg(long, value_name = "NAME")]
+    pub simd: Option<String>,
+
     /// Image width in pixels; given without --height, the height follows the film's
     /// aspect ratio, rounded to the nearest pixel [default: the scene's film; 512 for the
     /// built-in scene].

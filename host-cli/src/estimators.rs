@@ -318,6 +318,8 @@ pub struct Built {
     /// The scene's name (its file, or "built-in Cornell box").
     pub scene: String,
     pub max_depth: i32,
+    /// The instruction set the ray queries run with (`--simd`, `EMBER_SIMD`).
+    pub simd: ember_host::accel::Isa,
     /// The scene file's sample count, used when neither --spp nor --time is given.
     pub file_spp: Option<u32>,
     /// Passes already rendered with this renderer's configuration and seed, which the

@@ -28,22 +28,45 @@ pub fn prepare_builtin(args: &RenderArgs) -> Result<PreparedScene, String> {
         _ => ("built-in Cornell box", builtin::cornell_box(w, h)),
     };
     let (scene, geometry, warnings) = builder.build().map_err(|e| format!("built-in scene: {e}"))?;
-    Ok(PreparedScene::new(name.into(), scene, &geometry, warnings, None, None, Vec::new()))
+    let mut prepared = PreparedScene::new(name.into(), scene, &geometry, warnings, None, None, Vec::new());
+    choose_simd(&mut prepared, args.simd.as_deref())?;
+    Ok(prepared)
+}
+
+/// Set the ray queries' instruction set: `option` (`--simd`) if given, else the
+/// environment's `EMBER_SIMD`, else the widest the machine offers
+/// (`ember_host::accel::isa`). Images do not depend on it.
+fn choose_simd(prepared: &mut PreparedScene, option: Option<&str>) -> Result<(), String> {
+    let env = std::env::var("EMBER_SIMD").ok();
+    let isa = ember_host::accel::Isa::select(option, env.as_deref()).map_err(|e| e.to_string())?;
+    prepared.accel.set_isa(isa).map_err(|e| e.to_string())
 }
 
 /// Load a Mitsuba 3 XML scene; `width`/`height` override the file's film.
 pub fn prepare_file(path: &Path, width: Option<u32>, height: Option<u32>, defaults: Vec<(String, String)>) -> Result<PreparedScene, String> {
+    prepare_file_with(path, width, height, defaults, None)
+}
+
+/// [`prepare_file`] with `--simd`'s value.
+fn prepare_file_with(
+    path: &Path,
+    width: Option<u32>,
+    height: Option<u32>,
+    defaults: Vec<(String, String)>,
+    simd: Option<&str>,
+) -> Result<PreparedScene, String> {
     let loaded = mitsuba::load_scene(path, &mitsuba::LoadOptions { defaults, width, height }).map_err(|e| e.to_string())?;
     let (scene, geometry, warnings) = loaded.builder.build().map_err(|e| format!("{}: {e}", path.display()))?;
     let mut prepared = PreparedScene::new(path.display().to_string(), scene, &geometry, warnings, loaded.max_depth, loaded.spp, loaded.warnings);
     prepared.inputs = std::iter::once(path.to_path_buf()).chain(loaded.inputs).collect();
+    choose_simd(&mut prepared, simd)?;
     Ok(prepared)
 }
 
 /// The scene a `render` command names (a file, or the built-in one).
 pub fn prepare(args: &RenderArgs) -> Result<PreparedScene, String> {
     match &args.scene {
-        Some(path) => prepare_file(path, args.width, args.height, args.defines.pairs.clone()),
+        Some(path) => prepare_file_with(path, args.width, args.height, args.defines.pairs.clone(), args.simd.as_deref()),
         None if !args.defines.pairs.is_empty() => Err("-D sets parameters of a scene file; the built-in scenes have none (give a SCENE)".into()),
         None => prepare_builtin(args),
     }
@@ -70,7 +93,14 @@ pub fn make_built(args: &RenderArgs) -> Result<Built, String> {
 /// pilot race in the `--time` budget that runs from there).
 pub fn make_built_at(args: &RenderArgs, start: Instant) -> Result<Built, String> {
     let (r, film) = renderer_and_head(args, start)?;
-    Ok(Built { scene: r.prepared.name.clone(), max_depth: r.renderer.params().max_depth.0, file_spp: r.prepared.spp, renderer: Box::new(r), film })
+    Ok(Built {
+        scene: r.prepared.name.clone(),
+        max_depth: r.renderer.params().max_depth.0,
+        simd: r.prepared.accel.isa(),
+        file_spp: r.prepared.spp,
+        renderer: Box::new(r),
+        film,
+    })
 }
 
 /// The memory a run may claim, `limit` or else what the machine has available

@@ -73,6 +73,7 @@ mod build;
 #[cfg(feature = "embree")]
 pub mod embree;
 mod hit;
+pub mod isa;
 mod sphere;
 mod triangle;
 mod wide;
@@ -89,6 +90,7 @@ use ember_core::geometry::{LightId, MaterialId, Ray, RayQuery, SurfaceHit};
 use ember_core::shapes::{SceneGeometry, Sphere};
 
 pub use build::build_bvh2_without_clock;
+pub use isa::{Isa, IsaError};
 pub use triangle::WatertightRay;
 pub use wide::Wide;
 
@@ -315,6 +317,24 @@ trait Padded {
 impl Padded for Aabb {
     fn padded(self, pad: f32) -> Self {
         Aabb::new(self.min - Vec3A::splat(pad), self.max + Vec3A::splat(pad))
+    }
+}
+
+impl AccelWith<Wide> {
+    /// The instruction set the triangle queries run with (module `isa`): the widest this
+    /// machine offers unless [`AccelWith::set_isa`] chose another (a scene without
+    /// triangles reports the widest).
+    pub fn isa(&self) -> Isa {
+        self.bvh.as_ref().map_or_else(Isa::best, Wide::isa)
+    }
+
+    /// Run the triangle queries with `isa`; refused if this machine does not offer it.
+    /// Images do not depend on it (module `isa`).
+    pub fn set_isa(&mut self, isa: Isa) -> Result<(), IsaError> {
+        match &mut self.bvh {
+            Some(bvh) => bvh.set_isa(isa),
+            None => Isa::from_name(isa.name()).map(drop),
+        }
     }
 }
 

@@ -10,9 +10,10 @@
 //! [`accel`]), and reading `/proc`. What it may not: read or write scene and image files
 //! (that is `ember-formats`), parse command lines (`ember-cli`), or print — a library
 //! host (the C API) prints nothing, so progress goes through [`driver::Progress`], which
-//! the command line implements. `unsafe` appears in one module only,
-//! `accel/embree/ffi.rs` (our bindings to Embree, behind the off-by-default feature
-//! `embree`).
+//! the command line implements. `unsafe` appears in two modules only:
+//! `accel/isa.rs` (the calls into the traversal compiled for AVX2 and AVX-512, made only
+//! on a machine that has them) and `accel/embree/ffi.rs` (our bindings to Embree, behind
+//! the off-by-default feature `embree`).
 
 pub mod accel;
 #[cfg(feature = "threads")]
