@@ -455,8 +455,12 @@ impl PerspectiveCamera {
         }
         let dist = sqrt(dist2);
         let wi = d / dist;
-        let film = self.film_position(-wi)?;
-        let importance = self.importance(-wi);
+        // `film_position` and `importance` of -wi, with the direction taken to camera
+        // space once (they each did it, and `importance` found the film point again).
+        let local = self.to_local * -wi;
+        let film = self.local_film_position(local)?;
+        let len = local.length();
+        let importance = if len > 0.0 { self.we_of_cos(local.z / len) } else { 0.0 };
         if importance <= 0.0 {
             return None;
         }
