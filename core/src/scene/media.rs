@@ -30,10 +30,16 @@
 //! merges read the sub-paths' β). A smooth dielectric boundary blocks shadow rays, so
 //! no connection crosses its medium; a rough one does not, and there
 //! [`Scene::transmittance_to`] gives T for a connection: PT's next-event estimation and
-//! BDPT's connections (light sample, interior join, cached light source) apply it. The
-//! filter estimators' node walks (MVF, BPF, PhF) put T on the continuation that crossed
-//! the medium, and PhF's camera walk on its β; the filters' next-event segments and
-//! BPF's bridges take [`Scene::transmittance_to`] as PT's and BDPT's connections do.
+//! BDPT's connections (light sample, interior join, cached light source: so LVCBPT,
+//! SPCBPT, VCM and segment BDPT's bridges) apply it at the camera-side end, read from
+//! `path::Exit` with its own material, since a kernel may move that end onto another
+//! surface. The filter estimators' node walks (MVF, BPF, PhF) record T on the
+//! continuation that crossed the medium (`Continuation::medium`): a Dirac continuation
+//! carries it in its throughput, a reused one where its reached node's value is read,
+//! and a light node's arrival takes its predecessor's; PhF's camera walk puts it on β.
+//! The filters' next-event segments take [`Scene::transmittance_to`] as PT's do. BPF's
+//! bridge segments would need it in their end's row and are refused with a medium
+//! (`estimators::RendererError::BridgesInMedium`).
 //!
 //! # What the rule cannot see, and is refused
 //!
