@@ -23,10 +23,12 @@
 
 use ember_core::bsdf::{Material, MicrofacetKind};
 use ember_core::camera::{FovAxis, PerspectiveCamera};
-use ember_core::estimators::{EstimatorConfig, EstimatorKind, KernelChoice, SegmentAlgorithm, SegmentConfig};
+use ember_core::estimators::{
+    EstimatorConfig, EstimatorKind, FilterConfig, FilterReuse, FilterSide, KernelChoice, Renderer, RendererError, SegmentAlgorithm, SegmentConfig,
+};
 use ember_core::math::Mat4;
 use ember_core::merge::RadiusRule;
-use ember_core::scene::{AreaEmission, Scene, SceneBuilder, builtin};
+use ember_core::scene::{AreaEmission, MediumIntruder, Scene, SceneBuilder, SceneError, builtin};
 use ember_core::spectrum::Rgb;
 use ember_core::transport::{MaxDepth, RenderParams};
 use ember_tests::chi2::sidak;
@@ -309,4 +311,27 @@ fn every_estimator_sees_the_rough_absorbing_slab() {
         }
     }
     assert!(failed.is_empty(), "α = {alpha:.1e} per test:\n{}", failed.join("\n"));
+}
+
+/// What the transmittance rule cannot attenuate is refused for every host, not only by
+/// the Mitsuba reader: `build` refuses a camera inside the slab
+/// ([`SceneError::InsideMedium`]), and BPF with bridge segments is refused in a scene
+/// with a medium ([`RendererError::BridgesInMedium`]). Seen failing with `build`'s check
+/// removed (the scene built).
+#[test]
+fn what_the_media_rule_cannot_see_is_refused() {
+    let mut b = SceneBuilder::new();
+    let cam = builtin::look_at(Vec3::new(0.0, 0.0, 0.8), Vec3::ZERO, Vec3::Y);
+    b.set_camera(PerspectiveCamera::new(cam, 90.0, FovAxis::X, RES, RES));
+    let glass = b.add_material(Material::dielectric(ETA, 1.0, Rgb::ONE, Rgb::ONE));
+    let glass = b.add_interior(glass, Rgb::ONE);
+    b.add_cube(Mat4::from_translation(Vec3::new(0.0, 0.0, 0.8)) * Mat4::from_scale(Vec3::new(0.6, 0.6, 0.2)), false, glass, None);
+    match b.build() {
+        Err(SceneError::InsideMedium(m, MediumIntruder::Camera)) => assert_eq!(m, glass),
+        other => panic!("camera inside the slab: {:?}", other.map(|_| ())),
+    }
+    let (scene, _) = lit_floor(true);
+    let bridges = FilterConfig { reuse: FilterReuse::Bridges, ..FilterConfig::DEFAULT };
+    let refused = Renderer::new(&scene, RenderParams::default(), EstimatorConfig::Filter(FilterSide::Both, bridges));
+    assert!(matches!(refused, Err(RendererError::BridgesInMedium)), "{refused:?}");
 }
