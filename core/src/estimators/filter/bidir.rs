@@ -658,10 +658,10 @@ impl Bidirectional<'_> {
                 }
                 if chain.is_none() && !(reflected > 0.0) {
                     // Only light samples draw it: its emitted part alone.
-                    direct = add3(direct, scale3(mul3(c, rgb::<T>(nodes[target as usize].emitted)), T::from_f64(g * whole / all)));
+                    direct = add3(direct, scale3(mul3(c, rgb::<T>(arriving_emission(nodes, target))), T::from_f64(g * whole / all)));
                     return;
                 }
-                let e = nodes[target as usize].emitted;
+                let e = arriving_emission(nodes, target);
                 let coefficient = if reflected > 0.0 { g * gain * part / reflected } else { 0.0 };
                 if nee > 0.0 && !e.is_black() {
                     // The reflected part over D_r, the emitted part over D.
@@ -725,5 +725,17 @@ impl Bidirectional<'_> {
             }
             None => (emission, direct),
         }
+    }
+}
+
+/// The emission a node's row starts from, as it arrives there: a light node's (emitted by
+/// its predecessor toward it) through the medium its predecessor's continuation crossed,
+/// as its row applies it ([`Bidirectional::row`]'s arrival); a camera node's as it
+/// leaves the node (the reusing segment carries its own T).
+fn arriving_emission(nodes: &[Node], target: u32) -> Rgb {
+    let v = &nodes[target as usize];
+    match v.kind {
+        NodeKind::Light if !v.bridge && v.pred != NONE => v.emitted * nodes[v.pred as usize].next.transmittance(),
+        _ => v.emitted,
     }
 }
