@@ -122,6 +122,9 @@ pub enum RendererError {
         /// The cargo feature of `ember-core` that compiles it.
         feature: &'static str,
     },
+    /// Bidirectional path filtering with bridge segments in a scene with an absorbing
+    /// medium: a bridge does not carry the medium's transmittance (docs/scene-features.md).
+    BridgesInMedium,
 }
 
 impl From<ConfigError> for RendererError {
@@ -137,6 +140,9 @@ impl fmt::Display for RendererError {
             Self::NotCompiled { estimator, feature } => {
                 write!(f, "{estimator} is not compiled into this build: enable the cargo feature `{feature}` of ember-core")
             }
+            Self::BridgesInMedium => {
+                write!(f, "bpf's bridge segments do not carry an absorbing medium's transmittance: render this scene without bridges")
+            }
         }
     }
 }
@@ -145,7 +151,7 @@ impl core::error::Error for RendererError {
     fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
         match self {
             Self::Config(e) => Some(e),
-            Self::NotCompiled { .. } => None,
+            Self::NotCompiled { .. } | Self::BridgesInMedium => None,
         }
     }
 }
@@ -154,9 +160,16 @@ impl Renderer {
     /// The estimator `config` names, for `scene`, with `params`. Allocates nothing
     /// large: setup happens in the setup phases. Refuses a configuration out of range
     /// ([`RendererError::Config`]) and an estimator this build leaves out
-    /// ([`RendererError::NotCompiled`], checked after the ranges).
+    /// ([`RendererError::NotCompiled`], checked after the ranges), and BPF's bridges
+    /// in a scene with an absorbing medium ([`RendererError::BridgesInMedium`]).
     pub fn new(scene: &Scene, params: RenderParams, config: EstimatorConfig) -> Result<Self, RendererError> {
         config.validate()?;
+        #[cfg(feature = "filtering")]
+        if let EstimatorConfig::Filter(FilterSide::Both, c) = config {
+            if c.bridges() && !scene.interiors.is_empty() {
+                return Err(RendererError::BridgesInMedium);
+            }
+        }
         let pixels = scene.camera.width() * scene.camera.height();
         Ok(match config {
             EstimatorConfig::Pt => Self::OnePhase(Box::new(OnePhase::new(Simple::Pt, params, pixels))),

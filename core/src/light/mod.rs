@@ -301,6 +301,15 @@ impl Light {
         matches!(self.kind, Kind::Point(_) | Kind::Spot(_) | Kind::Directional(_))
     }
 
+    /// Where a point or spot light sits; `None` for lights with an extent or at infinity.
+    pub fn delta_position(&self) -> Option<Vec3> {
+        match &self.kind {
+            Kind::Point(l) => Some(l.position),
+            Kind::Spot(l) => Some(l.position),
+            _ => None,
+        }
+    }
+
     /// Point and spot lights: emission starts at one point.
     #[inline]
     pub fn is_delta_position(&self) -> bool {

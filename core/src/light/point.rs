@@ -72,7 +72,7 @@ impl PointLight {
 
 #[derive(Clone, Copy, Debug)]
 pub(super) struct SpotLight {
-    position: Vec3,
+    pub(super) position: Vec3,
     /// Local frame with the spot's axis as normal.
     frame: Frame,
     intensity: Rgb,

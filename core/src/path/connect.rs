@@ -143,7 +143,7 @@ pub fn connect<Q: RayQuery + ?Sized>(
         if pt.is_on_surface() {
             v *= ls.wi.dot(pt.exit.ns).abs();
         }
-        if let Some(tr) = scene.transmittance_to(ls.p, pt.exit.p, pt.exit.ng, pt.material) {
+        if let Some(tr) = scene.transmittance_to(ls.p, pt.exit.p, pt.exit.ng, pt.exit.material) {
             v *= tr;
         }
         if v.is_black() {
@@ -169,7 +169,7 @@ pub fn connect<Q: RayQuery + ?Sized>(
         }
         v *= geometry_term(qs, pt);
         // Through an absorbing medium (a rough dielectric's interior) between them.
-        if let Some(tr) = scene.transmittance_to(qs.p, pt.exit.p, pt.exit.ng, pt.material) {
+        if let Some(tr) = scene.transmittance_to(qs.p, pt.exit.p, pt.exit.ng, pt.exit.material) {
             v *= tr;
         }
         if v.is_black() {
@@ -210,7 +210,7 @@ pub fn connect_light_source<Q: RayQuery + ?Sized>(
     if pt.kind != VertexKind::Surface || !pt.is_connectible(scene) {
         return None;
     }
-    let tr = scene.transmittance_to(y0.p, pt.exit.p, pt.exit.ng, pt.material).unwrap_or(Rgb::ONE);
+    let tr = scene.transmittance_to(y0.p, pt.exit.p, pt.exit.ng, pt.exit.material).unwrap_or(Rgb::ONE);
     let value = pt.beta * pt.f(scene, y0, TransportMode::Radiance) * y0.le(scene, pt) * tr * (geometry_term(y0, pt) / y0.pdf_fwd.value());
     if value.is_black() || !value.is_finite() {
         return None;

@@ -83,13 +83,18 @@ pub struct Exit {
     pub ng: Vec3,
     /// Shading normal, for the cosine of the segment leaving here (eq. 6).
     pub ns: Vec3,
+    /// The material of the surface here: a kernel may move the exit onto another
+    /// surface than the vertex's own, and a connection from it crosses that surface's
+    /// medium, if any (`Scene::transmittance_to`).
+    pub material: u32,
 }
 
 impl Exit {
-    /// The exit at the vertex itself.
+    /// The exit at `p` on a surface of `material` (0 off surfaces, where `ng` is zero
+    /// and no medium is read).
     #[inline]
-    pub fn at(p: Vec3, ng: Vec3, ns: Vec3) -> Self {
-        Self { p, ng, ns }
+    pub fn at(p: Vec3, ng: Vec3, ns: Vec3, material: u32) -> Self {
+        Self { p, ng, ns, material }
     }
 }
 
@@ -108,7 +113,7 @@ impl Vertex {
             delta: false,
             pdf_fwd: VertexPdf::ZERO,
             pdf_rev: VertexPdf::ZERO,
-            exit: Exit::at(p, Vec3::ZERO, Vec3::Z),
+            exit: Exit::at(p, Vec3::ZERO, Vec3::Z, 0),
             kernel_ratio: 1.0,
         }
     }
@@ -127,7 +132,7 @@ impl Vertex {
             delta,
             pdf_fwd,
             pdf_rev: VertexPdf::ZERO,
-            exit: Exit::at(p, n, if n == Vec3::ZERO { Vec3::Z } else { n }),
+            exit: Exit::at(p, n, if n == Vec3::ZERO { Vec3::Z } else { n }, 0),
             kernel_ratio: 1.0,
         }
     }
@@ -146,7 +151,7 @@ impl Vertex {
             delta: false,
             pdf_fwd,
             pdf_rev: VertexPdf::ZERO,
-            exit: Exit::at(p, Vec3::ZERO, Vec3::Z),
+            exit: Exit::at(p, Vec3::ZERO, Vec3::Z, 0),
             kernel_ratio: 1.0,
         }
     }

@@ -221,7 +221,7 @@ fn random_walk<Q: RayQuery + ?Sized>(
             delta: false,
             pdf_fwd: VertexPdf::ZERO,
             pdf_rev: VertexPdf::ZERO,
-            exit: Exit::at(exit.p, exit.ng, exit.ns),
+            exit: Exit::at(exit.p, exit.ng, exit.ns, exit.material),
             kernel_ratio,
         };
         set_densities(scene, path, &prev, &mut v, mode);

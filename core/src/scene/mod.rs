@@ -12,7 +12,7 @@ pub mod builtin;
 pub mod builtin_glass;
 mod media;
 
-pub use media::absorption_transmittance;
+pub use media::{MediumIntruder, absorption_transmittance};
 
 use alloc::borrow::Cow;
 use alloc::vec::Vec;
@@ -135,6 +135,9 @@ pub enum SceneError {
     NonFinite(&'static str),
     /// A medium given to this material's surfaces has a negative or non-finite σ_t.
     BadMedium(MaterialId),
+    /// Something sits inside the absorbing medium behind this material's surfaces (the
+    /// camera, a point light, another shape): not modelled (`media` notes).
+    InsideMedium(MaterialId, MediumIntruder),
 }
 
 impl core::fmt::Display for SceneError {
@@ -145,6 +148,16 @@ impl core::fmt::Display for SceneError {
             Self::BadTexture(m) => write!(f, "material {m} is bound to a texture that does not exist or to a parameter it does not have"),
             Self::NonFinite(what) => write!(f, "non-finite value in {what}"),
             Self::BadMedium(m) => write!(f, "the medium inside material {m}'s surfaces has a negative or non-finite sigma_t"),
+            Self::InsideMedium(m, what) => write!(
+                f,
+                "{} is inside the absorbing medium of material {m}'s surfaces: only media whose boundary is the only thing inside them are modelled (no camera, light or other shape inside or crossing them)",
+                match what {
+                    MediumIntruder::Camera => alloc::string::String::from("the camera"),
+                    MediumIntruder::Light(l) => alloc::format!("light {l}"),
+                    MediumIntruder::Triangle(t) => alloc::format!("triangle {t} of another surface"),
+                    MediumIntruder::Sphere(s) => alloc::format!("sphere {s}"),
+                }
+            ),
         }
     }
 }
@@ -181,6 +194,16 @@ impl SceneBuilder {
 
     pub fn set_camera(&mut self, camera: PerspectiveCamera) {
         self.camera = Some(camera);
+    }
+
+    /// The geometry added so far (its triangles and spheres in the order added).
+    pub fn geometry(&self) -> &SceneGeometry {
+        &self.geometry
+    }
+
+    /// How many lights were added so far (the next light's id).
+    pub fn light_count(&self) -> usize {
+        self.lights.len()
     }
 
     pub fn add_material(&mut self, m: Material) -> MaterialId {
@@ -373,6 +396,9 @@ impl SceneBuilder {
     pub fn build(mut self) -> Result<(Scene, SceneGeometry, BuildWarnings), SceneError> {
         if let Some(e) = self.error {
             return Err(e);
+        }
+        if let Some((m, what)) = self.medium_intrusion() {
+            return Err(SceneError::InsideMedium(m, what));
         }
         let camera = self.camera.ok_or(SceneError::NoCamera)?;
         let bounds = self.geometry.bounds();

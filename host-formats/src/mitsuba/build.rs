@@ -16,6 +16,7 @@ use ember_core::pixel_filter::Filter;
 use ember_core::scene::{AreaEmission, SceneBuilder};
 use ember_core::spectrum::Rgb;
 
+use super::media::Placed;
 use super::positions::Positions;
 use super::props::Props;
 use super::transform;
@@ -103,6 +104,8 @@ pub(crate) fn instantiate(parsed: Parsed, positions: &Positions, base_dir: &Path
     let mut sensor: Option<(SensorSpec, Loc)> = None;
     let mut integrator: Option<(Option<i32>, Loc)> = None;
     let mut shapes = 0;
+    // Where each shape's and emitter's geometry and lights end, for the media check.
+    let mut placed = Placed::default();
     for &idx in &parsed.top {
         let obj = ctx.obj(idx)?;
         if !matches!(obj.tag, Tag::Bsdf | Tag::Film | Tag::RFilter | Tag::Sampler | Tag::Texture | Tag::Medium) {
@@ -111,10 +114,14 @@ pub(crate) fn instantiate(parsed: Parsed, positions: &Positions, base_dir: &Path
         match obj.tag {
             Tag::Shape => {
                 ctx.shape(idx)?;
+                placed.record(&ctx.sb, obj.loc);
                 shapes += 1;
                 progress.shape_done(shapes);
             }
-            Tag::Emitter => ctx.emitter(idx)?,
+            Tag::Emitter => {
+                ctx.emitter(idx)?;
+                placed.record(&ctx.sb, obj.loc);
+            }
             Tag::Sensor => {
                 if let Some((_, first)) = &sensor {
                     return Err(Fail::at(obj.loc, format!("only one <sensor> is supported (the first is at line {})", ctx.line(*first))));
@@ -138,7 +145,7 @@ pub(crate) fn instantiate(parsed: Parsed, positions: &Positions, base_dir: &Path
             ctx.warnings.push(format!("line {}: {}{id} is declared but never used", ctx.line(obj.loc), obj.label()));
         }
     }
-    let (spec, _) = sensor.ok_or_else(|| Fail::nowhere("the scene has no <sensor> (a perspective camera is required)"))?;
+    let (spec, sensor_loc) = sensor.ok_or_else(|| Fail::nowhere("the scene has no <sensor> (a perspective camera is required)"))?;
     override_side(options.width, "width")?;
     override_side(options.height, "height")?;
     let (width, height) = super::film_size((spec.width, spec.height), options.width, options.height);
@@ -150,6 +157,9 @@ pub(crate) fn instantiate(parsed: Parsed, positions: &Positions, base_dir: &Path
     }
     let camera = PerspectiveCamera::new(spec.to_world.as_mat4(), spec.fov, spec.fov_axis, width, height).with_lens(spec.lens).with_filter(spec.filter);
     ctx.sb.set_camera(camera);
+    if let Some((medium, what)) = ctx.sb.medium_intrusion() {
+        return Err(placed.refuse_intrusion(&ctx, medium, what, Some(sensor_loc)));
+    }
     let world_origin = -ctx.render_frame.w_axis.truncate();
     progress.finish();
     Ok(LoadedScene {
@@ -189,6 +199,15 @@ impl<'a> Ctx<'a> {
         for c in &obj.children {
             let t = self.obj(c.obj)?;
             if !allowed.contains(&t.tag) {
+                if t.tag == Tag::Medium && matches!(obj.tag, Tag::Sensor | Tag::Emitter) {
+                    return Err(Fail::at(
+                        c.loc,
+                        format!(
+                            "{} cannot sit in a medium: ember's camera and lights are in vacuum (only a shape's absorbing `interior` is modelled, with nothing inside it)",
+                            obj.label()
+                        ),
+                    ));
+                }
                 let what = if allowed.is_empty() {
                     "no nested objects".to_string()
                 } else {

@@ -9,9 +9,18 @@
 //! every segment inside by exp(−σ_t d) (`ember_core::scene`'s media notes). Mitsuba's
 //! `sample_emitters` and `has_spectral_extinction` are read and change nothing here
 //! (no scattering, RGB extinction).
+//!
+//! A medium must hold nothing but its own boundary: the camera, a point or spot light,
+//! or another shape inside it or crossing it (nested media among them) is refused once
+//! the scene is read ([`Placed::refuse_intrusion`], by `SceneBuilder::medium_intrusion`),
+//! naming the line of the thing inside and of the shape whose medium it is in. So is a
+//! sensor's or emitter's `medium` (Mitsuba's way to say where they sit).
 
+use ember_core::geometry::MaterialId;
+use ember_core::scene::{MediumIntruder, SceneBuilder};
 use ember_core::spectrum::Rgb;
 
+use super::Loc;
 use super::build::Ctx;
 use super::props::Props;
 use super::xml::{Obj, Tag};
@@ -83,5 +92,49 @@ impl Ctx<'_> {
             return Err(Fail::at(obj.loc, "`sigma_t` · `scale` overflows"));
         }
         Ok(sigma)
+    }
+}
+
+/// Where each top-level shape's and emitter's geometry and lights end in the builder:
+/// (triangles, spheres, lights) after it, and its place in the file.
+#[derive(Debug, Default)]
+pub(crate) struct Placed {
+    ends: Vec<(usize, usize, usize, Loc)>,
+}
+
+impl Placed {
+    /// The object at `loc` has just been added to `sb`.
+    pub(crate) fn record(&mut self, sb: &SceneBuilder, loc: Loc) {
+        let g = sb.geometry();
+        self.ends.push((g.triangles.len(), g.spheres.len(), sb.light_count(), loc));
+    }
+
+    /// The object that added the `i`-th item counted by `count`.
+    fn owner(&self, i: usize, count: impl Fn(&(usize, usize, usize, Loc)) -> usize) -> Option<Loc> {
+        self.ends.iter().find(|e| count(e) > i).map(|e| e.3)
+    }
+
+    /// The error for `what` inside the medium of material `medium`: at the intruder's
+    /// line, naming the medium shape's.
+    pub(crate) fn refuse_intrusion(&self, ctx: &Ctx, medium: MaterialId, what: MediumIntruder, sensor: Option<Loc>) -> Fail {
+        let g = ctx.sb.geometry();
+        let shape = match g.triangles.iter().position(|t| t.material == medium) {
+            Some(i) => self.owner(i, |e| e.0),
+            None => g.spheres.iter().position(|s| s.material == medium).and_then(|i| self.owner(i, |e| e.1)),
+        };
+        let (loc, thing) = match what {
+            MediumIntruder::Camera => (sensor, "the sensor's position"),
+            MediumIntruder::Light(l) => (self.owner(l as usize, |e| e.2), "this light"),
+            MediumIntruder::Triangle(t) => (self.owner(t as usize, |e| e.0), "this shape"),
+            MediumIntruder::Sphere(s) => (self.owner(s as usize, |e| e.1), "this sphere"),
+        };
+        let medium_at = shape.map_or_else(String::new, |l| format!(" of the shape at line {}", ctx.line(l)));
+        let message = format!(
+            "{thing} is inside (or crosses) the absorbing medium{medium_at}: ember attenuates a segment by the medium surface it ends on, which is right only when the medium holds nothing but its own boundary (no camera, light or other shape inside, no nested media)"
+        );
+        match loc.or(shape) {
+            Some(l) => Fail::at(l, message),
+            None => Fail::nowhere(message),
+        }
     }
 }

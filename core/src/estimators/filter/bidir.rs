@@ -566,6 +566,9 @@ impl Bidirectional<'_> {
             }
         };
         let mut direct = zero;
+        // A light node's radiance arrives through the medium its predecessor's continuation
+        // crossed (a Dirac one has T in its throughput already).
+        let arrival = if v.kind == NodeKind::Light && !v.bridge { centre.next.medium } else { None };
         if centre.delta {
             // Only the centre's own segment, with its Dirac draw's f |cos| / (q p).
             let c = rgb::<T>(centre.next.throughput);
@@ -575,7 +578,7 @@ impl Bidirectional<'_> {
                 NodeKind::Light => pairs.push((v.pred, c)),
                 NodeKind::Emission => {}
             }
-            return (emission, direct);
+            return (arrival.map_or(emission, |t| mul3(emission, rgb::<T>(t))), direct);
         }
         let centre_index = if v.kind == NodeKind::Camera { index } else { v.pred };
         // The BSDF at the junction vertex: for a camera junction its own (the kept segment
@@ -629,12 +632,14 @@ impl Bidirectional<'_> {
             // `chain`: with merges only, a light path's own chain merged at a camera
             // junction (module notes): the reflected part's D and the factor that trades the
             // chain's K(0) for the other light nodes' density.
-            let mut reuse = |dir: Vec3, all: f64, nee: f64, target: u32, constant: Rgb, dep: f64, emit: f64, chain: Option<(f64, f64)>| {
+            // `tr`: the segment's transmittance through an absorbing medium.
+            #[allow(clippy::too_many_arguments)]
+            let mut reuse = |dir: Vec3, all: f64, nee: f64, target: u32, constant: Rgb, dep: f64, emit: f64, chain: Option<(f64, f64)>, tr: Rgb| {
                 let (reflected, gain) = chain.unwrap_or((all - nee, 1.0));
                 if !(all > 0.0) {
                     return;
                 }
-                let fr = f(u, dir);
+                let fr = f(u, dir) * tr;
                 if fr.is_black() {
                     return;
                 }
@@ -653,10 +658,10 @@ impl Bidirectional<'_> {
                 }
                 if chain.is_none() && !(reflected > 0.0) {
                     // Only light samples draw it: its emitted part alone.
-                    direct = add3(direct, scale3(mul3(c, rgb::<T>(nodes[target as usize].emitted)), T::from_f64(g * whole / all)));
+                    direct = add3(direct, scale3(mul3(c, rgb::<T>(arriving_emission(nodes, target))), T::from_f64(g * whole / all)));
                     return;
                 }
-                let e = nodes[target as usize].emitted;
+                let e = arriving_emission(nodes, target);
                 let coefficient = if reflected > 0.0 { g * gain * part / reflected } else { 0.0 };
                 if nee > 0.0 && !e.is_black() {
                     // The reflected part over D_r, the emitted part over D.
@@ -676,14 +681,14 @@ impl Bidirectional<'_> {
                         if u.next.node != NONE && nodes[u.next.node as usize].delta && self.light_side_owns_dirac() {
                             // Into a Dirac vertex: the light side's (see the module notes).
                         } else if u.next.node != NONE {
-                            reuse(u.next.dir, d.next + ja, d.next_light + jn, u.next.node, Rgb::ZERO, 0.0, d.next_emit, None);
+                            reuse(u.next.dir, d.next + ja, d.next_light + jn, u.next.node, Rgb::ZERO, 0.0, d.next_emit, None, u.next.transmittance());
                         } else if !u.next.escaped.is_black() {
-                            reuse(u.next.dir, d.next + ja, 0.0, NONE, u.next.escaped, 0.0, d.next_emit, None);
+                            reuse(u.next.dir, d.next + ja, 0.0, NONE, u.next.escaped, 0.0, d.next_emit, None, Rgb::ONE);
                         }
                     }
                     if !u.light.radiance.is_black() {
                         let ja = if at_junction { self.junction(centre, k, u.light.dir, u.light.pdf as f64, !u.light.delta, None).0 } else { 0.0 };
-                        reuse(u.light.dir, d.light + ja, 0.0, NONE, u.light.radiance, 0.0, d.light_emit, None);
+                        reuse(u.light.dir, d.light + ja, 0.0, NONE, u.light.radiance, 0.0, d.light_emit, None, Rgb::ONE);
                     }
                 }
                 NodeKind::Light => {
@@ -704,11 +709,33 @@ impl Bidirectional<'_> {
                         (all - d.arrive_self - nee, others / d.arrive_self)
                     });
                     let dep = pair.as_ref().map_or(0.0, |a| self.light_instance(u, centre, a, wo_world));
-                    reuse(u.wo, all, nee, i, Rgb::ZERO, dep, d.arrive_emit, chain)
+                    // u's own value has its arrival's transmittance.
+                    reuse(u.wo, all, nee, i, Rgb::ZERO, dep, d.arrive_emit, chain, Rgb::ONE)
                 }
                 NodeKind::Emission => {}
             }
         });
-        (emission, direct)
+        match arrival {
+            Some(t) => {
+                let t = rgb::<T>(t);
+                for (_, c) in pairs.iter_mut() {
+                    *c = mul3(*c, t);
+                }
+                (mul3(emission, t), mul3(direct, t))
+            }
+            None => (emission, direct),
+        }
+    }
+}
+
+/// The emission a node's row starts from, as it arrives there: a light node's (emitted by
+/// its predecessor toward it) through the medium its predecessor's continuation crossed,
+/// as its row applies it ([`Bidirectional::row`]'s arrival); a camera node's as it
+/// leaves the node (the reusing segment carries its own T).
+fn arriving_emission(nodes: &[Node], target: u32) -> Rgb {
+    let v = &nodes[target as usize];
+    match v.kind {
+        NodeKind::Light if !v.bridge && v.pred != NONE => v.emitted * nodes[v.pred as usize].next.transmittance(),
+        _ => v.emitted,
     }
 }

@@ -47,6 +47,17 @@ pub struct Continuation {
     /// P(light) · p_light(dir) per solid angle at the start, if a light sample could have
     /// drawn the same segment (it ended on an area light or escaped to the sky).
     pub light_pdf: f32,
+    /// T = exp(−σ_t d) when the segment crossed an absorbing medium (`None`: T = 1). A
+    /// Dirac continuation has it in `throughput` too; a reused one takes it from here.
+    pub medium: Option<Rgb>,
+}
+
+impl Continuation {
+    /// The segment's transmittance (1 outside media).
+    #[inline]
+    pub fn transmittance(&self) -> Rgb {
+        self.medium.unwrap_or(Rgb::ONE)
+    }
 }
 
 /// The light-sampled segment leaving a node (next-event estimation).
@@ -266,9 +277,10 @@ fn walk<Q: RayQuery + ?Sized>(
             first = index;
         } else {
             nodes[parent as usize].next.node = index;
-            // The continuation crossed an absorbing medium: its throughput carries T.
+            // The continuation crossed an absorbing medium: it carries T.
             if let Some(t) = scene.transmittance(&path.ray, &hit) {
                 nodes[parent as usize].next.throughput *= t;
+                nodes[parent as usize].next.medium = Some(t);
             }
         }
         let sp = SurfacePoint::new(hit, -path.ray.dir);
@@ -288,7 +300,8 @@ fn walk<Q: RayQuery + ?Sized>(
                 node.light.end = LightEnd { light: draw.light as u32, p: ls.p, n: ls.n };
                 counters.rays += 1;
                 if !tracer.occluded(&shadow_ray(&sp.hit, ls)) {
-                    node.light.radiance = ls.radiance;
+                    // Across an absorbing medium (a rough dielectric's interior), T.
+                    node.light.radiance = ls.radiance * scene.transmittance_to(ls.p, hit.p, hit.ng, hit.material).unwrap_or(Rgb::ONE);
                 }
             }
         }
@@ -441,9 +454,10 @@ fn light_walk<Q: RayQuery + ?Sized>(
         let index = out.nodes.len() as u32;
         if parent != NONE {
             out.nodes[parent as usize].next.node = index;
-            // The continuation crossed an absorbing medium: its throughput carries T.
+            // The continuation crossed an absorbing medium: it carries T.
             if let Some(t) = scene.transmittance(&ray, &hit) {
                 out.nodes[parent as usize].next.throughput *= t;
+                out.nodes[parent as usize].next.medium = Some(t);
             }
         }
         let sp = SurfacePoint::new(hit, -ray.dir);

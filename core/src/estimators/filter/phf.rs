@@ -269,7 +269,9 @@ fn dirac_light_at<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, sp: &SurfaceP
         counters.rays += 1;
         let shadow = if ls.dist.is_finite() { sp.spawn_to(ls.p, ls.n) } else { sp.spawn(ls.wi) };
         if !tracer.occluded(&shadow) {
-            l += f * ls.radiance * (wi.z.abs() / ls.pdf.0);
+            // Across an absorbing medium (a rough dielectric's interior), T.
+            let tr = scene.transmittance_to(ls.p, sp.hit.p, sp.hit.ng, sp.hit.material).unwrap_or(Rgb::ONE);
+            l += f * ls.radiance * tr * (wi.z.abs() / ls.pdf.0);
         }
     }
     l

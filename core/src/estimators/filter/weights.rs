@@ -184,7 +184,8 @@ impl Neighbourhood<'_> {
                     let scale = T::from_f32(n.dot(u.next.dir).abs()) * T::from_f64(k) / T::from_f64(d.next);
                     let c = scale3(rgb::<T>(fr), scale);
                     if u.next.node != NONE {
-                        pairs.push((u.next.node, c));
+                        // The reached node's radiance, through the medium the segment crossed.
+                        pairs.push((u.next.node, scale3(rgb::<T>(fr * u.next.transmittance()), scale)));
                     } else if !u.next.escaped.is_black() {
                         direct = super::graph::add3(direct, super::graph::mul3(c, rgb::<T>(u.next.escaped)));
                     }
@@ -243,7 +244,8 @@ impl Neighbourhood<'_> {
                 let material = self.scene.material(u.hit.material, u.hit.uv);
                 let fr = material.eval(frame.to_local(out), frame.to_local(u.wo), TransportMode::Radiance);
                 if !fr.is_black() {
-                    pairs.push((i, scale3(rgb::<T>(fr), cos * T::from_f64(k))));
+                    // The flux leaving w reaches u through the medium w's continuation crossed.
+                    pairs.push((i, scale3(rgb::<T>(fr * w.next.transmittance()), cos * T::from_f64(k))));
                 }
             }
         });
