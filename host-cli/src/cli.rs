@@ -404,7 +404,7 @@ pub struct RenderArgs {
 
     /// SIMD instruction set of the ray queries: scalar, sse, avx2, avx512, neon or
     /// simd128, one this machine offers (overrides the environment's EMBER_SIMD). The
-    /// image does not depend on it [default: the widest the machine offers].
+    /// image does not depend on it [default: avx2 where the machine has it, else its widest].
     #[arg(long, value_name = "NAME")]
     pub simd: Option<String>,
 

@@ -34,7 +34,7 @@ pub fn prepare_builtin(args: &RenderArgs) -> Result<PreparedScene, String> {
 }
 
 /// Set the ray queries' instruction set: `option` (`--simd`) if given, else the
-/// environment's `EMBER_SIMD`, else the widest the machine offers
+/// environment's `EMBER_SIMD`, else `Isa::best` (AVX2 where the machine has it)
 /// (`ember_host::accel::isa`). Images do not depend on it.
 fn choose_simd(prepared: &mut PreparedScene, option: Option<&str>) -> Result<(), String> {
     let env = std::env::var("EMBER_SIMD").ok();

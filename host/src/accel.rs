@@ -321,9 +321,9 @@ impl Padded for Aabb {
 }
 
 impl AccelWith<Wide> {
-    /// The instruction set the triangle queries run with (module `isa`): the widest this
-    /// machine offers unless [`AccelWith::set_isa`] chose another (a scene without
-    /// triangles reports the widest).
+    /// The instruction set the triangle queries run with (module `isa`): the default set
+    /// ([`Isa::best`]) unless [`AccelWith::set_isa`] chose another (a scene without
+    /// triangles reports that default).
     pub fn isa(&self) -> Isa {
         self.bvh.as_ref().map_or_else(Isa::best, Wide::isa)
     }
