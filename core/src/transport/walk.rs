@@ -242,7 +242,7 @@ impl Walk {
     /// Next-event estimation's draw at the current bounce: a light ∝ power (dimension
     /// `light`) and a point on it (the next two) as seen from `origin`; `None` if the
     /// scene has no lights or the sample carries nothing.
-    #[inline]
+    #[inline(always)]
     pub fn draw_light(&self, scene: &Scene, state: &PathState, origin: Vec3, rng: &mut SampleStream) -> Option<LightDraw> {
         let table = scene.light_selection.as_ref()?;
         rng.set_dimension(state.dimension(&self.layout, self.layout.light));
@@ -262,7 +262,7 @@ impl Walk {
     /// ray from `start` (a kernel-moved start of a radiance walk, whose normal takes the
     /// cosine) or from `sp`.
     #[allow(clippy::too_many_arguments)]
-    #[inline]
+    #[inline(always)]
     pub fn scatter(
         &self,
         params: &RenderParams,
@@ -338,7 +338,7 @@ impl Walk {
 }
 
 /// The shadow ray of a light sample `ls` taken from `from`.
-#[inline]
+#[inline(always)]
 pub fn shadow_ray(from: &SurfaceHit, ls: &LightSample) -> Ray {
     if ls.dist.is_finite() { spawn_ray_to(from.p, from.ng, ls.p, ls.n) } else { spawn_ray(from.p, from.ng, ls.wi) }
 }
