@@ -50,7 +50,7 @@ fn bpf_nodes(scene: &Scene, tracer: &BruteForce, params: &RenderParams, segments
     let (mut nodes, mut first, mut sky) = (Vec::new(), Vec::new(), Vec::new());
     trace_camera_nodes(scene, tracer, params, segments, 0, 0..pixels, &mut nodes, &mut first, &mut sky);
     let (mut light, mut pred, mut base) = (Vec::new(), Vec::new(), Vec::new());
-    trace_light_nodes(scene, tracer, params, segments, light_paths, 0, 0..light_paths, true, &mut light, &mut pred, &mut base);
+    trace_light_nodes(scene, tracer, params, segments, light_paths, 0, 0..light_paths, true, true, &mut light, &mut pred, &mut base);
     let offset = nodes.len() as u32;
     let shift = |i: u32| if i == NONE { NONE } else { i + offset };
     nodes.extend(light.into_iter().map(|mut n| {
@@ -139,6 +139,8 @@ impl Naive<'_> {
                 continue;
             }
             match t.kind {
+                // A light node's twin is no technique of the segment that placed it.
+                NodeKind::Camera if t.twin && x.kind == NodeKind::Light && t.pred as usize == s.x => {}
                 NodeKind::Camera => {
                     let k = self.k(t, x.hit.p, x.hit.ng);
                     if k == 0.0 {
@@ -477,6 +479,39 @@ fn bpf_is_unbiased_at_small_fixed_kernels() {
         println!("{footprints} footprints: BPF {bpf:.5} ± {se:.5}, PT {pt:.5} ± {pt_se:.5}: ratio {:.4}, z = {z:.2}", bpf / pt);
         assert!(z.abs() < 3.3, "BPF at {footprints} footprints: ratio {:.4} to the path tracer, {z:.2} standard errors", bpf / pt);
     }
+}
+
+/// Where kernels are dense, BPF agrees with the same settings at β = 0 (MVF's
+/// techniques, the same kernel): on the 16×16 Cornell box at max depth 8, β = 1 and a
+/// fixed kernel (α = 1) of 0.5 pixel footprints, where a kernel holds about one camera
+/// node and several light nodes, the mean of the lower three quarters is within
+/// max(1 %, 3 standard errors) of β = 0's, 150 passes each.
+///
+/// Measured: 0.9955 of β = 0 (−0.9 standard errors; 7 s optimised on 2 cores). Seen failing with the estimator before light nodes had
+/// twins (module notes of `bidir.rs`, "Twins"; `Bpf::twins` returning false):
+/// 0.9733, −5.0 standard errors. A light junction had no continuation of its own among the camera
+/// segments it reuses, so where its kernel held no camera node their share of L was
+/// lost. What is left (about −1 % here; docs/bidirectional-filtering.md, "Small
+/// kernels") is inside this test's bound but not yet explained.
+#[test]
+fn bpf_agrees_with_beta_zero_where_kernels_are_dense() {
+    use ember_core::estimators::{EstimatorConfig, FilterConfig, FilterSide};
+    use ember_core::merge::RadiusRule;
+    let (depth, passes) = (8, 150);
+    let blocks: Vec<Block> = vec![(4..16, 0..16)];
+    let config = |beta: f32| FilterConfig { radius: RadiusRule::Footprints(0.5), alpha: 1.0, max_segments: Some(depth), beta, ..FilterConfig::DEFAULT };
+    let start = std::time::Instant::now();
+    let (bpf, se) = block_means(EstimatorConfig::Filter(FilterSide::Both, config(1.0)), passes, depth, &blocks)[0];
+    let (mvf, mvf_se) = block_means(EstimatorConfig::Filter(FilterSide::Both, config(0.0)), passes, depth, &blocks)[0];
+    let se = (se * se + mvf_se * mvf_se).sqrt();
+    let allowed = (0.01 * mvf).max(3.0 * se);
+    println!(
+        "β = 1: {bpf:.5}, β = 0: {mvf:.5}: ratio {:.4}, difference {:.2} standard errors, allowed {allowed:.5} ({:.1} s)",
+        bpf / mvf,
+        (bpf - mvf) / se,
+        start.elapsed().as_secs_f64()
+    );
+    assert!((bpf - mvf).abs() < allowed, "BPF at β = 1 is {:.4}× the same settings at β = 0 ({:.2} standard errors)", bpf / mvf, (bpf - mvf) / se);
 }
 
 /// The reduction to bidirectional photon mapping: restricted to BPM's segment paths

@@ -117,6 +117,12 @@ impl Bpf {
         self.config.light_paths(self.pixels)
     }
 
+    /// Do light nodes get twins ([`super::nodes::trace_light_nodes`])? Not with merges
+    /// only, whose light junctions follow their own paths.
+    pub fn twins(&self) -> bool {
+        self.config.reuse != crate::estimators::FilterReuse::Merges
+    }
+
     /// The weights over the current pass.
     pub fn weights<'a>(&'a self, scene: &'a crate::scene::Scene) -> Bidirectional<'a> {
         Bidirectional {
@@ -171,7 +177,20 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
                 let mut c = trace_camera_nodes(scene, tracer, &self.params, self.segments, pass, camera, &mut chunk.nodes, &mut chunk.links, &mut chunk.values);
                 if !light.is_empty() {
                     let (pred, base) = &mut chunk.light_scratch;
-                    let l = trace_light_nodes(scene, tracer, &self.params, self.segments, self.light_paths(), pass, light, true, &mut chunk.nodes, pred, base);
+                    let l = trace_light_nodes(
+                        scene,
+                        tracer,
+                        &self.params,
+                        self.segments,
+                        self.light_paths(),
+                        pass,
+                        light,
+                        true,
+                        self.twins(),
+                        &mut chunk.nodes,
+                        pred,
+                        base,
+                    );
                     c += l;
                 }
                 scale_kernels(scene, self.config.glossy_alpha, &mut chunk.nodes);
