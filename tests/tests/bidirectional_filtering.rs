@@ -581,10 +581,12 @@ fn bridge_terms_equal_the_sum_over_every_pair() {
     let choice = 1.0 / ends.len() as f64;
     let with = Bidirectional { hood, light_paths: 24.0, merges_only: false, bridge_choice: Some(choice) };
     let without = Bidirectional { bridge_choice: None, ..with };
-    // The bridge technique's density, every pair written out.
-    let brute = |x: &Node, py: Vec3, ny: Vec3| -> f64 {
+    // The bridge technique's density, every pair written out; `twin_of`: the light node
+    // whose twin (placed by the segment arriving at it) starts no bridge of its D.
+    let brute = |x: &Node, py: Vec3, ny: Vec3, twin_of: u32| -> f64 {
         let xp = KernelPoint::of(x);
-        let starts: f64 = nodes.iter().filter(|c| bridges_from(c)).map(|c| KernelPoint::of(c).kernel(&kernel, &xp)).sum();
+        let starts: f64 =
+            nodes.iter().filter(|c| bridges_from(c) && !(c.twin && c.pred == twin_of)).map(|c| KernelPoint::of(c).kernel(&kernel, &xp)).sum();
         let ends: f64 = nodes
             .iter()
             .filter(|l| l.kind == NodeKind::Light && !l.delta && !l.bridge)
@@ -613,15 +615,15 @@ fn bridge_terms_equal_the_sum_over_every_pair() {
             NodeKind::Camera => {
                 if u.next.dir != Vec3::ZERO && !u.next.delta && u.next.node != NONE && !nodes[u.next.node as usize].delta {
                     let y = &nodes[u.next.node as usize].hit;
-                    check("continuation", i, dw.next, d0.next, brute(u, y.p, y.ng));
+                    check("continuation", i, dw.next, d0.next, brute(u, y.p, y.ng, NONE));
                 }
                 if u.light.dir != Vec3::ZERO && !u.light.delta {
-                    check("light sample", i, dw.light, d0.light, brute(u, u.light.end.p, u.light.end.n));
+                    check("light sample", i, dw.light, d0.light, brute(u, u.light.end.p, u.light.end.n, NONE));
                 }
             }
             NodeKind::Light if u.pred != NONE && !nodes[u.pred as usize].delta => {
                 let y = &nodes[u.pred as usize].hit;
-                check(if u.bridge { "bridge" } else { "light segment" }, i, dw.arrive, d0.arrive, brute(u, y.p, y.ng));
+                check(if u.bridge { "bridge" } else { "light segment" }, i, dw.arrive, d0.arrive, brute(u, y.p, y.ng, i as u32));
             }
             _ => {}
         }
