@@ -12,7 +12,12 @@
 //! - the light continuations' adjoint density evaluated for +ŝ instead of −ŝ: 2.4e-2;
 //! - a light junction reusing its own arriving segment: 3.7e-2;
 //! - the light node that drew a reused segment kept in D_a: 5.8e-3;
-//! - a light junction's own path counted in the emission's N_L: 1.2e-3.
+//! - a light junction's own path counted in the emission's N_L: 1.2e-3;
+//! - a light node's twin kept in D of the segment arriving at the node
+//!   (`Bidirectional::camera_techniques` without its `twin_of` test): 3.2e-3.
+//!
+//! The same with bridges (`bpf_with_bridges_equals_the_area_measure_recursion_in_f64`)
+//! is in that test's notes. The merges-only mode has no such test yet.
 
 use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
 use ember_core::estimators::filter::nodes::{NONE, NodeKind};
@@ -82,6 +87,8 @@ struct Naive<'a> {
     nodes: &'a [Node],
     kernel: Kernel,
     light_paths: f64,
+    /// With bridges: 1 / M.
+    bridge_choice: Option<f64>,
 }
 
 /// A reusable segment: its start node, direction, light-side end and what it carries.
@@ -160,10 +167,11 @@ impl Naive<'_> {
                         nee += p;
                     }
                 }
-                NodeKind::Light => all += self.light_term(t, s, x.kind == NodeKind::Light && x.pred as usize == i),
+                NodeKind::Light => all += self.light_term(t, s, x.kind == NodeKind::Light && !x.bridge && x.pred as usize == i),
                 _ => {}
             }
         }
+        all += self.bridge_term(s, None);
         let mut emission = 0.0;
         if let Some(id) = s.light {
             let light = &self.scene.lights[id as usize];
@@ -173,6 +181,26 @@ impl Naive<'_> {
         }
         let _ = cos_y;
         (all, all - nee, emission)
+    }
+    /// With bridges: the bridge technique's density for segment s per unit area at x and
+    /// y, (1 / M) Σ_c K(c → x) Σ_l K(l → y) over every bridge start c (the twin of a light
+    /// node x left out: the segment arriving at x placed it) and every bridge end l, or
+    /// with `end` the one end l alone (its share, for the pair correction).
+    fn bridge_term(&self, s: &Seg, end: Option<&Node>) -> f64 {
+        let Some(choice) = self.bridge_choice else { return 0.0 };
+        let x = &self.nodes[s.x];
+        if ember_core::estimators::filter::bridge::bridge_geometry(x.hit.p, s.y, s.ny).is_none() {
+            return 0.0;
+        }
+        use ember_core::estimators::filter::bridge::{bridge_end, bridges_from};
+        let own_twin = |c: &Node| c.twin && x.kind == NodeKind::Light && c.pred as usize == s.x;
+        let starts: f64 = self.nodes.iter().filter(|c| bridges_from(c) && !own_twin(c)).map(|c| self.k(c, x.hit.p, x.hit.ng)).sum();
+        let ends: f64 = match end {
+            Some(l) if bridge_end(l) => self.k(l, s.y, s.ny),
+            Some(_) => 0.0,
+            None => self.nodes.iter().filter(|l| bridge_end(l)).map(|l| self.k(l, s.y, s.ny)).sum(),
+        };
+        choice * starts * ends
     }
     /// The pool at a junction: every segment whose start lies in the kernel of `centre`.
     fn pool(&self) -> Vec<Seg> {
@@ -212,6 +240,8 @@ impl Naive<'_> {
         }
         let (centre_index, wo) = match node.kind {
             NodeKind::Camera => (v, node.wo),
+            // A bridge leaves its end toward its start.
+            NodeKind::Light if node.pred != NONE && node.bridge => (node.pred as usize, -node.wo),
             NodeKind::Light if node.pred != NONE => (node.pred as usize, self.nodes[node.pred as usize].next.dir),
             _ => return l,
         };
@@ -236,7 +266,7 @@ impl Naive<'_> {
             // D_a without the light node that drew s (an instance s conditions), D_b
             // without the junction's own path's emission.
             let dep = match (a, d_a) {
-                (Some(a), Some(d)) if x.kind == NodeKind::Light => d / (d - self.light_term(x, &a.s, false)),
+                (Some(a), Some(d)) if x.kind == NodeKind::Light => d / (d - self.light_term(x, &a.s, false) - self.bridge_term(&a.s, Some(x))),
                 _ => 1.0,
             };
             let own = if light_junction { emission / self.light_paths } else { 0.0 };
@@ -274,6 +304,26 @@ impl Naive<'_> {
 /// sphere that emits (so light samples, emission-drawn and reflected parts all occur).
 #[test]
 fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
+    recursion_agrees(false);
+}
+
+/// The same with bridge segments (`FilterReuse::Bridges`): bridges in the pool (light
+/// junctions at their ends), the bridge technique in every D, a bridge end's share in
+/// the pair correction. Measured: 48 pixels, 245 nodes (50 bridges), worst 2.8e-6
+/// relative, so the tolerance is 1e-5 here: a bridge's d² / |n_y·ŝ| comes from f32
+/// geometry, and the oracle's area measure does not form it (|n_y·ŝ| down to 1e-4 at
+/// grazing bridges). Seen failing with a bridge end's share left out of the pair
+/// correction (`Bidirectional::light_instance`): 3.8e-3; with a light node's twin kept
+/// in D of the node's arrival: 2.2e-3.
+#[test]
+fn bpf_with_bridges_equals_the_area_measure_recursion_in_f64() {
+    recursion_agrees(true);
+}
+
+/// The propagation against [`Naive`] at every pixel, with or without bridges.
+fn recursion_agrees(bridges: bool) {
+    use ember_core::estimators::filter::bridge::bridge_end;
+    use ember_core::estimators::filter::trace_bridges;
     let (scene, tracer) = scene_with_reflective_light(8, 6);
     let params = RenderParams { max_depth: MaxDepth(3), seed: 5, ..RenderParams::default() };
     let segments = 3;
@@ -283,6 +333,14 @@ fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
     // every kernel must be its centre's own. Seen failing with the light techniques'
     // K(t → y) at the pass's radius (`Neighbourhood::kernel_at` unscaled): 4.9e-3.
     vary_kernels(&mut nodes);
+    let ends: Vec<u32> = (0..nodes.len() as u32).filter(|&i| bridge_end(&nodes[i as usize])).collect();
+    let bridge_choice = bridges.then(|| 1.0 / ends.len() as f64);
+    let mut bridge_nodes = Vec::new();
+    if bridges {
+        trace_bridges(&scene, &tracer, params.seed, 0, &nodes, &ends, 0..nodes.len(), &mut bridge_nodes);
+    }
+    let bridge_count = bridge_nodes.len();
+    nodes.extend(bridge_nodes);
     let radius = 0.8f32;
     let mut grid = HashGrid::new();
     grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
@@ -291,7 +349,7 @@ fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
         hood: Neighbourhood { scene: &scene, nodes: &nodes, points: &kernel_points(&nodes), grid: &grid, kernel },
         light_paths: light_paths as f64,
         merges_only: false,
-        bridge_choice: None,
+        bridge_choice,
     };
     let dens: Vec<BidirDenominators> = (0..nodes.len() as u32).map(|i| weights.denominators(i)).collect();
     let mut graph = FilterGraph::<f64>::new();
@@ -301,7 +359,7 @@ fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
         graph.push_row(e, d, pairs.iter().copied());
     }
     let propagated = graph.propagate(segments - 1);
-    let naive = Naive { scene: &scene, nodes: &nodes, kernel, light_paths: light_paths as f64 };
+    let naive = Naive { scene: &scene, nodes: &nodes, kernel, light_paths: light_paths as f64, bridge_choice };
     let pool: Vec<Pooled> = naive
         .pool()
         .into_iter()
@@ -313,18 +371,25 @@ fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
     let lights = nodes.iter().filter(|n| n.kind == NodeKind::Light).count();
     let emission_nodes = nodes.iter().filter(|n| n.kind == NodeKind::Emission).count();
     let (mut checked, mut worst) = (0, 0.0f64);
+    let tolerance = if bridges { 1e-5 } else { 1e-7 };
     for &f in first.iter().filter(|&&f| f != NONE) {
         let a = propagated[f as usize];
         let b = naive.radiance(&pool, f as usize, segments - 1);
         for c in 0..3 {
             let rel = (a[c] - b[c]).abs() / b[c].abs().max(1e-30);
             worst = worst.max(rel);
-            assert!(rel < 1e-7, "pixel node {f}, channel {c}: propagated {} vs recursion {} (relative {rel:e})", a[c], b[c]);
+            assert!(rel < tolerance, "pixel node {f}, channel {c}: propagated {} vs recursion {} (relative {rel:e})", a[c], b[c]);
         }
         checked += 1;
     }
-    println!("{checked} pixels, {} nodes ({lights} light, {emission_nodes} emission), {} reused segments, worst {worst:e}", nodes.len(), graph.targets.len());
-    assert!(checked >= 40 && lights >= 24 && emission_nodes >= 4, "too few paths to test");
+    let twins = nodes.iter().filter(|n| n.twin && n.kind == NodeKind::Camera).count();
+    println!(
+        "{checked} pixels, {} nodes ({lights} light, {emission_nodes} emission, {twins} twins, {bridge_count} bridges), {} reused segments, worst {worst:e}",
+        nodes.len(),
+        graph.targets.len()
+    );
+    assert!(checked >= 40 && lights >= 24 && emission_nodes >= 4 && twins >= 4, "too few paths to test");
+    assert!(!bridges || bridge_count >= 20, "too few bridges to test: {bridge_count}");
     // (Eight pairs per node with every kernel the pass's; about 7.7 with the narrower ones.)
     assert!(graph.targets.len() > 6 * nodes.len(), "too little reuse: {} pairs", graph.targets.len());
 }
@@ -585,8 +650,7 @@ fn bridge_terms_equal_the_sum_over_every_pair() {
     // whose twin (placed by the segment arriving at it) starts no bridge of its D.
     let brute = |x: &Node, py: Vec3, ny: Vec3, twin_of: u32| -> f64 {
         let xp = KernelPoint::of(x);
-        let starts: f64 =
-            nodes.iter().filter(|c| bridges_from(c) && !(c.twin && c.pred == twin_of)).map(|c| KernelPoint::of(c).kernel(&kernel, &xp)).sum();
+        let starts: f64 = nodes.iter().filter(|c| bridges_from(c) && !(c.twin && c.pred == twin_of)).map(|c| KernelPoint::of(c).kernel(&kernel, &xp)).sum();
         let ends: f64 = nodes
             .iter()
             .filter(|l| l.kind == NodeKind::Light && !l.delta && !l.bridge)
