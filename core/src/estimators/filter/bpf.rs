@@ -10,7 +10,9 @@
 //! technique able to draw it ([`super::bidir`]): the camera continuations and light
 //! samples conditioned on the camera nodes around its start, the light continuations
 //! conditioned on the light nodes around its end, and the emission. The pixel is the
-//! radiance along its camera segment (eq. 19). A camera path meeting a light path inside
+//! radiance along its camera segment (eq. 19). Each light node also has a twin, a camera
+//! node at it with a walk of its own, so that a light junction reuses a continuation
+//! drawn from itself as a camera junction does ([`super::bidir`], "Twins"). A camera path meeting a light path inside
 //! one kernel is bidirectional photon mapping's merge; a camera path continuing through
 //! another camera path's segment is multi-vertex path filtering; a light path through
 //! another's, photon filtering; the set of segment paths contains BPM's.
@@ -23,7 +25,7 @@
 //! | stage | phase | items | reduction |
 //! |---|---|---|---|
 //! | setup 0 | `footprint` | W·H pixels (none unless r₀ is in pixel footprints) | mean footprint → r₀ |
-//! | pass 0 | `paths` | W·H camera paths, then N_L light paths | nodes appended, grid built for r_pass |
+//! | pass 0 | `paths` | W·H camera paths, then N_L light paths (each light node's twin and its camera walk after its path) | nodes appended, grid built for r_pass |
 //! | (pass 0½) | `bridges` (with bridges only) | nodes | bridge nodes appended, grid rebuilt |
 //! | pass 1 | `denominators` | nodes | D of every reusable segment |
 //! | pass 2 | `filter` | nodes | rows appended; L₀ = L_e |
