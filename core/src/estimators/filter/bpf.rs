@@ -12,10 +12,11 @@
 //! conditioned on the light nodes around its end, and the emission. The pixel is the
 //! radiance along its camera segment (eq. 19). Each light node also has a twin, a camera
 //! node at it with a walk of its own, so that a light junction reuses a continuation
-//! drawn from itself as a camera junction does ([`super::bidir`], "Twins"). A camera path meeting a light path inside
-//! one kernel is bidirectional photon mapping's merge; a camera path continuing through
-//! another camera path's segment is multi-vertex path filtering; a light path through
-//! another's, photon filtering; the set of segment paths contains BPM's.
+//! drawn from itself as a camera junction does ([`super::bidir`], "Twins"). A camera
+//! path meeting a light path inside one kernel is bidirectional photon mapping's merge;
+//! a camera path continuing through another camera path's segment is multi-vertex path
+//! filtering; a light path through another's, photon filtering; the set of segment paths
+//! contains BPM's.
 //!
 //! The radiance along every segment follows by propagation, as for MVF ([`super::graph`]):
 //! a light node's row sits at its predecessor (the light side of its segment), so that
