@@ -146,7 +146,7 @@ fn filtering(b: &mut Bytes, scene: &Scene, tracer: &BruteForce, params: &RenderP
     let (mut cam, mut first, mut sky) = (Vec::new(), Vec::new(), Vec::new());
     trace_camera_nodes(scene, tracer, params, segments, 0, 0..16, &mut cam, &mut first, &mut sky);
     let (mut light, mut pred, mut base) = (Vec::new(), Vec::new(), Vec::new());
-    trace_light_nodes(scene, tracer, params, segments, 16, 0, 0..16, false, &mut light, &mut pred, &mut base);
+    trace_light_nodes(scene, tracer, params, segments, 16, 0, 0..16, false, false, &mut light, &mut pred, &mut base);
     for (nodes, is_light) in [(&cam, false), (&light, true)] {
         let mut grid = HashGrid::new();
         grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
@@ -186,7 +186,7 @@ fn bidirectional(b: &mut Bytes, scene: &Scene, tracer: &BruteForce, params: &Ren
     let (mut nodes, mut first, mut sky) = (Vec::new(), Vec::new(), Vec::new());
     trace_camera_nodes(scene, tracer, params, segments, 0, 0..16, &mut nodes, &mut first, &mut sky);
     let (mut light, mut pred, mut base) = (Vec::new(), Vec::new(), Vec::new());
-    trace_light_nodes(scene, tracer, params, segments, 16, 0, 0..16, true, &mut light, &mut pred, &mut base);
+    trace_light_nodes(scene, tracer, params, segments, 16, 0, 0..16, true, false, &mut light, &mut pred, &mut base);
     let offset = nodes.len() as u32;
     let shift = |i: u32| if i == NONE { NONE } else { i + offset };
     nodes.extend(light.into_iter().map(|mut n| {

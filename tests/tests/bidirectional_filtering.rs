@@ -12,7 +12,12 @@
 //! - the light continuations' adjoint density evaluated for +ŝ instead of −ŝ: 2.4e-2;
 //! - a light junction reusing its own arriving segment: 3.7e-2;
 //! - the light node that drew a reused segment kept in D_a: 5.8e-3;
-//! - a light junction's own path counted in the emission's N_L: 1.2e-3.
+//! - a light junction's own path counted in the emission's N_L: 1.2e-3;
+//! - a light node's twin kept in D of the segment arriving at the node
+//!   (`Bidirectional::camera_techniques` without its `twin_of` test): 3.2e-3.
+//!
+//! The same with bridges (`bpf_with_bridges_equals_the_area_measure_recursion_in_f64`)
+//! is in that test's notes. The merges-only mode has no such test yet.
 
 use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
 use ember_core::estimators::filter::nodes::{NONE, NodeKind};
@@ -50,7 +55,7 @@ fn bpf_nodes(scene: &Scene, tracer: &BruteForce, params: &RenderParams, segments
     let (mut nodes, mut first, mut sky) = (Vec::new(), Vec::new(), Vec::new());
     trace_camera_nodes(scene, tracer, params, segments, 0, 0..pixels, &mut nodes, &mut first, &mut sky);
     let (mut light, mut pred, mut base) = (Vec::new(), Vec::new(), Vec::new());
-    trace_light_nodes(scene, tracer, params, segments, light_paths, 0, 0..light_paths, true, &mut light, &mut pred, &mut base);
+    trace_light_nodes(scene, tracer, params, segments, light_paths, 0, 0..light_paths, true, true, &mut light, &mut pred, &mut base);
     let offset = nodes.len() as u32;
     let shift = |i: u32| if i == NONE { NONE } else { i + offset };
     nodes.extend(light.into_iter().map(|mut n| {
@@ -82,6 +87,8 @@ struct Naive<'a> {
     nodes: &'a [Node],
     kernel: Kernel,
     light_paths: f64,
+    /// With bridges: 1 / M.
+    bridge_choice: Option<f64>,
 }
 
 /// A reusable segment: its start node, direction, light-side end and what it carries.
@@ -139,6 +146,8 @@ impl Naive<'_> {
                 continue;
             }
             match t.kind {
+                // A light node's twin is no technique of the segment that placed it.
+                NodeKind::Camera if t.twin && x.kind == NodeKind::Light && t.pred as usize == s.x => {}
                 NodeKind::Camera => {
                     let k = self.k(t, x.hit.p, x.hit.ng);
                     if k == 0.0 {
@@ -158,10 +167,11 @@ impl Naive<'_> {
                         nee += p;
                     }
                 }
-                NodeKind::Light => all += self.light_term(t, s, x.kind == NodeKind::Light && x.pred as usize == i),
+                NodeKind::Light => all += self.light_term(t, s, x.kind == NodeKind::Light && !x.bridge && x.pred as usize == i),
                 _ => {}
             }
         }
+        all += self.bridge_term(s, None);
         let mut emission = 0.0;
         if let Some(id) = s.light {
             let light = &self.scene.lights[id as usize];
@@ -171,6 +181,26 @@ impl Naive<'_> {
         }
         let _ = cos_y;
         (all, all - nee, emission)
+    }
+    /// With bridges: the bridge technique's density for segment s per unit area at x and
+    /// y, (1 / M) Σ_c K(c → x) Σ_l K(l → y) over every bridge start c (the twin of a light
+    /// node x left out: the segment arriving at x placed it) and every bridge end l, or
+    /// with `end` the one end l alone (its share, for the pair correction).
+    fn bridge_term(&self, s: &Seg, end: Option<&Node>) -> f64 {
+        let Some(choice) = self.bridge_choice else { return 0.0 };
+        let x = &self.nodes[s.x];
+        if ember_core::estimators::filter::bridge::bridge_geometry(x.hit.p, s.y, s.ny).is_none() {
+            return 0.0;
+        }
+        use ember_core::estimators::filter::bridge::{bridge_end, bridges_from};
+        let own_twin = |c: &Node| c.twin && x.kind == NodeKind::Light && c.pred as usize == s.x;
+        let starts: f64 = self.nodes.iter().filter(|c| bridges_from(c) && !own_twin(c)).map(|c| self.k(c, x.hit.p, x.hit.ng)).sum();
+        let ends: f64 = match end {
+            Some(l) if bridge_end(l) => self.k(l, s.y, s.ny),
+            Some(_) => 0.0,
+            None => self.nodes.iter().filter(|l| bridge_end(l)).map(|l| self.k(l, s.y, s.ny)).sum(),
+        };
+        choice * starts * ends
     }
     /// The pool at a junction: every segment whose start lies in the kernel of `centre`.
     fn pool(&self) -> Vec<Seg> {
@@ -210,6 +240,8 @@ impl Naive<'_> {
         }
         let (centre_index, wo) = match node.kind {
             NodeKind::Camera => (v, node.wo),
+            // A bridge leaves its end toward its start.
+            NodeKind::Light if node.pred != NONE && node.bridge => (node.pred as usize, -node.wo),
             NodeKind::Light if node.pred != NONE => (node.pred as usize, self.nodes[node.pred as usize].next.dir),
             _ => return l,
         };
@@ -234,7 +266,7 @@ impl Naive<'_> {
             // D_a without the light node that drew s (an instance s conditions), D_b
             // without the junction's own path's emission.
             let dep = match (a, d_a) {
-                (Some(a), Some(d)) if x.kind == NodeKind::Light => d / (d - self.light_term(x, &a.s, false)),
+                (Some(a), Some(d)) if x.kind == NodeKind::Light => d / (d - self.light_term(x, &a.s, false) - self.bridge_term(&a.s, Some(x))),
                 _ => 1.0,
             };
             let own = if light_junction { emission / self.light_paths } else { 0.0 };
@@ -272,6 +304,26 @@ impl Naive<'_> {
 /// sphere that emits (so light samples, emission-drawn and reflected parts all occur).
 #[test]
 fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
+    recursion_agrees(false);
+}
+
+/// The same with bridge segments (`FilterReuse::Bridges`): bridges in the pool (light
+/// junctions at their ends), the bridge technique in every D, a bridge end's share in
+/// the pair correction. Measured: 48 pixels, 245 nodes (50 bridges), worst 2.8e-6
+/// relative, so the tolerance is 1e-5 here: a bridge's d² / |n_y·ŝ| comes from f32
+/// geometry, and the oracle's area measure does not form it (|n_y·ŝ| down to 1e-4 at
+/// grazing bridges). Seen failing with a bridge end's share left out of the pair
+/// correction (`Bidirectional::light_instance`): 3.8e-3; with a light node's twin kept
+/// in D of the node's arrival: 2.2e-3.
+#[test]
+fn bpf_with_bridges_equals_the_area_measure_recursion_in_f64() {
+    recursion_agrees(true);
+}
+
+/// The propagation against [`Naive`] at every pixel, with or without bridges.
+fn recursion_agrees(bridges: bool) {
+    use ember_core::estimators::filter::bridge::bridge_end;
+    use ember_core::estimators::filter::trace_bridges;
     let (scene, tracer) = scene_with_reflective_light(8, 6);
     let params = RenderParams { max_depth: MaxDepth(3), seed: 5, ..RenderParams::default() };
     let segments = 3;
@@ -281,6 +333,14 @@ fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
     // every kernel must be its centre's own. Seen failing with the light techniques'
     // K(t → y) at the pass's radius (`Neighbourhood::kernel_at` unscaled): 4.9e-3.
     vary_kernels(&mut nodes);
+    let ends: Vec<u32> = (0..nodes.len() as u32).filter(|&i| bridge_end(&nodes[i as usize])).collect();
+    let bridge_choice = bridges.then(|| 1.0 / ends.len() as f64);
+    let mut bridge_nodes = Vec::new();
+    if bridges {
+        trace_bridges(&scene, &tracer, params.seed, 0, &nodes, &ends, 0..nodes.len(), &mut bridge_nodes);
+    }
+    let bridge_count = bridge_nodes.len();
+    nodes.extend(bridge_nodes);
     let radius = 0.8f32;
     let mut grid = HashGrid::new();
     grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
@@ -289,7 +349,7 @@ fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
         hood: Neighbourhood { scene: &scene, nodes: &nodes, points: &kernel_points(&nodes), grid: &grid, kernel },
         light_paths: light_paths as f64,
         merges_only: false,
-        bridge_choice: None,
+        bridge_choice,
     };
     let dens: Vec<BidirDenominators> = (0..nodes.len() as u32).map(|i| weights.denominators(i)).collect();
     let mut graph = FilterGraph::<f64>::new();
@@ -299,7 +359,7 @@ fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
         graph.push_row(e, d, pairs.iter().copied());
     }
     let propagated = graph.propagate(segments - 1);
-    let naive = Naive { scene: &scene, nodes: &nodes, kernel, light_paths: light_paths as f64 };
+    let naive = Naive { scene: &scene, nodes: &nodes, kernel, light_paths: light_paths as f64, bridge_choice };
     let pool: Vec<Pooled> = naive
         .pool()
         .into_iter()
@@ -311,18 +371,25 @@ fn bpf_propagation_equals_the_area_measure_recursion_in_f64() {
     let lights = nodes.iter().filter(|n| n.kind == NodeKind::Light).count();
     let emission_nodes = nodes.iter().filter(|n| n.kind == NodeKind::Emission).count();
     let (mut checked, mut worst) = (0, 0.0f64);
+    let tolerance = if bridges { 1e-5 } else { 1e-7 };
     for &f in first.iter().filter(|&&f| f != NONE) {
         let a = propagated[f as usize];
         let b = naive.radiance(&pool, f as usize, segments - 1);
         for c in 0..3 {
             let rel = (a[c] - b[c]).abs() / b[c].abs().max(1e-30);
             worst = worst.max(rel);
-            assert!(rel < 1e-7, "pixel node {f}, channel {c}: propagated {} vs recursion {} (relative {rel:e})", a[c], b[c]);
+            assert!(rel < tolerance, "pixel node {f}, channel {c}: propagated {} vs recursion {} (relative {rel:e})", a[c], b[c]);
         }
         checked += 1;
     }
-    println!("{checked} pixels, {} nodes ({lights} light, {emission_nodes} emission), {} reused segments, worst {worst:e}", nodes.len(), graph.targets.len());
-    assert!(checked >= 40 && lights >= 24 && emission_nodes >= 4, "too few paths to test");
+    let twins = nodes.iter().filter(|n| n.twin && n.kind == NodeKind::Camera).count();
+    println!(
+        "{checked} pixels, {} nodes ({lights} light, {emission_nodes} emission, {twins} twins, {bridge_count} bridges), {} reused segments, worst {worst:e}",
+        nodes.len(),
+        graph.targets.len()
+    );
+    assert!(checked >= 40 && lights >= 24 && emission_nodes >= 4 && twins >= 4, "too few paths to test");
+    assert!(!bridges || bridge_count >= 20, "too few bridges to test: {bridge_count}");
     // (Eight pairs per node with every kernel the pass's; about 7.7 with the narrower ones.)
     assert!(graph.targets.len() > 6 * nodes.len(), "too little reuse: {} pairs", graph.targets.len());
 }
@@ -479,6 +546,39 @@ fn bpf_is_unbiased_at_small_fixed_kernels() {
     }
 }
 
+/// Where kernels are dense, BPF agrees with the same settings at β = 0 (MVF's
+/// techniques, the same kernel): on the 16×16 Cornell box at max depth 8, β = 1 and a
+/// fixed kernel (α = 1) of 0.5 pixel footprints, where a kernel holds about one camera
+/// node and several light nodes, the mean of the lower three quarters is within
+/// max(1 %, 3 standard errors) of β = 0's, 150 passes each.
+///
+/// Measured: 0.9955 of β = 0 (−0.9 standard errors; 7 s optimised on 2 cores). Seen failing with the estimator before light nodes had
+/// twins (module notes of `bidir.rs`, "Twins"; `Bpf::twins` returning false):
+/// 0.9733, −5.0 standard errors. A light junction had no continuation of its own among the camera
+/// segments it reuses, so where its kernel held no camera node their share of L was
+/// lost. What is left (about −1 % here; docs/bidirectional-filtering.md, "Small
+/// kernels") is inside this test's bound but not yet explained.
+#[test]
+fn bpf_agrees_with_beta_zero_where_kernels_are_dense() {
+    use ember_core::estimators::{EstimatorConfig, FilterConfig, FilterSide};
+    use ember_core::merge::RadiusRule;
+    let (depth, passes) = (8, 150);
+    let blocks: Vec<Block> = vec![(4..16, 0..16)];
+    let config = |beta: f32| FilterConfig { radius: RadiusRule::Footprints(0.5), alpha: 1.0, max_segments: Some(depth), beta, ..FilterConfig::DEFAULT };
+    let start = std::time::Instant::now();
+    let (bpf, se) = block_means(EstimatorConfig::Filter(FilterSide::Both, config(1.0)), passes, depth, &blocks)[0];
+    let (mvf, mvf_se) = block_means(EstimatorConfig::Filter(FilterSide::Both, config(0.0)), passes, depth, &blocks)[0];
+    let se = (se * se + mvf_se * mvf_se).sqrt();
+    let allowed = (0.01 * mvf).max(3.0 * se);
+    println!(
+        "β = 1: {bpf:.5}, β = 0: {mvf:.5}: ratio {:.4}, difference {:.2} standard errors, allowed {allowed:.5} ({:.1} s)",
+        bpf / mvf,
+        (bpf - mvf) / se,
+        start.elapsed().as_secs_f64()
+    );
+    assert!((bpf - mvf).abs() < allowed, "BPF at β = 1 is {:.4}× the same settings at β = 0 ({:.2} standard errors)", bpf / mvf, (bpf - mvf) / se);
+}
+
 /// The reduction to bidirectional photon mapping: restricted to BPM's segment paths
 /// (`FilterReuse::Merges`), BPF agrees with `-e bpm` per block, and both with the path
 /// tracer. 16×16 Cornell box, max depth 4 (light chains of up to three segments merged),
@@ -546,10 +646,11 @@ fn bridge_terms_equal_the_sum_over_every_pair() {
     let choice = 1.0 / ends.len() as f64;
     let with = Bidirectional { hood, light_paths: 24.0, merges_only: false, bridge_choice: Some(choice) };
     let without = Bidirectional { bridge_choice: None, ..with };
-    // The bridge technique's density, every pair written out.
-    let brute = |x: &Node, py: Vec3, ny: Vec3| -> f64 {
+    // The bridge technique's density, every pair written out; `twin_of`: the light node
+    // whose twin (placed by the segment arriving at it) starts no bridge of its D.
+    let brute = |x: &Node, py: Vec3, ny: Vec3, twin_of: u32| -> f64 {
         let xp = KernelPoint::of(x);
-        let starts: f64 = nodes.iter().filter(|c| bridges_from(c)).map(|c| KernelPoint::of(c).kernel(&kernel, &xp)).sum();
+        let starts: f64 = nodes.iter().filter(|c| bridges_from(c) && !(c.twin && c.pred == twin_of)).map(|c| KernelPoint::of(c).kernel(&kernel, &xp)).sum();
         let ends: f64 = nodes
             .iter()
             .filter(|l| l.kind == NodeKind::Light && !l.delta && !l.bridge)
@@ -578,15 +679,15 @@ fn bridge_terms_equal_the_sum_over_every_pair() {
             NodeKind::Camera => {
                 if u.next.dir != Vec3::ZERO && !u.next.delta && u.next.node != NONE && !nodes[u.next.node as usize].delta {
                     let y = &nodes[u.next.node as usize].hit;
-                    check("continuation", i, dw.next, d0.next, brute(u, y.p, y.ng));
+                    check("continuation", i, dw.next, d0.next, brute(u, y.p, y.ng, NONE));
                 }
                 if u.light.dir != Vec3::ZERO && !u.light.delta {
-                    check("light sample", i, dw.light, d0.light, brute(u, u.light.end.p, u.light.end.n));
+                    check("light sample", i, dw.light, d0.light, brute(u, u.light.end.p, u.light.end.n, NONE));
                 }
             }
             NodeKind::Light if u.pred != NONE && !nodes[u.pred as usize].delta => {
                 let y = &nodes[u.pred as usize].hit;
-                check(if u.bridge { "bridge" } else { "light segment" }, i, dw.arrive, d0.arrive, brute(u, y.p, y.ng));
+                check(if u.bridge { "bridge" } else { "light segment" }, i, dw.arrive, d0.arrive, brute(u, y.p, y.ng, i as u32));
             }
             _ => {}
         }

@@ -257,7 +257,7 @@ fn photon_filtering_propagation_equals_its_recursion_in_f64() {
     let params = RenderParams { max_depth: MaxDepth(5), seed: 4, ..RenderParams::default() };
     let segments = 5;
     let (mut nodes, mut pred, mut base) = (Vec::new(), Vec::new(), Vec::new());
-    trace_light_nodes(&scene, &tracer, &params, segments, 40, 0, 0..40, false, &mut nodes, &mut pred, &mut base);
+    trace_light_nodes(&scene, &tracer, &params, segments, 40, 0, 0..40, false, false, &mut nodes, &mut pred, &mut base);
     vary_kernels(&mut nodes);
     let radius = 0.8f32;
     let mut grid = HashGrid::new();

@@ -116,14 +116,40 @@
 //! also a light node b reached, so the pair correction removes u's share of it from D_a
 //! along with its continuation's term (without: −3.9 % at 0.5 footprints, β = 1).
 //!
-//! With these the estimator agrees with the path tracer at fixed kernels of 0.02 to 0.5
-//! pixel footprints at depth 3; a shortfall of 2–8 % remains where light nodes are dense
-//! (depth 8 with β ≥ 1 or radii of a footprint; 5 % on the caustic scene, 7 % on ajar at
-//! r₀ = 1–2 footprints). The likely cause, not yet confirmed: a light junction has no
-//! technique of its own among the camera segments it reuses, so it sees them only when a
-//! camera node lies in its kernel, and with the drawer's K(0) in each one's D its
-//! estimate of their part of L has mean 1 − e^(−m) of the true one for m camera nodes
-//! per kernel (a Poisson count).
+//! **Twins** (2026-11-28). A camera junction's estimate of L covers its camera segments
+//! whatever its kernel holds: its own continuation and light sample are there at K(0),
+//! and its own term is in every neighbour's D. A light junction w had no technique of
+//! its own among the camera segments it reuses, so their part of L reached it only
+//! through the camera nodes that happened to lie in its kernel: with the drawer's K(0)
+//! in each one's D, the sum over them has mean P(some node in the kernel) of the true
+//! part (Mecke's formula: for m camera nodes per kernel, m E[1/(1 + N)] = 1 − e^(−m)
+//! with N Poisson(m)), and the image came out 2–8 % dark where kernels hold about one
+//! camera node and light nodes are dense. So every non-Dirac light node w whose
+//! continuation reached a node gets a twin ([`super::nodes::trace_light_nodes`]): a
+//! camera-kind node at w, arriving along w's continuation (so sampling the BSDF the
+//! light junction evaluates), with its own light sample and continuation and a camera
+//! walk after them. The twin is an ordinary camera node to every junction and every D;
+//! at w's light junction it is the own technique at K(0), and the light junction is
+//! complete as a camera junction is. One more camera path per light node.
+//! - The segment arriving at a light node u placed u, and so u's twin: the twin's term
+//!   leaves D of that segment, as the drawing node's own arrival leaves a light
+//!   junction's pool.
+//! - A twin's segments do *not* take the pair correction above. The twin's light node
+//!   is a condition of the twin's sample, present whichever segment the twin draws;
+//!   a reached light node is a consequence of the sample. Given every node of the
+//!   pass, each complete pool's weights sum to 1 over its drawers, so D_a keeps its
+//!   value (removing the twin's light node from D_a made the discrete model of
+//!   `scripts/bpf-weight-model.py` 2–3 % too bright).
+//! - A twin has no row: no segment arrives at it.
+//!
+//! Brute force (`scripts/bpf-weight-model.py`): a world of 40 cells, each cell one
+//! kernel, the rules of this module applied literally, against the exact path sum. With
+//! sparse camera nodes (10 camera and 40 light paths per pass): before 0.9895 ± 0.0037,
+//! with twins 0.9965 ± 0.0027, MVF 0.9946 ± 0.0050; with the depth cap at 5 segments:
+//! before 0.9923 ± 0.0036, with twins 1.0005 ± 0.0029 (MVF 0.9767 ± 0.0044, its cap's
+//! bias). On the 16×16 Cornell box at depth 8, β = 1, r = 0.5 footprints the
+//! image mean went from 0.955 to 0.976 of the path tracer's (β = 0: 0.987); what
+//! remains is measured in docs/bidirectional-filtering.md, "Small kernels".
 
 use alloc::vec::Vec;
 
@@ -304,7 +330,10 @@ impl Bidirectional<'_> {
     /// its sampler reported. Returns (all, light samples' part).
     ///
     /// Also Σ K(t → x) over the camera nodes that start bridges (0 without bridges).
-    fn camera_techniques(&self, x: &Node, dir: Vec3, nee: f64, bsdf: bool, own: Option<(u32, f64)>) -> (f64, f64, f64) {
+    ///
+    /// The twin of light node `twin_of` ([`NONE`] for none) is left out: with x a light
+    /// node, the segment arriving at x placed x and so its twin (module notes, "Twins").
+    fn camera_techniques(&self, x: &Node, dir: Vec3, nee: f64, bsdf: bool, own: Option<(u32, f64)>, twin_of: u32) -> (f64, f64, f64) {
         let (mut all, mut nee_part, mut starts) = (0.0, 0.0, 0.0);
         let xp = KernelPoint::of(x);
         self.hood.grid.query(x.hit.p, |i| {
@@ -317,6 +346,9 @@ impl Bidirectional<'_> {
                 return;
             }
             let t = &self.nodes()[i as usize];
+            if t.twin && t.pred == twin_of {
+                return;
+            }
             if bsdf {
                 let p = match own {
                     Some((o, pdf)) if o == i => pdf,
@@ -394,9 +426,12 @@ impl Bidirectional<'_> {
     /// samples carry L_e alone (light samples; with merges only, the emission too). With
     /// merges only, the camera techniques are the junction's and left to the row.
     /// Also Σ K(c → x) over the bridge starts c (0 without bridges).
-    fn sum(&self, x: &Node, dir: Vec3, far: Far, nee: f64, own_camera: Option<(u32, f64)>, own_light: u32) -> (f64, f64, f64, f64) {
+    /// `twin_of`: the light node x whose twin is left out ([`Self::camera_techniques`]).
+    #[allow(clippy::too_many_arguments)]
+    fn sum(&self, x: &Node, dir: Vec3, far: Far, nee: f64, own_camera: Option<(u32, f64)>, own_light: u32, twin_of: u32) -> (f64, f64, f64, f64) {
         let delta_end = self.delta_end(far);
-        let (mut d, mut emitted_only, starts) = if self.merges_only { (0.0, 0.0, 0.0) } else { self.camera_techniques(x, dir, nee, !delta_end, own_camera) };
+        let (mut d, mut emitted_only, starts) =
+            if self.merges_only { (0.0, 0.0, 0.0) } else { self.camera_techniques(x, dir, nee, !delta_end, own_camera, twin_of) };
         if let Far::Surface(py, ny, _) = far {
             let (light, ends) = self.light_techniques(x, py, ny, dir, own_light, false);
             d += light + self.bridge_density(x, py, ny, starts, ends);
@@ -455,13 +490,14 @@ impl Bidirectional<'_> {
                     } else {
                         Far::Sky
                     };
-                    (d.next, d.next_light, d.next_emit, d.starts) = self.sum(u, next.dir, far, next.light_pdf as f64, Some((index, next.pdf as f64)), NONE);
+                    (d.next, d.next_light, d.next_emit, d.starts) =
+                        self.sum(u, next.dir, far, next.light_pdf as f64, Some((index, next.pdf as f64)), NONE, NONE);
                 }
                 let light = &u.light;
                 if light.dir != Vec3::ZERO {
                     let end = light.end;
                     let far = if self.hood.scene.lights[end.light as usize].has_area() { Far::Surface(end.p, end.n, end) } else { Far::Light(end) };
-                    (d.light, _, d.light_emit, d.starts) = self.sum(u, light.dir, far, light.pdf as f64, None, NONE);
+                    (d.light, _, d.light_emit, d.starts) = self.sum(u, light.dir, far, light.pdf as f64, None, NONE, NONE);
                 }
             }
             NodeKind::Light => {
@@ -470,7 +506,7 @@ impl Bidirectional<'_> {
                 let origin = crate::transport::SurfacePoint::new(u.hit, u.wo).reflection_origin();
                 let nee = far.light().map_or(0.0, |end| self.light_sample_density(origin, dir, end));
                 let own = if u.pred != NONE && !u.bridge && nodes[u.pred as usize].kind == NodeKind::Light { u.pred } else { NONE };
-                (d.arrive, d.arrive_light, d.arrive_emit, d.starts) = self.sum(u, dir, far, nee, None, own);
+                (d.arrive, d.arrive_light, d.arrive_emit, d.starts) = self.sum(u, dir, far, nee, None, own, index);
                 if self.merges_only {
                     // A light junction reuses its own path alone: its own technique and
                     // the emission.
@@ -557,6 +593,8 @@ impl Bidirectional<'_> {
         let zero = [T::zero(); 3];
         let (centre, wo) = match v.kind {
             NodeKind::Emission => return (zero, zero),
+            // No segment arrives at a twin: nothing reads its L.
+            NodeKind::Camera if v.twin => return (zero, zero),
             NodeKind::Camera => (v, v.wo),
             NodeKind::Light if v.pred == NONE => return (emission, zero),
             NodeKind::Light => {
@@ -643,11 +681,11 @@ impl Bidirectional<'_> {
                 if fr.is_black() {
                     return;
                 }
+                let own = emit * own_path;
                 let a_fix = match pair {
                     Some(a) if dep > 0.0 && a.d > dep => a.d / (a.d - dep),
                     _ => 1.0,
                 };
-                let own = emit * own_path;
                 let fix = |d_b: f64| if own > 0.0 && d_b > own { a_fix * d_b / (d_b - own) } else { a_fix };
                 let (whole, part) = (fix(all), fix(reflected));
                 let g = n.dot(dir).abs() as f64 * k;

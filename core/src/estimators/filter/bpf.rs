@@ -10,10 +10,13 @@
 //! technique able to draw it ([`super::bidir`]): the camera continuations and light
 //! samples conditioned on the camera nodes around its start, the light continuations
 //! conditioned on the light nodes around its end, and the emission. The pixel is the
-//! radiance along its camera segment (eq. 19). A camera path meeting a light path inside
-//! one kernel is bidirectional photon mapping's merge; a camera path continuing through
-//! another camera path's segment is multi-vertex path filtering; a light path through
-//! another's, photon filtering; the set of segment paths contains BPM's.
+//! radiance along its camera segment (eq. 19). Each light node also has a twin, a camera
+//! node at it with a walk of its own, so that a light junction reuses a continuation
+//! drawn from itself as a camera junction does ([`super::bidir`], "Twins"). A camera
+//! path meeting a light path inside one kernel is bidirectional photon mapping's merge;
+//! a camera path continuing through another camera path's segment is multi-vertex path
+//! filtering; a light path through another's, photon filtering; the set of segment paths
+//! contains BPM's.
 //!
 //! The radiance along every segment follows by propagation, as for MVF ([`super::graph`]):
 //! a light node's row sits at its predecessor (the light side of its segment), so that
@@ -23,7 +26,7 @@
 //! | stage | phase | items | reduction |
 //! |---|---|---|---|
 //! | setup 0 | `footprint` | W·H pixels (none unless r₀ is in pixel footprints) | mean footprint → r₀ |
-//! | pass 0 | `paths` | W·H camera paths, then N_L light paths | nodes appended, grid built for r_pass |
+//! | pass 0 | `paths` | W·H camera paths, then N_L light paths (each light node's twin and its camera walk after its path) | nodes appended, grid built for r_pass |
 //! | (pass 0½) | `bridges` (with bridges only) | nodes | bridge nodes appended, grid rebuilt |
 //! | pass 1 | `denominators` | nodes | D of every reusable segment |
 //! | pass 2 | `filter` | nodes | rows appended; L₀ = L_e |
@@ -117,6 +120,12 @@ impl Bpf {
         self.config.light_paths(self.pixels)
     }
 
+    /// Do light nodes get twins ([`super::nodes::trace_light_nodes`])? Not with merges
+    /// only, whose light junctions follow their own paths.
+    pub fn twins(&self) -> bool {
+        self.config.reuse != crate::estimators::FilterReuse::Merges
+    }
+
     /// The weights over the current pass.
     pub fn weights<'a>(&'a self, scene: &'a crate::scene::Scene) -> Bidirectional<'a> {
         Bidirectional {
@@ -171,7 +180,20 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
                 let mut c = trace_camera_nodes(scene, tracer, &self.params, self.segments, pass, camera, &mut chunk.nodes, &mut chunk.links, &mut chunk.values);
                 if !light.is_empty() {
                     let (pred, base) = &mut chunk.light_scratch;
-                    let l = trace_light_nodes(scene, tracer, &self.params, self.segments, self.light_paths(), pass, light, true, &mut chunk.nodes, pred, base);
+                    let l = trace_light_nodes(
+                        scene,
+                        tracer,
+                        &self.params,
+                        self.segments,
+                        self.light_paths(),
+                        pass,
+                        light,
+                        true,
+                        self.twins(),
+                        &mut chunk.nodes,
+                        pred,
+                        base,
+                    );
                     c += l;
                 }
                 scale_kernels(scene, self.config.glossy_alpha, &mut chunk.nodes);

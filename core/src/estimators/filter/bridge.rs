@@ -119,6 +119,7 @@ pub fn trace_bridges<Q: RayQuery + ?Sized>(
         let mut node = *c;
         node.kind = NodeKind::Light;
         node.bridge = true;
+        node.twin = false;
         node.wo = dir;
         node.pred = end;
         node.source = LightEnd::at_surface(&l.hit);

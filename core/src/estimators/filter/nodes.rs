@@ -140,6 +140,12 @@ pub struct Node {
     /// camera node's point whose segment runs to the light node `pred`, drawn by the
     /// bridge technique rather than by `pred`'s continuation (`next` is empty).
     pub bridge: bool,
+    /// A light node's twin (bidirectional filtering): a camera-kind node at light node
+    /// `pred`'s point, arriving along `pred`'s continuation, whose own continuation and
+    /// light sample give the light junction at `pred` the techniques of its own that a
+    /// camera junction has ([`trace_light_nodes`]). No segment arrives at it: it has no
+    /// row.
+    pub twin: bool,
     /// The node whose continuation reached it, or [`NONE`] (a camera ray's hit; a light
     /// path's first hit from a light without an emission node).
     pub pred: u32,
@@ -161,6 +167,7 @@ impl Node {
             kernel_scale: 1.0,
             kind,
             bridge: false,
+            twin: false,
             pred,
             source: LightEnd::default(),
             next: Continuation { node: NONE, ..Continuation::default() },
@@ -260,8 +267,26 @@ fn walk<Q: RayQuery + ?Sized>(
     counters: &mut Counters,
 ) -> (u32, Rgb) {
     let first_dim = rng.dimension();
-    let mut path = PathState::new(ray, Rgb::ONE, first_dim + CAMERA_WALK.layout.per_bounce);
-    let mut parent = NONE;
+    let path = PathState::new(ray, Rgb::ONE, first_dim + CAMERA_WALK.layout.per_bounce);
+    walk_on(scene, tracer, params, max_segments, path, NONE, rng, nodes, counters)
+}
+
+/// The camera walk from `path`'s ray on, its first hit the successor of node `parent`
+/// (or a path's first node if [`NONE`]); returns that first node (or [`NONE`]) and the
+/// environment radiance if the path's first ray escaped with no parent.
+#[allow(clippy::too_many_arguments)]
+fn walk_on<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    max_segments: u32,
+    mut path: PathState,
+    origin: u32,
+    rng: &mut SampleStream,
+    nodes: &mut Vec<Node>,
+    counters: &mut Counters,
+) -> (u32, Rgb) {
+    let mut parent = origin;
     let mut first = NONE;
     loop {
         let Some(hit) = CAMERA_WALK.trace(tracer, &path, counters) else {
@@ -284,29 +309,9 @@ fn walk<Q: RayQuery + ?Sized>(
             }
         }
         let sp = SurfacePoint::new(hit, -path.ray.dir);
-        let material = sp.material(scene);
         let mut node = Node::new(scene, hit, sp.wo, NodeKind::Camera, parent);
         node.emitted = emitted(scene, &hit, sp.wo);
-        let more = path.segments < max_segments && params.max_depth.allows(path.segments + 1);
-
-        // The light-sampled segment (next-event estimation), shadow ray included.
-        if more && !node.delta && scene.light_selection.is_some() {
-            node.light.attempted = true;
-            if let Some(draw) = CAMERA_WALK.draw_light(scene, &path, sp.reflection_origin(), rng) {
-                let ls = &draw.sample;
-                node.light.dir = ls.wi;
-                node.light.pdf = draw.pmf * ls.pdf.0;
-                node.light.delta = ls.is_delta;
-                node.light.end = LightEnd { light: draw.light as u32, p: ls.p, n: ls.n };
-                counters.rays += 1;
-                if !tracer.occluded(&shadow_ray(&sp.hit, ls)) {
-                    // Across an absorbing medium (a rough dielectric's interior), T.
-                    node.light.radiance = ls.radiance * scene.transmittance_to(ls.p, hit.p, hit.ng, hit.material).unwrap_or(Rgb::ONE);
-                }
-            }
-        }
-
-        let leave = continue_path(params, &mut path, &sp, &material, CAMERA_WALK, more, &mut node, rng);
+        let leave = camera_step(scene, tracer, params, max_segments, &mut path, &sp, &mut node, rng, counters);
         nodes.push(node);
         if !leave {
             break;
@@ -314,8 +319,46 @@ fn walk<Q: RayQuery + ?Sized>(
         parent = index;
     }
     // Light densities of continuations that ended on a light or escaped.
-    fill_light_densities(scene, nodes, first);
+    fill_light_densities(scene, nodes, if origin != NONE { origin } else { first });
     (first, Rgb::ZERO)
+}
+
+/// A camera node's segments at `sp`: its light sample (shadow ray included) and its
+/// continuation ([`continue_path`]); says whether the path goes on.
+#[allow(clippy::too_many_arguments)]
+fn camera_step<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    max_segments: u32,
+    path: &mut PathState,
+    sp: &SurfacePoint,
+    node: &mut Node,
+    rng: &mut SampleStream,
+    counters: &mut Counters,
+) -> bool {
+    let material = sp.material(scene);
+    let more = path.segments < max_segments && params.max_depth.allows(path.segments + 1);
+
+    // The light-sampled segment (next-event estimation), shadow ray included.
+    if more && !node.delta && scene.light_selection.is_some() {
+        node.light.attempted = true;
+        if let Some(draw) = CAMERA_WALK.draw_light(scene, path, sp.reflection_origin(), rng) {
+            let ls = &draw.sample;
+            node.light.dir = ls.wi;
+            node.light.pdf = draw.pmf * ls.pdf.0;
+            node.light.delta = ls.is_delta;
+            node.light.end = LightEnd { light: draw.light as u32, p: ls.p, n: ls.n };
+            counters.rays += 1;
+            if !tracer.occluded(&shadow_ray(&sp.hit, ls)) {
+                // Across an absorbing medium (a rough dielectric's interior), T.
+                let hit = &sp.hit;
+                node.light.radiance = ls.radiance * scene.transmittance_to(ls.p, hit.p, hit.ng, hit.material).unwrap_or(Rgb::ONE);
+            }
+        }
+    }
+
+    continue_path(params, path, sp, &material, CAMERA_WALK, more, node, rng)
 }
 
 /// For each continuation along the path starting at node `first`: the density with which
@@ -346,6 +389,14 @@ fn fill_light_densities(scene: &Scene, nodes: &mut [Node], first: u32) {
 /// hit along the unoccluded emission segment), the first hit's predecessor; the centre
 /// of the row of radiance reflected by the light's own surface. Indices are local to
 /// `nodes`.
+///
+/// With `twins` (bidirectional filtering), after each path every non-Dirac light node w
+/// whose continuation reached a node gets a **twin**: a camera node at w ([`Node::twin`],
+/// `pred` = w) arriving along w's continuation, followed by a camera walk from it (its
+/// light sample and continuation at segment 2, so at most `max_segments` − 2 segments).
+/// The light junction at w (the row of w's successor) then reuses a continuation drawn
+/// from itself at K(0), as a camera junction does (module notes of [`super::bidir`],
+/// "Twins"). Their nodes follow the path's, with [`NONE`] and zero in `pred` and `base`.
 #[allow(clippy::too_many_arguments)]
 pub fn trace_light_nodes<Q: RayQuery + ?Sized>(
     scene: &Scene,
@@ -356,6 +407,7 @@ pub fn trace_light_nodes<Q: RayQuery + ?Sized>(
     pass: u32,
     paths: core::ops::Range<u32>,
     emission_nodes: bool,
+    twins: bool,
     nodes: &mut Vec<Node>,
     pred: &mut Vec<u32>,
     base: &mut Vec<Rgb>,
@@ -379,10 +431,61 @@ pub fn trace_light_nodes<Q: RayQuery + ?Sized>(
         let beta0 = es.radiance * (cos0 / (pdf_pos * es.pdf_dir.0));
         let ray = if es.n == Vec3::ZERO { Ray::new(es.p, es.dir, f32::INFINITY) } else { spawn_ray(es.p, es.n, es.dir) };
         let start = Emission { light: chosen.index as u32, sample: es, beta0, paths_per_pass, with_node: emission_nodes && light.has_area() };
+        let first = nodes.len();
         let out = LightNodes { nodes: &mut *nodes, pred: &mut *pred, base: &mut *base };
         light_walk(scene, tracer, params, max_segments, ray, start, &mut rng, out, &mut counters);
+        if twins {
+            let before = nodes.len();
+            trace_twins(scene, tracer, params, max_segments, pass, path, first..before, nodes, &mut counters);
+            let added = nodes.len() - before;
+            pred.extend(core::iter::repeat_n(NONE, added));
+            base.extend(core::iter::repeat_n(Rgb::ZERO, added));
+        }
     }
     counters
+}
+
+/// The twins of light nodes `light` (one light path's, indices local to `nodes`) and
+/// their camera walks (see [`trace_light_nodes`]). The k-th twin of light path `path`
+/// draws from its own stream (sample index 1 + k), so a path's twins do not shift its
+/// own random numbers.
+#[allow(clippy::too_many_arguments)]
+fn trace_twins<Q: RayQuery + ?Sized>(
+    scene: &Scene,
+    tracer: &Q,
+    params: &RenderParams,
+    max_segments: u32,
+    pass: u32,
+    path: u32,
+    light: core::ops::Range<usize>,
+    nodes: &mut Vec<Node>,
+    counters: &mut Counters,
+) {
+    let mut k = 0u32;
+    for w_index in light {
+        let w = nodes[w_index];
+        if w.kind != NodeKind::Light || w.delta || w.bridge || w.next.node == NONE || w.next.delta {
+            continue;
+        }
+        k += 1;
+        let mut rng = SampleStream::for_sample(params.seed, Stream::Light, path, pass, k);
+        // A camera node at w arriving along w's continuation: the chain reaches the
+        // light junction at w after at least two segments (the pixel's and the one
+        // arriving at w's successor), so the twin's continuation is segment 3 or later.
+        let mut state = PathState::new(Ray::new(w.hit.p, w.next.dir, f32::INFINITY), Rgb::ONE, rng.dimension());
+        state.segments = 2;
+        let sp = SurfacePoint::new(w.hit, w.next.dir);
+        let mut twin = Node::new(scene, w.hit, w.next.dir, NodeKind::Camera, w_index as u32);
+        twin.twin = true;
+        let goes_on = camera_step(scene, tracer, params, max_segments, &mut state, &sp, &mut twin, &mut rng, counters);
+        let index = nodes.len() as u32;
+        nodes.push(twin);
+        if goes_on {
+            walk_on(scene, tracer, params, max_segments, state, index, &mut rng, nodes, counters);
+        } else {
+            fill_light_densities(scene, nodes, index);
+        }
+    }
 }
 
 /// How a light path started.

@@ -428,6 +428,7 @@ mod tests {
             kernel_scale: 1.0,
             kind,
             bridge: false,
+            twin: false,
             pred,
             source: LightEnd::default(),
             next: Continuation { node: next, ..Continuation::default() },

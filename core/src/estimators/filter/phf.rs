@@ -148,6 +148,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
                     pass,
                     items,
                     false,
+                    false,
                     &mut chunk.nodes,
                     &mut chunk.links,
                     &mut chunk.values,
