@@ -5,7 +5,9 @@
 //!   a tent filter and a vertical field of view, built through the C functions, renders
 //!   bit-identically to the same scene written as Mitsuba XML (OBJ meshes, a PNG, an
 //!   EXR) and rendered by the command line's code (`prepare_file`, `CoreRenderer`), for
-//!   PT and BDPT;
+//!   PT and BDPT; and so does each other BSDF kind on the floor (conductor, rough
+//!   conductor, dielectric, rough dielectric, plastic, principled, two-sided diffuse)
+//!   with parameters off the defaults and textures on its slots, against its `<bsdf>`;
 //! - a table of bad descriptions, each refused with its status and a message naming the
 //!   field;
 //! - `ember_render_passes` runs on one pool per renderer: four calls on a renderer of
@@ -17,6 +19,10 @@
 //! - a textured parameter given the struct's colour instead of the texture's mean (as
 //!   the reader gives it): the XML agreement fails (PT: 1596 pixels differ; the rough
 //!   plastic's lobe weights come from that value);
+//! - the dielectrics' and plastics' `int_ior` and `ext_ior` swapped: the BSDF test's
+//!   dielectric case fails (1589 pixels differ);
+//! - `principled`'s `anisotropic` read from `sheen_tint`: its principled case fails
+//!   (1590 pixels differ);
 //! - the texture-index bound `>` for `>=`: the table's `materials[0].textures[0] 3` case
 //!   panics (EMBER_STATUS_PANIC) instead of being refused;
 //! - in `src/ffi.rs`, a pool started on every `ember_render_passes` (as before issue
@@ -204,7 +210,17 @@ fn obj(positions: &[[f32; 3]], normals: &[[f32; 3]], uvs: &[[f32; 2]]) -> String
 }
 
 /// The same scene as Mitsuba 3 XML in `dir`, with its meshes and images.
-fn write_xml(dir: &Path) -> PathBuf {
+/// The floor's rough plastic in XML.
+fn plastic_xml() -> String {
+    format!(
+        r#"<bsdf type="roughplastic" id="floor"><string name="distribution" value="ggx"/><float name="alpha" value="{}"/>
+    <texture type="bitmap" name="diffuse_reflectance"><string name="filename" value="albedo.png"/></texture></bsdf>"#,
+        f(ALPHA)
+    )
+}
+
+/// The scene as XML in `dir`, the floor's material `floor` (a `<bsdf id="floor">`).
+fn write_xml(dir: &Path, floor: &str) -> PathBuf {
     std::fs::create_dir_all(dir).unwrap();
     std::fs::write(dir.join("floor.obj"), obj(&FLOOR, &FLOOR_NORMALS, &FLOOR_UVS)).unwrap();
     std::fs::write(dir.join("wall.obj"), obj(&WALL, &WALL_NORMALS, &WALL_UVS)).unwrap();
@@ -230,11 +246,7 @@ fn write_xml(dir: &Path) -> PathBuf {
       <rfilter type="tent"><float name="radius" value="{tent}"/></rfilter>
     </film>
   </sensor>
-  <bsdf type="roughplastic" id="floor">
-    <string name="distribution" value="ggx"/>
-    <float name="alpha" value="{alpha}"/>
-    <texture type="bitmap" name="diffuse_reflectance"><string name="filename" value="albedo.png"/></texture>
-  </bsdf>
+  {floor}
   <bsdf type="diffuse" id="wall">
     <texture type="checkerboard" name="reflectance">
       <rgb name="color0" value="{c0}"/><rgb name="color1" value="{c1}"/>
@@ -255,7 +267,6 @@ fn write_xml(dir: &Path) -> PathBuf {
         focus = f(FOCUS),
         target = v3(TARGET),
         tent = f(TENT),
-        alpha = f(ALPHA),
         c0 = v3(CHECKER.0),
         c1 = v3(CHECKER.1),
         scale = f(ENV_SCALE),
@@ -302,7 +313,7 @@ fn render_cli(path: &Path, estimator: EstimatorKind, seed: u64) -> Vec<[f32; 3]>
 fn the_c_description_renders_as_the_same_scene_in_xml() {
     let scene = arrays().create().unwrap_or_else(|e| panic!("{e:?}"));
     let dir = std::env::temp_dir().join(format!("ember-capi-scene2-{}", std::process::id()));
-    let xml = write_xml(&dir);
+    let xml = write_xml(&dir, &plastic_xml());
     for estimator in [EstimatorKind::Pt, EstimatorKind::Bdpt] {
         let (mine, cli) = (render_c(scene, estimator, 11), render_cli(&xml, estimator, 11));
         let mean = |img: &[[f32; 3]]| img.iter().flatten().map(|&x| x as f64).sum::<f64>() / (3 * img.len()) as f64;
@@ -319,6 +330,95 @@ fn the_c_description_renders_as_the_same_scene_in_xml() {
         );
     }
     assert_eq!(ember_scene_destroy(scene), EmberStatus::Ok);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Every other BSDF kind on the floor, with parameters off Mitsuba's defaults and
+/// textures on their slots, against the same `<bsdf>` in XML: the same bits (PT).
+#[test]
+fn every_bsdf_kind_renders_as_its_xml() {
+    let png = r#"<texture type="bitmap" name="NAME"><string name="filename" value="albedo.png"/></texture>"#;
+    let checker = |name: &str| {
+        format!(
+            r#"<texture type="checkerboard" name="{name}"><rgb name="color0" value="{}"/><rgb name="color1" value="{}"/><transform name="to_uv"><scale x="4" y="4"/></transform></texture>"#,
+            v3(CHECKER.0),
+            v3(CHECKER.1)
+        )
+    };
+    let bsdf = |kind: EmberBsdfKind, edit: &dyn Fn(&mut EmberBsdf)| {
+        let mut b = init(ember_bsdf_init, kind as u32);
+        edit(&mut b);
+        b
+    };
+    let cases: Vec<(EmberBsdf, String)> = vec![
+        (
+            bsdf(EmberBsdfKind::Conductor, &|b| (b.eta, b.k, b.specular_reflectance) = ([0.2, 0.9, 1.1], [3.9, 2.4, 2.1], [0.9, 0.8, 0.7])),
+            r#"<bsdf type="conductor" id="floor"><rgb name="eta" value="0.2, 0.9, 1.1"/><rgb name="k" value="3.9, 2.4, 2.1"/><rgb name="specular_reflectance" value="0.9, 0.8, 0.7"/></bsdf>"#.into(),
+        ),
+        (
+            bsdf(EmberBsdfKind::RoughConductor, &|b| (b.alpha, b.textures[1]) = (0.3, 0)),
+            format!(r#"<bsdf type="roughconductor" id="floor"><float name="alpha" value="{}"/>{}</bsdf>"#, f(0.3), png.replace("NAME", "specular_reflectance")),
+        ),
+        (
+            bsdf(EmberBsdfKind::Dielectric, &|b| (b.int_ior, b.ext_ior, b.specular_transmittance) = (1.6, 1.1, [0.9, 0.95, 1.0])),
+            format!(
+                r#"<bsdf type="dielectric" id="floor"><float name="int_ior" value="{}"/><float name="ext_ior" value="{}"/><rgb name="specular_transmittance" value="{}"/></bsdf>"#,
+                f(1.6),
+                f(1.1),
+                v3([0.9, 0.95, 1.0])
+            ),
+        ),
+        (
+            bsdf(EmberBsdfKind::RoughDielectric, &|b| (b.distribution, b.alpha, b.int_ior, b.ext_ior, b.textures[2]) = (1, 0.25, 1.33, 1.0, 1)),
+            format!(
+                r#"<bsdf type="roughdielectric" id="floor"><string name="distribution" value="ggx"/><float name="alpha" value="{}"/><float name="int_ior" value="{}"/><float name="ext_ior" value="1"/>{}</bsdf>"#,
+                f(0.25),
+                f(1.33),
+                checker("specular_transmittance")
+            ),
+        ),
+        (
+            bsdf(EmberBsdfKind::Plastic, &|b| (b.int_ior, b.ext_ior, b.nonlinear, b.textures[0]) = (1.6, 1.0, 1, 0)),
+            format!(
+                r#"<bsdf type="plastic" id="floor"><float name="int_ior" value="{}"/><float name="ext_ior" value="1"/><boolean name="nonlinear" value="true"/>{}</bsdf>"#,
+                f(1.6),
+                png.replace("NAME", "diffuse_reflectance")
+            ),
+        ),
+        (
+            bsdf(EmberBsdfKind::Principled, &|b| {
+                let p = &mut b.principled;
+                (p.metallic, p.spec_trans, p.sheen, p.clearcoat, p.anisotropic, p.eta) = (0.4, 0.2, 0.5, 0.3, 0.3, 1.45);
+                b.textures[0] = 0;
+                b.textures[3] = 1;
+            }),
+            format!(
+                r#"<bsdf type="principled" id="floor"><float name="metallic" value="{}"/><float name="spec_trans" value="{}"/><float name="sheen" value="0.5"/><float name="clearcoat" value="{}"/><float name="anisotropic" value="{}"/><float name="eta" value="{}"/>{}{}</bsdf>"#,
+                f(0.4),
+                f(0.2),
+                f(0.3),
+                f(0.3),
+                f(1.45),
+                png.replace("NAME", "base_color"),
+                checker("roughness")
+            ),
+        ),
+        (
+            bsdf(EmberBsdfKind::Diffuse, &|b| (b.two_sided, b.diffuse) = (1, [0.3, 0.6, 0.2])),
+            format!(r#"<bsdf type="twosided" id="floor"><bsdf type="diffuse"><rgb name="reflectance" value="{}"/></bsdf></bsdf>"#, v3([0.3, 0.6, 0.2])),
+        ),
+    ];
+    let dir = std::env::temp_dir().join(format!("ember-capi-bsdfs-{}", std::process::id()));
+    for (i, (floor, xml)) in cases.iter().enumerate() {
+        let mut a = arrays();
+        a.materials[0] = *floor;
+        let scene = a.create().unwrap_or_else(|e| panic!("case {i}: {e:?}"));
+        let path = write_xml(&dir.join(i.to_string()), xml);
+        let (mine, cli) = (render_c(scene, EstimatorKind::Pt, 3), render_cli(&path, EstimatorKind::Pt, 3));
+        let differing = mine.iter().zip(&cli).filter(|(a, b)| a != b).count();
+        assert_eq!(differing, 0, "case {i} ({xml}): {differing} of {} pixels differ from the XML scene's", cli.len());
+        assert_eq!(ember_scene_destroy(scene), EmberStatus::Ok);
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
