@@ -32,9 +32,8 @@ export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 # estimator, seed, passes and threads as scene2.c's (PT, seed 5, 4 passes, 2 threads).
 rm -rf "$OUT/scene2-files" && mkdir -p "$OUT/scene2-files"
 "$OUT/scene2" "$OUT/scene2-files"
-cargo run --release -q -p ember-cli -- render "$OUT/scene2-files/scene.xml" -e pt --spp 4 --seed 5 --threads 2 --no-plan \
-    -o "$OUT/scene2-files/cli.exr" >/dev/null
-cargo run --release -q -p ember-capi --example same_image -- "$OUT/scene2-files/c.pfm" "$OUT/scene2-files/cli.exr"
+cargo run --release -q -p ember-capi --example same_as_cli -- "$OUT/scene2-files/c.pfm" \
+    render "$OUT/scene2-files/scene.xml" -e pt --spp 4 --seed 5 --threads 2 -o "$OUT/scene2-files/cli.exr"
 # The Rust side of embedding: the core with a ray tracer of its own.
 cargo run --release -q -p ember-capi --example custom_tracer
 echo "test-capi: OK"
