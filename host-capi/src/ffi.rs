@@ -20,17 +20,18 @@
 //! not safe to call from several threads at once when `threads` is not 1.
 #![allow(unsafe_code)]
 
+pub mod desc;
 mod film;
 mod ray_queries;
-pub mod scene;
+mod scene;
 
+pub use desc::{
+    EmberBsdf, EmberBsdfKind, EmberFilterKind, EmberFovAxis, EmberLens, EmberLight, EmberLightKind, EmberMicrofacet, EmberPixelFilter, EmberPrincipled,
+    EmberSceneDesc2, EmberTexture, EmberTextureFilter, EmberTextureKind, EmberTextureSlot, EmberWrapMode,
+};
 pub use film::{ember_film_export, ember_film_import};
 pub use ray_queries::{Callbacks, EmberHit, EmberRay, EmberRayBatch, EmberRayBatchCallbacks, EmberRayCallbacks};
-pub use scene::{
-    EmberBsdf, EmberBsdfKind, EmberFilterKind, EmberFovAxis, EmberLens, EmberLight, EmberLightKind, EmberMicrofacet, EmberPixelFilter, EmberPrincipled,
-    EmberSceneDesc2, EmberTexture, EmberTextureFilter, EmberTextureKind, EmberTextureSlot, EmberWrapMode, ember_bsdf_init, ember_light_init,
-    ember_scene_create2, ember_texture_init,
-};
+pub use scene::{ember_bsdf_init, ember_light_init, ember_scene_create2, ember_texture_init};
 
 use std::cell::{Cell, RefCell};
 use std::ffi::{CStr, CString, c_char};

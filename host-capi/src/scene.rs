@@ -28,10 +28,11 @@ use ember_core::spectrum::Rgb;
 use ember_core::texture::{Bitmap, Texture, UvTransform, WrapMode, srgb_decode};
 use ember_host::accel::Accel;
 
-use crate::ffi::scene::{
-    EmberBsdfKind as Kind, EmberFilterKind, EmberFovAxis, EmberLightKind, EmberMicrofacet, EmberTextureFilter, EmberTextureKind, EmberWrapMode, flag, from_raw,
+use crate::ffi::EmberCamera;
+use crate::ffi::desc::{
+    self, EmberBsdf, EmberBsdfKind as Kind, EmberFilterKind, EmberFovAxis, EmberLens, EmberLight, EmberLightKind, EmberMicrofacet, EmberPixelFilter,
+    EmberPrincipled, EmberTextureFilter, EmberTextureKind, EmberWrapMode, flag, from_raw,
 };
-use crate::ffi::{self, EmberBsdf, EmberLight, EmberPrincipled};
 use crate::{Error, Result};
 
 /// The largest bitmap side (and camera side) accepted.
@@ -88,11 +89,11 @@ pub struct SceneDesc {
     pub point_lights: Vec<([f32; 3], [f32; 3])>,
     pub lights: Vec<EmberLight>,
     /// The camera: the C struct itself (plain values, no pointers).
-    pub camera: ffi::EmberCamera,
+    pub camera: EmberCamera,
     /// An `EmberFovAxis` value.
     pub fov_axis: u32,
-    pub lens: ffi::EmberLens,
-    pub filter: ffi::EmberPixelFilter,
+    pub lens: EmberLens,
+    pub filter: EmberPixelFilter,
 }
 
 /// A built scene: what the estimators read, the tracer's geometry, the built-in BVH and,
@@ -292,7 +293,7 @@ fn bsdf(i: usize, m: &EmberBsdf, textures: &[BuiltTexture], coatings: &mut Coati
         }
         let name = format!("{} ({})", field(&format!("textures[{s}]")), SLOTS[s].1);
         if !slots_of(kind).contains(&s) {
-            return Err(Error::arg(format!("{name} is {t}, but a {} material has no such parameter (give -1)", ffi::scene::kind_name(kind))));
+            return Err(Error::arg(format!("{name} is {t}, but a {} material has no such parameter (give -1)", desc::kind_name(kind))));
         }
         if t < 0 || t as usize >= textures.len() {
             return Err(Error::arg(format!("{name} {t} is neither -1 nor a texture index (0..{})", textures.len())));
