@@ -91,6 +91,36 @@ static EmberStatus c_material_kind(void) {
     EmberSceneDesc d = good_desc(); d.materials = bad; return create(d);
 }
 static EmberStatus c_huge_count(void) { EmberSceneDesc d = good_desc(); d.triangle_count = 0xffffffffu; return create(d); }
+/* The complete description (EmberSceneDesc2): one triangle, one diffuse EmberBsdf. */
+static EmberBsdf BSDF;
+static EmberSceneDesc2 good_desc2(void) {
+    ember_bsdf_init(EMBER_BSDF_KIND_DIFFUSE, &BSDF);
+    EmberSceneDesc2 d = {.positions = P, .vertex_count = 4, .indices = IDX, .triangle_count = 1, .triangle_materials = MAT,
+                         .materials = &BSDF, .material_count = 1, .camera = good_desc().camera};
+    return d;
+}
+static EmberStatus create2(EmberSceneDesc2 d) { EmberScene s; return ember_scene_create2(&d, &s); }
+static EmberStatus c2_bsdf_kind(void) { EmberSceneDesc2 d = good_desc2(); BSDF.kind = 8; return create2(d); }
+static EmberStatus c2_texture_slot(void) { EmberSceneDesc2 d = good_desc2(); BSDF.textures[EMBER_TEXTURE_SLOT_DIFFUSE] = 0; return create2(d); }
+static EmberStatus c2_pixels_null(void) {
+    EmberSceneDesc2 d = good_desc2();
+    static EmberTexture t;
+    ember_texture_init(EMBER_TEXTURE_KIND_BITMAP, &t);
+    t.width = t.height = 2;
+    d.textures = &t, d.texture_count = 1;
+    return create2(d);
+}
+static EmberStatus c2_light_kind(void) {
+    EmberSceneDesc2 d = good_desc2();
+    static EmberLight l;
+    ember_light_init(EMBER_LIGHT_KIND_POINT, &l);
+    l.kind = 9;
+    d.lights = &l, d.light_count = 1;
+    return create2(d);
+}
+static EmberStatus c2_filter_kind(void) { EmberSceneDesc2 d = good_desc2(); d.filter.kind = 3; return create2(d); }
+static EmberStatus c2_normals_zero(void) { static const float N[12] = {0}; EmberSceneDesc2 d = good_desc2(); d.normals = N; return create2(d); }
+static EmberStatus c2_init_kind(void) { EmberBsdf b; return ember_bsdf_init(99, &b); }
 static EmberStatus c_builtin_unknown(void) { EmberScene s; return ember_scene_builtin("teapot", 8, 8, &s); }
 static EmberStatus c_builtin_null(void) { EmberScene s; return ember_scene_builtin(NULL, 8, 8, &s); }
 static EmberStatus c_dead_scene(void) { return ember_scene_destroy(dead_scene); }
@@ -264,6 +294,13 @@ int main(void) {
         {"NaN position", c_nan_position, EMBER_STATUS_INVALID_ARGUMENT, "position 1 is not finite"},
         {"material kind 3", c_material_kind, EMBER_STATUS_INVALID_ARGUMENT, "materials[0].kind 3 is not an EmberMaterialKind (0..=2"},
         {"triangle count overflowing", c_huge_count, EMBER_STATUS_INVALID_ARGUMENT, "too large"},
+        {"desc2: bsdf kind 8", c2_bsdf_kind, EMBER_STATUS_INVALID_ARGUMENT, "materials[0].kind 8 is not an EmberBsdfKind (0..=7"},
+        {"desc2: texture past the textures", c2_texture_slot, EMBER_STATUS_INVALID_ARGUMENT, "materials[0].textures[0] (diffuse) 0 is neither -1 nor a texture index (0..0)"},
+        {"desc2: bitmap without pixels", c2_pixels_null, EMBER_STATUS_NULL_POINTER, "textures[0].pixels (for 12 floats) is null"},
+        {"desc2: light kind 9", c2_light_kind, EMBER_STATUS_INVALID_ARGUMENT, "lights[0].kind 9 is not an EmberLightKind"},
+        {"desc2: filter kind 3", c2_filter_kind, EMBER_STATUS_INVALID_ARGUMENT, "filter.kind 3 is not an EmberFilterKind"},
+        {"desc2: zero normals", c2_normals_zero, EMBER_STATUS_INVALID_ARGUMENT, "normals[0] is zero"},
+        {"bsdf init: kind 99", c2_init_kind, EMBER_STATUS_INVALID_ARGUMENT, "kind 99 is not an EmberBsdfKind"},
         {"unknown built-in scene", c_builtin_unknown, EMBER_STATUS_INVALID_ARGUMENT, "teapot"},
         {"built-in name null", c_builtin_null, EMBER_STATUS_NULL_POINTER, "name is null"},
         {"destroyed scene destroyed again", c_dead_scene, EMBER_STATUS_INVALID_HANDLE, "not a live scene"},

@@ -8,6 +8,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
+// The largest bitmap side (and camera side) accepted.
+#define MAX_TEXTURE_SIDE 65536
+
 // What a call returned. Every function returns one; `Ok` is 0.
 typedef enum EmberStatus {
   // Success.
@@ -54,6 +57,103 @@ typedef enum EmberMaterialKind {
   // Smooth glass; `ior` is the interior index of refraction (outside: 1).
   EMBER_MATERIAL_KIND_GLASS = 2,
 } EmberMaterialKind;
+
+// Values of [`EmberBsdf`]'s `kind`: Mitsuba 3's BSDF plugins.
+typedef enum EmberBsdfKind {
+  // `diffuse`: `diffuse` is the reflectance.
+  EMBER_BSDF_KIND_DIFFUSE = 0,
+  // `conductor`: `eta`, `k`, `specular_reflectance` (η = 0, k = 1: a perfect mirror).
+  EMBER_BSDF_KIND_CONDUCTOR = 1,
+  // `roughconductor`: as `conductor`, with `distribution` and `alpha`.
+  EMBER_BSDF_KIND_ROUGH_CONDUCTOR = 2,
+  // `dielectric`: `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance`.
+  EMBER_BSDF_KIND_DIELECTRIC = 3,
+  // `roughdielectric`: as `dielectric`, with `distribution` and `alpha`.
+  EMBER_BSDF_KIND_ROUGH_DIELECTRIC = 4,
+  // `plastic`: `int_ior`, `ext_ior`, `diffuse` (its `diffuse_reflectance`),
+  // `specular_reflectance`, `nonlinear`.
+  EMBER_BSDF_KIND_PLASTIC = 5,
+  // `roughplastic`: as `plastic`, with `distribution` and `alpha`.
+  EMBER_BSDF_KIND_ROUGH_PLASTIC = 6,
+  // `principled`: `diffuse` is its `base_color`, the rest are in `principled`.
+  EMBER_BSDF_KIND_PRINCIPLED = 7,
+} EmberBsdfKind;
+
+// Values of [`EmberBsdf`]'s `distribution`.
+typedef enum EmberMicrofacet {
+  // Mitsuba's default.
+  EMBER_MICROFACET_BECKMANN = 0,
+  EMBER_MICROFACET_GGX = 1,
+} EmberMicrofacet;
+
+// The indices of [`EmberBsdf`]'s `textures`: the parameters a texture can drive.
+typedef enum EmberTextureSlot {
+  // `diffuse`: the diffuse albedo (`reflectance`, `diffuse_reflectance`, `base_color`).
+  EMBER_TEXTURE_SLOT_DIFFUSE = 0,
+  // `specular_reflectance` of conductors, dielectrics and plastics.
+  EMBER_TEXTURE_SLOT_SPECULAR_REFLECTANCE = 1,
+  // `specular_transmittance` of dielectrics.
+  EMBER_TEXTURE_SLOT_SPECULAR_TRANSMITTANCE = 2,
+  // `principled.roughness` (the texel's luminance).
+  EMBER_TEXTURE_SLOT_ROUGHNESS = 3,
+} EmberTextureSlot;
+
+// Values of [`EmberTexture`]'s `kind`: Mitsuba 3's texture plugins.
+typedef enum EmberTextureKind {
+  // `bitmap`: `pixels`, `width`, `height`, `channels`, `srgb`, `wrap_mode`, `filter`.
+  EMBER_TEXTURE_KIND_BITMAP = 0,
+  // `checkerboard`: `color0`, `color1`.
+  EMBER_TEXTURE_KIND_CHECKERBOARD = 1,
+} EmberTextureKind;
+
+// Values of [`EmberTexture`]'s `wrap_mode` (Mitsuba's).
+typedef enum EmberWrapMode {
+  EMBER_WRAP_MODE_REPEAT = 0,
+  EMBER_WRAP_MODE_MIRROR = 1,
+  EMBER_WRAP_MODE_CLAMP = 2,
+} EmberWrapMode;
+
+// Values of [`EmberTexture`]'s `filter` (Mitsuba's `filter_type`).
+typedef enum EmberTextureFilter {
+  EMBER_TEXTURE_FILTER_BILINEAR = 0,
+  EMBER_TEXTURE_FILTER_NEAREST = 1,
+} EmberTextureFilter;
+
+// Values of [`EmberLight`]'s `kind`: Mitsuba 3's emitters other than `area` (an
+// emitting triangle is `triangle_emission`).
+typedef enum EmberLightKind {
+  // `position`, `color` (the intensity).
+  EMBER_LIGHT_KIND_POINT = 0,
+  // `position`, `direction` (the cone's axis), `color` (the intensity),
+  // `cutoff_angle`, `beam_width` (degrees).
+  EMBER_LIGHT_KIND_SPOT = 1,
+  // `direction` (the light travels along it), `color` (the irradiance).
+  EMBER_LIGHT_KIND_DIRECTIONAL = 2,
+  // `color` (the radiance from every direction).
+  EMBER_LIGHT_KIND_CONSTANT = 3,
+  // `texture` (a bitmap: a latitude-longitude image, row 0 at the zenith, +y of
+  // `to_world`), `scale`, `to_world` (a rotation).
+  EMBER_LIGHT_KIND_ENVMAP = 4,
+} EmberLightKind;
+
+// Values of [`EmberPixelFilter`]'s `kind`: Mitsuba 3's `rfilter` plugins.
+typedef enum EmberFilterKind {
+  // One pixel (ember's default; Mitsuba's is the gaussian of σ = 0.5).
+  EMBER_FILTER_KIND_BOX = 0,
+  // `tent` of half-width `radius` (0: Mitsuba's 1).
+  EMBER_FILTER_KIND_TENT = 1,
+  // `gaussian` of standard deviation `radius` (0: Mitsuba's 0.5).
+  EMBER_FILTER_KIND_GAUSSIAN = 2,
+} EmberFilterKind;
+
+// Values of [`EmberSceneDesc2`]'s `fov_axis` (Mitsuba's): which extent `fov_degrees` spans.
+typedef enum EmberFovAxis {
+  EMBER_FOV_AXIS_X = 0,
+  EMBER_FOV_AXIS_Y = 1,
+  EMBER_FOV_AXIS_SMALLER = 2,
+  EMBER_FOV_AXIS_LARGER = 3,
+  EMBER_FOV_AXIS_DIAGONAL = 4,
+} EmberFovAxis;
 
 // A material.
 typedef struct EmberMaterial {
@@ -206,6 +306,169 @@ typedef struct EmberPhaseInfo {
   int64_t pass;
 } EmberPhaseInfo;
 
+// `principled`'s parameters besides `base_color` (Mitsuba's names; `ember_bsdf_init`
+// gives its defaults).
+typedef struct EmberPrincipled {
+  // ≥ 0 (default 0.5); a texture in slot `EMBER_TEXTURE_SLOT_ROUGHNESS` replaces it.
+  float roughness;
+  // The weights below lie in [0, 1] (default 0).
+  float anisotropic;
+  float metallic;
+  float spec_tint;
+  // ≥ 0 (default 0).
+  float sheen;
+  float sheen_tint;
+  float flatness;
+  // ≥ 0 (default 0).
+  float clearcoat;
+  float clearcoat_gloss;
+  float spec_trans;
+  // η_int/η_ext, > 0 (default 1.5, Mitsuba's `specular` = 0.5; with `spec_trans` > 0,
+  // η = 1 is read as 1.001, as Mitsuba does).
+  float eta;
+  // ≥ 0 (default 1 each).
+  float diffuse_reflectance_sampling_rate;
+  float main_specular_sampling_rate;
+  float clearcoat_sampling_rate;
+} EmberPrincipled;
+
+// A material: one of Mitsuba 3's BSDFs by `kind`; the fields a kind does not read are
+// ignored (see `EmberBsdfKind`). `ember_bsdf_init` fills Mitsuba's defaults.
+typedef struct EmberBsdf {
+  // An `EmberBsdfKind` value; any other is refused.
+  uint32_t kind;
+  // The diffuse albedo: `diffuse`'s `reflectance`, the plastics' `diffuse_reflectance`,
+  // `principled`'s `base_color` (≥ 0).
+  float diffuse[3];
+  // Conductors, dielectrics and plastics (≥ 0).
+  float specular_reflectance[3];
+  // Dielectrics (≥ 0).
+  float specular_transmittance[3];
+  // Conductors: the relative complex index of refraction η + ik per channel (≥ 0).
+  float eta[3];
+  float k[3];
+  // Dielectrics and plastics: the indices inside and outside (> 0; plastics: not equal).
+  float int_ior;
+  float ext_ior;
+  // The rough kinds: an `EmberMicrofacet` value and the roughness α ≥ 0.
+  uint32_t distribution;
+  float alpha;
+  // Plastics: Mitsuba's `nonlinear` (0 or 1).
+  uint32_t nonlinear;
+  // 1: Mitsuba's `twosided` around this BSDF (not for dielectrics); 0: one-sided.
+  uint32_t two_sided;
+  struct EmberPrincipled principled;
+  // Per `EmberTextureSlot`, the index of the texture driving that parameter (its mean
+  // is the parameter's value where a single value is needed, as Mitsuba's), or -1.
+  // A slot the kind has not must be -1.
+  int32_t textures[4];
+} EmberBsdf;
+
+// A texture: a pixel array (`bitmap`) or a checkerboard, by `kind`. Looked up at a
+// hit's texture coordinates (the mesh's `uvs`, else the triangle's barycentrics), after
+// `to_uv`. `ember_texture_init` fills Mitsuba's defaults.
+typedef struct EmberTexture {
+  // An `EmberTextureKind` value; any other is refused.
+  uint32_t kind;
+  // Bitmap: `width` × `height` × `channels` floats, row 0 at the top (v = 0), read
+  // during `ember_scene_create2` only.
+  const float *pixels;
+  // Bitmap: 1..=65536 each.
+  uint32_t width;
+  uint32_t height;
+  // Bitmap: 1 (grey) or 3 (RGB).
+  uint32_t channels;
+  // Bitmap: 1 if the values are sRGB-encoded in [0, 1] (decoded per texel before any
+  // interpolation, as Mitsuba decodes an 8-bit PNG: give byte / 255.0f for its bits),
+  // 0 if linear (≥ 0).
+  uint32_t srgb;
+  // Bitmap: an `EmberWrapMode` value and an `EmberTextureFilter` value.
+  uint32_t wrap_mode;
+  uint32_t filter;
+  // Checkerboard: the colours (≥ 0) where the fractional parts of u and v are on the
+  // same side of ½ (`color0`) and elsewhere (`color1`).
+  float color0[3];
+  float color1[3];
+  // Mitsuba's `to_uv`, the affine map (u, v) → (m₀u + m₁v + m₂, m₃u + m₄v + m₅), row by
+  // row; all zero: the identity.
+  float to_uv[6];
+} EmberTexture;
+
+// A light by `kind`; the fields a kind does not read are ignored (see
+// `EmberLightKind`). `ember_light_init` fills Mitsuba's defaults.
+typedef struct EmberLight {
+  // An `EmberLightKind` value; any other is refused.
+  uint32_t kind;
+  float position[3];
+  // Not zero; normalised.
+  float direction[3];
+  // The intensity (point, spot), irradiance (directional) or radiance (constant), ≥ 0.
+  float color[3];
+  // Spot: the cone's half-angle in (0, 180] and the half-angle of full intensity in
+  // [0, cutoff_angle], in degrees.
+  float cutoff_angle;
+  float beam_width;
+  // Envmap: the image's factor (≥ 0).
+  float scale;
+  // Envmap: the rotation from the image's frame to the world, row-major (Mitsuba's
+  // `to_world` matrix's upper-left 3 × 3).
+  float to_world[3][3];
+  // Envmap: the index of a bitmap texture holding the image (its wrap mode, filter and
+  // `to_uv` are not used).
+  int32_t texture;
+} EmberLight;
+
+// A thin lens (Mitsuba's `thinlens`): `aperture_radius` 0 is the pinhole (Mitsuba's
+// `perspective`), else > 0 with `focus_distance` > 0, the distance to the plane in focus.
+typedef struct EmberLens {
+  float aperture_radius;
+  float focus_distance;
+} EmberLens;
+
+// The film's pixel filter (Mitsuba's `rfilter`).
+typedef struct EmberPixelFilter {
+  // An `EmberFilterKind` value; any other is refused.
+  uint32_t kind;
+  // The tent's radius or the gaussian's standard deviation, in pixels (> 0; 0:
+  // Mitsuba's default for the kind; not read by the box).
+  float radius;
+} EmberPixelFilter;
+
+// A scene as arrays, version 2 (`ember_scene_create2`): version 1's arrays and camera,
+// with per-vertex normals and texture coordinates, `EmberBsdf` materials, textures,
+// lights of every kind, the camera's field-of-view axis, lens and pixel filter. Null
+// with a count of 0 is an empty array; the optional per-vertex arrays are null or hold
+// one entry per vertex. Read during `ember_scene_create2` only.
+typedef struct EmberSceneDesc2 {
+  // `vertex_count` × 3 floats.
+  const float *positions;
+  uint32_t vertex_count;
+  // Null, or `vertex_count` × 3 floats: shading normals (not zero; normalised).
+  const float *normals;
+  // Null, or `vertex_count` × 2 floats: texture coordinates (u, v), v = 0 at an
+  // image's top row (Mitsuba's convention after loading: an OBJ file's v is flipped).
+  const float *uvs;
+  // `triangle_count` × 3 vertex indices; the triangle's front is counter-clockwise.
+  const uint32_t *indices;
+  uint32_t triangle_count;
+  // `triangle_count` indices into `materials`.
+  const uint32_t *triangle_materials;
+  // Null, or `triangle_count` × 3 floats: radiance emitted from each triangle's front.
+  const float *triangle_emission;
+  const struct EmberBsdf *materials;
+  uint32_t material_count;
+  const struct EmberTexture *textures;
+  uint32_t texture_count;
+  const struct EmberLight *lights;
+  uint32_t light_count;
+  // As version 1's: `lookat`, `fov_degrees` along `fov_axis`, the film's size.
+  struct EmberCamera camera;
+  // An `EmberFovAxis` value (0: x, Mitsuba's default).
+  uint32_t fov_axis;
+  struct EmberLens lens;
+  struct EmberPixelFilter filter;
+} EmberSceneDesc2;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -341,6 +604,41 @@ enum EmberStatus ember_film_export(EmberRenderer renderer,
 // # Safety
 // A non-null `bytes` must point to `len` readable bytes.
 enum EmberStatus ember_film_import(EmberRenderer renderer, const uint8_t *bytes, size_t len);
+
+// Fill `*bsdf` with Mitsuba 3's defaults for `kind` (an `EmberBsdfKind` value): every
+// texture -1, one-sided, linear; reflectances 1, diffuse 0.5; η = 0, k = 1 (a mirror);
+// dielectrics in BK7 (1.5046), plastics in polypropylene (1.49), both in air
+// (1.000277); Beckmann, α = 0.1; `principled`'s own defaults.
+//
+// # Safety
+// A non-null `bsdf` must point to a writable `EmberBsdf`.
+enum EmberStatus ember_bsdf_init(uint32_t kind, struct EmberBsdf *bsdf);
+
+// Fill `*texture` with Mitsuba 3's defaults for `kind` (an `EmberTextureKind` value):
+// no pixels (set `pixels`, `width` and `height`), 3 linear channels, repeat, bilinear;
+// checkerboard colours 0.4 and 0.2; `to_uv` the identity.
+//
+// # Safety
+// A non-null `texture` must point to a writable `EmberTexture`.
+enum EmberStatus ember_texture_init(uint32_t kind, struct EmberTexture *texture);
+
+// Fill `*light` with Mitsuba 3's defaults for `kind` (an `EmberLightKind` value): at
+// the origin, along +z, colour 1, cutoff 20° and beam 15°, scale 1, `to_world` the
+// identity, no texture (an envmap needs one).
+//
+// # Safety
+// A non-null `light` must point to a writable `EmberLight`.
+enum EmberStatus ember_light_init(uint32_t kind, struct EmberLight *light);
+
+// Build a scene from a version-2 description; `*scene` receives its handle. Every
+// value is checked (`EMBER_STATUS_INVALID_ARGUMENT`, the message naming the field, e.g.
+// `materials[2].alpha`, and its range; `EMBER_STATUS_NULL_POINTER` for a null array with
+// a count above 0).
+//
+// # Safety
+// `desc` must be null or point to a valid description whose non-null pointers (the
+// textures' `pixels` included) hold as many elements as its counts say.
+enum EmberStatus ember_scene_create2(const struct EmberSceneDesc2 *desc, EmberScene *scene);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -20,11 +20,18 @@
 //! not safe to call from several threads at once when `threads` is not 1.
 #![allow(unsafe_code)]
 
+pub mod desc;
 mod film;
 mod ray_queries;
+mod scene;
 
+pub use desc::{
+    EmberBsdf, EmberBsdfKind, EmberFilterKind, EmberFovAxis, EmberLens, EmberLight, EmberLightKind, EmberMicrofacet, EmberPixelFilter, EmberPrincipled,
+    EmberSceneDesc2, EmberTexture, EmberTextureFilter, EmberTextureKind, EmberTextureSlot, EmberWrapMode,
+};
 pub use film::{ember_film_export, ember_film_import};
 pub use ray_queries::{Callbacks, EmberHit, EmberRay, EmberRayBatch, EmberRayBatchCallbacks, EmberRayCallbacks};
+pub use scene::{ember_bsdf_init, ember_light_init, ember_scene_create2, ember_texture_init};
 
 use std::cell::{Cell, RefCell};
 use std::ffi::{CStr, CString, c_char};
@@ -369,6 +376,7 @@ pub unsafe extern "C" fn ember_scene_create(desc: *const EmberSceneDesc, scene: 
                 .collect::<Result<_>>()?,
             point_lights: lights.iter().map(|l| (l.position, l.intensity)).collect(),
             camera: d.camera,
+            ..SceneDesc::default()
         };
         let data = SceneData::from_desc(&desc)?;
         *out = scenes()?.insert(Arc::new(data));
@@ -490,8 +498,19 @@ unsafe fn create(scene: EmberScene, settings: *const EmberRenderSettings, callba
     crate::check_memory(&data, &estimator, memory_limit)?;
     let r = Renderer::new(&data.scene, params, estimator).map_err(|e| Error::new(EmberStatus::InvalidConfig, e.to_string()))?;
     let film = Film::for_camera(&data.scene.camera);
-    let state =
-        RendererState { scene: data, renderer: r, film, imported: None, identity, threads, callbacks, ready: false, pass_started: false, out_of_order: None };
+    let state = RendererState {
+        scene: data,
+        renderer: r,
+        film,
+        imported: None,
+        identity,
+        threads,
+        pool: None,
+        callbacks,
+        ready: false,
+        pass_started: false,
+        out_of_order: None,
+    };
     let shared = Arc::new(Shared { state: RwLock::new(state), phase: RwLock::new(None) });
     *out = renderers()?.insert(shared);
     Ok(EmberStatus::Ok)
@@ -527,7 +546,12 @@ pub extern "C" fn ember_render_passes(renderer: EmberRenderer, passes: u32) -> E
         let q = tracer(&st.scene, &st.callbacks, &fault);
         let ctx = Context { scene: &st.scene.scene, tracer: &q };
         let limits = Limits { spp: end, deadline: None, interrupt: None, first_pass };
-        driver::render(&mut st.renderer, &ctx, &mut st.film, limits, st.threads, None, Instant::now())
+        // The renderer's own pool, started on its first render (not one per call).
+        let pool = match &mut st.pool {
+            Some(pool) => pool,
+            empty => empty.insert(driver::render_pool(st.threads).map_err(|e| Error::new(EmberStatus::InvalidArgument, e.to_string()))?),
+        };
+        driver::render_on(pool, &mut st.renderer, &ctx, &mut st.film, limits, None, Instant::now())
             .map_err(|e| Error::new(EmberStatus::InvalidArgument, e.to_string()))?;
         st.ready = true;
         fault_error(fault, "the rest of the call's rays were misses, and the film holds its passes: destroy the renderer")?;

@@ -14,19 +14,17 @@
 
 pub mod ffi;
 pub mod film_state;
+pub mod scene;
+
+pub use scene::{MaterialDesc, SceneData, SceneDesc, TextureDesc};
 
 use std::borrow::Cow;
-use std::sync::{Arc, OnceLock, RwLock, RwLockReadGuard, RwLockWriteGuard, TryLockError};
+use std::sync::{Arc, RwLock, RwLockReadGuard, RwLockWriteGuard, TryLockError};
 
-use ember_core::camera::{FovAxis, PerspectiveCamera};
 use ember_core::estimators::options::{self, OptionError, Options};
 use ember_core::estimators::{EstimatorConfig, EstimatorKind, Renderer};
-use ember_core::math::Vec3;
 use ember_core::render::Film;
-use ember_core::scene::{AreaEmission, Scene, SceneBuilder, SceneGeometry};
-use ember_core::spectrum::Rgb;
 use ember_core::transport::{Heuristic, MaxDepth, RenderParams};
-use ember_host::accel::Accel;
 
 /// What a call returned. Every function returns one; `Ok` is 0.
 #[repr(C)]
@@ -78,7 +76,7 @@ impl Error {
     pub fn new(status: EmberStatus, message: impl Into<String>) -> Self {
         Self { status, message: message.into() }
     }
-    fn arg(message: impl Into<String>) -> Self {
+    pub(crate) fn arg(message: impl Into<String>) -> Self {
         Self::new(EmberStatus::InvalidArgument, message)
     }
 }
@@ -131,158 +129,6 @@ impl<T> Registry<T> {
         self.slot(handle)?;
         let slot = &mut self.slots[handle as u32 as usize];
         slot.1.take()
-    }
-}
-
-/// A material of a scene description.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum MaterialDesc {
-    /// Lambertian with this albedo.
-    Diffuse([f32; 3]),
-    /// A perfect mirror with this reflectance.
-    Mirror([f32; 3]),
-    /// Smooth glass with this interior index of refraction (outside: 1).
-    Glass(f32),
-}
-
-/// A scene as plain data: triangles indexing positions, a material and optional
-/// emitted radiance per triangle, point lights and a camera.
-#[derive(Clone, Debug, Default)]
-pub struct SceneDesc {
-    pub positions: Vec<[f32; 3]>,
-    pub triangles: Vec<[u32; 3]>,
-    pub triangle_materials: Vec<u32>,
-    /// Per triangle, or empty: radiance emitted from the triangle's front.
-    pub triangle_emission: Vec<[f32; 3]>,
-    pub materials: Vec<MaterialDesc>,
-    /// (position, intensity).
-    pub point_lights: Vec<([f32; 3], [f32; 3])>,
-    /// The camera: the C struct itself (plain values, no pointers).
-    pub camera: ffi::EmberCamera,
-}
-
-/// A built scene: what the estimators read, the tracer's geometry, the built-in BVH and,
-/// per triangle of the description, its index in the geometry (`None`: dropped as
-/// degenerate).
-#[derive(Debug)]
-pub struct SceneData {
-    pub scene: Scene,
-    pub geometry: SceneGeometry,
-    pub accel: Accel,
-    pub triangle_index: Vec<Option<u32>>,
-    /// [`SceneData::hash`], computed the first time it is asked for.
-    hash: OnceLock<u64>,
-}
-
-fn finite3(v: [f32; 3], what: &str) -> Result<Vec3> {
-    if v.iter().all(|x| x.is_finite()) { Ok(Vec3::from(v)) } else { Err(Error::arg(format!("{what} is not finite"))) }
-}
-
-fn colour(v: [f32; 3], what: &str) -> Result<Rgb> {
-    if v.iter().all(|x| x.is_finite() && *x >= 0.0) { Ok(Rgb::new(v[0], v[1], v[2])) } else { Err(Error::arg(format!("{what} is negative or not finite"))) }
-}
-
-impl SceneData {
-    /// Build `desc`, checking every index and value.
-    pub fn from_desc(desc: &SceneDesc) -> Result<Self> {
-        let cam = &desc.camera;
-        if cam.width == 0 || cam.height == 0 || cam.width > 65536 || cam.height > 65536 {
-            return Err(Error::arg(format!("camera size {}x{} is outside 1..=65536", cam.width, cam.height)));
-        }
-        if !(cam.fov_degrees > 0.0 && cam.fov_degrees < 180.0) {
-            return Err(Error::arg(format!("camera fov_degrees {} is outside (0, 180)", cam.fov_degrees)));
-        }
-        let (origin, target, up) = (finite3(cam.origin, "camera origin")?, finite3(cam.target, "camera target")?, finite3(cam.up, "camera up")?);
-        let forward = target - origin;
-        if forward.length_squared() == 0.0 || forward.cross(up).length_squared() == 0.0 {
-            return Err(Error::arg("camera target equals its origin, or up is parallel to the view direction"));
-        }
-        let mut b = SceneBuilder::new();
-        b.set_camera(PerspectiveCamera::new(ember_core::scene::builtin::look_at(origin, target, up), cam.fov_degrees, FovAxis::X, cam.width, cam.height));
-        let mut materials = Vec::with_capacity(desc.materials.len());
-        for (i, m) in desc.materials.iter().enumerate() {
-            let material = match *m {
-                MaterialDesc::Diffuse(c) => ember_core::bsdf::Material::diffuse(colour(c, &format!("material {i}'s albedo"))?),
-                MaterialDesc::Mirror(c) => ember_core::bsdf::Material::conductor(Rgb::ZERO, Rgb::ONE, colour(c, &format!("material {i}'s reflectance"))?),
-                MaterialDesc::Glass(ior) if ior.is_finite() && ior > 0.0 => ember_core::bsdf::Material::dielectric(ior, 1.0, Rgb::ONE, Rgb::ONE),
-                MaterialDesc::Glass(ior) => return Err(Error::arg(format!("material {i}'s index of refraction {ior} is not positive and finite"))),
-            };
-            materials.push(b.add_material(material));
-        }
-        let n = desc.triangles.len();
-        if desc.triangle_materials.len() != n {
-            return Err(Error::arg(format!("{} triangle materials for {n} triangles", desc.triangle_materials.len())));
-        }
-        if !desc.triangle_emission.is_empty() && desc.triangle_emission.len() != n {
-            return Err(Error::arg(format!("{} triangle emissions for {n} triangles (give none or one per triangle)", desc.triangle_emission.len())));
-        }
-        let positions: Vec<Vec3> = desc.positions.iter().enumerate().map(|(i, p)| finite3(*p, &format!("position {i}"))).collect::<Result<_>>()?;
-        let mut triangle_index = Vec::with_capacity(n);
-        let mut kept = 0u32;
-        for (t, tri) in desc.triangles.iter().enumerate() {
-            let p = tri.map(|v| positions.get(v as usize).copied());
-            let [Some(p0), Some(p1), Some(p2)] = p else {
-                return Err(Error::arg(format!("triangle {t} indexes a vertex past the {} positions", positions.len())));
-            };
-            let m = desc.triangle_materials[t];
-            let material =
-                *materials.get(m as usize).ok_or_else(|| Error::arg(format!("triangle {t}'s material {m} is past the {} materials", materials.len())))?;
-            let emission = match desc.triangle_emission.get(t) {
-                Some(e) if e.iter().any(|&x| x != 0.0) => Some(AreaEmission { radiance: colour(*e, &format!("triangle {t}'s emission"))?, two_sided: false }),
-                _ => None,
-            };
-            if b.add_triangle([p0, p1, p2], None, material, emission) {
-                triangle_index.push(Some(kept));
-                kept += 1;
-            } else {
-                triangle_index.push(None);
-            }
-        }
-        for (i, (p, intensity)) in desc.point_lights.iter().enumerate() {
-            let light = ember_core::light::Light::point(
-                finite3(*p, &format!("point light {i}'s position"))?,
-                colour(*intensity, &format!("point light {i}'s intensity"))?,
-            );
-            b.add_light(light);
-        }
-        let (scene, geometry, _) = b.build().map_err(|e| Error::arg(format!("the scene cannot be built: {e}")))?;
-        Ok(Self::new(scene, geometry, triangle_index))
-    }
-
-    /// A built-in scene: `cornell-box` or `glass-spheres`, as `ember render --builtin`.
-    pub fn builtin(name: &str, width: u32, height: u32) -> Result<Self> {
-        if width == 0 || height == 0 || width > 65536 || height > 65536 {
-            return Err(Error::arg(format!("size {width}x{height} is outside 1..=65536")));
-        }
-        let builder = match name {
-            "cornell-box" => ember_core::scene::builtin::cornell_box(width, height),
-            "glass-spheres" => ember_core::scene::builtin_glass::glass_spheres(width, height),
-            other => return Err(Error::arg(format!("no built-in scene '{other}' (cornell-box, glass-spheres)"))),
-        };
-        let (scene, geometry, _) = builder.build().map_err(|e| Error::arg(format!("built-in scene: {e}")))?;
-        let triangle_index = (0..geometry.triangles.len() as u32).map(Some).collect();
-        Ok(Self::new(scene, geometry, triangle_index))
-    }
-
-    fn new(scene: Scene, geometry: SceneGeometry, triangle_index: Vec<Option<u32>>) -> Self {
-        let accel = Accel::new(&geometry);
-        Self { scene, geometry, accel, triangle_index, hash: OnceLock::new() }
-    }
-
-    /// FNV-1a of everything a render reads, as the CLI hashes its scenes
-    /// (`ember_host::scene::PreparedScene::hash`): the scene's `Debug` form (camera,
-    /// materials, lights), the BVH's geometry as raw bits, and each description
-    /// triangle's index in the geometry (the callbacks name triangles by it; `u32::MAX`
-    /// for a dropped one). Computed once, when an
-    /// exported film first needs it.
-    pub fn hash(&self) -> u64 {
-        *self.hash.get_or_init(|| {
-            let mut h = ember_host::scene::scene_hasher(&self.scene, &self.accel);
-            for index in &self.triangle_index {
-                std::hash::Hasher::write_u32(&mut h, index.unwrap_or(u32::MAX));
-            }
-            h.value()
-        })
     }
 }
 
@@ -446,6 +292,9 @@ pub struct RendererState {
     /// What the film's passes depend on, less the scene's hash (computed on export).
     pub identity: RenderIdentity,
     pub threads: usize,
+    /// The `threads` threads `ember_render_passes` runs on: started by its first call and
+    /// kept until the renderer is destroyed (one pool per renderer, not per call).
+    pub pool: Option<rayon::ThreadPool>,
     pub callbacks: Option<ffi::Callbacks>,
     /// Set up (setup phases run).
     pub ready: bool,

@@ -329,7 +329,8 @@ impl std::error::Error for DriverError {}
 
 /// Render passes of `est` into `film` on `threads` threads until `limits` say stop
 /// (pending setup phases run first), telling `progress` how it goes. `program_start` is
-/// when the program started (for the summary's total time).
+/// when the program started (for the summary's total time). The threads are a pool of
+/// this call's ([`render_on`] takes one a host keeps between calls).
 pub fn render<E, Q>(
     est: &mut E,
     ctx: &Context<'_, Q>,
@@ -344,13 +345,45 @@ where
     E::Data: Send,
     Q: RayQuery + Sync + ?Sized,
 {
+    check_resolution(ctx, film)?;
+    let pool = render_pool(threads)?;
+    render_on(&pool, est, ctx, film, limits, progress, program_start)
+}
+
+/// The pool [`render`] starts for `threads` threads (at least 1), named `ember-render-i`:
+/// for a host that renders many times with the same threads ([`render_on`]).
+pub fn render_pool(threads: usize) -> Result<rayon::ThreadPool, DriverError> {
+    thread_pool(threads, "ember-render")
+}
+
+fn check_resolution<Q: ?Sized>(ctx: &Context<'_, Q>, film: &Film) -> Result<(), DriverError> {
     let camera = &ctx.scene.camera;
     let (w, h) = (camera.width(), camera.height());
     if (film.width(), film.height()) != (w, h) {
         return Err(DriverError::Resolution { film: (film.width(), film.height()), renderer: (w, h) });
     }
-    let threads = threads.max(1);
-    let pool = thread_pool(threads, "ember-render")?;
+    Ok(())
+}
+
+/// [`render`] on the threads of `pool`, which the caller keeps (the C API's renderer
+/// starts one on its first render and reuses it: a pool per call cost a thread start per
+/// thread and call). The bits do not depend on the pool.
+pub fn render_on<E, Q>(
+    pool: &rayon::ThreadPool,
+    est: &mut E,
+    ctx: &Context<'_, Q>,
+    film: &mut Film,
+    limits: Limits,
+    progress: Option<&dyn Progress>,
+    program_start: Instant,
+) -> Result<RenderSummary, DriverError>
+where
+    E: Phased<Q> + Sync + Send + ?Sized,
+    E::Data: Send,
+    Q: RayQuery + Sync + ?Sized,
+{
+    check_resolution(ctx, film)?;
+    let threads = pool.current_num_threads();
     let mut buffers = PhaseBuffers::new();
     let mut times = PhaseTimes::new();
     if let Some(p) = progress {
