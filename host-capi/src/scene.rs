@@ -557,7 +557,7 @@ impl SceneData {
             b.add_light(light(i, l, &textures)?);
         }
         let (scene, geometry, _) = b.build().map_err(|e| Error::arg(format!("the scene cannot be built: {e}")))?;
-        Ok(Self::new(scene, geometry, triangle_index))
+        Self::new(scene, geometry, triangle_index)
     }
 
     /// A built-in scene: `cornell-box` or `glass-spheres`, as `ember render --builtin`.
@@ -572,12 +572,19 @@ impl SceneData {
         };
         let (scene, geometry, _) = builder.build().map_err(|e| Error::arg(format!("built-in scene: {e}")))?;
         let triangle_index = (0..geometry.triangles.len() as u32).map(Some).collect();
-        Ok(Self::new(scene, geometry, triangle_index))
+        Self::new(scene, geometry, triangle_index)
     }
 
-    fn new(scene: Scene, geometry: SceneGeometry, triangle_index: Vec<Option<u32>>) -> Self {
-        let accel = Accel::new(&geometry);
-        Self { scene, geometry, accel, triangle_index, hash: OnceLock::new() }
+    /// The scene with its BVH, whose queries run with the instruction set the
+    /// environment's `EMBER_SIMD` names (as `ember render`'s; the default otherwise:
+    /// `ember_host::accel::Isa::best`). A name this machine does not offer is refused.
+    /// Images do not depend on it.
+    fn new(scene: Scene, geometry: SceneGeometry, triangle_index: Vec<Option<u32>>) -> Result<Self> {
+        let mut accel = Accel::new(&geometry);
+        let env = std::env::var("EMBER_SIMD").ok();
+        let isa = ember_host::accel::Isa::select(None, env.as_deref()).map_err(|e| Error::arg(e.message))?;
+        accel.set_isa(isa).map_err(|e| Error::arg(e.message))?;
+        Ok(Self { scene, geometry, accel, triangle_index, hash: OnceLock::new() })
     }
 
     /// FNV-1a of everything a render reads, as the CLI hashes its scenes
