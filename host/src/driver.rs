@@ -344,13 +344,31 @@ where
     E::Data: Send,
     Q: RayQuery + Sync + ?Sized,
 {
+    render_on(&thread_pool(threads.max(1), "ember-render")?, est, ctx, film, limits, progress, program_start)
+}
+
+/// [`render`] on `pool`, a pool the host keeps from call to call (a library that renders
+/// a pass per call would otherwise start its threads for every pass).
+pub fn render_on<E, Q>(
+    pool: &rayon::ThreadPool,
+    est: &mut E,
+    ctx: &Context<'_, Q>,
+    film: &mut Film,
+    limits: Limits,
+    progress: Option<&dyn Progress>,
+    program_start: Instant,
+) -> Result<RenderSummary, DriverError>
+where
+    E: Phased<Q> + Sync + Send + ?Sized,
+    E::Data: Send,
+    Q: RayQuery + Sync + ?Sized,
+{
     let camera = &ctx.scene.camera;
     let (w, h) = (camera.width(), camera.height());
     if (film.width(), film.height()) != (w, h) {
         return Err(DriverError::Resolution { film: (film.width(), film.height()), renderer: (w, h) });
     }
-    let threads = threads.max(1);
-    let pool = thread_pool(threads, "ember-render")?;
+    let threads = pool.current_num_threads();
     let mut buffers = PhaseBuffers::new();
     let mut times = PhaseTimes::new();
     if let Some(p) = progress {
