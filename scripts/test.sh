@@ -40,6 +40,9 @@ cargo check -q -p ember-core -p ember-host --target aarch64-unknown-linux-gnu
 step "workspace tests (optimised)"
 cargo test --release --workspace
 
+step "the Python package: a fresh venv, pip install ./host-python, the import one-liner, pytest, the example (docs/python.md)"
+scripts/test-python.sh
+
 step "Embree's ray queries against ours (feature embree: our FFI, its lints, its test)"
 if [ ! -e /usr/include/embree3/rtcore.h ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
   apt-get install -y libembree-dev >/dev/null || { apt-get update >/dev/null && apt-get install -y libembree-dev >/dev/null; } || true
