@@ -49,10 +49,13 @@ fn estimators() -> Vec<(&'static str, &'static str, bool)> {
     EstimatorKind::ALL.iter().map(|k| (k.name(), k.summary(), k.is_compiled())).collect()
 }
 
-/// Every estimator option of the core's table: (name as the command line spells it,
-/// values in words, help, the estimators it applies to, the names a choice takes).
+/// One row of [`estimator_options`]: (name as the command line spells it, values in
+/// words, help, the estimators it applies to, the names a choice takes).
+type OptionRow = (&'static str, &'static str, &'static str, Vec<&'static str>, Vec<&'static str>);
+
+/// Every estimator option of the core's table.
 #[pyfunction]
-fn estimator_options() -> Vec<(&'static str, &'static str, &'static str, Vec<&'static str>, Vec<&'static str>)> {
+fn estimator_options() -> Vec<OptionRow> {
     options::all()
         .iter()
         .map(|o| {
