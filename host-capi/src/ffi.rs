@@ -213,8 +213,8 @@ thread_local! {
     static IN_CALL: Cell<u32> = const { Cell::new(0) };
 }
 
-/// The names of the threads `ember_host::driver::render` starts (its pool is named
-/// "ember-render"; the panic test in `tests/panics.rs` fails if the two part).
+/// The names of the render threads (`ember_render_passes` names its pool "ember-render";
+/// the panic test in `tests/panics.rs` fails if the two part).
 const RENDER_THREAD_PREFIX: &str = "ember-render-";
 
 /// Install, once, the panic hook that keeps ember's panics off the host's stderr: silent
@@ -490,8 +490,19 @@ unsafe fn create(scene: EmberScene, settings: *const EmberRenderSettings, callba
     crate::check_memory(&data, &estimator, memory_limit)?;
     let r = Renderer::new(&data.scene, params, estimator).map_err(|e| Error::new(EmberStatus::InvalidConfig, e.to_string()))?;
     let film = Film::for_camera(&data.scene.camera);
-    let state =
-        RendererState { scene: data, renderer: r, film, imported: None, identity, threads, callbacks, ready: false, pass_started: false, out_of_order: None };
+    let state = RendererState {
+        scene: data,
+        renderer: r,
+        film,
+        imported: None,
+        identity,
+        threads,
+        pool: None,
+        callbacks,
+        ready: false,
+        pass_started: false,
+        out_of_order: None,
+    };
     let shared = Arc::new(Shared { state: RwLock::new(state), phase: RwLock::new(None) });
     *out = renderers()?.insert(shared);
     Ok(EmberStatus::Ok)
@@ -527,7 +538,11 @@ pub extern "C" fn ember_render_passes(renderer: EmberRenderer, passes: u32) -> E
         let q = tracer(&st.scene, &st.callbacks, &fault);
         let ctx = Context { scene: &st.scene.scene, tracer: &q };
         let limits = Limits { spp: end, deadline: None, interrupt: None, first_pass };
-        driver::render(&mut st.renderer, &ctx, &mut st.film, limits, st.threads, None, Instant::now())
+        let pool = match &mut st.pool {
+            Some(pool) => pool,
+            slot @ None => slot.insert(driver::thread_pool(st.threads, "ember-render").map_err(|e| Error::new(EmberStatus::InvalidArgument, e.to_string()))?),
+        };
+        driver::render_on(pool, &mut st.renderer, &ctx, &mut st.film, limits, None, Instant::now())
             .map_err(|e| Error::new(EmberStatus::InvalidArgument, e.to_string()))?;
         st.ready = true;
         fault_error(fault, "the rest of the call's rays were misses, and the film holds its passes: destroy the renderer")?;

@@ -446,6 +446,9 @@ pub struct RendererState {
     /// What the film's passes depend on, less the scene's hash (computed on export).
     pub identity: RenderIdentity,
     pub threads: usize,
+    /// The render threads, started by the first `ember_render_passes` and kept until the
+    /// renderer is destroyed (a pool per call started `threads` threads for every call).
+    pub pool: Option<rayon::ThreadPool>,
     pub callbacks: Option<ffi::Callbacks>,
     /// Set up (setup phases run).
     pub ready: bool,
