@@ -24,6 +24,8 @@ echo "python: venv and pip install ./host-python numpy pytest matplotlib: $((t1 
 # The `ember` command the bit-identity tests compare with: the workspace tests built it
 # (`cargo build -p ember-cli` alone would rebuild its dependencies with other features).
 [ -x "$CARGO_TARGET_DIR/release/ember" ] || cargo build --release -q -p ember-cli
+# The C library the array-scene test hands the same arrays to (ctypes).
+[ -e "$CARGO_TARGET_DIR/release/libember_capi.so" ] || cargo build --release -q -p ember-capi
 "$venv/python" -m pytest -q -p no:cacheprovider host-python/tests
 t2=$(date +%s)
 echo "python: the one-liner and pytest: $((t2 - t1)) s"

@@ -132,6 +132,7 @@ fn _ember(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<scene::Scene>()?;
     m.add_class::<session::Render>()?;
     m.add_function(wrap_pyfunction!(scene::load_file, m)?)?;
+    m.add_function(wrap_pyfunction!(scene::scene_from_arrays, m)?)?;
     m.add_function(wrap_pyfunction!(estimators, m)?)?;
     m.add_function(wrap_pyfunction!(estimator_options, m)?)?;
     m.add_function(wrap_pyfunction!(compare, m)?)?;

@@ -24,7 +24,7 @@ use ember_host::scene::PreparedScene;
 use ember_host::setup;
 
 use crate::Error;
-use crate::scene::{Scene, prepare};
+use crate::scene::Scene;
 
 /// What a render is asked for, as the Python half hands it over (types and integer
 /// ranges already checked there).
@@ -96,7 +96,7 @@ impl Render {
         let time = request.time.map(|t| setup::check_seconds(t, t)).transpose().map_err(|e| Error::Value(format!("time: {e}")))?;
         let prepared = match (request.width, request.height) {
             (None, None) => scene.prepared.clone(),
-            (w, h) => Arc::new(prepare(&scene.path, &scene.defines, w, h)?),
+            (w, h) => Arc::new(scene.resized(w, h)?),
         };
         let max_depth = request.max_depth.or(prepared.max_depth).unwrap_or(-1);
         let threads = driver::capped_threads(request.threads);

@@ -39,6 +39,7 @@ __all__ = [
     "reference_floor",
     "render",
     "render_progressive",
+    "scene_from_arrays",
     "version",
 ]
 
@@ -158,6 +159,51 @@ def load_file(path, **defines) -> Scene:
             raise ArgumentTypeError(f"scene parameter {key} must be a string or a number, got {type(value).__name__}")
         pairs.append((key, value if isinstance(value, str) else str(value)))
     return _ember.load_file(_path("path", path), pairs)
+
+
+def scene_from_arrays(positions, triangles, triangle_materials, materials, camera, emission=None, point_lights=()) -> Scene:
+    """A scene from arrays, through the C API's scene description (``ember_scene_create``'s
+    checks, docs/embedding.md), so one path serves C and Python.
+
+    - ``positions``: V x 3 floats; ``triangles``: T x 3 vertex indices (front
+      counter-clockwise); ``triangle_materials``: T indices into ``materials``;
+    - ``materials``: ``("diffuse", (r, g, b))``, ``("mirror", (r, g, b))`` or ``("glass", ior)``;
+    - ``emission``: ``None`` or T x 3 radiance from each triangle's front;
+    - ``point_lights``: ``(position, intensity)`` pairs;
+    - ``camera``: a dict with ``origin``, ``target``, ``up``, ``fov`` (horizontal, degrees),
+      ``width`` and ``height``.
+
+    A bad index or value raises ``ValueError`` naming it. (The description has diffuse,
+    mirror and glass materials and point lights so far: issue 55's second half completes it.)
+    """
+    pos = np.ascontiguousarray(positions, dtype=np.float32)
+    tris = np.asarray(triangles)
+    if pos.ndim != 2 or pos.shape[1] != 3:
+        raise ValueError(f"positions must be V x 3, got shape {pos.shape}")
+    if tris.ndim != 2 or tris.shape[1] != 3 or not np.issubdtype(tris.dtype, np.integer):
+        raise ValueError(f"triangles must be T x 3 whole numbers, got shape {tris.shape} of {tris.dtype}")
+    if tris.size and (tris.min() < 0 or tris.max() > U32_MAX):
+        raise ValueError("triangles hold a vertex index outside 0 to 4294967295")
+    mats = np.asarray(triangle_materials)
+    if mats.shape != (tris.shape[0],) or not np.issubdtype(mats.dtype, np.integer) or (mats.size and (mats.min() < 0 or mats.max() > U32_MAX)):
+        raise ValueError(f"triangle_materials must be {tris.shape[0]} indices, got shape {mats.shape} of {mats.dtype}")
+    emitted = b"" if emission is None else np.ascontiguousarray(emission, dtype=np.float32).reshape(-1, 3).tobytes()
+    described = []
+    for i, m in enumerate(materials):
+        kind, value = m
+        if kind == "glass":
+            described.append((kind, (0.0, 0.0, 0.0), float(value)))
+        else:
+            described.append((kind, tuple(float(c) for c in value), 0.0))
+    lights = [(tuple(map(float, p)), tuple(map(float, c))) for p, c in point_lights]
+    try:
+        cam = (tuple(map(float, camera["origin"])), tuple(map(float, camera["target"])), tuple(map(float, camera["up"])),
+               float(camera["fov"]), _whole("camera width", camera["width"], 1, 65536), _whole("camera height", camera["height"], 1, 65536))
+    except KeyError as e:
+        raise ValueError(f"camera has no {e.args[0]} (origin, target, up, fov, width, height)") from None
+    return _ember.scene_from_arrays(
+        pos.tobytes(), np.ascontiguousarray(tris, dtype=np.uint32).tobytes(), [int(m) for m in mats], emitted, described, lights, cam
+    )
 
 
 def _start(scene, estimator, spp, time, seed, threads, width, height, max_depth, no_plan, options) -> _ember.Render:
