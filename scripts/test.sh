@@ -18,7 +18,7 @@ cargo clippy --workspace --all-targets -- -D warnings
 cargo clippy -p ember-host --no-default-features --target wasm32-unknown-unknown -- -D warnings
 
 step "one home per role (issue 49): no import cycles in the core or the hosts, a protocol that names no estimator, a C library without the CLI's or the file formats' crates"
-scripts/import-cycles.py core/src host/src host-formats/src host-cli/src host-capi/src host-wasm/src
+scripts/import-cycles.py core/src host/src host-formats/src host-cli/src host-capi/src host-wasm/src host-python/src
 if grep -rnE 'crate::(estimators|path|subspace|segment|merge|plan)\b' core/src/render/; then
   echo "core/src/render (the protocol) names an estimator or an estimator's data (above)"; exit 1
 fi
@@ -39,6 +39,9 @@ cargo check -q -p ember-core -p ember-host --target aarch64-unknown-linux-gnu
 
 step "workspace tests (optimised)"
 cargo test --release --workspace
+
+step "the Python package: a fresh venv, pip install ./host-python, the import one-liner, pytest, the example (docs/python.md)"
+scripts/test-python.sh
 
 step "Embree's ray queries against ours (feature embree: our FFI, its lints, its test)"
 if [ ! -e /usr/include/embree3/rtcore.h ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then

@@ -220,8 +220,8 @@ thread_local! {
     static IN_CALL: Cell<u32> = const { Cell::new(0) };
 }
 
-/// The names of the threads `ember_host::driver::render` starts (its pool is named
-/// "ember-render"; the panic test in `tests/panics.rs` fails if the two part).
+/// The names of the render threads (`ember_render_passes` names its pool "ember-render";
+/// the panic test in `tests/panics.rs` fails if the two part).
 const RENDER_THREAD_PREFIX: &str = "ember-render-";
 
 /// Install, once, the panic hook that keeps ember's panics off the host's stderr: silent

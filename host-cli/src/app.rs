@@ -394,10 +394,7 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
     // (cli::parse_seconds bounds --time; a deadline past what Instant holds would be never.)
     let deadline = args.time.and_then(|t| Duration::try_from_secs_f64(t).ok().and_then(|d| start.checked_add(d)));
     // --spp, else unlimited under --time, else the scene file's sample count, else the default.
-    let spp = match (args.spp, args.time, built.file_spp) {
-        (None, None, Some(n)) => n,
-        _ => args.spp_limit(),
-    };
+    let spp = ember_host::setup::pass_limit(args.spp, args.time, built.file_spp);
     let (mut first_pass, end) = split.map_or((0, spp), |(r, _)| (r.start, r.end));
     // A resumed render is the split render of the passes the image lacks, merged with it.
     if let (Some((path, header, _)), Some(identity)) = (&resumed, &identity) {

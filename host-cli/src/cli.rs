@@ -7,9 +7,7 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, Parser, Subcommand};
 
-/// Passes rendered when neither `--spp` nor `--time` is given and the scene file gives
-/// no `sample_count` (pbrt's default; the built-in scenes always use it).
-pub const DEFAULT_SPP: u32 = 16;
+pub use ember_host::setup::DEFAULT_SPP;
 /// Resolution of the built-in scene when `--width`/`--height` are not given.
 pub const DEFAULT_RESOLUTION: (u32, u32) = (512, 512);
 
@@ -689,17 +687,11 @@ fn parse_share(text: &str) -> Result<f32, String> {
     }
 }
 
-/// The longest time budget: ten years (a larger `--time 1e300` overflowed `Instant`'s
-/// arithmetic and panicked after the scene had loaded).
-pub const MAX_SECONDS: f64 = 10.0 * 365.0 * 86400.0;
+pub use ember_host::setup::MAX_SECONDS;
 
 fn parse_seconds(s: &str) -> Result<f64, String> {
     let v: f64 = s.parse().map_err(|_| format!("'{s}' is not a number of seconds"))?;
-    if v.is_finite() && v > 0.0 && v <= MAX_SECONDS {
-        Ok(v)
-    } else {
-        Err(format!("the time budget must be positive and at most {MAX_SECONDS} seconds (ten years), got {s}"))
-    }
+    ember_host::setup::check_seconds(v, s)
 }
 
 fn parse_exposure(s: &str) -> Result<f32, String> {
@@ -723,11 +715,7 @@ impl RenderArgs {
     /// Maximum passes: `--spp`, else unlimited under `--time`, else [`DEFAULT_SPP`] (the
     /// render command puts the scene file's `sample_count` before the last).
     pub fn spp_limit(&self) -> u32 {
-        match (self.spp, self.time) {
-            (Some(n), _) => n,
-            (None, Some(_)) => u32::MAX,
-            (None, None) => DEFAULT_SPP,
-        }
+        ember_host::setup::pass_limit(self.spp, self.time, None)
     }
 
     /// Render threads: `--threads`, else every core.

@@ -8,7 +8,6 @@ use std::time::Instant;
 
 use ember_core::estimators::{EstimatorConfig, EstimatorKind, Renderer};
 use ember_core::render::{Context, Film};
-use ember_core::transport::{Heuristic, MaxDepth, RenderParams};
 use ember_host::driver::{self, DriverError, Limits, PhaseTimes, RenderSummary};
 use ember_host::scene::PreparedScene;
 
@@ -56,10 +55,7 @@ impl CoreRenderer {
         threads: usize,
         model: Option<&Path>,
     ) -> Result<Self, String> {
-        // PT combines its two techniques with the power heuristic (as Mitsuba does);
-        // BDPT's weights are the balance heuristic by construction.
-        let params = RenderParams { max_depth: MaxDepth(max_depth), seed, heuristic: Heuristic::Power, ..RenderParams::default() };
-        let renderer = Renderer::new(&prepared.scene, params, config).map_err(|e| format!("{} {e}", config.kind()))?;
+        let renderer = ember_host::setup::new_renderer(&prepared.scene, config, max_depth, seed)?;
         let mut r = Self { prepared, renderer, config, setup_times: PhaseTimes::new(), setup_seconds: 0.0 };
         if let Some(path) = model {
             let camera = &r.prepared.scene.camera;
@@ -150,43 +146,14 @@ impl CoreRenderer {
         }
     }
 
-    /// The kernel radius r₀ this renderer's setup chose, with the rule that chose it: the
-    /// merging estimators (where the plan keeps merging), the path filters and segment
-    /// kernels of the disk; `None` for the others.
+    /// The kernel radius r₀ this renderer's setup chose ([`ember_host::setup::initial_radius`]).
     pub fn initial_radius(&self) -> Option<(f32, ember_core::merge::RadiusRule)> {
-        match &self.renderer {
-            Renderer::Merging(m) if m.config.merges(m.mode) => Some((m.r0, m.config.radius)),
-            Renderer::Segment(s) => match s.kernel {
-                ember_core::segment::Kernel::Disk { radius } => Some((radius, s.config.radius)),
-                ember_core::segment::Kernel::Dirac => None,
-            },
-            Renderer::Filter(f) => Some((f.r0, f.config.radius)),
-            Renderer::PhotonFilter(f) => Some((f.r0, f.config.radius)),
-            Renderer::BidirectionalFilter(f) => Some((f.r0, f.config.radius)),
-            _ => None,
-        }
+        ember_host::setup::initial_radius(&self.renderer)
     }
 
-    /// Refuse a kernel radius larger than the scene's bounding-box diagonal: every merge
-    /// or filter kernel would then span the whole scene, and the image came out nearly
-    /// black with exit 0 (`--radius 10` on the 2-unit Cornell box: 2 % of the right mean).
+    /// Refuse a kernel radius larger than the scene ([`ember_host::setup::check_radius`]).
     pub fn check_radius(&self) -> Result<(), String> {
-        use ember_core::merge::RadiusRule;
-        let Some((r0, rule)) = self.initial_radius() else { return Ok(()) };
-        let bounds = &self.prepared.scene.bounds;
-        let diagonal = if bounds.is_empty() { 0.0 } else { (bounds.max - bounds.min).length() };
-        if !(diagonal > 0.0) || r0 <= diagonal {
-            return Ok(());
-        }
-        let option = match rule {
-            RadiusRule::Footprints(k) => format!("--radius-footprints {k}"),
-            RadiusRule::SceneFraction(f) => format!("--radius-scene {f}"),
-            RadiusRule::Absolute(r) => format!("--radius {r}"),
-        };
-        Err(format!(
-            "{option} gives {} a kernel radius r0 = {r0:.4e}, larger than the scene itself (its bounding box's diagonal is {diagonal:.4e}): every kernel would span the whole scene; lower it",
-            self.renderer.kind().name()
-        ))
+        ember_host::setup::check_radius(&self.renderer, &self.prepared.scene)
     }
 
     /// The filtering estimators' report line: memory per pass and per pixel, reuse, depth

@@ -1,57 +1,13 @@
-//! The scene plan on the host: the core's facts and decisions ([`ember_core::plan`]),
-//! its pilot mapped on threads, and `ember plan`'s report (text or JSON).
+//! The scene plan on the command line: `ember plan`'s report (text or JSON). The plan
+//! itself, its pilot mapped on threads, is [`ember_host::setup`]'s, shared with every host.
 
-use ember_core::estimators::{EstimatorConfig, EstimatorKind};
-use ember_core::plan::{PilotStats, Plan, SceneFacts, pilot};
-use ember_core::render::Context;
-use ember_core::transport::{Heuristic, MaxDepth, RenderParams};
-use rayon::prelude::*;
+use ember_core::estimators::EstimatorKind;
+use ember_core::plan::{Plan, SceneFacts, pilot};
+use ember_core::transport::MaxDepth;
 
 use ember_host::scene::PreparedScene;
 
-/// Pilot samples per rayon task.
-const PILOT_CHUNK: u32 = 256;
-
-/// Run `samples` pilot samples on `threads` threads (the counts do not depend on them).
-pub fn run_pilot(prepared: &PreparedScene, max_depth: i32, seed: u64, samples: u32, threads: usize) -> Result<PilotStats, String> {
-    let params = RenderParams { max_depth: MaxDepth(max_depth), seed, heuristic: Heuristic::Power, ..RenderParams::default() };
-    let ctx = Context { scene: &prepared.scene, tracer: &prepared.accel };
-    let pool = ember_host::driver::thread_pool(threads, "ember-pilot").map_err(|e| e.to_string())?;
-    let chunks = samples.div_ceil(PILOT_CHUNK);
-    let parts: Vec<PilotStats> = pool.install(|| {
-        (0..chunks)
-            .into_par_iter()
-            .map(|c| {
-                let range = c * PILOT_CHUNK..((c + 1) * PILOT_CHUNK).min(samples);
-                pilot::map(&ctx, &params, range, samples)
-            })
-            .collect()
-    });
-    // Summed in chunk order: the energies (floating point) do not depend on the threads.
-    Ok(parts.into_iter().fold(PilotStats::default(), |mut a, b| {
-        a += b;
-        a
-    }))
-}
-
-/// Does deciding for `config` need the pilot? (Only SPCBPT's Γ decision reads it.)
-pub fn needs_pilot(config: &EstimatorConfig) -> bool {
-    matches!(config, EstimatorConfig::Spcbpt(_))
-}
-
-/// The film's pixel count, which sizes the plan's memory estimates.
-fn film_pixels(prepared: &PreparedScene) -> u32 {
-    let camera = &prepared.scene.camera;
-    (camera.width() as u64 * camera.height() as u64).min(u32::MAX as u64) as u32
-}
-
-/// The plan for `config` on `prepared` at depth `max_depth`, with a pilot of `samples`
-/// where the decisions need one.
-pub fn plan_for(prepared: &PreparedScene, config: EstimatorConfig, max_depth: i32, seed: u64, threads: usize, samples: u32) -> Result<Plan, String> {
-    let facts = SceneFacts::new(&prepared.scene, MaxDepth(max_depth));
-    let pilot = if needs_pilot(&config) { Some(run_pilot(prepared, max_depth, seed, samples, threads)?) } else { None };
-    Ok(Plan::decide(facts, pilot, config, film_pixels(prepared)))
-}
+pub use ember_host::setup::{film_pixels, needs_pilot, plan_for, run_pilot};
 
 /// `ember plan`'s report in words: the facts and the pilot once, then per estimator its
 /// memory and its decisions.

@@ -6,7 +6,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use ember_core::estimators::{EstimatorConfig, Renderer};
+use ember_core::estimators::Renderer;
 use ember_core::render::Film;
 use ember_core::scene::builtin;
 use ember_formats::mitsuba;
@@ -56,8 +56,7 @@ fn prepare_file_with(
     simd: Option<&str>,
 ) -> Result<PreparedScene, String> {
     let loaded = mitsuba::load_scene(path, &mitsuba::LoadOptions { defaults, width, height }).map_err(|e| e.to_string())?;
-    let (scene, geometry, warnings) = loaded.builder.build().map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut prepared = PreparedScene::new(path.display().to_string(), scene, &geometry, warnings, loaded.max_depth, loaded.spp, loaded.warnings);
+    let mut prepared = PreparedScene::build(path.display().to_string(), loaded.builder, loaded.max_depth, loaded.spp, loaded.warnings)?;
     prepared.inputs = std::iter::once(path.to_path_buf()).chain(loaded.inputs).collect();
     choose_simd(&mut prepared, simd)?;
     Ok(prepared)
@@ -103,41 +102,7 @@ pub fn make_built_at(args: &RenderArgs, start: Instant) -> Result<Built, String>
     })
 }
 
-/// The memory a run may claim, `limit` or else what the machine has available
-/// ([`ember_host::memory`]), with how messages name it.
-pub fn memory_budget(limit: Option<u64>) -> (Option<u64>, &'static str) {
-    match limit {
-        Some(l) => (Some(l), "--memory-limit"),
-        None => (ember_host::memory::available_bytes(), "available memory"),
-    }
-}
-
-/// Refuse, before anything large is allocated, a render whose estimated memory exceeds
-/// `limit` or, without one, the memory available. Under `--memory-limit` (a budget for the
-/// whole process) the loaded geometry counts too; measured against the memory available
-/// it does not, since it is already allocated and so already missing from that figure.
-pub fn check_memory(prepared: &PreparedScene, config: &EstimatorConfig, limit: Option<u64>) -> Result<(), String> {
-    let camera = &prepared.scene.camera;
-    let (bytes, estimate) = prepared.memory_need(config);
-    let geometry = if limit.is_some() { prepared.geometry_bytes() } else { 0 };
-    match memory_budget(limit) {
-        (Some(a), source) if bytes.saturating_add(geometry) > a => {
-            let (largest, lower) = if geometry > bytes {
-                (format!("the scene's geometry, {} triangles,", prepared.accel.triangle_count()), "the scene's triangle count")
-            } else {
-                (format!("{} at {}×{}", estimate.largest, camera.width(), camera.height()), estimate.lower)
-            };
-            Err(format!(
-                "{} would need about {} ({largest} is the largest part{}), more than the {} of {source}; lower {lower} or raise --memory-limit",
-                config.kind(),
-                ember_host::memory::human(bytes.saturating_add(geometry)),
-                if geometry > 0 { format!("; the geometry holds {}", ember_host::memory::human(geometry)) } else { String::new() },
-                ember_host::memory::human(a),
-            ))
-        }
-        _ => Ok(()),
-    }
-}
+pub use ember_host::setup::{check_memory, memory_budget};
 
 /// The renderer a `render` command asks for, its setup run and reported on stderr.
 pub fn make_core_renderer(args: &RenderArgs) -> Result<CoreRenderer, String> {
@@ -177,11 +142,7 @@ fn renderer_and_head(args: &RenderArgs, start: Instant) -> Result<(CoreRenderer,
         }
     };
     let asked = args.cache.config_for(kind);
-    // Options are checked before anything is estimated from them (an out-of-range
-    // --subspaces was reported as too much memory rather than as out of range).
-    asked.validate().map_err(|e| format!("{} {e}", asked.kind()))?;
-    // The plan is a pure function of the scene, the options and the seed, so `ember
-    // train` and the renders that load its model plan alike.
+    ember_host::setup::check_config(&asked)?;
     let config = if args.no_plan {
         asked
     } else {

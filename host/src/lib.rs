@@ -1,11 +1,12 @@
 //! `ember-host`: what every host with `std` shares around the `no_std` core — the
 //! ray queries ([`accel`]: BVH over triangles, exact spheres, the core's `RayQuery`), the
 //! render protocol on threads ([`driver`]), interrupts ([`interrupt`]), the memory check
-//! ([`memory`]), scene preparation that reads no files ([`scene`]) and the program's
-//! version ([`program_version`]).
+//! ([`memory`]), scene preparation that reads no files ([`scene`]), the steps from a
+//! configuration to a renderer every host takes ([`setup`]: the plan, the memory check,
+//! the radius check) and the program's version ([`program_version`]).
 //!
-//! What code here may do: threads, clocks and signal handlers (in [`driver`] and
-//! [`interrupt`] only, behind the default cargo feature `threads`: without it the crate
+//! What code here may do: threads, clocks and signal handlers (in [`driver`],
+//! [`interrupt`] and [`setup`] only, behind the default cargo feature `threads`: without it the crate
 //! compiles for `wasm32-unknown-unknown`, and the browser's module traces with its
 //! [`accel`]), and reading `/proc`. What it may not: read or write scene and image files
 //! (that is `ember-formats`), parse command lines (`ember-cli`), or print — a library
@@ -22,6 +23,8 @@ pub mod driver;
 pub mod interrupt;
 pub mod memory;
 pub mod scene;
+#[cfg(feature = "threads")]
+pub mod setup;
 
 /// This program's version and build: parts of a split render and exported films from
 /// different builds are never merged, since any code change may change the passes' bits.

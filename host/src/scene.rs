@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use ember_core::estimators::{EstimatorConfig, MemoryEstimate};
-use ember_core::scene::{BuildWarnings, Scene, SceneGeometry};
+use ember_core::scene::{BuildWarnings, Scene, SceneBuilder, SceneGeometry};
 
 use crate::accel::Accel;
 
@@ -50,6 +50,14 @@ impl PreparedScene {
         }
         let accel = Accel::new(geometry);
         Self { name, scene, accel, max_depth, spp, warnings: notes, inputs: Vec::new() }
+    }
+
+    /// [`Self::new`] on `builder` built; the builder's refusal names the scene. Every host
+    /// that reads a scene file prepares it through here (the command line's
+    /// `setup::prepare_file`, the Python package's `load_file`).
+    pub fn build(name: String, builder: SceneBuilder, max_depth: Option<i32>, spp: Option<u32>, notes: Vec<String>) -> Result<Self, String> {
+        let (scene, geometry, warnings) = builder.build().map_err(|e| format!("{name}: {e}"))?;
+        Ok(Self::new(name, scene, &geometry, warnings, max_depth, spp, notes))
     }
 
     /// FNV-1a of the built scene's full content: the camera, materials and lights (their
