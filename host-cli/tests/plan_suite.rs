@@ -111,10 +111,10 @@ fn blocks(scene: &str, config: EstimatorConfig, depth: i32) -> (Vec<[MeanVar; 3]
     }
     assert_eq!(film.discarded(), 0, "{scene}: discarded samples");
     // Left out means never allocated: VCM without merging holds no photon, grid or record.
-    if let (EstimatorConfig::Merging(MergeMode::Vcm, c), ember_core::estimators::Renderer::Merging(m)) = (config, &renderer.renderer) {
-        if !c.merging {
-            assert_eq!((m.photons.capacity(), m.records.capacity(), m.grid.size_bytes()), (0, 0, 0), "{scene}: merging's storage allocated");
-        }
+    if let (EstimatorConfig::Merging(MergeMode::Vcm, c), ember_core::estimators::Renderer::Merging(m)) = (config, &renderer.renderer)
+        && !c.merging
+    {
+        assert_eq!((m.photons.capacity(), m.records.capacity(), m.grid.size_bytes()), (0, 0, 0), "{scene}: merging's storage allocated");
     }
     (stats, mean, (bw, bh))
 }

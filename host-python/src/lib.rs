@@ -76,7 +76,7 @@ fn pixel_bytes<'py>(py: Python<'py>, pixels: &[[f32; 3]]) -> Bound<'py, PyByteAr
 
 /// Native-endian f32 bytes as pixels; refused unless a whole number of pixels.
 fn pixels_of(bytes: &[u8], what: &str) -> Result<Vec<[f32; 3]>, Error> {
-    if bytes.len() % 12 != 0 {
+    if !bytes.len().is_multiple_of(12) {
         return Err(Error::Value(format!("{what}: {} bytes are not a whole number of RGB float32 pixels", bytes.len())));
     }
     let value = |b: &[u8]| f32::from_ne_bytes([b[0], b[1], b[2], b[3]]);

@@ -131,7 +131,7 @@ pub fn load_file(py: Python<'_>, path: PathBuf, defines: Vec<(String, String)>) 
 
 /// Native-endian u32 bytes as triples; refused unless a whole number of triples.
 fn triples_u32(bytes: &[u8], what: &str) -> Result<Vec<[u32; 3]>, Error> {
-    if bytes.len() % 12 != 0 {
+    if !bytes.len().is_multiple_of(12) {
         return Err(Error::Value(format!("{what}: {} bytes are not a whole number of uint32 triples", bytes.len())));
     }
     let value = |b: &[u8]| u32::from_ne_bytes([b[0], b[1], b[2], b[3]]);

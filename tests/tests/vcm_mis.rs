@@ -73,15 +73,18 @@ fn full_paths(scene: &Scene, tracer: &BruteForce, count: u32) -> Vec<Vec<Vertex>
         for t in 3..=cam.len() {
             let e = &cam[t - 1];
             let emits = e.le(scene, &cam[t - 2]).max_component() > 0.0;
-            if t <= 9 && emits && e.kind == VertexKind::Surface && !cam[1..t - 1].iter().any(|v| v.emitter.is_some()) {
-                if let Some(id) = e.emitter {
-                    // As a light sub-path would have started there.
-                    let mut x: Vec<Vertex> = cam[..t].iter().rev().copied().collect();
-                    // Its normal on the emitting side (the side the camera path came from).
-                    let n = if e.ng.dot(cam[t - 2].p - e.p) < 0.0 { -e.ng } else { e.ng };
-                    x[0] = Vertex::light(id, e.p, n, e.beta, e.pdf_fwd, false);
-                    out.push(x);
-                }
+            if t <= 9
+                && emits
+                && e.kind == VertexKind::Surface
+                && !cam[1..t - 1].iter().any(|v| v.emitter.is_some())
+                && let Some(id) = e.emitter
+            {
+                // As a light sub-path would have started there.
+                let mut x: Vec<Vertex> = cam[..t].iter().rev().copied().collect();
+                // Its normal on the emitting side (the side the camera path came from).
+                let n = if e.ng.dot(cam[t - 2].p - e.p) < 0.0 { -e.ng } else { e.ng };
+                x[0] = Vertex::light(id, e.p, n, e.beta, e.pdf_fwd, false);
+                out.push(x);
             }
         }
         // Light paths connected to the pinhole (t = 1), including caustics through glass.

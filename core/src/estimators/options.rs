@@ -353,10 +353,10 @@ impl Options {
         if self.given & (1 << index) != 0 {
             return Err(OptionError::Twice(spec.name));
         }
-        if let Some(group) = spec.group {
-            if let Some((_, first)) = table.iter().enumerate().find(|(i, o)| self.given & (1 << i) != 0 && o.group == Some(group)) {
-                return Err(OptionError::Conflict { first: first.name, second: spec.name, group });
-            }
+        if let Some(group) = spec.group
+            && let Some((_, first)) = table.iter().enumerate().find(|(i, o)| self.given & (1 << i) != 0 && o.group == Some(group))
+        {
+            return Err(OptionError::Conflict { first: first.name, second: spec.name, group });
         }
         let parsed = spec.parse_value(value)?;
         // Check the value alone: on this estimator where the option applies, else on the

@@ -165,10 +165,11 @@ impl Renderer {
     pub fn new(scene: &Scene, params: RenderParams, config: EstimatorConfig) -> Result<Self, RendererError> {
         config.validate()?;
         #[cfg(feature = "filtering")]
-        if let EstimatorConfig::Filter(FilterSide::Both, c) = config {
-            if c.bridges() && !scene.interiors.is_empty() {
-                return Err(RendererError::BridgesInMedium);
-            }
+        if let EstimatorConfig::Filter(FilterSide::Both, c) = config
+            && c.bridges()
+            && !scene.interiors.is_empty()
+        {
+            return Err(RendererError::BridgesInMedium);
         }
         let pixels = scene.camera.width() * scene.camera.height();
         Ok(match config {

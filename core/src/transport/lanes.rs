@@ -239,10 +239,10 @@ pub fn run_with_width<P: LaneProgram, Q: RayQuery + ?Sized>(program: &mut P, tra
             let lane = &mut lanes[lane_of[k] as usize];
             let path = lane.as_mut().expect("a traced lane holds a path");
             let answer = (shadow_of[k] != u8::MAX).then(|| occluded[shadow_of[k] as usize]);
-            if !program.leave(path, arrivals[k], answer) {
-                if let Some(path) = lane.take() {
-                    program.finish(path);
-                }
+            if !program.leave(path, arrivals[k], answer)
+                && let Some(path) = lane.take()
+            {
+                program.finish(path);
             }
         }
     }
@@ -307,7 +307,7 @@ mod tests {
         type Path = ToyPath;
         fn start(&mut self, item: u32) -> Option<ToyPath> {
             self.started[item as usize] += 1;
-            if item % 5 == 0 {
+            if item.is_multiple_of(5) {
                 self.finished[item as usize] += 1;
                 return None;
             }
@@ -319,12 +319,12 @@ mod tests {
         fn arrive(&mut self, p: &mut ToyPath, hit: Option<SurfaceHit>) -> Arrival {
             assert!(hit.is_none());
             self.traced += 1;
-            let shadow = (p.step % 2 == 0).then(|| Ray::new(Vec3::new((p.item + p.step) as f32, 0.0, 0.0), Vec3::Y, 1.0));
+            let shadow = p.step.is_multiple_of(2).then(|| Ray::new(Vec3::new((p.item + p.step) as f32, 0.0, 0.0), Vec3::Y, 1.0));
             Arrival { shadow, continues: p.step < p.item % 7 }
         }
         fn leave(&mut self, p: &mut ToyPath, arrival: Arrival, occluded: Option<bool>) -> bool {
             // The answer is this lane's own shadow ray's (a mix-up of lanes shows here).
-            let expected = (p.step % 2 == 0).then_some((p.item + p.step) % 2 == 1);
+            let expected = p.step.is_multiple_of(2).then_some((p.item + p.step) % 2 == 1);
             assert_eq!(occluded, expected, "item {} step {}", p.item, p.step);
             p.step += 1;
             arrival.continues

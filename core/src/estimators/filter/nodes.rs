@@ -546,13 +546,14 @@ fn light_walk<Q: RayQuery + ?Sized>(
     let mut parent = NONE;
     while let Some(hit) = LIGHT_WALK.trace(tracer, &path, counters) {
         let (segments, ray) = (path.segments, path.ray);
-        if segments == 1 && start.with_node {
-            if let Some(e) = emission_node(scene, tracer, &hit, &start.sample, counters) {
-                parent = out.nodes.len() as u32;
-                out.nodes.push(e);
-                out.pred.push(NONE);
-                out.base.push(Rgb::ZERO);
-            }
+        if segments == 1
+            && start.with_node
+            && let Some(e) = emission_node(scene, tracer, &hit, &start.sample, counters)
+        {
+            parent = out.nodes.len() as u32;
+            out.nodes.push(e);
+            out.pred.push(NONE);
+            out.base.push(Rgb::ZERO);
         }
         let index = out.nodes.len() as u32;
         if parent != NONE {

@@ -99,10 +99,10 @@ pub fn trace_light_paths<Q: RayQuery + ?Sized>(
                 break;
             }
             let u = LightPointSample::lens(&scene.camera, &mut lens);
-            if let Some(c) = strategy(&ctx, &light[..s], &[], s, 1, u, counts, &mut counters) {
-                if let Some(film) = c.film {
-                    splat(Splat { film, value: counters.sanitize(c.value) });
-                }
+            if let Some(c) = strategy(&ctx, &light[..s], &[], s, 1, u, counts, &mut counters)
+                && let Some(film) = c.film
+            {
+                splat(Splat { film, value: counters.sanitize(c.value) });
             }
         }
     }

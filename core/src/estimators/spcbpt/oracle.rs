@@ -126,10 +126,11 @@ pub fn connection_sums<Q: RayQuery + ?Sized>(
                 }
                 let Some(c) = connect_unweighted(&ctx, model, light, &camera[..t], s, t, LightPointSample::default(), &mut counters) else { continue };
                 let value = c.value.luminance() as f64 / probability as f64;
-                if value.is_finite() && value > 0.0 {
-                    if let Some(slot) = sums.sums.get_mut(e * sums.n_light + subspace) {
-                        *slot += value;
-                    }
+                if value.is_finite()
+                    && value > 0.0
+                    && let Some(slot) = sums.sums.get_mut(e * sums.n_light + subspace)
+                {
+                    *slot += value;
                 }
             }
         }

@@ -97,10 +97,10 @@ pub fn accumulate_q<Q: RayQuery + ?Sized>(
     let mut counters = Counters::default();
     for i in paths {
         let light = trace_light_subpath(scene, tracer, params, Stream::Preprocess, Q_BASE.wrapping_add(i), 0, &mut counters);
-        if let Some(l) = light.first().and_then(|y0| classifier.light_source_of(scene, y0)) {
-            if let Some(slot) = q.get_mut(l as usize) {
-                *slot += cache_weight(&light[..1]) as f64;
-            }
+        if let Some(l) = light.first().and_then(|y0| classifier.light_source_of(scene, y0))
+            && let Some(slot) = q.get_mut(l as usize)
+        {
+            *slot += cache_weight(&light[..1]) as f64;
         }
         for k in 1..light.len() {
             if is_cacheable(scene, &light[k]) {
@@ -136,10 +136,10 @@ fn dataset_sample<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Rend
             break;
         }
         // The unweighted f/p₁ of the NEE full path.
-        if let Some(c) = connect(&ctx, &[], &camera[..t], 1, t, LightPointSample { u_light, u_point }, counters) {
-            if let Some(y) = c.sampled {
-                visit(pixel, &camera, t, y, c.value);
-            }
+        if let Some(c) = connect(&ctx, &[], &camera[..t], 1, t, LightPointSample { u_light, u_point }, counters)
+            && let Some(y) = c.sampled
+        {
+            visit(pixel, &camera, t, y, c.value);
         }
     }
 }
@@ -181,12 +181,13 @@ pub fn dataset_features<Q: RayQuery + ?Sized>(
             *slot += if total.is_finite() { total as f64 } else { 0.0 };
             block_samples[b] += 1;
         }
-        if let Some((_, f)) = last {
-            if total > 0.0 && total.is_finite() {
-                for feat in f {
-                    features.push(feat);
-                    weights.push(total);
-                }
+        if let Some((_, f)) = last
+            && total > 0.0
+            && total.is_finite()
+        {
+            for feat in f {
+                features.push(feat);
+                weights.push(total);
             }
         }
     }

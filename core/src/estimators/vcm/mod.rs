@@ -199,11 +199,12 @@ pub fn render_pixels<Q: RayQuery + ?Sized>(
             let (u_light, u_point) = (aux.next_f32(), aux.next_2d());
             // s = 0: the camera path reached an emitter.
             let all_dirac_before = camera[1..t - 1].iter().all(|v| v.delta);
-            if y.is_light() && (mode != MergeMode::Ppm || all_dirac_before) {
-                if let Some(c) = connect(&ctx, &[], &camera, 0, t, LightPointSample::default(), &mut counters) {
-                    let w = if mode == MergeMode::Ppm { 1.0 } else { connection_weight(scene, tech, &[], &[], &camera, camera_b, None, 0, t) };
-                    l += counters.sanitize(c.value * w);
-                }
+            if y.is_light()
+                && (mode != MergeMode::Ppm || all_dirac_before)
+                && let Some(c) = connect(&ctx, &[], &camera, 0, t, LightPointSample::default(), &mut counters)
+            {
+                let w = if mode == MergeMode::Ppm { 1.0 } else { connection_weight(scene, tech, &[], &[], &camera, camera_b, None, 0, t) };
+                l += counters.sanitize(c.value * w);
             }
             if y.kind == VertexKind::InfiniteLight {
                 break;
