@@ -16,7 +16,6 @@ use ember_core::pixel_filter::Filter;
 use ember_core::scene::{AreaEmission, SceneBuilder};
 use ember_core::spectrum::Rgb;
 
-use super::media::Placed;
 use super::positions::Positions;
 use super::props::Props;
 use super::transform;
@@ -28,6 +27,14 @@ const MAX_FILM_SIDE: i64 = 1 << 16;
 
 /// Mitsuba's `hdrfilm` default size.
 const DEFAULT_FILM: (u32, u32) = (768, 576);
+
+/// Where each top-level shape's and emitter's geometry and lights end in the builder:
+/// (triangles, spheres, lights) after it, and its place in the file (read by module
+/// `media`, which holds its methods, to name what sits inside a medium).
+#[derive(Debug, Default)]
+pub(crate) struct Placed {
+    pub(super) ends: Vec<(usize, usize, usize, Loc)>,
+}
 
 /// Instantiation state.
 #[derive(Debug)]

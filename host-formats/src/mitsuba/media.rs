@@ -21,7 +21,7 @@ use ember_core::scene::{MediumIntruder, SceneBuilder};
 use ember_core::spectrum::Rgb;
 
 use super::Loc;
-use super::build::Ctx;
+use super::build::{Ctx, Placed};
 use super::props::Props;
 use super::xml::{Obj, Tag};
 use super::{Fail, Res};
@@ -93,13 +93,6 @@ impl Ctx<'_> {
         }
         Ok(sigma)
     }
-}
-
-/// Where each top-level shape's and emitter's geometry and lights end in the builder:
-/// (triangles, spheres, lights) after it, and its place in the file.
-#[derive(Debug, Default)]
-pub(crate) struct Placed {
-    ends: Vec<(usize, usize, usize, Loc)>,
 }
 
 impl Placed {

@@ -1,7 +1,7 @@
 //! The instruction set the BVH4's traversal runs with, chosen at run time (issue 52).
 //!
 //! # Why
-//! The traversal ([`Wide`]: slab tests of four boxes, watertight tests of four
+//! The traversal (the BVH4, `Wide`: slab tests of four boxes, watertight tests of four
 //! triangles) is written once, on glam's 4-lane `Vec4`. Compiled for the x86-64
 //! baseline, that is SSE2: two-operand instructions, so every operation that keeps its
 //! input costs a register copy first. The same source compiled with AVX2 (or AVX-512)
@@ -39,7 +39,7 @@
 //! # `unsafe`
 //! Calling a `#[target_feature]` function is `unsafe`: it is undefined behaviour on a
 //! machine without the feature. This module holds the only such calls, and an [`Isa`]
-//! reaches them only through [`Isa::best`], [`Isa::select`] or [`Wide::set_isa`], each
+//! reaches them only through [`Isa::best`], [`Isa::select`] or `Wide::set_isa`, each
 //! of which admits only a set [`Isa::offered`] detected on this machine.
 #![allow(unsafe_code)]
 
@@ -48,7 +48,9 @@ use core::fmt;
 use obvhs::ray::Ray as BvhRay;
 
 use super::triangle::WatertightRay;
-use super::wide::Wide;
+
+/// Lanes of the traversal kernels on every set: a node's children, a leaf's triangles.
+pub const KERNEL_LANES: usize = 4;
 
 /// An instruction set for the traversal kernels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -99,7 +101,7 @@ impl Isa {
 
     /// Lanes of the traversal kernels (a node's children, a leaf's triangles).
     pub fn lanes(self) -> usize {
-        super::wide::PACKET
+        KERNEL_LANES
     }
 
     /// True if this machine runs code compiled for the set.
@@ -190,31 +192,43 @@ fn detect_avx512() -> bool {
     false
 }
 
-/// Closest hit through the kernel compiled for `wide`'s set.
+/// A traversal written once, which this module compiles for each instruction set: the
+/// BVH4 (`wide`) implements it with its baseline functions, inlined here into each copy.
+pub(super) trait Kernels {
+    /// The set its queries run with: one this machine offers (the only way a set gets
+    /// here is through [`Isa::from_name`], [`Isa::select`] or [`Isa::best`]).
+    fn isa(&self) -> Isa;
+    /// Closest hit in (0, ray.tmax), to be inlined (`#[inline(always)]`).
+    fn closest_inline(&self, ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])>;
+    /// Any hit in (0, ray.tmax), to be inlined (`#[inline(always)]`).
+    fn occluded_inline(&self, ray: &BvhRay, wt: &WatertightRay) -> bool;
+}
+
+/// Closest hit through the copy compiled for `k`'s set.
 #[inline]
-pub(super) fn closest(wide: &Wide, ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])> {
-    match wide.isa() {
-        // SAFETY: `Wide::isa` is a set this machine offers (see the module notes).
+pub(super) fn closest<K: Kernels>(k: &K, ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])> {
+    match k.isa() {
+        // SAFETY: `Kernels::isa` is a set this machine offers (see the module notes).
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx512 => unsafe { x86::closest_avx512(wide, ray, wt) },
+        Isa::Avx512 => unsafe { x86::closest_avx512(k, ray, wt) },
         // SAFETY: as above.
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 => unsafe { x86::closest_avx2(wide, ray, wt) },
-        _ => wide.closest_inline(ray, wt),
+        Isa::Avx2 => unsafe { x86::closest_avx2(k, ray, wt) },
+        _ => k.closest_inline(ray, wt),
     }
 }
 
-/// Occlusion through the kernel compiled for `wide`'s set.
+/// Occlusion through the copy compiled for `k`'s set.
 #[inline]
-pub(super) fn occluded(wide: &Wide, ray: &BvhRay, wt: &WatertightRay) -> bool {
-    match wide.isa() {
-        // SAFETY: `Wide::isa` is a set this machine offers (see the module notes).
+pub(super) fn occluded<K: Kernels>(k: &K, ray: &BvhRay, wt: &WatertightRay) -> bool {
+    match k.isa() {
+        // SAFETY: `Kernels::isa` is a set this machine offers (see the module notes).
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx512 => unsafe { x86::occluded_avx512(wide, ray, wt) },
+        Isa::Avx512 => unsafe { x86::occluded_avx512(k, ray, wt) },
         // SAFETY: as above.
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 => unsafe { x86::occluded_avx2(wide, ray, wt) },
-        _ => wide.occluded_inline(ray, wt),
+        Isa::Avx2 => unsafe { x86::occluded_avx2(k, ray, wt) },
+        _ => k.occluded_inline(ray, wt),
     }
 }
 
@@ -224,23 +238,23 @@ mod x86 {
     use super::*;
 
     #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
-    pub(super) fn closest_avx2(wide: &Wide, ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])> {
-        wide.closest_inline(ray, wt)
+    pub(super) fn closest_avx2<K: Kernels>(k: &K, ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])> {
+        k.closest_inline(ray, wt)
     }
 
     #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
-    pub(super) fn occluded_avx2(wide: &Wide, ray: &BvhRay, wt: &WatertightRay) -> bool {
-        wide.occluded_inline(ray, wt)
+    pub(super) fn occluded_avx2<K: Kernels>(k: &K, ray: &BvhRay, wt: &WatertightRay) -> bool {
+        k.occluded_inline(ray, wt)
     }
 
     #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,bmi1,bmi2,lzcnt,popcnt")]
-    pub(super) fn closest_avx512(wide: &Wide, ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])> {
-        wide.closest_inline(ray, wt)
+    pub(super) fn closest_avx512<K: Kernels>(k: &K, ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])> {
+        k.closest_inline(ray, wt)
     }
 
     #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,bmi1,bmi2,lzcnt,popcnt")]
-    pub(super) fn occluded_avx512(wide: &Wide, ray: &BvhRay, wt: &WatertightRay) -> bool {
-        wide.occluded_inline(ray, wt)
+    pub(super) fn occluded_avx512<K: Kernels>(k: &K, ray: &BvhRay, wt: &WatertightRay) -> bool {
+        k.occluded_inline(ray, wt)
     }
 }
 

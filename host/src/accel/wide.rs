@@ -47,11 +47,11 @@ use obvhs::bvh2::Bvh2;
 use obvhs::ray::Ray as BvhRay;
 
 use super::hit::SLAB_WIDEN;
-use super::isa::{self, Isa, IsaError};
+use super::isa::{self, Isa, IsaError, Kernels};
 use super::triangle::WatertightRay;
 
 /// Triangles per leaf packet (the SIMD width).
-pub const PACKET: usize = 4;
+pub const PACKET: usize = isa::KERNEL_LANES;
 
 /// Child reference: an inner node's index, or `LEAF | packet index`, or [`EMPTY`]
 /// (never followed: an empty slot's box is never entered).
@@ -330,27 +330,6 @@ impl Wide {
         isa::occluded(self, ray, wt)
     }
 
-    /// [`Wide::closest`] compiled into its caller (module `isa` inlines it under each
-    /// instruction set's features).
-    #[inline(always)]
-    pub(super) fn closest_inline(&self, ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])> {
-        match self.stack_need {
-            0..=16 => self.closest_with(ray, wt, Stack::<16>::new()),
-            17..=64 => self.closest_with(ray, wt, Stack::<64>::new()),
-            _ => self.closest_with(ray, wt, HeapStack(Vec::with_capacity(self.stack_need))),
-        }
-    }
-
-    /// [`Wide::occluded`] compiled into its caller, as [`Wide::closest_inline`].
-    #[inline(always)]
-    pub(super) fn occluded_inline(&self, ray: &BvhRay, wt: &WatertightRay) -> bool {
-        match self.stack_need {
-            0..=16 => self.occluded_with(ray, wt, Stack::<16>::new()),
-            17..=64 => self.occluded_with(ray, wt, Stack::<64>::new()),
-            _ => self.occluded_with(ray, wt, HeapStack(Vec::with_capacity(self.stack_need))),
-        }
-    }
-
     #[inline(always)]
     fn closest_with(&self, ray: &BvhRay, wt: &WatertightRay, mut stack: impl TraversalStack) -> Option<(usize, f32, [f32; 3])> {
         let (slab, tri) = (SlabRay::new(ray), PacketRay::new(wt));
@@ -429,6 +408,31 @@ impl Wide {
                 Some((next, _)) => item = next,
                 None => return false,
             }
+        }
+    }
+}
+
+/// The traversal module `isa` compiles for each instruction set.
+impl Kernels for Wide {
+    fn isa(&self) -> Isa {
+        self.isa
+    }
+
+    #[inline(always)]
+    fn closest_inline(&self, ray: &BvhRay, wt: &WatertightRay) -> Option<(usize, f32, [f32; 3])> {
+        match self.stack_need {
+            0..=16 => self.closest_with(ray, wt, Stack::<16>::new()),
+            17..=64 => self.closest_with(ray, wt, Stack::<64>::new()),
+            _ => self.closest_with(ray, wt, HeapStack(Vec::with_capacity(self.stack_need))),
+        }
+    }
+
+    #[inline(always)]
+    fn occluded_inline(&self, ray: &BvhRay, wt: &WatertightRay) -> bool {
+        match self.stack_need {
+            0..=16 => self.occluded_with(ray, wt, Stack::<16>::new()),
+            17..=64 => self.occluded_with(ray, wt, Stack::<64>::new()),
+            _ => self.occluded_with(ray, wt, HeapStack(Vec::with_capacity(self.stack_need))),
         }
     }
 }
