@@ -277,6 +277,38 @@ pub fn default_bsdf(kind: Kind) -> EmberBsdf {
     }
 }
 
+/// Mitsuba 3's defaults for a texture of `kind` (`ember_texture_init`).
+pub fn default_texture(k: EmberTextureKind) -> desc::EmberTexture {
+    desc::EmberTexture {
+        kind: k as u32,
+        pixels: std::ptr::null(),
+        width: 0,
+        height: 0,
+        channels: 3,
+        srgb: 0,
+        wrap_mode: EmberWrapMode::Repeat as u32,
+        filter: EmberTextureFilter::Bilinear as u32,
+        color0: [0.4; 3],
+        color1: [0.2; 3],
+        to_uv: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+    }
+}
+
+/// Mitsuba 3's defaults for a light of `kind` (`ember_light_init`).
+pub fn default_light(k: EmberLightKind) -> EmberLight {
+    EmberLight {
+        kind: k as u32,
+        position: [0.0; 3],
+        direction: [0.0, 0.0, 1.0],
+        color: [1.0; 3],
+        cutoff_angle: 20.0,
+        beam_width: 15.0,
+        scale: 1.0,
+        to_world: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        texture: -1,
+    }
+}
+
 /// Rough plastic coatings built so far, by (GGX, α, int_ior, ext_ior): each costs up to
 /// a second (the reader shares them the same way).
 type Coatings = HashMap<(bool, u32, u32, u32), PlasticCoating>;

@@ -23,9 +23,7 @@
 
 use super::*;
 
-use super::desc::{
-    EmberBsdf, EmberBsdfKind, EmberLight, EmberLightKind, EmberSceneDesc2, EmberTexture, EmberTextureFilter, EmberTextureKind, EmberWrapMode, from_raw,
-};
+use super::desc::{EmberBsdf, EmberBsdfKind, EmberLight, EmberLightKind, EmberSceneDesc2, EmberTexture, EmberTextureKind, from_raw};
 
 use crate::scene::{MaterialDesc, TextureDesc};
 
@@ -55,19 +53,7 @@ pub unsafe extern "C" fn ember_bsdf_init(kind: u32, bsdf: *mut EmberBsdf) -> Emb
 pub unsafe extern "C" fn ember_texture_init(kind: u32, texture: *mut EmberTexture) -> EmberStatus {
     guard(|| {
         let k: EmberTextureKind = from_raw(kind, "kind")?;
-        *unsafe { out(texture, "texture") }? = EmberTexture {
-            kind: k as u32,
-            pixels: std::ptr::null(),
-            width: 0,
-            height: 0,
-            channels: 3,
-            srgb: 0,
-            wrap_mode: EmberWrapMode::Repeat as u32,
-            filter: EmberTextureFilter::Bilinear as u32,
-            color0: [0.4; 3],
-            color1: [0.2; 3],
-            to_uv: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
-        };
+        *unsafe { out(texture, "texture") }? = crate::scene::default_texture(k);
         Ok(EmberStatus::Ok)
     })
 }
@@ -82,17 +68,7 @@ pub unsafe extern "C" fn ember_texture_init(kind: u32, texture: *mut EmberTextur
 pub unsafe extern "C" fn ember_light_init(kind: u32, light: *mut EmberLight) -> EmberStatus {
     guard(|| {
         let k: EmberLightKind = from_raw(kind, "kind")?;
-        *unsafe { out(light, "light") }? = EmberLight {
-            kind: k as u32,
-            position: [0.0; 3],
-            direction: [0.0, 0.0, 1.0],
-            color: [1.0; 3],
-            cutoff_angle: 20.0,
-            beam_width: 15.0,
-            scale: 1.0,
-            to_world: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-            texture: -1,
-        };
+        *unsafe { out(light, "light") }? = crate::scene::default_light(k);
         Ok(EmberStatus::Ok)
     })
 }

@@ -161,20 +161,74 @@ def load_file(path, **defines) -> Scene:
     return _ember.load_file(_path("path", path), pairs)
 
 
-def scene_from_arrays(positions, triangles, triangle_materials, materials, camera, emission=None, point_lights=()) -> Scene:
-    """A scene from arrays, through the C API's scene description (``ember_scene_create``'s
-    checks, docs/embedding.md), so one path serves C and Python.
+_CAMERA_KEYS = ("origin", "target", "up", "fov", "width", "height", "fov_axis", "aperture_radius", "focus_distance", "filter")
+
+
+def _per_vertex(name, values, count, width):
+    if values is None:
+        return b""
+    a = np.ascontiguousarray(values, dtype=np.float32)
+    if a.shape != (count, width):
+        raise ValueError(f"{name} must be {count} x {width} (one per position), got shape {a.shape}")
+    return a.tobytes()
+
+
+def _bitmap(i, texture):
+    """A bitmap texture's ``data`` apart: (float32 bytes, width, height, channels)."""
+    if not isinstance(texture, dict) or texture.get("type") != "bitmap":
+        return None
+    if "data" not in texture:
+        return None
+    data = np.asarray(texture["data"])
+    if data.ndim == 3 and data.shape[2] == 1:
+        data = data[:, :, 0]
+    if data.ndim not in (2, 3) or (data.ndim == 3 and data.shape[2] != 3) or data.dtype.kind not in "fiu":
+        raise ValueError(f"textures[{i}]['data'] must be H x W x 3 or H x W numbers, got shape {data.shape} of {data.dtype}")
+    height, width = data.shape[:2]
+    channels = 3 if data.ndim == 3 else 1
+    return np.ascontiguousarray(data, dtype=np.float32).tobytes(), width, height, channels
+
+
+def scene_from_arrays(positions, triangles, triangle_materials, materials, camera, emission=None, point_lights=(),
+                      normals=None, uvs=None, textures=(), lights=()) -> Scene:
+    """A scene from arrays, through the C API's scene description (``ember_scene_create2``'s
+    checks, docs/embedding.md), so one path serves C and Python. Names and defaults are
+    Mitsuba 3's (``ember_bsdf_init``, ``ember_texture_init``, ``ember_light_init``).
 
     - ``positions``: V x 3 floats; ``triangles``: T x 3 vertex indices (front
       counter-clockwise); ``triangle_materials``: T indices into ``materials``;
-    - ``materials``: ``("diffuse", (r, g, b))``, ``("mirror", (r, g, b))`` or ``("glass", ior)``;
+    - ``normals``: ``None`` or V x 3 shading normals; ``uvs``: ``None`` or V x 2 texture
+      coordinates (v = 0 at an image's top row);
+    - ``materials``: dicts ``{"type": <Mitsuba BSDF>, <parameter>: value, ...}``: ``diffuse``
+      (``reflectance``), ``conductor``/``roughconductor`` (``eta``, ``k``,
+      ``specular_reflectance``), ``dielectric``/``roughdielectric`` (``int_ior``, ``ext_ior``,
+      ``specular_reflectance``, ``specular_transmittance``), ``plastic``/``roughplastic``
+      (``int_ior``, ``ext_ior``, ``diffuse_reflectance``, ``specular_reflectance``,
+      ``nonlinear``), the rough ones with ``distribution`` (``"beckmann"``/``"ggx"``) and
+      ``alpha``, ``principled`` (``base_color``, ``roughness``, ``metallic``, ... as Mitsuba
+      names them), ``{"type": "twosided", "bsdf": {...}}``. A colour is a number or
+      (r, g, b); a textured one (and ``roughness``) may be ``{"texture": index}``. The first
+      description's ``("diffuse", (r, g, b))``, ``("mirror", (r, g, b))``, ``("glass", ior)``
+      still work;
+    - ``textures``: ``{"type": "bitmap", "data": H x W x 3 or H x W floats (row 0 at the top),
+      "srgb": bool, "wrap_mode": "repeat"|"mirror"|"clamp", "filter_type":
+      "bilinear"|"nearest", "to_uv": 2 x 3 or 3 x 3}`` or ``{"type": "checkerboard",
+      "color0", "color1", "to_uv"}``;
     - ``emission``: ``None`` or T x 3 radiance from each triangle's front;
     - ``point_lights``: ``(position, intensity)`` pairs;
-    - ``camera``: a dict with ``origin``, ``target``, ``up``, ``fov`` (horizontal, degrees),
-      ``width`` and ``height``.
+    - ``lights``: dicts: ``point`` (``position``, ``intensity``), ``spot`` (``position``,
+      ``direction``, ``intensity``, ``cutoff_angle``, ``beam_width``), ``directional``
+      (``direction``, ``irradiance``), ``constant`` (``radiance``), ``envmap``
+      (``texture``: a bitmap's index, ``scale``, ``to_world``: a 3 x 3 rotation);
+    - ``camera``: a dict with ``origin``, ``target``, ``up``, ``fov`` (degrees), ``width``
+      and ``height``; optional ``fov_axis`` (``"x"``, default, ``"y"``, ``"smaller"``,
+      ``"larger"``, ``"diagonal"``), ``aperture_radius`` and ``focus_distance`` (a thin
+      lens; 0: pinhole), ``filter`` (``{"type": "box"}``, default, ``{"type": "tent",
+      "radius": r}`` or ``{"type": "gaussian", "stddev": s}``).
 
-    A bad index or value raises ``ValueError`` naming it. (The description has diffuse,
-    mirror and glass materials and point lights so far: issue 55's second half completes it.)
+    An unknown key or type, or a bad index or value, raises ``ValueError`` naming it
+    (``materials[2]['alpha']``; the description's checks name its C fields, with the
+    Python keys that set them).
     """
     pos = np.ascontiguousarray(positions, dtype=np.float32)
     tris = np.asarray(triangles)
@@ -190,19 +244,40 @@ def scene_from_arrays(positions, triangles, triangle_materials, materials, camer
     emitted = b"" if emission is None else np.ascontiguousarray(emission, dtype=np.float32).reshape(-1, 3).tobytes()
     described = []
     for i, m in enumerate(materials):
+        if isinstance(m, dict):
+            described.append(m)
+            continue
         kind, value = m
         if kind == "glass":
             described.append((kind, (0.0, 0.0, 0.0), float(value)))
         else:
             described.append((kind, tuple(float(c) for c in value), 0.0))
-    lights = [(tuple(map(float, p)), tuple(map(float, c))) for p, c in point_lights]
+    point = [(tuple(map(float, p)), tuple(map(float, c))) for p, c in point_lights]
+    if not isinstance(camera, dict):
+        raise ValueError(f"camera must be a dict ({', '.join(_CAMERA_KEYS)})")
+    unknown = [k for k in camera if k not in _CAMERA_KEYS]
+    if unknown:
+        raise ValueError(f"camera: unknown key {', '.join(map(repr, unknown))} (known: {', '.join(_CAMERA_KEYS)})")
     try:
         cam = (tuple(map(float, camera["origin"])), tuple(map(float, camera["target"])), tuple(map(float, camera["up"])),
                float(camera["fov"]), _whole("camera width", camera["width"], 1, 65536), _whole("camera height", camera["height"], 1, 65536))
     except KeyError as e:
         raise ValueError(f"camera has no {e.args[0]} (origin, target, up, fov, width, height)") from None
+    pixel_filter = camera.get("filter", {"type": "box"})
+    if not isinstance(pixel_filter, dict) or "type" not in pixel_filter:
+        raise ValueError("camera['filter'] must be a dict with a 'type' (box, tent, gaussian)")
+    radius_key = {"tent": "radius", "gaussian": "stddev"}.get(pixel_filter["type"])
+    unknown = [k for k in pixel_filter if k not in ("type", radius_key)]
+    if unknown:
+        raise ValueError(f"camera['filter']: unknown key {', '.join(map(repr, unknown))} (a {pixel_filter['type']} filter takes "
+                         f"{repr(radius_key) if radius_key else 'none'})")
+    extra = (str(camera.get("fov_axis", "x")), float(camera.get("aperture_radius", 0.0)), float(camera.get("focus_distance", 0.0)),
+             str(pixel_filter["type"]), float(pixel_filter.get(radius_key, 0.0)) if radius_key else 0.0)
+    textures = list(textures)
     return _ember.scene_from_arrays(
-        pos.tobytes(), np.ascontiguousarray(tris, dtype=np.uint32).tobytes(), [int(m) for m in mats], emitted, described, lights, cam
+        pos.tobytes(), np.ascontiguousarray(tris, dtype=np.uint32).tobytes(), [int(m) for m in mats], emitted, described, point, cam,
+        _per_vertex("normals", normals, len(pos), 3), _per_vertex("uvs", uvs, len(pos), 2),
+        textures, [_bitmap(i, t) for i, t in enumerate(textures)], list(lights), extra,
     )
 
 

@@ -2,7 +2,7 @@
 `ember`, whose functions check their arguments' types before they reach these."""
 
 import os
-from typing import List, Optional, Tuple, Union
+from typing import Any, Dict, List, Optional, Tuple, Union
 
 DEFAULT_SPP: int
 
@@ -68,9 +68,15 @@ def scene_from_arrays(
     triangles: bytes,
     triangle_materials: List[int],
     emission: bytes,
-    materials: List[Tuple[str, Tuple[float, float, float], float]],
+    materials: List[Union[Tuple[str, Tuple[float, float, float], float], Dict[str, Any]]],
     point_lights: List[Tuple[Tuple[float, float, float], Tuple[float, float, float]]],
     camera: Tuple[Tuple[float, float, float], Tuple[float, float, float], Tuple[float, float, float], float, int, int],
+    normals: bytes = ...,
+    uvs: bytes = ...,
+    textures: List[Dict[str, Any]] = ...,
+    texture_pixels: List[Optional[Tuple[bytes, int, int, int]]] = ...,
+    lights: List[Dict[str, Any]] = ...,
+    camera_extra: Optional[Tuple[str, float, float, str, float]] = ...,
 ) -> Scene: ...
 def estimators() -> List[Tuple[str, str, bool]]: ...
 def estimator_options() -> List[Tuple[str, str, str, List[str], List[str]]]: ...
