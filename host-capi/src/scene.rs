@@ -613,8 +613,7 @@ impl SceneData {
     /// Images do not depend on it.
     fn new(scene: Scene, geometry: SceneGeometry, triangle_index: Vec<Option<u32>>) -> Result<Self> {
         let mut accel = Accel::new(&geometry);
-        let env = std::env::var("EMBER_SIMD").ok();
-        let isa = ember_host::accel::Isa::select(None, env.as_deref()).map_err(|e| Error::arg(e.message))?;
+        let isa = ember_host::accel::Isa::select_with_env(None).map_err(|e| Error::arg(e.message))?;
         accel.set_isa(isa).map_err(|e| Error::arg(e.message))?;
         Ok(Self { scene, geometry, accel, triangle_index, hash: OnceLock::new() })
     }

@@ -37,8 +37,7 @@ pub fn prepare_builtin(args: &RenderArgs) -> Result<PreparedScene, String> {
 /// environment's `EMBER_SIMD`, else `Isa::best` (AVX2 where the machine has it)
 /// (`ember_host::accel::isa`). Images do not depend on it.
 fn choose_simd(prepared: &mut PreparedScene, option: Option<&str>) -> Result<(), String> {
-    let env = std::env::var("EMBER_SIMD").ok();
-    let isa = ember_host::accel::Isa::select(option, env.as_deref()).map_err(|e| e.to_string())?;
+    let isa = ember_host::accel::Isa::select_with_env(option).map_err(|e| e.to_string())?;
     prepared.accel.set_isa(isa).map_err(|e| e.to_string())
 }
 

@@ -203,10 +203,8 @@ impl<'py> Fields<'py> {
     /// A colour or `{"texture": index}` (into `slot` of `textures`).
     fn spectrum(&mut self, key: &str, value: &mut [f32; 3], textures: &mut [i32; 4], slot: usize) -> Result<(), Error> {
         let Some(v) = self.raw(key)? else { return Ok(()) };
-        if let Ok(d) = v.cast::<PyDict>() {
-            let mut inner = Fields::new(d.as_any(), format!("{}['{key}']", self.what))?;
-            textures[slot] = inner.index("texture")?.ok_or_else(|| Error::Value(format!("{}['{key}'] has no 'texture'", self.what)))?;
-            return inner.finish();
+        if self.texture_ref(key, &v, textures, slot)? {
+            return Ok(());
         }
         *value = self.rgb_of(key, &v)?;
         Ok(())
@@ -214,13 +212,20 @@ impl<'py> Fields<'py> {
     /// A float or `{"texture": index}` (principled's roughness).
     fn scalar(&mut self, key: &str, value: &mut f32, textures: &mut [i32; 4], slot: usize) -> Result<(), Error> {
         let Some(v) = self.raw(key)? else { return Ok(()) };
-        if let Ok(d) = v.cast::<PyDict>() {
-            let mut inner = Fields::new(d.as_any(), format!("{}['{key}']", self.what))?;
-            textures[slot] = inner.index("texture")?.ok_or_else(|| Error::Value(format!("{}['{key}'] has no 'texture'", self.what)))?;
-            return inner.finish();
+        if self.texture_ref(key, &v, textures, slot)? {
+            return Ok(());
         }
         *value = v.extract::<f32>().map_err(|_| self.bad(key, "a number or {'texture': index}"))?;
         Ok(())
+    }
+    /// If `v` (the value of `key`) is `{"texture": index}`: that index into `slot` of
+    /// `textures`, and true; false for any other value.
+    fn texture_ref(&self, key: &str, v: &Bound<'py, PyAny>, textures: &mut [i32; 4], slot: usize) -> Result<bool, Error> {
+        let Ok(d) = v.cast::<PyDict>() else { return Ok(false) };
+        let mut inner = Fields::new(d.as_any(), format!("{}['{key}']", self.what))?;
+        textures[slot] = inner.index("texture")?.ok_or_else(|| Error::Value(format!("{}['{key}'] has no 'texture'", self.what)))?;
+        inner.finish()?;
+        Ok(true)
     }
     /// A named value of a C enum (Mitsuba's spelling).
     fn named<T: CEnum>(&mut self, key: &str) -> Result<Option<u32>, Error> {

@@ -156,6 +156,12 @@ impl Isa {
             (None, None) => Ok(Self::best()),
         }
     }
+
+    /// [`Isa::select`] with the environment's `EMBER_SIMD` (what every host reads).
+    pub fn select_with_env(option: Option<&str>) -> Result<Isa, IsaError> {
+        let env = std::env::var("EMBER_SIMD").ok();
+        Self::select(option, env.as_deref())
+    }
 }
 
 impl fmt::Display for Isa {
