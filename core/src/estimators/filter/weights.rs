@@ -72,6 +72,13 @@ impl KernelPoint {
     pub fn kernel(&self, kernel: &Kernel, x: &KernelPoint) -> f64 {
         kernel.scaled(self.scale).density_around(self.p, self.side, x.p, x.side).0 as f64
     }
+
+    /// K(self → x) for the point `x` with normal `nx` (either orientation): the same as
+    /// [`Neighbourhood::kernel_at`] of this point's node, without reading the node.
+    #[inline]
+    pub fn density_at(&self, kernel: &Kernel, x: Vec3, nx: Vec3) -> f64 {
+        kernel.scaled(self.scale).density_around(self.p, self.side, x, nx).0 as f64
+    }
 }
 
 /// Each node's kernel point, in node order.
