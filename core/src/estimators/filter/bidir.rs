@@ -232,6 +232,19 @@ enum Far {
     Sky,
 }
 
+/// A segment leaving a node, as the camera-side techniques see it.
+#[derive(Clone, Copy, Debug)]
+struct CameraSegment {
+    /// Its direction.
+    dir: Vec3,
+    /// P_L p_L of drawing it by a light sample from the node (0 if none can).
+    nee: f64,
+    /// Can a BSDF draw reach its end (not a Dirac light)?
+    bsdf: bool,
+    /// The node that drew it and its sampler's density, if a camera continuation.
+    own: Option<(u32, f64)>,
+}
+
 impl Far {
     fn light(&self) -> Option<LightEnd> {
         match *self {
@@ -327,14 +340,15 @@ impl Bidirectional<'_> {
 
     /// Σ over camera nodes t whose kernel covers `x`: K(t → x) [q_t p_σ(dir | t) (if
     /// `bsdf`) + c_t `nee`], with node `own`'s continuation density replaced by the one
-    /// its sampler reported. Returns (all, light samples' part).
-    ///
-    /// Also Σ K(t → x) over the camera nodes that start bridges (0 without bridges).
+    /// its sampler reported, for each of the `N` segments leaving `x` in `segments`
+    /// (one grid query for all: a camera node's continuation and light sample share
+    /// their kernel neighbours). Returns per segment (all, light samples' part, and
+    /// Σ K(t → x) over the camera nodes that start bridges, 0 without bridges).
     ///
     /// The twin of light node `twin_of` ([`NONE`] for none) is left out: with x a light
     /// node, the segment arriving at x placed x and so its twin (module notes, "Twins").
-    fn camera_techniques(&self, x: &Node, dir: Vec3, nee: f64, bsdf: bool, own: Option<(u32, f64)>, twin_of: u32) -> (f64, f64, f64) {
-        let (mut all, mut nee_part, mut starts) = (0.0, 0.0, 0.0);
+    fn camera_techniques<const N: usize>(&self, x: &Node, segments: [CameraSegment; N], twin_of: u32) -> [(f64, f64, f64); N] {
+        let mut sums = [(0.0, 0.0, 0.0); N];
         let xp = KernelPoint::of(x);
         self.hood.grid.query(x.hit.p, |i| {
             let tp = &self.hood.points[i as usize];
@@ -349,22 +363,31 @@ impl Bidirectional<'_> {
             if t.twin && t.pred == twin_of {
                 return;
             }
-            if bsdf {
-                let p = match own {
-                    Some((o, pdf)) if o == i => pdf,
-                    _ => self.hood.bsdf_pdf(t, dir, TransportMode::Radiance),
-                };
-                all += k * t.next.q as f64 * p;
-            }
-            if t.light.attempted && nee > 0.0 {
-                all += k * nee;
-                nee_part += k * nee;
-            }
-            if self.bridge_choice.is_some() && bridges_from(t) {
-                starts += k;
+            let starts = self.bridge_choice.is_some() && bridges_from(t);
+            for (s, (all, nee_part, start)) in segments.iter().zip(sums.iter_mut()) {
+                if s.bsdf {
+                    let p = match s.own {
+                        Some((o, pdf)) if o == i => pdf,
+                        _ => self.hood.bsdf_pdf(t, s.dir, TransportMode::Radiance),
+                    };
+                    *all += k * t.next.q as f64 * p;
+                }
+                if t.light.attempted && s.nee > 0.0 {
+                    *all += k * s.nee;
+                    *nee_part += k * s.nee;
+                }
+                if starts {
+                    *start += k;
+                }
             }
         });
-        (all, nee_part, starts)
+        sums
+    }
+
+    /// What [`Self::camera_techniques`] needs of a segment leaving x along `dir` to
+    /// `far`: its light sample density `nee`, and node `own`'s sampler density.
+    fn camera_segment(&self, dir: Vec3, far: Far, nee: f64, own: Option<(u32, f64)>) -> CameraSegment {
+        CameraSegment { dir, nee, bsdf: !self.delta_end(far), own }
     }
 
     /// Σ over light nodes t whose kernel covers y = (`py`, `ny`): K(t → y) q_t p*_σ(−dir |
@@ -430,12 +453,9 @@ impl Bidirectional<'_> {
     /// samples carry L_e alone (light samples; with merges only, the emission too). With
     /// merges only, the camera techniques are the junction's and left to the row.
     /// Also Σ K(c → x) over the bridge starts c (0 without bridges).
-    /// `twin_of`: the light node x whose twin is left out ([`Self::camera_techniques`]).
-    #[allow(clippy::too_many_arguments)]
-    fn sum(&self, x: &Node, dir: Vec3, far: Far, nee: f64, own_camera: Option<(u32, f64)>, own_light: u32, twin_of: u32) -> (f64, f64, f64, f64) {
-        let delta_end = self.delta_end(far);
-        let (mut d, mut emitted_only, starts) =
-            if self.merges_only { (0.0, 0.0, 0.0) } else { self.camera_techniques(x, dir, nee, !delta_end, own_camera, twin_of) };
+    /// `camera`: the segment's [`Self::camera_techniques`] (unread with merges only).
+    fn sum(&self, x: &Node, dir: Vec3, far: Far, camera: (f64, f64, f64), own_light: u32) -> (f64, f64, f64, f64) {
+        let (mut d, mut emitted_only, starts) = if self.merges_only { (0.0, 0.0, 0.0) } else { camera };
         if let Far::Surface(py, ny, _) = far {
             let (light, ends) = self.light_techniques(x, py, ny, dir, own_light, false);
             d += light + self.bridge_density(x, py, ny, starts, ends);
@@ -486,22 +506,40 @@ impl Bidirectional<'_> {
         }
         match u.kind {
             NodeKind::Camera => {
+                // Its continuation and its light sample, each with its far end and its
+                // camera-side query; both queries in one pass over the kernel neighbours.
                 let next = &u.next;
-                if next.dir != Vec3::ZERO && !next.delta {
+                let next_far = (next.dir != Vec3::ZERO && !next.delta).then(|| {
                     let far = if next.node != NONE {
                         let y = &nodes[next.node as usize].hit;
                         Far::Surface(y.p, y.ng, LightEnd::at_surface(y))
                     } else {
                         Far::Sky
                     };
-                    (d.next, d.next_light, d.next_emit, d.starts) =
-                        self.sum(u, next.dir, far, next.light_pdf as f64, Some((index, next.pdf as f64)), NONE, NONE);
-                }
+                    (far, self.camera_segment(next.dir, far, next.light_pdf as f64, Some((index, next.pdf as f64))))
+                });
                 let light = &u.light;
-                if light.dir != Vec3::ZERO {
+                let light_far = (light.dir != Vec3::ZERO).then(|| {
                     let end = light.end;
                     let far = if self.hood.scene.lights[end.light as usize].has_area() { Far::Surface(end.p, end.n, end) } else { Far::Light(end) };
-                    (d.light, _, d.light_emit, d.starts) = self.sum(u, light.dir, far, light.pdf as f64, None, NONE, NONE);
+                    (far, self.camera_segment(light.dir, far, light.pdf as f64, None))
+                });
+                let none = (0.0, 0.0, 0.0);
+                let (next_cam, light_cam) = match (next_far, light_far) {
+                    _ if self.merges_only => (none, none),
+                    (Some((_, a)), Some((_, b))) => {
+                        let [a, b] = self.camera_techniques(u, [a, b], NONE);
+                        (a, b)
+                    }
+                    (Some((_, a)), None) => (self.camera_techniques(u, [a], NONE)[0], none),
+                    (None, Some((_, b))) => (none, self.camera_techniques(u, [b], NONE)[0]),
+                    (None, None) => (none, none),
+                };
+                if let Some((far, _)) = next_far {
+                    (d.next, d.next_light, d.next_emit, d.starts) = self.sum(u, next.dir, far, next_cam, NONE);
+                }
+                if let Some((far, _)) = light_far {
+                    (d.light, _, d.light_emit, d.starts) = self.sum(u, light.dir, far, light_cam, NONE);
                 }
             }
             NodeKind::Light => {
@@ -510,7 +548,8 @@ impl Bidirectional<'_> {
                 let origin = crate::transport::SurfacePoint::new(u.hit, u.wo).reflection_origin();
                 let nee = far.light().map_or(0.0, |end| self.light_sample_density(origin, dir, end));
                 let own = if u.pred != NONE && !u.bridge && nodes[u.pred as usize].kind == NodeKind::Light { u.pred } else { NONE };
-                (d.arrive, d.arrive_light, d.arrive_emit, d.starts) = self.sum(u, dir, far, nee, None, own, index);
+                let camera = if self.merges_only { (0.0, 0.0, 0.0) } else { self.camera_techniques(u, [self.camera_segment(dir, far, nee, None)], index)[0] };
+                (d.arrive, d.arrive_light, d.arrive_emit, d.starts) = self.sum(u, dir, far, camera, own);
                 if self.merges_only {
                     // A light junction reuses its own path alone: its own technique and
                     // the emission.
