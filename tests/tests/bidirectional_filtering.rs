@@ -171,21 +171,15 @@ fn recursion_agrees(reuse: FilterReuse) {
     let dens: Vec<BidirDenominators> = (0..nodes.len() as u32).map(|i| weights.denominators(i)).collect();
     let mut graph = FilterGraph::<f64>::new();
     let mut pairs = Vec::new();
-    // With merges only, the rows of light nodes whose segment leaves an emission node
-    // (the emission's sample) are replaced by their L_e: the estimator merges the light
-    // segments around the emission node there, a reflected part that the mode's D_r leaves
-    // the emission out of (see the test's notes). Counted here, not checked.
+    // With merges only, the rows of light nodes whose segment leaves an emission node (the
+    // emission's sample) carry its L_e alone: counted, and checked with the rest.
     let (mut emission_rows, mut light_rows) = (0, 0);
     for v in 0..nodes.len() as u32 {
         let (e, d) = weights.row::<f64>(v, &dens, &mut pairs);
         let u = &nodes[v as usize];
         let from = |kind| u.kind == NodeKind::Light && u.pred != NONE && nodes[u.pred as usize].kind == kind;
         light_rows += (from(NodeKind::Light) && !pairs.is_empty()) as u32;
-        if merges_only && from(NodeKind::Emission) {
-            emission_rows += (!pairs.is_empty() || d != [0.0; 3]) as u32;
-            graph.push_row(e, [0.0; 3], []);
-            continue;
-        }
+        emission_rows += (merges_only && from(NodeKind::Emission)) as u32;
         graph.push_row(e, d, pairs.iter().copied());
     }
     let propagated = graph.propagate(segments - 1);
@@ -221,7 +215,7 @@ fn recursion_agrees(reuse: FilterReuse) {
     println!(
         "{checked} pixels, {} nodes ({lights} light, {emission_nodes} emission, {twins} twins, {bridge_count} bridges), {} reused segments \
          ({} merges at camera junctions, {chains} of chains, {corrected} pair-corrected; {light_rows} light rows continuing a chain; \
-         {emission_rows} emission-node rows replaced), worst {worst:e}",
+         {emission_rows} emission-node rows), worst {worst:e}",
         nodes.len(),
         graph.targets.len(),
         merged.len()

@@ -661,6 +661,14 @@ impl Bidirectional<'_> {
             }
             return (arrival.map_or(emission, |t| mul3(emission, rgb::<T>(t))), direct);
         }
+        if self.merges_only && centre.kind == NodeKind::Emission {
+            // With merges only, the emission's samples carry L_e alone (D_r leaves the
+            // emission out), as BPM's light sub-paths start with the emitted light: no
+            // segment around the emission node is merged into this one. (Merging them
+            // gave a reflected part over D_r, the junction's continuation alone: up to
+            // 2.5e7× the reference in `bpf_merges_only_equals_the_area_measure_recursion_in_f64`.)
+            return (arrival.map_or(emission, |t| mul3(emission, rgb::<T>(t))), zero);
+        }
         let centre_index = if v.kind == NodeKind::Camera { index } else { v.pred };
         // The BSDF at the junction vertex: for a camera junction its own (the kept segment
         // arrives there); for a light junction the reused segment's own node, where that
