@@ -36,12 +36,11 @@ use ember_core::scene::Context;
 use ember_core::transport::{Counters, MaxDepth, RenderParams};
 use ember_core::mmis::{Mmis, Pair, Technique, product_of_sums, tuple_weight};
 use ember_core::rng::{SampleStream, Stream};
-use ember_core::merge::HashGrid;
 use ember_core::scene::Scene;
 use ember_core::segment::Kernel;
 use ember_core::estimators::filter::nodes::{NONE, NodeKind};
 use ember_core::estimators::filter::bridge::bridge_end;
-use ember_core::estimators::filter::{Bidirectional, FilterGraph, Neighbourhood, kernel_points, trace_bridges, trace_camera_nodes, trace_light_nodes};
+use ember_core::estimators::filter::{Bidirectional, FilterGraph, Neighbourhood, NodeGrid, kernel_points, trace_bridges, trace_camera_nodes, trace_light_nodes};
 use ember_core::spectrum::Rgb;
 use ember_fuzz::Bytes;
 use ember_tests::bdpt_oracle::for_each_strategy_split;
@@ -148,8 +147,8 @@ fn filtering(b: &mut Bytes, scene: &Scene, tracer: &BruteForce, params: &RenderP
     let (mut light, mut pred, mut base) = (Vec::new(), Vec::new(), Vec::new());
     trace_light_nodes(scene, tracer, params, segments, 16, 0, 0..16, false, false, &mut light, &mut pred, &mut base);
     for (nodes, is_light) in [(&cam, false), (&light, true)] {
-        let mut grid = HashGrid::new();
-        grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
+        let mut grid = NodeGrid::default();
+        grid.build(&nodes, radius * std::f32::consts::SQRT_2);
         let points = kernel_points(nodes);
         let hood = Neighbourhood { scene, nodes, points: &points, grid: &grid, kernel: Kernel::Disk { radius } };
         let dens: Vec<_> = (0..nodes.len() as u32).map(|i| hood.denominators(i)).collect();
@@ -204,8 +203,8 @@ fn bidirectional(b: &mut Bytes, scene: &Scene, tracer: &BruteForce, params: &Ren
         nodes.extend(bridges);
         bridge_choice = (!ends.is_empty()).then(|| 1.0 / ends.len() as f64);
     }
-    let mut grid = HashGrid::new();
-    grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
+    let mut grid = NodeGrid::default();
+    grid.build(&nodes, radius * std::f32::consts::SQRT_2);
     let points = kernel_points(&nodes);
     let hood = Neighbourhood { scene, nodes: &nodes, points: &points, grid: &grid, kernel: Kernel::Disk { radius } };
     let w = Bidirectional { hood, light_paths: 16.0, merges_only: mode == 1, bridge_choice };

@@ -42,6 +42,12 @@
 //! And BPF's three when light nodes got twins (issue 53, a different pool and D by
 //! design; its images' means against PT and β = 0: docs/bidirectional-filtering.md,
 //! "Small kernels"; every other entry unchanged).
+//! And MVF's, PhF's and BPF's nine when their nodes moved to [`CellGrid`]s by side
+//! (issue 53): the same neighbours in another order, so sums rounded differently; at
+//! one seed, 160 pixels wide, 2 passes, every one of the nine against the previous
+//! binary: relMSE 6e-16 to 3e-15, ratio of means 1.000000 (`ember compare`).
+//!
+//! [`CellGrid`]: ember_core::merge::CellGrid
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -145,9 +151,9 @@ const GOLDEN: &[(&str, &str, u64)] = &[
     ("builtin", "spt", 0xc35a75152b392c9a),
     ("builtin", "slt", 0x88c05076af9eaf7f),
     ("builtin", "sbdpt", 0xc8c7fd9af0d7749b),
-    ("builtin", "mvf", 0x8641ef3b3273ffa9),
-    ("builtin", "phf", 0xb96d6d0380c29138),
-    ("builtin", "bpf", 0x22cc7e96359fc1fb),
+    ("builtin", "mvf", 0x4aefbc8f70aac5a3),
+    ("builtin", "phf", 0x61894fb18b9b12b8),
+    ("builtin", "bpf", 0x30c60ab9f6d6fd73),
     ("ajar", "pt", 0x572da2034d62d9e6),
     ("ajar", "lt", 0x7414f822e9e2f3d2),
     ("ajar", "bdpt", 0xdb34ef4ccca82789),
@@ -159,9 +165,9 @@ const GOLDEN: &[(&str, &str, u64)] = &[
     ("ajar", "spt", 0x572da2034d62d9e6),
     ("ajar", "slt", 0x7414f822e9e2f3d2),
     ("ajar", "sbdpt", 0xdb34ef4ccca82789),
-    ("ajar", "mvf", 0xbe69a26e8d6a0110),
-    ("ajar", "phf", 0xcd75204e8df99d79),
-    ("ajar", "bpf", 0x108f4223a89c1e1b),
+    ("ajar", "mvf", 0xbdbdb5b67556838b),
+    ("ajar", "phf", 0x1725b049b410eb8b),
+    ("ajar", "bpf", 0x2bed9ea5db9f62b7),
     ("veach-mis", "pt", 0x016246f95e846d8e),
     ("veach-mis", "lt", 0x33b21cd773b09b35),
     ("veach-mis", "bdpt", 0xc88bea920fb8d5a4),
@@ -173,9 +179,9 @@ const GOLDEN: &[(&str, &str, u64)] = &[
     ("veach-mis", "spt", 0x016246f95e846d8e),
     ("veach-mis", "slt", 0x33b21cd773b09b35),
     ("veach-mis", "sbdpt", 0xc88bea920fb8d5a4),
-    ("veach-mis", "mvf", 0xfe7c0ba8e2056ec4),
-    ("veach-mis", "phf", 0xdb9316790a6a64e2),
-    ("veach-mis", "bpf", 0xba327ac93caf0960),
+    ("veach-mis", "mvf", 0xadd9bffc02ccfeeb),
+    ("veach-mis", "phf", 0xfcdeabc3e56e2f36),
+    ("veach-mis", "bpf", 0x38b421cf7f842f1b),
 ];
 
 const SCENES: [&str; 3] = ["builtin", "ajar", "veach-mis"];

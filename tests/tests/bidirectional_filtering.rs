@@ -28,9 +28,8 @@ use ember_core::estimators::FilterReuse;
 use ember_core::estimators::filter::graph::REFLECTED;
 use ember_core::estimators::filter::nodes::{NONE, NodeKind};
 use ember_core::estimators::filter::{
-    BidirDenominators, Bidirectional, FilterGraph, Neighbourhood, Node, kernel_points, trace_camera_nodes, trace_light_nodes,
+    BidirDenominators, Bidirectional, FilterGraph, Neighbourhood, Node, NodeGrid, kernel_points, trace_camera_nodes, trace_light_nodes,
 };
-use ember_core::merge::HashGrid;
 use ember_core::scene::{AreaEmission, Scene};
 use ember_core::segment::Kernel;
 use ember_core::spectrum::Rgb;
@@ -159,8 +158,8 @@ fn recursion_agrees(reuse: FilterReuse) {
     let bridge_count = bridge_nodes.len();
     nodes.extend(bridge_nodes);
     let radius = 0.8f32;
-    let mut grid = HashGrid::new();
-    grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
+    let mut grid = NodeGrid::default();
+    grid.build(&nodes, radius * std::f32::consts::SQRT_2);
     let kernel = Kernel::Disk { radius };
     let weights = Bidirectional {
         hood: Neighbourhood { scene: &scene, nodes: &nodes, points: &kernel_points(&nodes), grid: &grid, kernel },
@@ -242,8 +241,8 @@ fn bpf_denominators_are_finite_and_positive() {
     let (nodes, _) = bpf_nodes(&scene, &tracer, &params, 6, 100, 40, true);
     let mut checked = 0;
     for radius in [1e-3f32, 0.05, 0.5] {
-        let mut grid = HashGrid::new();
-        grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
+        let mut grid = NodeGrid::default();
+        grid.build(&nodes, radius * std::f32::consts::SQRT_2);
         let hood = Neighbourhood { scene: &scene, nodes: &nodes, points: &kernel_points(&nodes), grid: &grid, kernel: Kernel::Disk { radius } };
         let w = Bidirectional { hood, light_paths: 40.0, merges_only: false, bridge_choice: None };
         for (i, u) in nodes.iter().enumerate().filter(|(_, u)| !u.delta) {
@@ -476,8 +475,8 @@ fn bridge_terms_equal_the_sum_over_every_pair() {
     nodes.extend(bridges);
     let radius = 0.6f32;
     let kernel = Kernel::Disk { radius };
-    let mut grid = HashGrid::new();
-    grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
+    let mut grid = NodeGrid::default();
+    grid.build(&nodes, radius * std::f32::consts::SQRT_2);
     let points = kernel_points(&nodes);
     let hood = Neighbourhood { scene: &scene, nodes: &nodes, points: &points, grid: &grid, kernel };
     let choice = 1.0 / ends.len() as f64;

@@ -14,9 +14,8 @@
 use ember_core::bsdf::{Material, MicrofacetKind, TransportMode};
 use ember_core::estimators::FilterSide;
 use ember_core::estimators::filter::nodes::NONE;
-use ember_core::estimators::filter::{Denominators, FilterGraph, Neighbourhood, Node, kernel_points, trace_camera_nodes, trace_light_nodes};
+use ember_core::estimators::filter::{Denominators, FilterGraph, Neighbourhood, Node, NodeGrid, kernel_points, trace_camera_nodes, trace_light_nodes};
 use ember_core::math::Frame;
-use ember_core::merge::HashGrid;
 use ember_core::scene::Scene;
 use ember_core::segment::Kernel;
 use ember_core::spectrum::Rgb;
@@ -176,8 +175,8 @@ fn propagation_equals_the_naive_recursion_in_f64() {
     let (mut nodes, first) = pass_nodes(&scene, &tracer, &params, segments, 48);
     vary_kernels(&mut nodes);
     let radius = 0.8f32;
-    let mut grid = HashGrid::new();
-    grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
+    let mut grid = NodeGrid::default();
+    grid.build(&nodes, radius * std::f32::consts::SQRT_2);
     let kernel = Kernel::Disk { radius };
     let hood = Neighbourhood { scene: &scene, nodes: &nodes, points: &kernel_points(&nodes), grid: &grid, kernel };
     let (_, graph) = graph_f64(&hood);
@@ -260,8 +259,8 @@ fn photon_filtering_propagation_equals_its_recursion_in_f64() {
     trace_light_nodes(&scene, &tracer, &params, segments, 40, 0, 0..40, false, false, &mut nodes, &mut pred, &mut base);
     vary_kernels(&mut nodes);
     let radius = 0.8f32;
-    let mut grid = HashGrid::new();
-    grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
+    let mut grid = NodeGrid::default();
+    grid.build(&nodes, radius * std::f32::consts::SQRT_2);
     let kernel = Kernel::Disk { radius };
     let hood = Neighbourhood { scene: &scene, nodes: &nodes, points: &kernel_points(&nodes), grid: &grid, kernel };
     let dens: Vec<Denominators> = (0..nodes.len() as u32).map(|i| hood.denominators(i)).collect();
@@ -299,8 +298,8 @@ fn denominators_are_finite_and_positive() {
     let (nodes, _) = pass_nodes(&scene, &tracer, &params, 6, 144);
     let mut checked = 0;
     for radius in [1e-3f32, 0.05, 0.5] {
-        let mut grid = HashGrid::new();
-        grid.build(nodes.iter().map(|n| n.hit.p), radius * std::f32::consts::SQRT_2);
+        let mut grid = NodeGrid::default();
+        grid.build(&nodes, radius * std::f32::consts::SQRT_2);
         let hood = Neighbourhood { scene: &scene, nodes: &nodes, points: &kernel_points(&nodes), grid: &grid, kernel: Kernel::Disk { radius } };
         for (i, u) in nodes.iter().enumerate().filter(|(_, u)| !u.delta) {
             let d = hood.denominators(i as u32);

@@ -3,6 +3,8 @@
 //!
 //! - [`grid`]: a hash grid over points, rebuilt every pass into storage it keeps, whose
 //!   queries visit only the (at most eight) cells a ball of radius r can touch;
+//! - [`cells`]: a grid of cells half the query radius, hashed by rows so that a query
+//!   scans a few contiguous runs (the segment filters', whose passes are queries);
 //! - [`radius`]: the kernel radius: its initial value r₀ (the segment paper's heuristic,
 //!   4 × the mean pixel footprint, or a fraction of the scene's bounding radius as in
 //!   SmallVCM, or absolute) and the progressive schedule r_i = r₀ (i + 1)^((α − 1)/2)
@@ -18,9 +20,13 @@
 //! ranges on several machines gets the same radius in every pass.
 
 #[cfg(feature = "hash-grid")]
+pub mod cells;
+#[cfg(feature = "hash-grid")]
 pub mod grid;
 pub mod radius;
 
+#[cfg(feature = "hash-grid")]
+pub use cells::CellGrid;
 #[cfg(feature = "hash-grid")]
 pub use grid::HashGrid;
 pub use radius::{Footprint, RadiusRule, progressive_radius};

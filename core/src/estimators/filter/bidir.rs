@@ -155,6 +155,7 @@ use alloc::vec::Vec;
 
 use super::bridge::{self, bridge_end, bridges_from};
 use super::graph::{REFLECTED, Real, Rgb3, add3, mul3, rgb, scale3};
+use super::node_grid::Side;
 use super::nodes::{LightEnd, NONE, Node, NodeKind};
 use super::weights::{KernelPoint, Neighbourhood};
 use crate::bsdf::TransportMode;
@@ -350,7 +351,7 @@ impl Bidirectional<'_> {
     fn camera_techniques<const N: usize>(&self, x: &Node, segments: [CameraSegment; N], twin_of: u32) -> [(f64, f64, f64); N] {
         let mut sums = [(0.0, 0.0, 0.0); N];
         let xp = KernelPoint::of(x);
-        self.hood.grid.query(x.hit.p, |i| {
+        self.hood.grid.query_side(Side::Camera, x.hit.p, |i| {
             let tp = &self.hood.points[i as usize];
             if tp.delta || tp.kind != NodeKind::Camera {
                 return;
@@ -402,7 +403,7 @@ impl Bidirectional<'_> {
         }
         let (mut sum, mut ends) = (0.0, 0.0);
         let bridges = self.bridge_choice.is_some() && !own_only;
-        self.hood.grid.query(py, |i| {
+        self.hood.grid.query_side(Side::Light, py, |i| {
             // The kernel point first, then the kernel: most neighbours are skipped
             // without their node (reading every light node in the ball was a fifth of a
             // pass on the Cornell box), and one outside its kernel adds nothing.

@@ -6,11 +6,11 @@ use alloc::vec::Vec;
 
 use super::bidir::BidirDenominators;
 use super::graph::{FilterGraph, Rgb3, reserve_headroom};
+use super::node_grid::{NodeGrid, grid_permutation};
 use super::nodes::{NONE, Node};
 use super::weights::{Denominators, KernelPoint, Neighbourhood};
 use crate::camera::CameraPass;
 use crate::estimators::ChunkOutput;
-use crate::merge::HashGrid;
 use crate::render::Film;
 use crate::scene::Scene;
 use crate::segment::Kernel;
@@ -51,13 +51,6 @@ fn gather<T: Copy>(into: &mut Vec<T>, n: usize, outputs: &mut [ChunkOutput], par
     for out in outputs.iter_mut() {
         into.extend_from_slice(part(out.data.filter_chunk()));
     }
-}
-
-/// A node's position in the grid: emission nodes (all on the lights, and never anyone's
-/// neighbour) are left out, so that queries near a small light do not visit every light
-/// path's origin.
-fn grid_point(n: &Node) -> crate::math::Vec3 {
-    if n.kind == super::nodes::NodeKind::Emission { crate::math::Vec3::NAN } else { n.hit.p }
 }
 
 /// The filters' phase ids, shared by MVF, PhF and BPF (`reduce_phase` reads them):
@@ -146,8 +139,8 @@ pub struct FilterPass {
     pub links: Vec<u32>,
     /// Per-item values gathered with them.
     pub values: Vec<Rgb>,
-    /// The grid over the nodes' ends, for queries of radius √2 r.
-    pub grid: HashGrid,
+    /// The grids over the nodes' ends, for queries of radius √2 r.
+    pub grid: NodeGrid,
     /// The kernel radius.
     pub r: f32,
     /// Each node's denominators (MVF, PhF).
@@ -219,7 +212,7 @@ impl FilterPass {
         self.r = r;
         // The disk kernel's support (within r of the tangent plane, inside the disk)
         // reaches √2 r from its centre.
-        self.grid.build(self.nodes.iter().map(grid_point), r * core::f32::consts::SQRT_2);
+        self.grid.build(&self.nodes, r * core::f32::consts::SQRT_2);
         // The neighbour budget: rows cost O(Σ n²), so where nodes crowd (a caustic, a
         // spot light's pool) the pass's radius is lowered until the mean kernel holds at
         // most NEIGHBOUR_BUDGET nodes (surface density: n ∝ r²). The radius still goes
@@ -227,7 +220,7 @@ impl FilterPass {
         let mean = self.mean_neighbours();
         if mean > NEIGHBOUR_BUDGET as f64 {
             self.r = r * libm::sqrtf((NEIGHBOUR_BUDGET as f64 / mean) as f32).max(1.0 / 64.0);
-            self.grid.build(self.nodes.iter().map(grid_point), self.r * core::f32::consts::SQRT_2);
+            self.grid.build(&self.nodes, self.r * core::f32::consts::SQRT_2);
         }
         self.sort_nodes();
     }
@@ -245,16 +238,7 @@ impl FilterPass {
     /// is the same to the bit. Emission nodes, which are in no bucket, go last.
     fn sort_nodes(&mut self) {
         let n = self.nodes.len();
-        self.new_index.clear();
-        reserve_headroom(&mut self.new_index, n);
-        self.new_index.resize(n, NONE);
-        for (slot, &old) in self.grid.order().iter().enumerate() {
-            self.new_index[old as usize] = slot as u32;
-        }
-        let after_slots = self.grid.order().len() as u32..;
-        for (next, k) in after_slots.zip(self.new_index.iter_mut().filter(|k| **k == NONE)) {
-            *k = next;
-        }
+        grid_permutation(n, self.grid.order(), &mut self.new_index);
         let map = |i: u32, new_index: &[u32]| if i == NONE { NONE } else { new_index[i as usize] };
         for node in &mut self.nodes {
             node.next.node = map(node.next.node, &self.new_index);
@@ -282,7 +266,7 @@ impl FilterPass {
                 self.new_index.swap(i, j);
             }
         }
-        self.grid.build(self.nodes.iter().map(grid_point), self.r * core::f32::consts::SQRT_2);
+        self.grid.build(&self.nodes, self.r * core::f32::consts::SQRT_2);
         self.points.clear();
         reserve_headroom(&mut self.points, n);
         self.points.extend(self.nodes.iter().map(KernelPoint::of));
@@ -299,14 +283,14 @@ impl FilterPass {
             self.nodes.extend_from_slice(&chunk.nodes);
             self.points.extend(chunk.nodes.iter().map(KernelPoint::of));
         }
-        self.grid.build(self.nodes.iter().map(grid_point), self.r * core::f32::consts::SQRT_2);
+        self.grid.build(&self.nodes, self.r * core::f32::consts::SQRT_2);
     }
 
     /// Rebuild the grid for kernel radius `r` (PhF's gather, which keeps the progressive
     /// radius whatever the neighbour budget did to the pass's reuse kernel).
     pub fn rebuild_grid(&mut self, r: f32) {
         self.r = r;
-        self.grid.build(self.nodes.iter().map(grid_point), r * core::f32::consts::SQRT_2);
+        self.grid.build(&self.nodes, r * core::f32::consts::SQRT_2);
     }
 
     /// Mean number of nodes in a node's grid ball, from up to 512 nodes spread evenly.
@@ -496,8 +480,8 @@ mod tests {
                 links.extend(chunk.links.iter().map(|&i| shift(i)));
                 values.extend_from_slice(&chunk.values);
             }
-            let mut grid = HashGrid::default();
-            grid.build(unsorted.iter().map(grid_point), r * core::f32::consts::SQRT_2);
+            let mut grid = NodeGrid::default();
+            grid.build(&unsorted, r * core::f32::consts::SQRT_2);
             pass.gather_nodes(&mut outputs, r);
             assert_eq!(pass.r, r, "the neighbour budget must not cut in here");
             assert_eq!(pass.nodes.len(), unsorted.len());
@@ -510,7 +494,7 @@ mod tests {
                 assert_eq!(before, after, "query at {q:?}");
             }
             // Slot order: the grid over the sorted nodes reports identity order.
-            assert!(pass.grid.order().iter().enumerate().all(|(k, &i)| k as u32 == i));
+            assert!(pass.grid.order().enumerate().all(|(k, i)| k as u32 == i));
             let emission = pass.nodes.iter().position(|n| n.kind == NodeKind::Emission).unwrap();
             assert!(pass.nodes[emission..].iter().all(|n| n.kind == NodeKind::Emission));
             // Every node, its links and values, found again by its (unique) position.

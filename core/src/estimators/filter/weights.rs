@@ -23,10 +23,10 @@
 use alloc::vec::Vec;
 
 use super::graph::{Real, Rgb3, rgb, scale3};
+use super::node_grid::NodeGrid;
 use super::nodes::{NONE, Node, NodeKind};
 use crate::bsdf::TransportMode;
 use crate::math::Vec3;
-use crate::merge::HashGrid;
 use crate::scene::Scene;
 use crate::segment::Kernel;
 use crate::spectrum::Rgb;
@@ -40,7 +40,7 @@ pub struct Neighbourhood<'a> {
     pub nodes: &'a [Node],
     /// [`KernelPoint::of`] each node.
     pub points: &'a [KernelPoint],
-    pub grid: &'a HashGrid,
+    pub grid: &'a NodeGrid,
     pub kernel: Kernel,
 }
 
