@@ -679,12 +679,19 @@ impl Bidirectional<'_> {
         let material = self.hood.scene.material(centre.hit.material, centre.hit.uv);
         let wo_world = wo;
         let wo = frame.to_local(wo);
+        // (A local direction's z is its dot with the shading normal, bit for bit: a
+        // Lambertian lobe needs no frame.)
         let f = |u: &Node, dir: Vec3| {
             if camera_junction {
-                material.eval(wo, frame.to_local(dir), TransportMode::Radiance)
+                material
+                    .eval_cosines(wo.z, centre.hit.ns.dot(dir), TransportMode::Radiance)
+                    .unwrap_or_else(|| material.eval(wo, frame.to_local(dir), TransportMode::Radiance))
             } else {
-                let at = Frame::from_normal(u.hit.ns);
-                self.hood.scene.material(u.hit.material, u.hit.uv).eval(at.to_local(wo_world), at.to_local(dir), TransportMode::Radiance)
+                let m = self.hood.scene.material(u.hit.material, u.hit.uv);
+                m.eval_cosines(u.hit.ns.dot(wo_world), u.hit.ns.dot(dir), TransportMode::Radiance).unwrap_or_else(|| {
+                    let at = Frame::from_normal(u.hit.ns);
+                    m.eval(at.to_local(wo_world), at.to_local(dir), TransportMode::Radiance)
+                })
             }
         };
         let pair = self.pair_segment(index, dens);

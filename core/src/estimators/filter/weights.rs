@@ -107,8 +107,12 @@ impl Neighbourhood<'_> {
     /// in transport mode `mode`.
     #[inline]
     pub(super) fn bsdf_pdf(&self, t: &Node, dir: crate::math::Vec3, mode: TransportMode) -> f64 {
-        let frame = crate::math::Frame::from_normal(t.hit.ns);
         let m = self.scene.material(t.hit.material, t.hit.uv);
+        // A local direction's z is its dot with the shading normal, bit for bit.
+        if let Some(pdf) = m.pdf_cosines(t.hit.ns.dot(t.wo), t.hit.ns.dot(dir), mode) {
+            return pdf.0 as f64;
+        }
+        let frame = crate::math::Frame::from_normal(t.hit.ns);
         m.pdf(frame.to_local(t.wo), frame.to_local(dir), mode).0 as f64
     }
 
@@ -180,7 +184,11 @@ impl Neighbourhood<'_> {
         let frame = crate::math::Frame::from_normal(v.hit.ns);
         let material = self.scene.material(v.hit.material, v.hit.uv);
         let wo = frame.to_local(v.wo);
-        let f = |dir: crate::math::Vec3| material.eval(wo, frame.to_local(dir), TransportMode::Radiance);
+        let f = |dir: crate::math::Vec3| {
+            material
+                .eval_cosines(wo.z, v.hit.ns.dot(dir), TransportMode::Radiance)
+                .unwrap_or_else(|| material.eval(wo, frame.to_local(dir), TransportMode::Radiance))
+        };
         self.each_neighbour(v, true, |i, u, k| {
             let d = &dens[i as usize];
             let n = u.hit.ns;
