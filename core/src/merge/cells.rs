@@ -272,6 +272,8 @@ mod tests {
     use super::*;
     use alloc::vec;
 
+    type Draw = dyn Fn(&mut u64) -> Vec3;
+
     fn lcg(state: &mut u64) -> f32 {
         *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         ((*state >> 40) as f32) / (1u64 << 24) as f32
@@ -288,7 +290,8 @@ mod tests {
         let mut s = 11u64;
         let volume = |s: &mut u64| Vec3::new(lcg(s), lcg(s), lcg(s));
         let plane = |s: &mut u64| Vec3::new(lcg(s), 0.25, lcg(s));
-        let cases: [(usize, f32, f32, &dyn Fn(&mut u64) -> Vec3); 9] = [
+        // (points, radius, spread, how a point is drawn)
+        let cases: [(usize, f32, f32, &Draw); 9] = [
             (1, 0.1, 1.0, &volume),
             // A 64-bucket table under hundreds of occupied rows: ranges wrap and collide.
             (30, 0.15, 1.0, &volume),
