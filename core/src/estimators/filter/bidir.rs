@@ -368,7 +368,7 @@ impl Bidirectional<'_> {
             for (s, (all, nee_part, start)) in segments.iter().zip(sums.iter_mut()) {
                 if s.bsdf {
                     let p = match s.own {
-                        Some((o, pdf)) if o == i => pdf,
+                        Some((o, pdf)) if o == i => self.hood.own_pdf(t, s.dir, TransportMode::Radiance, pdf as f32),
                         _ => self.hood.bsdf_pdf(t, s.dir, TransportMode::Radiance),
                     };
                     *all += k * t.next.q as f64 * p;
@@ -446,7 +446,7 @@ impl Bidirectional<'_> {
         if t.delta || t.kind != NodeKind::Light || !(t.next.q > 0.0) || !(k > 0.0) {
             return 0.0;
         }
-        let p = if own { t.next.pdf as f64 } else { self.hood.bsdf_pdf(t, -dir, TransportMode::Importance) };
+        let p = if own { self.hood.own_pdf(t, -dir, TransportMode::Importance, t.next.pdf) } else { self.hood.bsdf_pdf(t, -dir, TransportMode::Importance) };
         k * t.next.q as f64 * p
     }
 
@@ -484,7 +484,9 @@ impl Bidirectional<'_> {
     fn junction(&self, c: &Node, k: f64, dir: Vec3, nee: f64, bsdf: bool, own_pdf: Option<f64>) -> (f64, f64) {
         let mut all = 0.0;
         if bsdf {
-            all += k * c.next.q as f64 * own_pdf.unwrap_or_else(|| self.hood.bsdf_pdf(c, dir, TransportMode::Radiance));
+            let p =
+                own_pdf.map_or_else(|| self.hood.bsdf_pdf(c, dir, TransportMode::Radiance), |p| self.hood.own_pdf(c, dir, TransportMode::Radiance, p as f32));
+            all += k * c.next.q as f64 * p;
         }
         let n = if c.light.attempted { k * nee } else { 0.0 };
         (all + n, n)
