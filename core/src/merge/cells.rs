@@ -23,12 +23,8 @@
 //! Order: a query reports points in slot order (bucket order, then input order within a
 //! bucket), whatever the thread count. Storage is reused across builds.
 
-use alloc::vec::Vec;
-
+use super::slots::{Slots, cell_of};
 use crate::math::Vec3;
-
-/// Points a scan tests at a time.
-const LANES: usize = 8;
 
 /// Cells per query radius along each axis.
 const CELLS_PER_RADIUS: f32 = 1.0;
@@ -41,16 +37,8 @@ const MAX_RANGES: usize = 32;
 pub struct CellGrid {
     radius: f32,
     inv_cell: f32,
-    /// Bucket b's points are at slots `starts[b] .. starts[b + 1]`.
-    starts: Vec<u32>,
-    /// The input index of the point in each slot.
-    indices: Vec<u32>,
-    /// Positions by slot, as structures of arrays.
-    xs: Vec<f32>,
-    ys: Vec<f32>,
-    zs: Vec<f32>,
-    /// Each input point's bucket while building, then its slot (`u32::MAX`: left out).
-    slot_of: Vec<u32>,
+    /// The points in bucket order.
+    slots: Slots,
     mask: u32,
 }
 
@@ -67,29 +55,24 @@ impl CellGrid {
 
     /// Number of points held.
     pub fn len(&self) -> usize {
-        self.indices.len()
+        self.slots.indices.len()
     }
 
     /// Does it hold no point?
     pub fn is_empty(&self) -> bool {
-        self.indices.is_empty()
+        self.slots.indices.is_empty()
     }
 
     /// Bytes held (capacity).
     pub fn size_bytes(&self) -> usize {
-        (self.starts.capacity() + self.indices.capacity() + self.slot_of.capacity() + self.xs.capacity() + self.ys.capacity() + self.zs.capacity()) * 4
+        self.slots.size_bytes()
     }
 
     /// Rebuild over `points` for queries of radius `radius` (> 0 and finite; otherwise the
     /// grid is left empty). Point i is reported as index i; a point that is not finite is
     /// left out.
     pub fn build(&mut self, points: impl ExactSizeIterator<Item = Vec3> + Clone, radius: f32) {
-        self.starts.clear();
-        self.indices.clear();
-        self.xs.clear();
-        self.ys.clear();
-        self.zs.clear();
-        self.slot_of.clear();
+        self.slots.clear();
         self.radius = radius;
         let n = points.len();
         if !(radius > 0.0 && radius.is_finite()) || n == 0 || n > u32::MAX as usize / 4 {
@@ -101,67 +84,31 @@ impl CellGrid {
         // About two buckets per point: rows of a few points each hash apart.
         let buckets = (2 * n).next_power_of_two().max(64);
         self.mask = buckets as u32 - 1;
-        self.starts.resize(buckets + 1, 0);
-        let mut kept = 0usize;
-        for p in points.clone() {
-            if !p.is_finite() {
-                self.slot_of.push(u32::MAX);
-                continue;
-            }
-            let b = self.bucket(self.cell_of(p));
-            self.slot_of.push(b);
-            self.starts[b as usize] += 1;
-            kept += 1;
-        }
-        let mut sum = 0u32;
-        for b in 0..buckets {
-            let count = self.starts[b];
-            self.starts[b] = sum;
-            sum += count;
-        }
-        self.starts[buckets] = sum;
-        self.indices.resize(kept, 0);
-        self.xs.resize(kept, 0.0);
-        self.ys.resize(kept, 0.0);
-        self.zs.resize(kept, 0.0);
-        for (i, p) in points.enumerate() {
-            if self.slot_of[i] == u32::MAX {
-                continue;
-            }
-            let b = self.slot_of[i] as usize;
-            let k = self.starts[b] as usize;
-            self.indices[k] = i as u32;
-            (self.xs[k], self.ys[k], self.zs[k]) = (p.x, p.y, p.z);
-            self.slot_of[i] = k as u32;
-            self.starts[b] += 1;
-        }
-        for b in (1..=buckets).rev() {
-            self.starts[b] = self.starts[b - 1];
-        }
-        self.starts[0] = 0;
+        let (inv_cell, mask) = (self.inv_cell, self.mask);
+        self.slots.fill(points, buckets, |p| bucket(cell_of(p, inv_cell), mask));
     }
 
     /// The input index of the point in each slot: hosts reorder their per-point data by
     /// it so that queries read it contiguously.
     pub fn order(&self) -> &[u32] {
-        &self.indices
+        &self.slots.indices
     }
 
     /// Each input point's slot (`u32::MAX` for a point left out): the inverse of
     /// [`Self::order`].
     pub fn slot_of(&self) -> &[u32] {
-        &self.slot_of
+        &self.slots.slot_of
     }
 
     /// Call `visit(i)` for every point i within distance `radius()` of `p`, once each, in
     /// slot order.
     pub fn query(&self, p: Vec3, mut visit: impl FnMut(u32)) {
-        if self.indices.is_empty() || !p.is_finite() {
+        if self.slots.indices.is_empty() || !p.is_finite() {
             return;
         }
         let r = self.radius;
-        let lo = self.cell_of(p - Vec3::splat(r));
-        let hi = self.cell_of(p + Vec3::splat(r));
+        let lo = cell_of(p - Vec3::splat(r), self.inv_cell);
+        let hi = cell_of(p + Vec3::splat(r), self.inv_cell);
         // At most 3 cells per axis in exact arithmetic, 4 where rounding puts p ± R just
         // across two boundaries (the cap only matters for saturated coordinates).
         let last = |l: i64, h: i64| h.min(l.saturating_add(3));
@@ -170,7 +117,7 @@ impl CellGrid {
         let mut n = 0;
         for z in lo[2]..=last(lo[2], hi[2]) {
             for y in lo[1]..=last(lo[1], hi[1]) {
-                let first = self.bucket([x0, y, z]);
+                let first = bucket([x0, y, z], self.mask);
                 let count = (x1 - x0) as u32 + 1;
                 // Buckets first ..= first + count − 1, modulo the table.
                 let end = first + count - 1;
@@ -195,82 +142,34 @@ impl CellGrid {
             }
         }
         let r2 = r * r;
+        let mut report = |k: u32| visit(self.slots.indices[k as usize]);
         let mut current = ranges[0];
         for &(a, b) in &ranges[1..] {
             if a <= current.1.saturating_add(1) {
                 current.1 = current.1.max(b);
             } else {
-                self.scan(current, p, r2, &mut visit);
+                self.slots.scan(self.slots.buckets(current.0, current.1), p, r2, &mut report);
                 current = (a, b);
             }
         }
-        self.scan(current, p, r2, &mut visit);
-    }
-
-    /// Report the points of buckets `first ..= last` within √`r2` of `p`.
-    #[inline]
-    fn scan(&self, (first, last): (u32, u32), p: Vec3, r2: f32, visit: &mut impl FnMut(u32)) {
-        let (lo, hi) = (self.starts[first as usize] as usize, self.starts[last as usize + 1] as usize);
-        let (xs, ys, zs) = (&self.xs[lo..hi], &self.ys[lo..hi], &self.zs[lo..hi]);
-        let n = xs.len();
-        let mut j = 0;
-        while j < n {
-            let mut mask = if j + LANES <= n {
-                inside_mask(block(&xs[j..]), block(&ys[j..]), block(&zs[j..]), p, r2)
-            } else {
-                // The last, partial block, one point at a time.
-                (j..n).fold(0u32, |mask, k| {
-                    let (dx, dy, dz) = (xs[k] - p.x, ys[k] - p.y, zs[k] - p.z);
-                    mask | (((dx * dx + dy * dy + dz * dz <= r2) as u32) << (k - j))
-                })
-            };
-            // One call site for `visit`, so that the compiler inlines it.
-            while mask != 0 {
-                visit(self.indices[lo + j + mask.trailing_zeros() as usize]);
-                mask &= mask - 1;
-            }
-            j += LANES;
-        }
-    }
-
-    #[inline]
-    fn cell_of(&self, p: Vec3) -> [i64; 3] {
-        let c = p * self.inv_cell;
-        // Saturating float-to-int casts: far-away points share the outermost cells.
-        [crate::math::floor(c.x) as i64, crate::math::floor(c.y) as i64, crate::math::floor(c.z) as i64]
-    }
-
-    /// Row (y, z) hashed, plus x: a row's cells are consecutive buckets.
-    #[inline]
-    fn bucket(&self, c: [i64; 3]) -> u32 {
-        let h = (c[1] as u64).wrapping_mul(19_349_663) ^ (c[2] as u64).wrapping_mul(83_492_791);
-        let h = (h ^ (h >> 29) ^ (h >> 47)) as u32;
-        h.wrapping_add(c[0] as u32) & self.mask
+        self.slots.scan(self.slots.buckets(current.0, current.1), p, r2, &mut report);
     }
 }
 
-/// The first [`LANES`] values of `v` (which has at least that many).
-#[inline(always)]
-fn block(v: &[f32]) -> &[f32; LANES] {
-    v[..LANES].try_into().expect("a full block")
-}
-
-/// Bit l set where point l of the block lies within √`r2` of `p`: (q − p)·(q − p) ≤ r²,
-/// summed in one order on every lane.
-#[inline(always)]
-fn inside_mask(x: &[f32; LANES], y: &[f32; LANES], z: &[f32; LANES], p: Vec3, r2: f32) -> u32 {
-    let mut mask = 0u32;
-    for l in 0..LANES {
-        let (dx, dy, dz) = (x[l] - p.x, y[l] - p.y, z[l] - p.z);
-        mask |= ((dx * dx + dy * dy + dz * dz <= r2) as u32) << l;
-    }
-    mask
+/// Row (y, z) hashed, plus x: a row's cells are consecutive buckets of a table of
+/// `mask` + 1.
+#[inline]
+fn bucket(c: [i64; 3], mask: u32) -> u32 {
+    let h = (c[1] as u64).wrapping_mul(19_349_663) ^ (c[2] as u64).wrapping_mul(83_492_791);
+    let h = (h ^ (h >> 29) ^ (h >> 47)) as u32;
+    h.wrapping_add(c[0] as u32) & mask
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use alloc::vec;
+    use alloc::vec::Vec;
 
     type Draw = dyn Fn(&mut u64) -> Vec3;
 

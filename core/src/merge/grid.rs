@@ -12,47 +12,16 @@
 //! Storage is reused: [`HashGrid::build`] clears and refills its vectors, so after the
 //! first pass of a render no allocation happens unless the point count grows.
 
-use alloc::vec::Vec;
-
+use super::slots::{Slots, cell_of};
 use crate::math::Vec3;
-
-/// Points a query tests at a time.
-const LANES: usize = 8;
-
-/// The first [`LANES`] values of `v` (which has at least that many).
-#[inline(always)]
-fn block(v: &[f32]) -> &[f32; LANES] {
-    v[..LANES].try_into().expect("a full block")
-}
-
-/// Bit l set where point l of the block lies within √`r2` of `p`: the scalar test
-/// (q − p)·(q − p) ≤ r², summed in the same order, on each lane.
-#[inline(always)]
-fn inside_mask(x: &[f32; LANES], y: &[f32; LANES], z: &[f32; LANES], p: Vec3, r2: f32) -> u32 {
-    let mut mask = 0u32;
-    for l in 0..LANES {
-        let (dx, dy, dz) = (x[l] - p.x, y[l] - p.y, z[l] - p.z);
-        mask |= ((dx * dx + dy * dy + dz * dz <= r2) as u32) << l;
-    }
-    mask
-}
 
 /// A hash grid over the points given to [`HashGrid::build`].
 #[derive(Clone, Debug, Default)]
 pub struct HashGrid {
     radius: f32,
     inv_cell: f32,
-    /// Bucket b's points are `indices[starts[b] .. starts[b + 1]]`, at `xs[…]`, `ys[…]`,
-    /// `zs[…]` (copied in bucket order as structures of arrays, so a query tests
-    /// [`LANES`] positions at a time from contiguous memory).
-    starts: Vec<u32>,
-    indices: Vec<u32>,
-    xs: Vec<f32>,
-    ys: Vec<f32>,
-    zs: Vec<f32>,
-    /// Each input point's bucket while building (kept to fill the buckets without hashing
-    /// twice), then its slot (`u32::MAX` for a point left out).
-    slot_of: Vec<u32>,
+    /// The points in bucket order (copied, so a query reads positions contiguously).
+    slots: Slots,
     mask: u32,
 }
 
@@ -69,29 +38,24 @@ impl HashGrid {
 
     /// Number of points held.
     pub fn len(&self) -> usize {
-        self.indices.len()
+        self.slots.indices.len()
     }
 
     /// Does it hold no point?
     pub fn is_empty(&self) -> bool {
-        self.indices.is_empty()
+        self.slots.indices.is_empty()
     }
 
     /// Bytes held (capacity, not length).
     pub fn size_bytes(&self) -> usize {
-        (self.starts.capacity() + self.indices.capacity() + self.slot_of.capacity()) * 4 + (self.xs.capacity() + self.ys.capacity() + self.zs.capacity()) * 4
+        self.slots.size_bytes()
     }
 
     /// Rebuild over `points` for queries of radius `radius` (> 0 and finite; otherwise
     /// the grid is left empty). Point i is reported to queries as index i; a point that
     /// is not finite is left out (a host's way to keep an item from every query).
     pub fn build(&mut self, points: impl ExactSizeIterator<Item = Vec3> + Clone, radius: f32) {
-        self.starts.clear();
-        self.indices.clear();
-        self.xs.clear();
-        self.ys.clear();
-        self.zs.clear();
-        self.slot_of.clear();
+        self.slots.clear();
         self.radius = radius;
         let n = points.len();
         if !(radius > 0.0 && radius.is_finite()) || n == 0 || n > u32::MAX as usize / 2 {
@@ -102,52 +66,14 @@ impl HashGrid {
         self.inv_cell = 0.5 / radius;
         let buckets = n.next_power_of_two().max(16);
         self.mask = buckets as u32 - 1;
-        // Counting sort: counts, exclusive prefix sums, then each point at its bucket's
-        // cursor; the cursors end at the bucket ends, shifted back into starts.
-        self.starts.resize(buckets + 1, 0);
-        let mut kept = 0usize;
-        for p in points.clone() {
-            if !p.is_finite() {
-                self.slot_of.push(u32::MAX);
-                continue;
-            }
-            let b = self.bucket(self.cell_of(p));
-            self.slot_of.push(b);
-            self.starts[b as usize] += 1;
-            kept += 1;
-        }
-        let mut sum = 0u32;
-        for b in 0..buckets {
-            let count = self.starts[b];
-            self.starts[b] = sum;
-            sum += count;
-        }
-        self.starts[buckets] = sum;
-        self.indices.resize(kept, 0);
-        self.xs.resize(kept, 0.0);
-        self.ys.resize(kept, 0.0);
-        self.zs.resize(kept, 0.0);
-        for (i, p) in points.enumerate() {
-            if self.slot_of[i] == u32::MAX {
-                continue;
-            }
-            let b = self.slot_of[i] as usize;
-            let k = self.starts[b] as usize;
-            self.indices[k] = i as u32;
-            (self.xs[k], self.ys[k], self.zs[k]) = (p.x, p.y, p.z);
-            self.slot_of[i] = k as u32;
-            self.starts[b] += 1;
-        }
-        for b in (1..=buckets).rev() {
-            self.starts[b] = self.starts[b - 1];
-        }
-        self.starts[0] = 0;
+        let (inv_cell, mask) = (self.inv_cell, self.mask);
+        self.slots.fill(points, buckets, |p| bucket(cell_of(p, inv_cell), mask));
     }
 
     /// The original index of the point in each slot (bucket order): hosts of per-point
     /// data reorder it by this to read it contiguously in [`Self::query_slots`].
     pub fn order(&self) -> &[u32] {
-        &self.indices
+        &self.slots.indices
     }
 
     /// Each input point's slot (`u32::MAX` for a point left out): the inverse of
@@ -156,23 +82,23 @@ impl HashGrid {
     /// photons, reading the light vertices in slot order (scattered over a pass's
     /// 100-200 MiB of light paths) made that loop wait on memory for each photon.
     pub fn slot_of(&self) -> &[u32] {
-        &self.slot_of
+        &self.slots.slot_of
     }
 
     /// Call `visit(i)` for every point i within distance `radius()` of `p`, once each.
     pub fn query(&self, p: Vec3, mut visit: impl FnMut(u32)) {
-        self.query_slots(p, |k| visit(self.indices[k as usize]));
+        self.query_slots(p, |k| visit(self.slots.indices[k as usize]));
     }
 
     /// [`Self::query`] reporting slots (positions in bucket order, see [`Self::order`]).
     pub fn query_slots(&self, p: Vec3, mut visit: impl FnMut(u32)) {
-        if self.indices.is_empty() || !p.is_finite() {
+        if self.slots.indices.is_empty() || !p.is_finite() {
             return;
         }
         let r = self.radius;
         let r2 = r * r;
-        let lo = self.cell_of(p - Vec3::splat(r));
-        let hi = self.cell_of(p + Vec3::splat(r));
+        let lo = cell_of(p - Vec3::splat(r), self.inv_cell);
+        let hi = cell_of(p + Vec3::splat(r), self.inv_cell);
         // Two cells per axis in exact arithmetic; three when rounding puts p ± r just
         // across two cell boundaries.
         let mut seen = [u32::MAX; 27];
@@ -180,69 +106,32 @@ impl HashGrid {
         for x in lo[0]..=hi[0].min(lo[0].saturating_add(2)) {
             for y in lo[1]..=hi[1].min(lo[1].saturating_add(2)) {
                 for z in lo[2]..=hi[2].min(lo[2].saturating_add(2)) {
-                    let b = self.bucket([x, y, z]);
+                    let b = bucket([x, y, z], self.mask);
                     if seen[..n_seen].contains(&b) {
                         continue;
                     }
                     seen[n_seen] = b;
                     n_seen += 1;
-                    let (lo, hi) = (self.starts[b as usize] as usize, self.starts[b as usize + 1] as usize);
-                    self.scan(lo..hi, p, r2, &mut visit);
+                    self.slots.scan(self.slots.buckets(b, b), p, r2, &mut visit);
                 }
             }
         }
     }
+}
 
-    /// Call `visit(k)` for each slot k in `slots` whose point lies within √`r2` of `p`,
-    /// in slot order. [`LANES`] points are tested at a time (each test is the scalar
-    /// one, (q − p)·(q − p) ≤ r², summed in the same order, so the same slots are
-    /// reported): the compiler turns the fixed-width loop into vector compares and a
-    /// mask, whatever instruction set the core is built for. On the filters, where a
-    /// query scans about ten points for each one in its ball, the scalar loop was the
-    /// largest single cost of a pass.
-    #[inline]
-    fn scan(&self, slots: core::ops::Range<usize>, p: Vec3, r2: f32, visit: &mut impl FnMut(u32)) {
-        let (xs, ys, zs) = (&self.xs[slots.clone()], &self.ys[slots.clone()], &self.zs[slots.clone()]);
-        let n = xs.len();
-        let mut j = 0;
-        while j < n {
-            let mask = if j + LANES <= n {
-                inside_mask(block(&xs[j..]), block(&ys[j..]), block(&zs[j..]), p, r2)
-            } else {
-                // The last, partial block, padded with points that are never inside
-                // (NaN compares false).
-                let pad = |v: &[f32]| core::array::from_fn(|l| v.get(j + l).copied().unwrap_or(f32::NAN));
-                inside_mask(&pad(xs), &pad(ys), &pad(zs), p, r2)
-            };
-            // One call site for `visit`, so that the compiler inlines it.
-            let mut mask = mask;
-            while mask != 0 {
-                visit((slots.start + j) as u32 + mask.trailing_zeros());
-                mask &= mask - 1;
-            }
-            j += LANES;
-        }
-    }
-
-    #[inline]
-    fn cell_of(&self, p: Vec3) -> [i64; 3] {
-        let c = p * self.inv_cell;
-        // Saturating float-to-int casts: far-away points share the outermost cells.
-        [crate::math::floor(c.x) as i64, crate::math::floor(c.y) as i64, crate::math::floor(c.z) as i64]
-    }
-
-    #[inline]
-    fn bucket(&self, c: [i64; 3]) -> u32 {
-        let h = (c[0] as u64).wrapping_mul(73_856_093) ^ (c[1] as u64).wrapping_mul(19_349_663) ^ (c[2] as u64).wrapping_mul(83_492_791);
-        // Fold the high bits in: the multipliers leave the low bits of nearby cells related.
-        ((h ^ (h >> 29) ^ (h >> 47)) as u32) & self.mask
-    }
+/// Cell `c`'s bucket in a table of `mask` + 1.
+#[inline]
+fn bucket(c: [i64; 3], mask: u32) -> u32 {
+    let h = (c[0] as u64).wrapping_mul(73_856_093) ^ (c[1] as u64).wrapping_mul(19_349_663) ^ (c[2] as u64).wrapping_mul(83_492_791);
+    // Fold the high bits in: the multipliers leave the low bits of nearby cells related.
+    ((h ^ (h >> 29) ^ (h >> 47)) as u32) & mask
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use alloc::vec;
+    use alloc::vec::Vec;
 
     fn lcg(state: &mut u64) -> f32 {
         *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);

@@ -24,6 +24,8 @@ pub mod cells;
 #[cfg(feature = "hash-grid")]
 pub mod grid;
 pub mod radius;
+#[cfg(feature = "hash-grid")]
+mod slots;
 
 #[cfg(feature = "hash-grid")]
 pub use cells::CellGrid;

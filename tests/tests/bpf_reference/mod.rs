@@ -244,6 +244,19 @@ impl Naive<'_> {
         let frame = Frame::from_normal(at.hit.ns);
         f64s(self.scene.materials[at.hit.material as usize].eval(frame.to_local(wo), frame.to_local(s.dir), TransportMode::Radiance))
     }
+    /// The junction node `v`'s segment leaves from and the direction back along it: a
+    /// camera node's own; a light node's predecessor (a bridge's end, toward its start);
+    /// `None` for the rest.
+    fn junction(&self, v: usize) -> Option<(usize, Vec3)> {
+        let node = &self.nodes[v];
+        match node.kind {
+            NodeKind::Camera => Some((v, node.wo)),
+            NodeKind::Light if node.pred != NONE && node.bridge => Some((node.pred as usize, -node.wo)),
+            NodeKind::Light if node.pred != NONE => Some((node.pred as usize, self.nodes[node.pred as usize].next.dir)),
+            _ => None,
+        }
+    }
+
     /// L along node `v`'s segment with at most `depth` further segments.
     pub fn radiance(&self, pool: &[Pooled], v: usize, depth: u32) -> [f64; 3] {
         if self.merges_only {
@@ -251,16 +264,7 @@ impl Naive<'_> {
         }
         let node = &self.nodes[v];
         let mut l = f64s(node.emitted);
-        if depth == 0 {
-            return l;
-        }
-        let (centre_index, wo) = match node.kind {
-            NodeKind::Camera => (v, node.wo),
-            // A bridge leaves its end toward its start.
-            NodeKind::Light if node.pred != NONE && node.bridge => (node.pred as usize, -node.wo),
-            NodeKind::Light if node.pred != NONE => (node.pred as usize, self.nodes[node.pred as usize].next.dir),
-            _ => return l,
-        };
+        let Some((centre_index, wo)) = self.junction(v).filter(|_| depth > 0) else { return l };
         let centre = &self.nodes[centre_index];
         assert!(!centre.delta, "the scene has no Dirac material");
         // Segment a (v's own) for the pair correction, with D_a as its junction divides by it.
@@ -309,14 +313,7 @@ impl Naive<'_> {
         assert!(self.bridge_choice.is_none(), "merges only has no bridges");
         let node = &self.nodes[v];
         let mut l = f64s(node.emitted);
-        if depth == 0 {
-            return l;
-        }
-        let (centre_index, wo) = match node.kind {
-            NodeKind::Camera => (v, node.wo),
-            NodeKind::Light if node.pred != NONE => (node.pred as usize, self.nodes[node.pred as usize].next.dir),
-            _ => return l,
-        };
+        let Some((centre_index, wo)) = self.junction(v).filter(|_| depth > 0) else { return l };
         let centre = &self.nodes[centre_index];
         assert!(!centre.delta && !node.twin && !node.bridge, "no Dirac material, twins or bridges");
         let mut add = |k: f64, p: &Pooled, carried: [f64; 3]| {
