@@ -38,7 +38,7 @@ mod rough_conductor;
 mod rough_dielectric;
 mod rough_plastic;
 
-use crate::math::{Vec2, Vec3};
+use crate::math::{Frame, Vec2, Vec3};
 use crate::measure::SolidAnglePdf;
 use crate::spectrum::Rgb;
 use conductor::Conductor;
@@ -376,30 +376,52 @@ impl Material {
         Self::checked_pdf(pdf)
     }
 
-    /// [`Self::eval`] for a material whose value depends on the directions only through
-    /// their cosines to the shading normal (the Lambertian one): from the cosines `cos_o`
-    /// and `cos_i` (the z components of the local directions), the same bits, without a
-    /// frame. `None` for every other material. The segment filters evaluate each node's
-    /// BSDF for dozens of neighbours' directions, where the frame was most of the work.
+    /// [`Self::eval`] for `wo` already local to `frame` (whose normal is the shading
+    /// normal) and `wi` in world space: the same bits as `eval(wo, frame.to_local(wi))`.
+    /// A lobe that reads only the cosines (the Lambertian one) skips the rest of the
+    /// transform: a local direction's z is its dot with the normal, bit for bit. The
+    /// segment filters evaluate each node's BSDF for dozens of neighbours' directions.
     #[inline]
-    pub fn eval_cosines(&self, cos_o: f32, cos_i: f32, mode: TransportMode) -> Option<Rgb> {
-        let Kind::Diffuse(_) = &self.kind else { return None };
-        let (o, i) = Self::cosine_directions(cos_o, cos_i);
-        Some(self.eval(o, i, mode))
+    pub fn eval_from_local(&self, frame: &Frame, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
+        match self.cosine_directions(wo.z, frame.n.dot(wi)) {
+            Some((o, i)) => self.eval(o, i, mode),
+            None => self.eval(wo, frame.to_local(wi), mode),
+        }
     }
 
-    /// [`Self::pdf`] from the cosines, as [`Self::eval_cosines`].
+    /// [`Self::eval`] for world-space `wo` and `wi` at a point of shading normal `ns`: the
+    /// same bits as through `Frame::from_normal(ns)`, which is built only for lobes that
+    /// read more than the cosines.
     #[inline]
-    pub fn pdf_cosines(&self, cos_o: f32, cos_i: f32, mode: TransportMode) -> Option<SolidAnglePdf> {
-        let Kind::Diffuse(_) = &self.kind else { return None };
-        let (o, i) = Self::cosine_directions(cos_o, cos_i);
-        Some(self.pdf(o, i, mode))
+    pub fn eval_world(&self, ns: Vec3, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
+        match self.cosine_directions(ns.dot(wo), ns.dot(wi)) {
+            Some((o, i)) => self.eval(o, i, mode),
+            None => {
+                let frame = Frame::from_normal(ns);
+                self.eval(frame.to_local(wo), frame.to_local(wi), mode)
+            }
+        }
     }
 
-    /// Local directions with the given z components (what a Lambertian lobe reads).
+    /// [`Self::pdf`] as [`Self::eval_world`].
     #[inline]
-    fn cosine_directions(cos_o: f32, cos_i: f32) -> (Vec3, Vec3) {
-        (Vec3::new(0.0, 0.0, cos_o), Vec3::new(0.0, 0.0, cos_i))
+    pub fn pdf_world(&self, ns: Vec3, wo: Vec3, wi: Vec3, mode: TransportMode) -> SolidAnglePdf {
+        match self.cosine_directions(ns.dot(wo), ns.dot(wi)) {
+            Some((o, i)) => self.pdf(o, i, mode),
+            None => {
+                let frame = Frame::from_normal(ns);
+                self.pdf(frame.to_local(wo), frame.to_local(wi), mode)
+            }
+        }
+    }
+
+    /// For a lobe whose value and density read only the directions' cosines to the normal
+    /// (the Lambertian one), local directions with the cosines `cos_o` and `cos_i` as z;
+    /// `None` for every other lobe.
+    #[inline]
+    fn cosine_directions(&self, cos_o: f32, cos_i: f32) -> Option<(Vec3, Vec3)> {
+        let Kind::Diffuse(_) = &self.kind else { return None };
+        Some((Vec3::new(0.0, 0.0, cos_o), Vec3::new(0.0, 0.0, cos_i)))
     }
 
     /// Denormal cosines can overflow the Jacobians (found by fuzzing): no density.
@@ -515,12 +537,12 @@ pub fn shading_normal_correction(mode: TransportMode, wo: Vec3, wi: Vec3, ng: Ve
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::Frame;
 
-    /// [`Material::eval_cosines`] and [`Material::pdf_cosines`] give the bits of
-    /// [`Material::eval`] and [`Material::pdf`] of the local directions, for one- and
-    /// two-sided Lambertian materials, from above and below, and `None` for a glossy one.
-    /// Seen failing with the two cosines swapped (the density is cos θi / π).
+    /// [`Material::eval_from_local`], [`Material::eval_world`] and
+    /// [`Material::pdf_world`] give the bits of [`Material::eval`] and [`Material::pdf`]
+    /// of the local directions, for one- and two-sided Lambertian materials (the cosine
+    /// shortcut) and a rough conductor (the frame), from above and below. Seen failing
+    /// with the two cosines swapped (the density is cos θi / π).
     #[test]
     fn cosine_forms_equal_the_framed_ones() {
         let mut state = 3u64;
@@ -529,21 +551,21 @@ mod tests {
             ((state >> 40) as f32) / (1u64 << 24) as f32 * 2.0 - 1.0
         };
         let diffuse = Material::diffuse(Rgb::new(0.2, 0.5, 0.8));
-        for m in [diffuse, diffuse.two_sided()] {
+        let glossy = Material::rough_conductor(MicrofacetKind::Ggx, 0.3, Rgb::splat(0.2), Rgb::splat(3.0), Rgb::ONE);
+        for m in [diffuse, diffuse.two_sided(), glossy] {
             for _ in 0..2000 {
                 let n = Vec3::new(next(), next(), next()).normalize_or(Vec3::Z);
                 let (wo, wi) = (Vec3::new(next(), next(), next()).normalize_or(Vec3::X), Vec3::new(next(), next(), next()).normalize_or(Vec3::Y));
                 let f = Frame::from_normal(n);
                 let (lo, li) = (f.to_local(wo), f.to_local(wi));
                 for mode in [TransportMode::Radiance, TransportMode::Importance] {
-                    let e = m.eval_cosines(n.dot(wo), n.dot(wi), mode).unwrap();
-                    let want = m.eval(lo, li, mode);
-                    assert_eq!([e.r.to_bits(), e.g.to_bits(), e.b.to_bits()], [want.r.to_bits(), want.g.to_bits(), want.b.to_bits()]);
-                    assert_eq!(m.pdf_cosines(n.dot(wo), n.dot(wi), mode).unwrap().0.to_bits(), m.pdf(lo, li, mode).0.to_bits());
+                    let bits = |f: Rgb| [f.r.to_bits(), f.g.to_bits(), f.b.to_bits()];
+                    let want = bits(m.eval(lo, li, mode));
+                    assert_eq!(bits(m.eval_from_local(&f, lo, wi, mode)), want);
+                    assert_eq!(bits(m.eval_world(n, wo, wi, mode)), want);
+                    assert_eq!(m.pdf_world(n, wo, wi, mode).0.to_bits(), m.pdf(lo, li, mode).0.to_bits());
                 }
             }
         }
-        let glossy = Material::rough_conductor(MicrofacetKind::Ggx, 0.3, Rgb::splat(0.2), Rgb::splat(3.0), Rgb::ONE);
-        assert!(glossy.eval_cosines(0.5, 0.5, TransportMode::Radiance).is_none() && glossy.pdf_cosines(0.5, 0.5, TransportMode::Radiance).is_none());
     }
 }

@@ -352,8 +352,9 @@ impl Bidirectional<'_> {
         let mut sums = [(0.0, 0.0, 0.0); N];
         let xp = KernelPoint::of(x);
         self.hood.grid.query_side(Side::Camera, x.hit.p, |i| {
+            // (The camera side's grid holds camera-kind nodes only.)
             let tp = &self.hood.points[i as usize];
-            if tp.delta || tp.kind != NodeKind::Camera {
+            if tp.delta {
                 return;
             }
             let k = tp.kernel(&self.hood.kernel, &xp);
@@ -408,7 +409,8 @@ impl Bidirectional<'_> {
             // without their node (reading every light node in the ball was a fifth of a
             // pass on the Cornell box), and one outside its kernel adds nothing.
             let tp = &self.hood.points[i as usize];
-            if (own_only && i != own) || tp.delta || tp.kind != NodeKind::Light {
+            // (The light side's grid holds light nodes only.)
+            if (own_only && i != own) || tp.delta {
                 return;
             }
             let k = tp.density_at(&self.hood.kernel, py, ny);
@@ -527,16 +529,12 @@ impl Bidirectional<'_> {
                     let far = if self.hood.scene.lights[end.light as usize].has_area() { Far::Surface(end.p, end.n, end) } else { Far::Light(end) };
                     (far, self.camera_segment(light.dir, far, light.pdf as f64, None))
                 });
-                let none = (0.0, 0.0, 0.0);
-                let (next_cam, light_cam) = match (next_far, light_far) {
-                    _ if self.merges_only => (none, none),
-                    (Some((_, a)), Some((_, b))) => {
-                        let [a, b] = self.camera_techniques(u, [a, b], NONE);
-                        (a, b)
-                    }
-                    (Some((_, a)), None) => (self.camera_techniques(u, [a], NONE)[0], none),
-                    (None, Some((_, b))) => (none, self.camera_techniques(u, [b], NONE)[0]),
-                    (None, None) => (none, none),
+                // A missing segment queries as one no technique can draw (it adds nothing).
+                let idle = CameraSegment { dir: Vec3::ZERO, nee: 0.0, bsdf: false, own: None };
+                let [next_cam, light_cam] = if self.merges_only || (next_far.is_none() && light_far.is_none()) {
+                    [(0.0, 0.0, 0.0); 2]
+                } else {
+                    self.camera_techniques(u, [next_far.map_or(idle, |f| f.1), light_far.map_or(idle, |f| f.1)], NONE)
                 };
                 if let Some((far, _)) = next_far {
                     (d.next, d.next_light, d.next_emit, d.starts) = self.sum(u, next.dir, far, next_cam, NONE);
@@ -685,15 +683,9 @@ impl Bidirectional<'_> {
         // Lambertian lobe needs no frame.)
         let f = |u: &Node, dir: Vec3| {
             if camera_junction {
-                material
-                    .eval_cosines(wo.z, centre.hit.ns.dot(dir), TransportMode::Radiance)
-                    .unwrap_or_else(|| material.eval(wo, frame.to_local(dir), TransportMode::Radiance))
+                material.eval_from_local(&frame, wo, dir, TransportMode::Radiance)
             } else {
-                let m = self.hood.scene.material(u.hit.material, u.hit.uv);
-                m.eval_cosines(u.hit.ns.dot(wo_world), u.hit.ns.dot(dir), TransportMode::Radiance).unwrap_or_else(|| {
-                    let at = Frame::from_normal(u.hit.ns);
-                    m.eval(at.to_local(wo_world), at.to_local(dir), TransportMode::Radiance)
-                })
+                self.hood.scene.material(u.hit.material, u.hit.uv).eval_world(u.hit.ns, wo_world, dir, TransportMode::Radiance)
             }
         };
         let pair = self.pair_segment(index, dens);

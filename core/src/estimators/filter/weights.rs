@@ -70,7 +70,7 @@ impl KernelPoint {
     /// scaled by [`Self::scale`]).
     #[inline]
     pub fn kernel(&self, kernel: &Kernel, x: &KernelPoint) -> f64 {
-        kernel.scaled(self.scale).density_around(self.p, self.side, x.p, x.side).0 as f64
+        self.density_at(kernel, x.p, x.side)
     }
 
     /// K(self → x) for the point `x` with normal `nx` (either orientation): the same as
@@ -100,20 +100,14 @@ impl Neighbourhood<'_> {
     /// K(t → x) for the point `x` with geometric normal `nx` (t's own kernel).
     #[inline]
     pub(super) fn kernel_at(&self, t: &Node, x: crate::math::Vec3, nx: crate::math::Vec3) -> f64 {
-        self.kernel.scaled(t.kernel_scale).density(&t.hit, t.wo, x, nx).0 as f64
+        KernelPoint::of(t).density_at(&self.kernel, x, nx)
     }
 
     /// The BSDF density of node t for leaving along `dir` (its own incoming direction),
     /// in transport mode `mode`.
     #[inline]
     pub(super) fn bsdf_pdf(&self, t: &Node, dir: crate::math::Vec3, mode: TransportMode) -> f64 {
-        let m = self.scene.material(t.hit.material, t.hit.uv);
-        // A local direction's z is its dot with the shading normal, bit for bit.
-        if let Some(pdf) = m.pdf_cosines(t.hit.ns.dot(t.wo), t.hit.ns.dot(dir), mode) {
-            return pdf.0 as f64;
-        }
-        let frame = crate::math::Frame::from_normal(t.hit.ns);
-        m.pdf(frame.to_local(t.wo), frame.to_local(dir), mode).0 as f64
+        self.scene.material(t.hit.material, t.hit.uv).pdf_world(t.hit.ns, t.wo, dir, mode).0 as f64
     }
 
     /// The density of node t's own draw of `dir` in the denominators: the one its sampler
@@ -202,11 +196,7 @@ impl Neighbourhood<'_> {
         let frame = crate::math::Frame::from_normal(v.hit.ns);
         let material = self.scene.material(v.hit.material, v.hit.uv);
         let wo = frame.to_local(v.wo);
-        let f = |dir: crate::math::Vec3| {
-            material
-                .eval_cosines(wo.z, v.hit.ns.dot(dir), TransportMode::Radiance)
-                .unwrap_or_else(|| material.eval(wo, frame.to_local(dir), TransportMode::Radiance))
-        };
+        let f = |dir: crate::math::Vec3| material.eval_from_local(&frame, wo, dir, TransportMode::Radiance);
         self.each_neighbour(v, true, |i, u, k| {
             let d = &dens[i as usize];
             let n = u.hit.ns;
