@@ -4,7 +4,7 @@
 use alloc::vec::Vec;
 
 use crate::geometry::{LightId, MaterialId};
-use crate::math::{Bounds3, Vec2, Vec3};
+use crate::math::{self, Bounds3, Vec2, Vec3};
 
 /// One triangle of the scene's geometry.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,11 +41,11 @@ pub fn texcoords_at(uv: Option<[Vec2; 3]>, b: [f32; 3]) -> Vec2 {
 /// Mitsuba's texture coordinates on a sphere at unit direction `local` from its centre:
 /// (φ/2π, θ/π) with φ = atan2(y, x) in [0, 2π) and θ = acos z.
 pub fn sphere_texcoords(local: Vec3) -> Vec2 {
-    let mut phi = libm::atan2f(local.y, local.x);
+    let mut phi = crate::math::atan2(local.y, local.x);
     if phi < 0.0 {
         phi += 2.0 * core::f32::consts::PI;
     }
-    let theta = libm::acosf(local.z.clamp(-1.0, 1.0));
+    let theta = math::safe_acos(local.z);
     Vec2::new(phi * (0.5 * core::f32::consts::FRAC_1_PI), theta * core::f32::consts::FRAC_1_PI)
 }
 

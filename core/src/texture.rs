@@ -20,7 +20,7 @@
 use alloc::sync::Arc;
 use alloc::vec::Vec;
 
-use crate::math::{Vec2, floor};
+use crate::math::{Vec2, floor, powf};
 use crate::spectrum::Rgb;
 
 /// An affine map of texture coordinates, uv' = M uv + t (Mitsuba's `to_uv`, the upper-left
@@ -204,7 +204,7 @@ pub fn srgb_to_linear(v: u8) -> f32 {
 /// The sRGB transfer function, decoded, for an encoded value `c` in [0, 1] (16-bit
 /// texels, and [`srgb_to_linear`]).
 pub fn srgb_decode(c: f32) -> f32 {
-    if c <= 0.04045 { c / 12.92 } else { libm::powf((c + 0.055) / 1.055, 2.4) }
+    if c <= 0.04045 { c / 12.92 } else { powf((c + 0.055) / 1.055, 2.4) }
 }
 
 #[cfg(test)]

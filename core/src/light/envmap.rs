@@ -45,7 +45,7 @@ use alloc::vec::Vec;
 use super::infinite::SceneDisk;
 use super::{EmissionSample, LightSample};
 use crate::alias::AliasTable;
-use crate::math::{PI, Vec2, Vec3};
+use crate::math::{self, PI, Vec2, Vec3};
 use crate::measure::{AreaPdf, SolidAnglePdf};
 use crate::spectrum::Rgb;
 use crate::warp::sample_linear;
@@ -146,7 +146,7 @@ impl EnvMapLight {
         // The power: texel means times sin θ at the texel rows' centres.
         let mut integral = 0.0f64;
         for j in 0..h {
-            let sin_theta = f64::from(libm::sinf((j as f32 + 0.5) / h as f32 * PI));
+            let sin_theta = f64::from(math::sin((j as f32 + 0.5) / h as f32 * PI));
             integral += texels[j * w..(j + 1) * w].iter().map(|t| f64::from(t.average())).sum::<f64>() * sin_theta;
         }
         let integral = (integral * 2.0 * f64::from(PI) * f64::from(PI) / n as f64) as f32;
@@ -155,7 +155,7 @@ impl EnvMapLight {
         let last = (r - 1) as f32;
         let mut lattice = Vec::with_capacity(r * w);
         for j in 0..r {
-            let s = libm::sinf(PI * (j as f32).clamp(0.25, last - 0.25) / last);
+            let s = math::sin(PI * (j as f32).clamp(0.25, last - 0.25) / last);
             let texel_row = j.min(h - 1) * w;
             lattice.extend(texels[texel_row..texel_row + w].iter().map(|&t| luminance(t) * s));
         }
@@ -190,9 +190,9 @@ impl EnvMapLight {
     /// (u, v) of a local unit direction.
     #[inline]
     fn uv(d: Vec3) -> Vec2 {
-        let u = libm::atan2f(d.x, -d.z) * (0.5 / PI);
-        let u = u - libm::floorf(u);
-        let v = libm::acosf(d.y.clamp(-1.0, 1.0)) / PI;
+        let u = crate::math::atan2(d.x, -d.z) * (0.5 / PI);
+        let u = u - math::floor(u);
+        let v = math::safe_acos(d.y) / PI;
         Vec2::new(if u < 1.0 { u } else { 0.0 }, v)
     }
 
@@ -205,12 +205,12 @@ impl EnvMapLight {
         }
         let uv = Self::uv(d);
         let x = uv.x * m.width as f32 - 0.5;
-        let x0 = libm::floorf(x);
+        let x0 = math::floor(x);
         let fx = x - x0;
         let i0 = (x0 as i64).rem_euclid(m.width as i64) as usize;
         let i1 = (i0 + 1) % m.width;
         let y = uv.y * (m.height - 1) as f32;
-        let y0 = (libm::floorf(y) as usize).min(m.height - 1);
+        let y0 = (math::floor(y) as usize).min(m.height - 1);
         let y1 = (y0 + 1).min(m.height - 1);
         let fy = (y - y0 as f32).clamp(0.0, 1.0);
         let t = |x: usize, y: usize| m.texels[y * m.width + x];
@@ -241,8 +241,8 @@ impl EnvMapLight {
         let uu = (k as f32 + fx + 0.5) / w as f32;
         let uu = if uu < 1.0 { uu } else { uu - 1.0 };
         let vv = (j as f32 + fy) / (m.lattice_rows - 1) as f32;
-        let (sin_phi, cos_phi) = libm::sincosf(2.0 * PI * uu);
-        let (sin_t, cos_t) = libm::sincosf(PI * vv);
+        let (sin_phi, cos_phi) = math::sin_cos(2.0 * PI * uu);
+        let (sin_t, cos_t) = math::sin_cos(PI * vv);
         let local = Vec3::new(sin_phi * sin_t, cos_t, -cos_phi * sin_t);
         // The density at the drawn lattice point (what `pdf_local` finds again from the
         // direction, without its atan2 and acos).
@@ -253,7 +253,7 @@ impl EnvMapLight {
     /// p_ω = p(u, v) / (2π² sin θ), with sin θ of the local direction `d`.
     #[inline]
     fn solid_angle(p_uv: f32, d: Vec3) -> SolidAnglePdf {
-        let sin_theta = libm::sqrtf(d.x * d.x + d.z * d.z);
+        let sin_theta = math::sqrt(d.x * d.x + d.z * d.z);
         if !(sin_theta > 0.0) {
             return SolidAnglePdf::ZERO;
         }
@@ -271,9 +271,9 @@ impl EnvMapLight {
         let w = m.width as f32;
         let x = uv.x * w - 0.5;
         let x = if x < 0.0 { x + w } else { x };
-        let k = (libm::floorf(x) as usize).min(m.width - 1);
+        let k = (math::floor(x) as usize).min(m.width - 1);
         let y = uv.y * (m.lattice_rows - 1) as f32;
-        let j = (libm::floorf(y) as usize).min(m.lattice_rows - 2);
+        let j = (math::floor(y) as usize).min(m.lattice_rows - 2);
         let (fx, fy) = ((x - k as f32).clamp(0.0, 1.0), (y - j as f32).clamp(0.0, 1.0));
         Self::solid_angle(Self::density_uv(m, k, j, fx, fy), d)
     }

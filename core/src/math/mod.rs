@@ -1,13 +1,20 @@
 //! The one place where float intrinsics are chosen.
 //!
-//! `core` is `no_std`, so `f32::sqrt` and friends do not exist here; everything goes
-//! through `libm`, which also keeps CLI and browser images bit-identical (a host that
+//! `core` is `no_std`, so `f32::sqrt` and friends do not exist here. The shading code's
+//! elementary functions (sin, cos, tan, exp, ln, pow, atan2, acos, asin) are our own
+//! ([`elementary`]): straight-line f64 arithmetic that every SIMD width evaluates to the
+//! same bits, nearly always the correctly rounded f32. The rest (square roots, which are
+//! correctly rounded everywhere; rounding; erf; the f64 functions of statistics) go
+//! through `libm`. Either way CLI and browser images are bit-identical (a host that
 //! pulls glam with `std` would otherwise switch glam's transcendental functions to the
 //! platform's, which differ in the last bits). Nothing else in the crate calls `libm`
 //! directly, and nothing calls glam methods that hide a transcendental function
-//! (`Vec3::length` is fine: sqrt is correctly rounded everywhere).
+//! (`Vec3::length` is fine).
 
 pub use glam::{DVec3, Mat3, Mat4, Vec2, Vec3, Vec4};
+
+pub mod elementary;
+pub use elementary::{atan2, cos, exp, ln, powf, safe_acos, safe_asin, sin, sin_cos, tan};
 
 /// π as f32.
 pub const PI: f32 = core::f32::consts::PI;
@@ -40,54 +47,12 @@ pub fn sqrt_f64(x: f64) -> f64 {
     libm::sqrt(x)
 }
 #[inline]
-pub fn sin(x: f32) -> f32 {
-    libm::sinf(x)
-}
-#[inline]
-pub fn cos(x: f32) -> f32 {
-    libm::cosf(x)
-}
-#[inline]
-pub fn sin_cos(x: f32) -> (f32, f32) {
-    libm::sincosf(x)
-}
-#[inline]
-pub fn tan(x: f32) -> f32 {
-    libm::tanf(x)
-}
-/// `acos` with its argument clamped to [-1, 1].
-#[inline]
-pub fn safe_acos(x: f32) -> f32 {
-    libm::acosf(x.clamp(-1.0, 1.0))
-}
-/// `asin` with its argument clamped to [-1, 1].
-#[inline]
-pub fn safe_asin(x: f32) -> f32 {
-    libm::asinf(x.clamp(-1.0, 1.0))
-}
-#[inline]
-pub fn atan2(y: f32, x: f32) -> f32 {
-    libm::atan2f(y, x)
-}
-#[inline]
-pub fn exp(x: f32) -> f32 {
-    libm::expf(x)
-}
-#[inline]
-pub fn ln(x: f32) -> f32 {
-    libm::logf(x)
-}
-#[inline]
 pub fn exp_f64(x: f64) -> f64 {
     libm::exp(x)
 }
 #[inline]
 pub fn ln_f64(x: f64) -> f64 {
     libm::log(x)
-}
-#[inline]
-pub fn powf(x: f32, y: f32) -> f32 {
-    libm::powf(x, y)
 }
 #[inline]
 pub fn pow_f64(x: f64, y: f64) -> f64 {
