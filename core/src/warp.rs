@@ -5,7 +5,7 @@
 //! directions are per steradian ([`SolidAnglePdf`]), points on planar domains per unit
 //! area ([`AreaPdf`], for the canonical unit-sized domain; callers scale by their own area).
 
-use crate::math::{INV_2PI, INV_4PI, INV_PI, PI, TWO_PI, Vec2, Vec3, atan2, safe_sqrt, sin_cos, sqrt};
+use crate::math::{INV_2PI, INV_4PI, INV_PI, PI, TWO_PI, Vec2, Vec3, atan2, safe_sqrt, sin_cos_small, sin_cos_turns, sqrt};
 use crate::measure::{AreaPdf, SolidAnglePdf};
 
 /// Wrap an angle from `atan2` into [0, 2π).
@@ -29,9 +29,15 @@ pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) = if o.x.abs() > o.y.abs() { (o.x, (PI / 4.0) * (o.y / o.x)) } else { (o.y, PI / 2.0 - (PI / 4.0) * (o.x / o.y)) };
-    let (s, c) = sin_cos(theta);
-    Vec2::new(r * c, r * s)
+    // θ = φ in the wedges around ±x, θ = π/2 − φ around ±y (so cos θ = sin φ): either
+    // way the series sees |φ| ≤ π/4 and needs no reduction.
+    if o.x.abs() > o.y.abs() {
+        let (s, c) = sin_cos_small((PI / 4.0) * (o.y / o.x));
+        Vec2::new(o.x * c, o.x * s)
+    } else {
+        let (s, c) = sin_cos_small((PI / 4.0) * (o.x / o.y));
+        Vec2::new(o.y * s, o.y * c)
+    }
 }
 
 /// Density of [`sample_concentric_disk`] per unit area: 1/π.
@@ -71,7 +77,7 @@ pub fn invert_concentric_disk(p: Vec2) -> Vec2 {
 pub fn sample_uniform_hemisphere(u: Vec2) -> Vec3 {
     let z = u.x;
     let r = safe_sqrt(1.0 - z * z);
-    let (s, c) = sin_cos(TWO_PI * u.y);
+    let (s, c) = sin_cos_turns(u.y);
     Vec3::new(r * c, r * s, z)
 }
 
@@ -116,7 +122,7 @@ pub fn invert_cosine_hemisphere(w: Vec3) -> Vec2 {
 pub fn sample_uniform_sphere(u: Vec2) -> Vec3 {
     let z = 1.0 - 2.0 * u.x;
     let r = safe_sqrt(1.0 - z * z);
-    let (s, c) = sin_cos(TWO_PI * u.y);
+    let (s, c) = sin_cos_turns(u.y);
     Vec3::new(r * c, r * s, z)
 }
 
@@ -144,7 +150,7 @@ pub fn sample_uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
     let one_minus_cos = u.x * one_minus_cos_max;
     let cos_theta = 1.0 - one_minus_cos;
     let sin_theta = safe_sqrt(one_minus_cos * (2.0 - one_minus_cos));
-    let (s, c) = sin_cos(TWO_PI * u.y);
+    let (s, c) = sin_cos_turns(u.y);
     Vec3::new(sin_theta * c, sin_theta * s, cos_theta)
 }
 

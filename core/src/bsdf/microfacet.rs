@@ -17,7 +17,7 @@
 //! sampler (which inverts the exact CDF in both codes) actually draws.
 
 use super::MicrofacetKind;
-use crate::math::{INV_PI, PI, TWO_PI, Vec2, Vec3, erf, erfinv, exp, ln, safe_sqrt, sin_cos, sqrt};
+use crate::math::{INV_PI, PI, Vec2, Vec3, erf, erfinv, exp, ln, safe_sqrt, sin_cos_turns, sqrt};
 
 /// Smallest roughness accepted (Mitsuba clamps to the same value).
 pub(crate) const MIN_ALPHA: f32 = 1e-4;
@@ -203,7 +203,7 @@ pub(super) fn ggx_visible_stretched(vh: Vec3, u: Vec2) -> Vec3 {
     let t2 = vh.cross(t1);
     // Uniform point on the disk, warped onto the visible half of the projection.
     let r = sqrt(u.x);
-    let (sp, cp) = sin_cos(TWO_PI * u.y);
+    let (sp, cp) = sin_cos_turns(u.y);
     let p1 = r * cp;
     let s = 0.5 * (1.0 + vh.z);
     let p2 = (1.0 - s) * safe_sqrt(1.0 - p1 * p1) + s * (r * sp);

@@ -60,7 +60,7 @@
 //!   add sheen also where brdf = 0, where no lobe samples it).
 
 use super::{BsdfSample, TransportMode, fresnel};
-use crate::math::{INV_PI, PI, TWO_PI, Vec2, Vec3, lerp, ln, powf, reflect, safe_sqrt, sin_cos, sqrt};
+use crate::math::{INV_PI, PI, Vec2, Vec3, lerp, ln, powf, reflect, safe_sqrt, sin_cos_turns, sqrt};
 use crate::measure::SolidAnglePdf;
 use crate::spectrum::Rgb;
 use crate::warp;
@@ -210,7 +210,7 @@ impl Gtr1 {
         let a2 = self.alpha * self.alpha;
         let cos2 = (1.0 - powf(a2, 1.0 - u.y)) / (1.0 - a2);
         let (sin_t, cos_t) = (safe_sqrt(1.0 - cos2), safe_sqrt(cos2));
-        let (sp, cp) = sin_cos(TWO_PI * u.x);
+        let (sp, cp) = sin_cos_turns(u.x);
         Vec3::new(cp * sin_t, sp * sin_t, cos_t)
     }
 }

@@ -241,8 +241,8 @@ impl EnvMapLight {
         let uu = (k as f32 + fx + 0.5) / w as f32;
         let uu = if uu < 1.0 { uu } else { uu - 1.0 };
         let vv = (j as f32 + fy) / (m.lattice_rows - 1) as f32;
-        let (sin_phi, cos_phi) = math::sin_cos(2.0 * PI * uu);
-        let (sin_t, cos_t) = math::sin_cos(PI * vv);
+        let (sin_phi, cos_phi) = math::sin_cos_turns(uu);
+        let (sin_t, cos_t) = math::sin_cos_turns(0.5 * vv);
         let local = Vec3::new(sin_phi * sin_t, cos_t, -cos_phi * sin_t);
         // The density at the drawn lattice point (what `pdf_local` finds again from the
         // direction, without its atan2 and acos).

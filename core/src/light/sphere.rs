@@ -15,7 +15,7 @@
 //! normal.
 
 use super::{EmissionSample, LightSample, finite_or_zero};
-use crate::math::{Bounds3, Frame, INV_4PI, PI, TWO_PI, Vec2, Vec3, safe_sqrt, sin_cos, sqrt};
+use crate::math::{Bounds3, Frame, INV_4PI, PI, TWO_PI, Vec2, Vec3, safe_sqrt, sin_cos_turns, sqrt};
 use crate::measure::{AreaPdf, SolidAnglePdf};
 use crate::spectrum::Rgb;
 use crate::warp;
@@ -33,11 +33,11 @@ fn one_minus_cos(sin2: f32) -> f32 {
 }
 
 /// Uniform direction in the cone about +z whose half-angle has 1 − cos θ_max =
-/// `one_minus_cos_max`; returns (cos θ, sin²θ, φ). Precise for arbitrarily narrow cones.
+/// `one_minus_cos_max`; returns (cos θ, sin²θ, φ in turns). Precise for arbitrarily narrow cones.
 #[inline]
 fn sample_narrow_cone(u: Vec2, one_minus_cos_max: f32) -> (f32, f32, f32) {
     let omc = u.x * one_minus_cos_max;
-    (1.0 - omc, omc * (2.0 - omc), TWO_PI * u.y)
+    (1.0 - omc, omc * (2.0 - omc), u.y)
 }
 
 /// Density of [`sample_narrow_cone`] inside its cone: 1 / (2π (1 − cos θ_max)).
@@ -102,12 +102,12 @@ impl SphereLight {
             if !pdf.is_positive() {
                 return None;
             }
-            let (cos_theta, sin2_theta, phi) = sample_narrow_cone(u, omc_max);
+            let (cos_theta, sin2_theta, turns) = sample_narrow_cone(u, omc_max);
             // Angle α at the centre between the direction back to p_ref and the point
             // that the direction θ reaches first (law of sines; pbrt-v4).
             let cos_alpha = sin2_theta / sin_max + cos_theta * safe_sqrt(1.0 - sin2_theta / sin2_max);
             let sin_alpha = safe_sqrt(1.0 - cos_alpha * cos_alpha);
-            let (s, c) = sin_cos(phi);
+            let (s, c) = sin_cos_turns(turns);
             let frame = Frame::from_normal(to_center / sqrt(d2));
             let n = frame.to_world(-Vec3::new(sin_alpha * c, sin_alpha * s, cos_alpha));
             // The sampled direction itself, exact even where p − p_ref is all rounding (a
