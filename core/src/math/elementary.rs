@@ -285,7 +285,7 @@ pub fn safe_acos(x: f32) -> f32 {
         return x;
     }
     let x = x.clamp(-1.0, 1.0) as f64;
-    atan2_kernel(libm::sqrt((1.0 - x) * (1.0 + x)), x) as f32
+    atan2_kernel(super::sqrt_f64((1.0 - x) * (1.0 + x)), x) as f32
 }
 
 /// asin of x clamped to [−1, 1] (NaN passes through).
@@ -295,7 +295,7 @@ pub fn safe_asin(x: f32) -> f32 {
         return x;
     }
     let x = x.clamp(-1.0, 1.0) as f64;
-    atan2_kernel(x, libm::sqrt((1.0 - x) * (1.0 + x))) as f32
+    atan2_kernel(x, super::sqrt_f64((1.0 - x) * (1.0 + x))) as f32
 }
 
 #[cfg(test)]

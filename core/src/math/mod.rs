@@ -33,19 +33,57 @@ pub fn round(x: f32) -> f32 {
     libm::roundf(x)
 }
 
+/// The square root, correctly rounded (IEEE 754), so the same bits on every target,
+/// instruction set and lane width. On x86-64 it is the `sqrtss` intrinsic, which LLVM
+/// knows as a square root and so vectorises in a loop over lanes; `libm`'s is the same
+/// instruction behind inline assembly, which no loop around it can vectorise
+/// (scripts/lane-probe: a cosine-weighted bounce over 16 lanes ran 0.9× the scalar
+/// speed through `libm::sqrtf` and 1.5× / 2.8× / 6.5× with SSE2 / AVX2 / AVX-512
+/// through the intrinsic). Elsewhere (x86-64 without SSE, as `x86_64-unknown-none`;
+/// other architectures) `libm`'s, which is correctly rounded too.
 #[inline]
 pub fn sqrt(x: f32) -> f32 {
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+    return sse::sqrt(x);
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
     libm::sqrtf(x)
 }
 /// `sqrt(max(x, 0))`: for quantities that are non-negative in exact arithmetic.
 #[inline]
 pub fn safe_sqrt(x: f32) -> f32 {
-    libm::sqrtf(x.max(0.0))
+    sqrt(x.max(0.0))
 }
+/// [`sqrt`] in f64.
 #[inline]
 pub fn sqrt_f64(x: f64) -> f64 {
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+    return sse::sqrt_f64(x);
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
     libm::sqrt(x)
 }
+
+/// The core's only `unsafe`: SSE2's square roots as intrinsics, compiled where the target
+/// enables SSE2 (every x86-64 target with floating-point registers). Calling a
+/// `#[target_feature]` function needs `unsafe` even where the build enables the feature.
+#[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+#[allow(unsafe_code)]
+mod sse {
+    use core::arch::x86_64::{_mm_cvtsd_f64, _mm_cvtss_f32, _mm_set_sd, _mm_set_ss, _mm_sqrt_sd, _mm_sqrt_ss};
+
+    #[inline(always)]
+    pub(super) fn sqrt(x: f32) -> f32 {
+        // SAFETY: the build enables SSE2 (the module's cfg), so the CPU has it; the
+        // intrinsics read and write only their register arguments.
+        unsafe { _mm_cvtss_f32(_mm_sqrt_ss(_mm_set_ss(x))) }
+    }
+
+    #[inline(always)]
+    pub(super) fn sqrt_f64(x: f64) -> f64 {
+        // SAFETY: as for `sqrt`.
+        unsafe { _mm_cvtsd_f64(_mm_sqrt_sd(_mm_set_sd(x), _mm_set_sd(x))) }
+    }
+}
+
 #[inline]
 pub fn exp_f64(x: f64) -> f64 {
     libm::exp(x)

@@ -10,6 +10,11 @@
 //! `#[target_feature]` and chosen only where the CPU reports them. LLVM vectorises the
 //! lane loop by itself; Rust never fuses a multiply and an add, so every width must give
 //! the scalar reference's bits (checked), and the printout is lane-bounces per second.
+//!
+//! The second line does the same bounce with the core's own functions in place of the
+//! probe's f32 polynomial: `ember_core::math::sin_cos_turns` (f64 series, correctly
+//! rounded) and `ember_core::math::sqrt`, called as they are, to show that the functions
+//! the scalar renderer uses vectorise too and give the scalar bits at every width.
 
 use std::time::Instant;
 
@@ -59,6 +64,49 @@ fn bounce<const N: usize>(key: &[u64; N], dim: u32, n: &[[f32; N]; 3], out: &mut
     }
 }
 
+/// [`bounce`] on the core's functions: the azimuth through `sin_cos_turns` (u2 in turns).
+#[inline(always)]
+fn bounce_core<const N: usize>(key: &[u64; N], dim: u32, n: &[[f32; N]; 3], out: &mut [[f32; N]; 4]) {
+    use ember_core::math::{sin_cos_turns, sqrt};
+    for i in 0..N {
+        let u1 = to_unit(mix64(key[i] ^ dim as u64));
+        let u2 = to_unit(mix64(key[i] ^ (dim as u64 + 1)));
+        let r = sqrt(u1);
+        let (s, c) = sin_cos_turns(u2);
+        let (x, y, z) = (r * c, r * s, sqrt((1.0 - u1).max(0.0)));
+        let (nx, ny, nz) = (n[0][i], n[1][i], n[2][i]);
+        let sign = 1.0f32.copysign(nz);
+        let a = -1.0 / (sign + nz);
+        let b = nx * ny * a;
+        let t = (1.0 + sign * nx * nx * a, sign * b, -sign * nx);
+        let bt = (b, sign + ny * ny * a, -ny);
+        out[0][i] = x * t.0 + y * bt.0 + z * nx;
+        out[1][i] = x * t.1 + y * bt.1 + z * ny;
+        out[2][i] = x * t.2 + y * bt.2 + z * nz;
+        out[3][i] = z * std::f32::consts::FRAC_1_PI;
+    }
+}
+
+#[inline(never)]
+fn core_one_lane(key: &[u64; 1], dim: u32, n: &[[f32; 1]; 3], out: &mut [[f32; 1]; 4]) {
+    bounce_core::<1>(key, dim, n, out)
+}
+
+#[inline(never)]
+fn core_baseline(key: &[u64; W], dim: u32, n: &[[f32; W]; 3], out: &mut [[f32; W]; 4]) {
+    bounce_core::<W>(key, dim, n, out)
+}
+
+#[target_feature(enable = "avx2")]
+fn core_avx2(key: &[u64; W], dim: u32, n: &[[f32; W]; 3], out: &mut [[f32; W]; 4]) {
+    bounce_core::<W>(key, dim, n, out)
+}
+
+#[target_feature(enable = "avx512f,avx512dq,avx512vl")]
+fn core_avx512(key: &[u64; W], dim: u32, n: &[[f32; W]; 3], out: &mut [[f32; W]; 4]) {
+    bounce_core::<W>(key, dim, n, out)
+}
+
 #[inline(never)]
 fn one_lane(key: &[u64; 1], dim: u32, n: &[[f32; 1]; 3], out: &mut [[f32; 1]; 4]) {
     bounce::<1>(key, dim, n, out)
@@ -79,7 +127,20 @@ fn avx512(key: &[u64; W], dim: u32, n: &[[f32; W]; 3], out: &mut [[f32; W]; 4]) 
     bounce::<W>(key, dim, n, out)
 }
 
+type Lanes = fn(&[u64; W], u32, &[[f32; W]; 3], &mut [[f32; W]; 4]);
+
 fn main() {
+    // SAFETY (both closures' callees): each target-feature build runs only where
+    // `measure` has checked the CPU for its features.
+    measure("the probe's f32 polynomial", one_lane, baseline, |k, d, n, o| unsafe { avx2(k, d, n, o) }, |k, d, n, o| unsafe { avx512(k, d, n, o) });
+    measure("the core's sin_cos_turns and sqrt", core_one_lane, core_baseline, |k, d, n, o| unsafe { core_avx2(k, d, n, o) }, |k, d, n, o| unsafe {
+        core_avx512(k, d, n, o)
+    });
+}
+
+fn measure(what: &str, one_lane: fn(&[u64; 1], u32, &[[f32; 1]; 3], &mut [[f32; 1]; 4]), baseline: Lanes, avx2: Lanes, avx512: Lanes) {
+    print!("{what}: ");
+
     let iters = 2_000_000u32;
     let key: [u64; W] = std::array::from_fn(|i| mix64(i as u64 + 1));
     let mut n = [[0.0f32; W]; 3];
@@ -117,12 +178,10 @@ fn main() {
     };
     run("16 lanes baseline (SSE2)", &baseline);
     if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
-        // SAFETY: the CPU has AVX2 and FMA (checked just above).
-        run("AVX2", &|k, d, n, o| unsafe { avx2(k, d, n, o) });
+        run("AVX2", &avx2);
     }
     if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512dq") && is_x86_feature_detected!("avx512vl") {
-        // SAFETY: the CPU has AVX-512 F, DQ and VL (checked just above).
-        run("AVX-512", &|k, d, n, o| unsafe { avx512(k, d, n, o) });
+        run("AVX-512", &avx512);
     }
     println!("; every width bit-identical to the scalar reference [{check}]");
 }

@@ -52,7 +52,7 @@ pub fn bridge_geometry(x: Vec3, y: Vec3, ny: Vec3) -> Option<(f64, f64)> {
     if !(d2 > 1e-12) {
         return None;
     }
-    let cos_y = ny.dot(v).abs() as f64 / libm::sqrt(d2);
+    let cos_y = ny.dot(v).abs() as f64 / crate::math::sqrt_f64(d2);
     (cos_y > MIN_BRIDGE_COS).then_some((d2, cos_y))
 }
 

@@ -219,7 +219,7 @@ impl FilterPass {
         // to zero over passes, so the estimator stays consistent.
         let mean = self.mean_neighbours();
         if mean > NEIGHBOUR_BUDGET as f64 {
-            self.r = r * libm::sqrtf((NEIGHBOUR_BUDGET as f64 / mean) as f32).max(1.0 / 64.0);
+            self.r = r * crate::math::sqrt((NEIGHBOUR_BUDGET as f64 / mean) as f32).max(1.0 / 64.0);
             self.grid.build(&self.nodes, self.r * core::f32::consts::SQRT_2);
         }
         self.sort_nodes();
