@@ -128,17 +128,23 @@ fn avx512(key: &[u64; W], dim: u32, n: &[[f32; W]; 3], out: &mut [[f32; W]; 4]) 
 }
 
 type Lanes = fn(&[u64; W], u32, &[[f32; W]; 3], &mut [[f32; W]; 4]);
+type OneLane = fn(&[u64; 1], u32, &[[f32; 1]; 3], &mut [[f32; 1]; 4]);
 
 fn main() {
     // SAFETY (both closures' callees): each target-feature build runs only where
     // `measure` has checked the CPU for its features.
     measure("the probe's f32 polynomial", one_lane, baseline, |k, d, n, o| unsafe { avx2(k, d, n, o) }, |k, d, n, o| unsafe { avx512(k, d, n, o) });
-    measure("the core's sin_cos_turns and sqrt", core_one_lane, core_baseline, |k, d, n, o| unsafe { core_avx2(k, d, n, o) }, |k, d, n, o| unsafe {
-        core_avx512(k, d, n, o)
-    });
+    measure(
+        "the core's sin_cos_turns and sqrt",
+        core_one_lane,
+        core_baseline,
+        |k, d, n, o| unsafe { core_avx2(k, d, n, o) },
+        |k, d, n, o| unsafe { core_avx512(k, d, n, o) },
+    );
 }
 
-fn measure(what: &str, one_lane: fn(&[u64; 1], u32, &[[f32; 1]; 3], &mut [[f32; 1]; 4]), baseline: Lanes, avx2: Lanes, avx512: Lanes) {
+#[allow(clippy::needless_range_loop, reason = "lanes indexed across several arrays")]
+fn measure(what: &str, one_lane: OneLane, baseline: Lanes, avx2: Lanes, avx512: Lanes) {
     print!("{what}: ");
 
     let iters = 2_000_000u32;
@@ -165,7 +171,7 @@ fn measure(what: &str, one_lane: fn(&[u64; 1], u32, &[[f32; 1]; 3], &mut [[f32; 
     let scalar = t.elapsed().as_secs_f64();
     print!("lane-bounces/s: scalar {:.0} M", lanes / scalar / 1e6);
 
-    let mut run = |name: &str, f: &dyn Fn(&[u64; W], u32, &[[f32; W]; 3], &mut [[f32; W]; 4])| {
+    let mut run = |name: &str, f: Lanes| {
         let mut out = [[0.0f32; W]; 4];
         let t = Instant::now();
         for d in 0..iters {
@@ -176,12 +182,12 @@ fn measure(what: &str, one_lane: fn(&[u64; 1], u32, &[[f32; 1]; 3], &mut [[f32; 
         assert!(out == reference, "{name}: lanes differ from the scalar reference");
         print!(", {name} {:.0} M ({:.1}×)", lanes / s / 1e6, scalar / s);
     };
-    run("16 lanes baseline (SSE2)", &baseline);
+    run("16 lanes baseline (SSE2)", baseline);
     if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
-        run("AVX2", &avx2);
+        run("AVX2", avx2);
     }
     if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512dq") && is_x86_feature_detected!("avx512vl") {
-        run("AVX-512", &avx512);
+        run("AVX-512", avx512);
     }
     println!("; every width bit-identical to the scalar reference [{check}]");
 }
