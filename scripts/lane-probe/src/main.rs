@@ -42,38 +42,51 @@ fn sincos(x: f32) -> (f32, f32) {
     (s, c)
 }
 
+/// The two functions a bounce needs, from the probe or from the core.
+trait LaneMath {
+    fn sqrt(x: f32) -> f32;
+    /// sin and cos of the azimuth drawn from `u` ∈ [0, 1).
+    fn azimuth(u: f32) -> (f32, f32);
+}
+
+/// The probe's f32 polynomial and std's square root.
+struct Probe;
+
+impl LaneMath for Probe {
+    #[inline(always)]
+    fn sqrt(x: f32) -> f32 {
+        x.sqrt()
+    }
+    #[inline(always)]
+    fn azimuth(u: f32) -> (f32, f32) {
+        sincos((u - 0.5) * std::f32::consts::TAU)
+    }
+}
+
+/// The core's own functions (issue 52): `sin_cos_turns` (f64 series, correctly rounded)
+/// and `math::sqrt` (the `sqrtss` intrinsic), called as the renderer calls them.
+struct Core;
+
+impl LaneMath for Core {
+    #[inline(always)]
+    fn sqrt(x: f32) -> f32 {
+        ember_core::math::sqrt(x)
+    }
+    #[inline(always)]
+    fn azimuth(u: f32) -> (f32, f32) {
+        ember_core::math::sin_cos_turns(u)
+    }
+}
+
 /// The lane work for `N` lanes (see the module notes).
 #[inline(always)]
-fn bounce<const N: usize>(key: &[u64; N], dim: u32, n: &[[f32; N]; 3], out: &mut [[f32; N]; 4]) {
+fn bounce<const N: usize, M: LaneMath>(key: &[u64; N], dim: u32, n: &[[f32; N]; 3], out: &mut [[f32; N]; 4]) {
     for i in 0..N {
         let u1 = to_unit(mix64(key[i] ^ dim as u64));
         let u2 = to_unit(mix64(key[i] ^ (dim as u64 + 1)));
-        let r = u1.sqrt();
-        let (s, c) = sincos((u2 - 0.5) * std::f32::consts::TAU);
-        let (x, y, z) = (r * c, r * s, (1.0 - u1).max(0.0).sqrt());
-        let (nx, ny, nz) = (n[0][i], n[1][i], n[2][i]);
-        let sign = 1.0f32.copysign(nz);
-        let a = -1.0 / (sign + nz);
-        let b = nx * ny * a;
-        let t = (1.0 + sign * nx * nx * a, sign * b, -sign * nx);
-        let bt = (b, sign + ny * ny * a, -ny);
-        out[0][i] = x * t.0 + y * bt.0 + z * nx;
-        out[1][i] = x * t.1 + y * bt.1 + z * ny;
-        out[2][i] = x * t.2 + y * bt.2 + z * nz;
-        out[3][i] = z * std::f32::consts::FRAC_1_PI;
-    }
-}
-
-/// [`bounce`] on the core's functions: the azimuth through `sin_cos_turns` (u2 in turns).
-#[inline(always)]
-fn bounce_core<const N: usize>(key: &[u64; N], dim: u32, n: &[[f32; N]; 3], out: &mut [[f32; N]; 4]) {
-    use ember_core::math::{sin_cos_turns, sqrt};
-    for i in 0..N {
-        let u1 = to_unit(mix64(key[i] ^ dim as u64));
-        let u2 = to_unit(mix64(key[i] ^ (dim as u64 + 1)));
-        let r = sqrt(u1);
-        let (s, c) = sin_cos_turns(u2);
-        let (x, y, z) = (r * c, r * s, sqrt((1.0 - u1).max(0.0)));
+        let r = M::sqrt(u1);
+        let (s, c) = M::azimuth(u2);
+        let (x, y, z) = (r * c, r * s, M::sqrt((1.0 - u1).max(0.0)));
         let (nx, ny, nz) = (n[0][i], n[1][i], n[2][i]);
         let sign = 1.0f32.copysign(nz);
         let a = -1.0 / (sign + nz);
@@ -88,63 +101,34 @@ fn bounce_core<const N: usize>(key: &[u64; N], dim: u32, n: &[[f32; N]; 3], out:
 }
 
 #[inline(never)]
-fn core_one_lane(key: &[u64; 1], dim: u32, n: &[[f32; 1]; 3], out: &mut [[f32; 1]; 4]) {
-    bounce_core::<1>(key, dim, n, out)
+fn one_lane<M: LaneMath>(key: &[u64; 1], dim: u32, n: &[[f32; 1]; 3], out: &mut [[f32; 1]; 4]) {
+    bounce::<1, M>(key, dim, n, out)
 }
 
 #[inline(never)]
-fn core_baseline(key: &[u64; W], dim: u32, n: &[[f32; W]; 3], out: &mut [[f32; W]; 4]) {
-    bounce_core::<W>(key, dim, n, out)
-}
-
-#[target_feature(enable = "avx2")]
-fn core_avx2(key: &[u64; W], dim: u32, n: &[[f32; W]; 3], out: &mut [[f32; W]; 4]) {
-    bounce_core::<W>(key, dim, n, out)
-}
-
-#[target_feature(enable = "avx512f,avx512dq,avx512vl")]
-fn core_avx512(key: &[u64; W], dim: u32, n: &[[f32; W]; 3], out: &mut [[f32; W]; 4]) {
-    bounce_core::<W>(key, dim, n, out)
-}
-
-#[inline(never)]
-fn one_lane(key: &[u64; 1], dim: u32, n: &[[f32; 1]; 3], out: &mut [[f32; 1]; 4]) {
-    bounce::<1>(key, dim, n, out)
-}
-
-#[inline(never)]
-fn baseline(key: &[u64; W], dim: u32, n: &[[f32; W]; 3], out: &mut [[f32; W]; 4]) {
-    bounce::<W>(key, dim, n, out)
+fn baseline<M: LaneMath>(key: &[u64; W], dim: u32, n: &[[f32; W]; 3], out: &mut [[f32; W]; 4]) {
+    bounce::<W, M>(key, dim, n, out)
 }
 
 #[target_feature(enable = "avx2,fma")]
-fn avx2(key: &[u64; W], dim: u32, n: &[[f32; W]; 3], out: &mut [[f32; W]; 4]) {
-    bounce::<W>(key, dim, n, out)
+fn avx2<M: LaneMath>(key: &[u64; W], dim: u32, n: &[[f32; W]; 3], out: &mut [[f32; W]; 4]) {
+    bounce::<W, M>(key, dim, n, out)
 }
 
 #[target_feature(enable = "avx512f,avx512dq,avx512vl")]
-fn avx512(key: &[u64; W], dim: u32, n: &[[f32; W]; 3], out: &mut [[f32; W]; 4]) {
-    bounce::<W>(key, dim, n, out)
+fn avx512<M: LaneMath>(key: &[u64; W], dim: u32, n: &[[f32; W]; 3], out: &mut [[f32; W]; 4]) {
+    bounce::<W, M>(key, dim, n, out)
 }
 
 type Lanes = fn(&[u64; W], u32, &[[f32; W]; 3], &mut [[f32; W]; 4]);
-type OneLane = fn(&[u64; 1], u32, &[[f32; 1]; 3], &mut [[f32; 1]; 4]);
 
 fn main() {
-    // SAFETY (both closures' callees): each target-feature build runs only where
-    // `measure` has checked the CPU for its features.
-    measure("the probe's f32 polynomial", one_lane, baseline, |k, d, n, o| unsafe { avx2(k, d, n, o) }, |k, d, n, o| unsafe { avx512(k, d, n, o) });
-    measure(
-        "the core's sin_cos_turns and sqrt",
-        core_one_lane,
-        core_baseline,
-        |k, d, n, o| unsafe { core_avx2(k, d, n, o) },
-        |k, d, n, o| unsafe { core_avx512(k, d, n, o) },
-    );
+    measure::<Probe>("the probe's f32 polynomial");
+    measure::<Core>("the core's sin_cos_turns and sqrt");
 }
 
 #[allow(clippy::needless_range_loop, reason = "lanes indexed across several arrays")]
-fn measure(what: &str, one_lane: OneLane, baseline: Lanes, avx2: Lanes, avx512: Lanes) {
+fn measure<M: LaneMath>(what: &str) {
     print!("{what}: ");
 
     let iters = 2_000_000u32;
@@ -163,7 +147,7 @@ fn measure(what: &str, one_lane: OneLane, baseline: Lanes, avx2: Lanes, avx512: 
     for d in 0..iters {
         for i in 0..W {
             let mut o = [[0.0f32; 1]; 4];
-            one_lane(&[key[i]], d, &[[n[0][i]], [n[1][i]], [n[2][i]]], &mut o);
+            one_lane::<M>(&[key[i]], d, &[[n[0][i]], [n[1][i]], [n[2][i]]], &mut o);
             (0..4).for_each(|k| reference[k][i] = o[k][0]);
         }
         check += reference[0][3];
@@ -182,12 +166,14 @@ fn measure(what: &str, one_lane: OneLane, baseline: Lanes, avx2: Lanes, avx512: 
         assert!(out == reference, "{name}: lanes differ from the scalar reference");
         print!(", {name} {:.0} M ({:.1}×)", lanes / s / 1e6, scalar / s);
     };
-    run("16 lanes baseline (SSE2)", baseline);
+    run("16 lanes baseline (SSE2)", baseline::<M>);
     if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
-        run("AVX2", avx2);
+        // SAFETY: the CPU has AVX2 and FMA (checked just above).
+        run("AVX2", |k, d, n, o| unsafe { avx2::<M>(k, d, n, o) });
     }
     if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512dq") && is_x86_feature_detected!("avx512vl") {
-        run("AVX-512", avx512);
+        // SAFETY: the CPU has AVX-512 F, DQ and VL (checked just above).
+        run("AVX-512", |k, d, n, o| unsafe { avx512::<M>(k, d, n, o) });
     }
     println!("; every width bit-identical to the scalar reference [{check}]");
 }
