@@ -111,8 +111,15 @@ impl Naive<'_> {
         let frame = Frame::from_normal(t.hit.ns);
         self.scene.materials[t.hit.material as usize].pdf(frame.to_local(t.wo), frame.to_local(dir), mode).0 as f64
     }
+    /// |y − x|², at least 10⁻²⁰⁰. Every density of a segment and its G carry one 1/d², which
+    /// cancels in the estimate, but a light sample can end exactly on x (a camera node on
+    /// the emitting sphere, drawing the point its offset origin sits above: d² = 0, seen
+    /// at this file's seed once the samplers' angles came from `sin_cos_turns`), and
+    /// 0/0 would make the reference NaN where the core, whose densities are in a measure
+    /// without 1/d² (`Bidirectional::emission_density`), is finite. The floor keeps the
+    /// ratios and touches no segment of positive length.
     fn d2(&self, s: &Seg) -> f64 {
-        (s.y.as_dvec3() - self.nodes[s.x].hit.p.as_dvec3()).length_squared()
+        (s.y.as_dvec3() - self.nodes[s.x].hit.p.as_dvec3()).length_squared().max(1e-200)
     }
     /// Light node t's density for segment s per unit area at x and y (0 unless t's
     /// kernel covers y and t continued).
