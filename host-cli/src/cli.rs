@@ -564,6 +564,11 @@ pub struct CacheArgs {
     /// 0 to 1, 0 gives every node the pass's kernel
     #[arg(long, value_name = "ALPHA", allow_negative_numbers = true, default_value_t = FilterConfig::DEFAULT.glossy_alpha)]
     pub glossy_alpha: f32,
+    /// MVF/PhF/BPF: the mean number of nodes per kernel a pass keeps at most, 1 to 4096:
+    /// where nodes crowd (caustics, a spot light's pool) the pass lowers its radius, since
+    /// a pass costs O(Σ n²) in the kernels' populations n
+    #[arg(long, value_name = "N", default_value_t = FilterConfig::DEFAULT.neighbours)]
+    pub neighbours: u32,
 }
 
 impl Default for CacheArgs {
@@ -592,6 +597,7 @@ impl Default for CacheArgs {
             beta: FilterConfig::DEFAULT.beta,
             filter_reuse: "every".into(),
             glossy_alpha: FilterConfig::DEFAULT.glossy_alpha,
+            neighbours: FilterConfig::DEFAULT.neighbours,
         }
     }
 }
@@ -653,6 +659,7 @@ impl CacheArgs {
                 _ => ember_core::estimators::FilterReuse::Every,
             },
             glossy_alpha: self.glossy_alpha,
+            neighbours: self.neighbours,
         }
     }
     /// The configuration of `estimator` (these options apply to the cache-based and

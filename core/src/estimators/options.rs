@@ -152,7 +152,7 @@ fn option(
 }
 
 /// Every estimator option, in the command line's order.
-pub fn all() -> [OptionSpec; 22] {
+pub fn all() -> [OptionSpec; 23] {
     use ValueKind::{Choice, Count, Number};
     let radius = |name, set, help| OptionSpec { group: Some("the radius"), ..option(name, Number, "(0, 1e30]", help, RADIUS, set) };
     [
@@ -271,6 +271,14 @@ pub fn all() -> [OptionSpec; 22] {
             "MVF/PhF/BPF: nodes on materials of roughness below this get a smaller kernel; 0: every node the pass's [default: 0.05]",
             FILTERS,
             filter!(glossy_alpha, v => v.number()),
+        ),
+        option(
+            "neighbours",
+            Count,
+            "1 to 4096",
+            "MVF/PhF/BPF: the mean nodes per kernel a pass keeps at most, lowering its radius where nodes crowd [default: 64]",
+            FILTERS,
+            filter!(neighbours, v => v.count()),
         ),
     ]
 }

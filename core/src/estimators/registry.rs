@@ -427,6 +427,8 @@ mod tests {
             (FilterConfig { glossy_alpha: -0.1, ..f }, "glossy-alpha"),
             (FilterConfig { glossy_alpha: 1.5, ..f }, "glossy-alpha"),
             (FilterConfig { glossy_alpha: f32::NAN, ..f }, "glossy-alpha"),
+            (FilterConfig { neighbours: 0, ..f }, "neighbours"),
+            (FilterConfig { neighbours: 4097, ..f }, "neighbours"),
             (FilterConfig { beta: 17.0, ..f }, "beta"),
         ] {
             assert_eq!(c.validate().map_err(|e| e.field), Err(field));

@@ -219,7 +219,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
             phase::FOOTPRINT => self.r0 = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs)),
             phase::BRIDGES => self.pass.append_nodes(outputs),
             id => {
-                self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0)));
+                self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0)), self.config.neighbours);
                 if id == phase::PATHS && self.config.bridges() {
                     self.bridge_ends.clear();
                     self.bridge_ends.extend(self.pass.nodes.iter().enumerate().filter(|(_, n)| bridge_end(n)).map(|(i, _)| i as u32));

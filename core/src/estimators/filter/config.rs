@@ -35,6 +35,11 @@ pub struct FilterConfig {
     /// times the pass's (`estimators::filter::nodes::scale_kernels`); 0 gives every node
     /// the pass's kernel. In [0, 1] (default 0.05).
     pub glossy_alpha: f32,
+    /// The neighbour budget: where nodes crowd (a caustic, a spot light's pool) a pass
+    /// lowers its radius until the mean kernel holds at most this many nodes, since rows
+    /// cost O(Σ n²). The radius still shrinks to zero over passes, so the estimators stay
+    /// consistent. 1 to 4096 (default 64).
+    pub neighbours: u32,
 }
 
 /// Which segments bidirectional filtering's junctions reuse.
@@ -60,10 +65,13 @@ pub const MAX_FILTER_BETA: f32 = 16.0;
 pub const DEFAULT_FILTER_SEGMENTS: u32 = 16;
 /// Largest `--max-segments` (one propagation phase each).
 pub const MAX_FILTER_SEGMENTS: u32 = 64;
+/// Largest `--neighbours`.
+pub const MAX_FILTER_NEIGHBOURS: u32 = 4096;
 
 impl FilterConfig {
     /// The defaults.
-    pub const DEFAULT: Self = Self { radius: RadiusRule::DEFAULT, alpha: 0.67, max_segments: None, beta: 0.25, reuse: FilterReuse::Every, glossy_alpha: 0.05 };
+    pub const DEFAULT: Self =
+        Self { radius: RadiusRule::DEFAULT, alpha: 0.67, max_segments: None, beta: 0.25, reuse: FilterReuse::Every, glossy_alpha: 0.05, neighbours: 64 };
 
     /// Light paths per pass for a film of `pixels` pixels: round(β · pixels), at least one
     /// where β > 0.
@@ -91,6 +99,9 @@ impl FilterConfig {
         check_f32("alpha", self.alpha, self.alpha > 0.0 && self.alpha <= 1.0, "(0, 1]")?;
         check_f32("beta", self.beta, self.beta >= 0.0 && self.beta <= MAX_FILTER_BETA, "0 to 16")?;
         check_f32("glossy-alpha", self.glossy_alpha, (0.0..=1.0).contains(&self.glossy_alpha), "0 to 1")?;
+        if !(1..=MAX_FILTER_NEIGHBOURS).contains(&self.neighbours) {
+            return Err(ConfigError { field: "neighbours", value: self.neighbours as f64, allowed: "1 to 4096" });
+        }
         match self.max_segments {
             Some(n) if !(1..=MAX_FILTER_SEGMENTS).contains(&n) => Err(ConfigError { field: "max-segments", value: n as f64, allowed: "1 to 64" }),
             _ => Ok(()),

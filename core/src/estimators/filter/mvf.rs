@@ -101,7 +101,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Mvf {
     fn reduce(&mut self, ctx: &Context<'_, Q>, phase: &Phase, outputs: &mut [ChunkOutput], film: &mut Film) {
         match phase.id {
             phase::FOOTPRINT => self.r0 = self.config.radius.initial_radius(ctx.scene, &crate::estimators::reduce_footprint(outputs)),
-            id => self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0))),
+            id => self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0)), self.config.neighbours),
         }
         // The pass ends after `filter` (no sweep) or after the last sweep: L is final.
         if self.cursor.advance() {

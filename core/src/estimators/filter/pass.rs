@@ -16,9 +16,6 @@ use crate::scene::Scene;
 use crate::segment::Kernel;
 use crate::spectrum::Rgb;
 
-/// Largest mean number of nodes per kernel a pass keeps (see [`FilterPass::gather_nodes`]).
-pub const NEIGHBOUR_BUDGET: u32 = 64;
-
 /// Items per chunk of the phases over paths (pixels, light paths).
 pub(super) const CHUNK: u32 = 1024;
 
@@ -182,8 +179,9 @@ impl FilterPass {
     }
 
     /// Gather the chunks' nodes, links and values (node indices shifted to global), and
-    /// build the grid for kernel radius `r`.
-    pub fn gather_nodes(&mut self, outputs: &mut [ChunkOutput], r: f32) {
+    /// build the grid for kernel radius `r`, lowered where the mean kernel would hold
+    /// more than `neighbours` nodes (`FilterConfig::neighbours`).
+    pub fn gather_nodes(&mut self, outputs: &mut [ChunkOutput], r: f32, neighbours: u32) {
         self.nodes.clear();
         self.links.clear();
         self.values.clear();
@@ -215,11 +213,11 @@ impl FilterPass {
         self.grid.build(&self.nodes, r * core::f32::consts::SQRT_2);
         // The neighbour budget: rows cost O(Σ n²), so where nodes crowd (a caustic, a
         // spot light's pool) the pass's radius is lowered until the mean kernel holds at
-        // most NEIGHBOUR_BUDGET nodes (surface density: n ∝ r²). The radius still goes
+        // most `neighbours` nodes (surface density: n ∝ r²). The radius still goes
         // to zero over passes, so the estimator stays consistent.
         let mean = self.mean_neighbours();
-        if mean > NEIGHBOUR_BUDGET as f64 {
-            self.r = r * crate::math::sqrt((NEIGHBOUR_BUDGET as f64 / mean) as f32).max(1.0 / 64.0);
+        if mean > neighbours as f64 {
+            self.r = r * crate::math::sqrt((neighbours as f64 / mean) as f32).max(1.0 / 64.0);
             self.grid.build(&self.nodes, self.r * core::f32::consts::SQRT_2);
         }
         self.sort_nodes();
@@ -334,10 +332,11 @@ impl FilterPass {
     }
 
     /// Reduction of the phases both estimators share, by phase id: 1 the nodes (for
-    /// kernel radius `r`), 2 the denominators, 3 the rows, later ones a sweep.
-    pub fn reduce_phase(&mut self, id: u8, outputs: &mut [ChunkOutput], r: f32) {
+    /// kernel radius `r` and the neighbour budget `neighbours`), 2 the denominators, 3
+    /// the rows, later ones a sweep.
+    pub fn reduce_phase(&mut self, id: u8, outputs: &mut [ChunkOutput], r: f32, neighbours: u32) {
         match id {
-            phase::PATHS => self.gather_nodes(outputs, r),
+            phase::PATHS => self.gather_nodes(outputs, r, neighbours),
             phase::DENOMINATORS => self.gather_denominators(outputs),
             phase::ROWS => self.gather_rows(outputs),
             _ => self.gather_sweep(outputs),
@@ -451,6 +450,28 @@ mod tests {
         (pass, outputs)
     }
 
+    /// The neighbour budget (`--neighbours`) lowers the pass's radius where kernels would
+    /// hold more nodes than it allows, to about the budget, and leaves it where they hold
+    /// fewer. Seen to fail with the budget ignored for the constant 64 it replaced (the
+    /// pass without a budget, 77 nodes per kernel, had its radius lowered).
+    #[test]
+    fn the_neighbour_budget_lowers_the_radius_to_about_its_mean() {
+        let r = 0.3;
+        let (mut free, mut outputs) = pass_of(false);
+        free.gather_nodes(&mut outputs, r, u32::MAX);
+        let full = free.mean_neighbours();
+        assert!(free.r == r && full > 50.0, "{full}");
+        for budget in [8, 24] {
+            let (mut pass, mut outputs) = pass_of(false);
+            pass.gather_nodes(&mut outputs, r, budget);
+            let mean = pass.mean_neighbours();
+            assert!(pass.r < r && mean <= 1.5 * budget as f64 && mean >= 0.5 * budget as f64, "budget {budget}: r {}, mean {mean}", pass.r);
+        }
+        let (mut roomy, mut outputs) = pass_of(false);
+        roomy.gather_nodes(&mut outputs, r, (2.0 * full) as u32);
+        assert_eq!(roomy.r, r);
+    }
+
     /// Sorting the nodes into grid order changes no query and no link: each grid query
     /// meets the same positions in the same order (so every sum over kernel neighbours is
     /// the same to the bit), each link, predecessor and continuation names the same node,
@@ -482,7 +503,7 @@ mod tests {
             }
             let mut grid = NodeGrid::default();
             grid.build(&unsorted, r * core::f32::consts::SQRT_2);
-            pass.gather_nodes(&mut outputs, r);
+            pass.gather_nodes(&mut outputs, r, u32::MAX);
             assert_eq!(pass.r, r, "the neighbour budget must not cut in here");
             assert_eq!(pass.nodes.len(), unsorted.len());
             let pos = |n: &Node| n.hit.p;
