@@ -173,6 +173,7 @@ fn run_convergence(args: &ConvergenceArgs) -> Result<(), AppError> {
         threads,
         max_depth: args.max_depth,
         memory_limit: args.memory_limit,
+        options: args.cache.clone(),
     };
     let prepare = setup::preparer(&args.scene, &args.defines.pairs);
     let points = convergence::measure(&setup, &reference, &prepare, |c| {

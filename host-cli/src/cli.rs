@@ -206,6 +206,10 @@ pub struct ConvergenceArgs {
     pub memory_limit: Option<u64>,
     #[command(flatten)]
     pub defines: Defines,
+    /// The estimators' options, as `ember render` takes them (each estimator reads its
+    /// own; e.g. `--neighbours 128` or `--radius-footprints 2` for the filters).
+    #[command(flatten)]
+    pub cache: CacheArgs,
     /// Output folder for NAME.csv, NAME-relmse.svg and NAME-mape.svg.
     #[arg(short, long, default_value = "convergence", value_name = "DIR")]
     pub output: PathBuf,

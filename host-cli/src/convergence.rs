@@ -24,6 +24,7 @@ use ember_core::estimators::EstimatorKind;
 use ember_host::driver::Limits;
 use ember_host::scene::PreparedScene;
 
+use crate::cli::CacheArgs;
 use crate::estimators::CoreRenderer;
 use crate::film::Film;
 use crate::plot::{self, Floor, Series};
@@ -43,6 +44,9 @@ pub struct ConvergenceSetup {
     /// Memory the renderers may claim together (`--memory-limit`); `None`: what the
     /// machine has available ([`ember_host::memory::available_bytes`]).
     pub memory_limit: Option<u64>,
+    /// The estimators' options (`ember convergence`'s, as `ember render` takes them; the
+    /// defaults in `ember suite`).
+    pub options: CacheArgs,
 }
 
 /// Refuse an estimator list that names one twice (`-e pt,pt` ran PT twice); `convergence`
@@ -56,12 +60,12 @@ pub fn check_distinct(estimators: &[EstimatorKind]) -> Result<(), String> {
 
 /// Refuse, before building them, estimators whose renderers (all held at once, one per
 /// estimator) would together need more memory than `limit` or the memory available.
-fn check_memory(prepared: &PreparedScene, estimators: &[EstimatorKind], limit: Option<u64>) -> Result<(), String> {
+fn check_memory(prepared: &PreparedScene, estimators: &[EstimatorKind], options: &CacheArgs, limit: Option<u64>) -> Result<(), String> {
     let camera = &prepared.scene.camera;
     let mut total = 0u64;
     let mut largest = (0u64, EstimatorKind::Pt);
     for &e in estimators {
-        let (bytes, _) = prepared.memory_need(&e.default_config());
+        let (bytes, _) = prepared.memory_need(&options.config_for(e));
         total = total.saturating_add(bytes);
         if bytes > largest.0 {
             largest = (bytes, e);
@@ -114,10 +118,10 @@ pub fn measure(
             let start = Instant::now();
             let prepared = prepare()?;
             if runs.is_empty() {
-                check_memory(&prepared, &setup.estimators, setup.memory_limit)?;
+                check_memory(&prepared, &setup.estimators, &setup.options, setup.memory_limit)?;
             }
             let depth = setup.max_depth.or(prepared.max_depth).unwrap_or(-1);
-            let renderer = CoreRenderer::with_config(prepared, estimator.default_config(), depth, seed as u64, setup.threads)?;
+            let renderer = CoreRenderer::with_config(prepared, setup.options.config_for(estimator), depth, seed as u64, setup.threads)?;
             let (w, h) = (renderer.width(), renderer.height());
             if (w as usize, h as usize) != (rw, rh) {
                 return Err(format!("the scene renders {w}x{h} but the reference is {rw}x{rh}"));

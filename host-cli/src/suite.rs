@@ -10,7 +10,7 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use crate::cli::{EstimatorKind, SuiteArgs};
+use crate::cli::{CacheArgs, EstimatorKind, SuiteArgs};
 use crate::convergence::{self, ConvergenceSetup};
 use crate::setup;
 use ember_formats::error_time::{self, Checkpoint, Reference};
@@ -73,6 +73,7 @@ pub fn run(args: &SuiteArgs, threads: usize) -> Result<Vec<SceneResult>, String>
             threads,
             max_depth: None,
             memory_limit: args.memory_limit,
+            options: CacheArgs::default(),
         };
         let scene_file = folder.join("scene.xml");
         let prepare = setup::preparer(&scene_file, &args.defines.pairs);

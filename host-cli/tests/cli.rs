@@ -57,6 +57,10 @@ fn bad_input_exits_one_with_a_message() {
         (&["convergence", "scene.xml", "--seeds", "0"], "--seeds"),
         (&["convergence", "scene.xml", "--threads", "0"], "--threads"),
         (&["convergence", "scene.xml", "--max-depth", "-2"], "--max-depth"),
+        // convergence takes the estimators' options, checked as render checks them (seen
+        // to fail when convergence built every estimator's default configuration: the
+        // bad value was ignored and the run rendered).
+        (&["convergence", cornell, "-e", "mvf", "--neighbours", "0", "--budget", "1", "-o", out_dir], "neighbours"),
         (&["suite", "--budget", "inf"], "time budget"),
         (&["suite", "--seeds", "0"], "--seeds"),
         (&["suite", "--threads", "0"], "--threads"),
