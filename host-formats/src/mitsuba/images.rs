@@ -72,6 +72,7 @@ pub(super) fn decode_jpeg(bytes: &[u8], raw: bool) -> Result<(u32, u32, Vec<Rgb>
     if last_scan.is_some() && end <= last_scan {
         return Err("not a readable JPEG: the file ends before its end-of-image marker (truncated?)".into());
     }
+    check_frame_header(bytes)?;
     let mut decoder = JpegDecoder::new_with_options(ZCursor::new(bytes), options);
     decoder.decode_headers().map_err(|e| format!("not a readable JPEG: {e}"))?;
     let info = decoder.info().ok_or("not a readable JPEG: no frame header")?;
@@ -90,6 +91,62 @@ pub(super) fn decode_jpeg(bytes: &[u8], raw: bool) -> Result<(u32, u32, Vec<Rgb>
     let lut: Vec<f32> = (0..=255u8).map(|v| if raw { v as f32 / 255.0 } else { srgb_to_linear(v) }).collect();
     let texels = rgb.chunks_exact(3).map(|p| Rgb::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize])).collect();
     Ok((width as u32, height as u32, texels))
+}
+
+/// Refuse, before decoding, JPEG frame headers that zune-jpeg 0.5.15 does not survive:
+/// a component with a sampling factor of 3 (it panicked in its AVX2 inverse DCT on a
+/// 16 × 16 frame whose third component was sampled 2 × 3; the fuzz target
+/// `image_readers` found it, and its input is the committed seed `jpeg_sampling_2x3`),
+/// and a second frame header or start-of-image (a JPEG has one frame). Walks the
+/// segments by their lengths and skips entropy-coded data (where 0xFF is followed by a
+/// stuffed 0x00 or a restart marker), so an APP segment's embedded thumbnail is not read
+/// as a frame. Anything it cannot follow is left to the decoder.
+fn check_frame_header(bytes: &[u8]) -> Result<(), String> {
+    if !bytes.starts_with(&[0xff, 0xd8]) {
+        return Ok(());
+    }
+    let (mut i, mut frames) = (2usize, 0u32);
+    while i + 1 < bytes.len() {
+        if bytes[i] != 0xff {
+            return Ok(());
+        }
+        let marker = bytes[i + 1];
+        i += 2;
+        match marker {
+            // Fill bytes before a marker.
+            0xff => i -= 1,
+            0xd8 => return Err("not a readable JPEG: a second start-of-image marker".into()),
+            0xd9 => return Ok(()),
+            0x01 | 0xd0..=0xd7 => {}
+            _ => {
+                let Some(len) = bytes.get(i..i + 2).map(|l| u16::from_be_bytes([l[0], l[1]]) as usize) else { return Ok(()) };
+                if matches!(marker, 0xc0..=0xcf) && !matches!(marker, 0xc4 | 0xc8 | 0xcc) {
+                    frames += 1;
+                    if frames > 1 {
+                        return Err("not a readable JPEG: more than one frame header".into());
+                    }
+                    // After the length (2), precision (1), height (2), width (2) and count
+                    // (1): per component its id, sampling h·16 + v and table.
+                    let components = bytes.get(i + 8..(i + len).min(bytes.len())).unwrap_or(&[]);
+                    for c in components.chunks_exact(3) {
+                        let (h, v) = (c[1] >> 4, c[1] & 15);
+                        if h == 3 || v == 3 {
+                            return Err(format!("not a readable JPEG: sampling factor {h}x{v} (component {}) is not supported", c[0]));
+                        }
+                    }
+                }
+                i += len;
+                if marker == 0xda {
+                    // Entropy-coded data runs to the next marker that is not a stuffed
+                    // 0xFF 0x00 or a restart marker.
+                    while i + 1 < bytes.len() && !(bytes[i] == 0xff && bytes[i + 1] != 0x00 && !(0xd0..=0xd7).contains(&bytes[i + 1])) {
+                        i += 1;
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// An OpenEXR file's first RGB layer, read through [`super::read_input`] (a regular file

@@ -101,6 +101,30 @@ fn hostile_jpeg_headers_are_refused_before_decoding() {
     assert!(e.contains("8192x8192 pixels cannot be stored"), "{e}");
 }
 
+/// A frame with a component sampled 2 × 3 is refused before decoding: zune-jpeg panicked
+/// on it (the fuzz target's find, `fuzz/seeds/image_readers/jpeg_sampling_2x3`). The
+/// real files still decode, and an APP segment holding a whole second JPEG (a thumbnail)
+/// is no second frame. Seen failing with the component bytes read one byte early (the
+/// check then missed the factor, and the decoder panicked).
+#[test]
+fn unsupported_sampling_factors_are_refused() {
+    let seed = include_bytes!("../../../fuzz/seeds/image_readers/jpeg_sampling_2x3");
+    let e = decode_jpeg(&seed[1..], false).unwrap_err();
+    assert!(e.contains("sampling factor 2x3"), "{e}");
+    for (grey, progressive) in [(false, false), (true, true), (false, true)] {
+        let bytes = quadrant_jpeg(grey, progressive);
+        assert!(decode_jpeg(&bytes, false).is_ok());
+        // The same file with the whole JPEG again inside an APP1 segment after SOI.
+        let inner = quadrant_jpeg(true, false);
+        let mut with_thumbnail = vec![0xff, 0xd8, 0xff, 0xe1];
+        with_thumbnail.extend_from_slice(&((inner.len() + 2) as u16).to_be_bytes());
+        with_thumbnail.extend_from_slice(&inner);
+        with_thumbnail.extend_from_slice(&bytes[2..]);
+        let (w, h, _) = decode_jpeg(&with_thumbnail, false).unwrap_or_else(|e| panic!("grey {grey}, progressive {progressive}: {e}"));
+        assert_eq!((w, h), (16, 16));
+    }
+}
+
 /// The diffuse albedo of material `id` at `uv` (f·π at normal incidence).
 fn albedo(scene: &ember_core::scene::Scene, id: u32, uv: Vec2) -> Rgb {
     scene.material(id, uv).eval(Vec3::Z, Vec3::Z, TransportMode::Radiance) * core::f32::consts::PI
