@@ -94,10 +94,12 @@ pub(super) fn decode_jpeg(bytes: &[u8], raw: bool) -> Result<(u32, u32, Vec<Rgb>
 }
 
 /// Refuse, before decoding, JPEG frame headers that zune-jpeg 0.5.15 does not survive:
-/// a component with a sampling factor of 3 (it panicked in its AVX2 inverse DCT on a
-/// 16 × 16 frame whose third component was sampled 2 × 3; the fuzz target
-/// `image_readers` found it, and its input is the committed seed `jpeg_sampling_2x3`),
-/// and a second frame header or start-of-image (a JPEG has one frame). Walks the
+/// a component sampled more finely than the first one, or with a factor of 3 (it
+/// panicked in its AVX2 inverse DCT on a 16 × 16 frame whose third component was sampled
+/// 2 × 3 against the first's 1 × 1, and as well at 2 × 2, 2 × 4, 4 × 2 and 4 × 4; the
+/// fuzz target `image_readers` found it, and its input is the committed seed
+/// `jpeg_sampling_2x3`; encoders sample the first component, luma, the finest), and a
+/// second frame header or start-of-image (a JPEG has one frame). Walks the
 /// segments by their lengths and skips entropy-coded data (where 0xFF is followed by a
 /// stuffed 0x00 or a restart marker), so an APP segment's embedded thumbnail is not read
 /// as a frame. Anything it cannot follow is left to the decoder.
@@ -128,10 +130,14 @@ fn check_frame_header(bytes: &[u8]) -> Result<(), String> {
                     // After the length (2), precision (1), height (2), width (2) and count
                     // (1): per component its id, sampling h·16 + v and table.
                     let components = bytes.get(i + 8..(i + len).min(bytes.len())).unwrap_or(&[]);
+                    let first = components.get(1).map_or((1, 1), |&f| (f >> 4, f & 15));
                     for c in components.chunks_exact(3) {
                         let (h, v) = (c[1] >> 4, c[1] & 15);
-                        if h == 3 || v == 3 {
-                            return Err(format!("not a readable JPEG: sampling factor {h}x{v} (component {}) is not supported", c[0]));
+                        if h == 3 || v == 3 || h > first.0 || v > first.1 {
+                            return Err(format!(
+                                "not a readable JPEG: component {} sampled {h}x{v} against the first's {}x{} is not supported",
+                                c[0], first.0, first.1
+                            ));
                         }
                     }
                 }

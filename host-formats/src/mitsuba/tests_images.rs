@@ -110,7 +110,7 @@ fn hostile_jpeg_headers_are_refused_before_decoding() {
 fn unsupported_sampling_factors_are_refused() {
     let seed = include_bytes!("../../../fuzz/seeds/image_readers/jpeg_sampling_2x3");
     let e = decode_jpeg(&seed[1..], false).unwrap_err();
-    assert!(e.contains("sampling factor 2x3"), "{e}");
+    assert!(e.contains("sampled 2x3 against the first's 1x1"), "{e}");
     for (grey, progressive) in [(false, false), (true, true), (false, true)] {
         let bytes = quadrant_jpeg(grey, progressive);
         assert!(decode_jpeg(&bytes, false).is_ok());
