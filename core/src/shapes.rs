@@ -41,7 +41,7 @@ pub fn texcoords_at(uv: Option<[Vec2; 3]>, b: [f32; 3]) -> Vec2 {
 /// Mitsuba's texture coordinates on a sphere at unit direction `local` from its centre:
 /// (φ/2π, θ/π) with φ = atan2(y, x) in [0, 2π) and θ = acos z.
 pub fn sphere_texcoords(local: Vec3) -> Vec2 {
-    let mut phi = crate::math::atan2(local.y, local.x);
+    let mut phi = math::atan2(local.y, local.x);
     if phi < 0.0 {
         phi += 2.0 * core::f32::consts::PI;
     }

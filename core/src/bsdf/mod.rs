@@ -394,25 +394,25 @@ impl Material {
     /// read more than the cosines.
     #[inline]
     pub fn eval_world(&self, ns: Vec3, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
-        match self.cosine_directions(ns.dot(wo), ns.dot(wi)) {
-            Some((o, i)) => self.eval(o, i, mode),
-            None => {
-                let frame = Frame::from_normal(ns);
-                self.eval(frame.to_local(wo), frame.to_local(wi), mode)
-            }
-        }
+        let (o, i) = self.local_directions(ns, wo, wi);
+        self.eval(o, i, mode)
     }
 
     /// [`Self::pdf`] as [`Self::eval_world`].
     #[inline]
     pub fn pdf_world(&self, ns: Vec3, wo: Vec3, wi: Vec3, mode: TransportMode) -> SolidAnglePdf {
-        match self.cosine_directions(ns.dot(wo), ns.dot(wi)) {
-            Some((o, i)) => self.pdf(o, i, mode),
-            None => {
-                let frame = Frame::from_normal(ns);
-                self.pdf(frame.to_local(wo), frame.to_local(wi), mode)
-            }
-        }
+        let (o, i) = self.local_directions(ns, wo, wi);
+        self.pdf(o, i, mode)
+    }
+
+    /// World-space `wo` and `wi` in the shading frame of normal `ns`, as far as this lobe
+    /// reads them: the cosines alone for the Lambertian one, through the frame otherwise.
+    #[inline]
+    fn local_directions(&self, ns: Vec3, wo: Vec3, wi: Vec3) -> (Vec3, Vec3) {
+        self.cosine_directions(ns.dot(wo), ns.dot(wi)).unwrap_or_else(|| {
+            let frame = Frame::from_normal(ns);
+            (frame.to_local(wo), frame.to_local(wi))
+        })
     }
 
     /// For a lobe whose value and density read only the directions' cosines to the normal

@@ -190,7 +190,7 @@ impl EnvMapLight {
     /// (u, v) of a local unit direction.
     #[inline]
     fn uv(d: Vec3) -> Vec2 {
-        let u = crate::math::atan2(d.x, -d.z) * (0.5 / PI);
+        let u = math::atan2(d.x, -d.z) * (0.5 / PI);
         let u = u - math::floor(u);
         let v = math::safe_acos(d.y) / PI;
         Vec2::new(if u < 1.0 { u } else { 0.0 }, v)

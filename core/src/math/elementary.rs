@@ -101,16 +101,21 @@ fn sin_cos_kernel(r: f64) -> (f64, f64) {
     (s, c)
 }
 
+/// (sin, cos) of the angle kπ/2 + r (|r| ≤ π/4, q the low bits of k): the series at r
+/// rotated by k quarter turns.
+#[inline(always)]
+fn sin_cos_quadrant(r: f64, q: i32) -> (f64, f64) {
+    let (s, c) = sin_cos_kernel(r);
+    let (s, c) = if q & 1 == 0 { (s, c) } else { (c, -s) };
+    if q & 2 == 0 { (s, c) } else { (-s, -c) }
+}
+
 /// (sin x, cos x) in f64 for finite |x| ≤ [`TRIG_REDUCTION_LIMIT`].
 #[inline(always)]
 fn sin_cos_reduced(x: f32) -> (f64, f64) {
     let xd = x as f64;
     let (k, q) = round_int(xd * (2.0 / PI));
-    let r = (xd - k * PIO2_HI) - k * PIO2_LO;
-    let (s, c) = sin_cos_kernel(r);
-    // x = kπ/2 + r: the quadrant rotates (sin r, cos r) by k quarter turns.
-    let (s, c) = if q & 1 == 0 { (s, c) } else { (c, -s) };
-    if q & 2 == 0 { (s, c) } else { (-s, -c) }
+    sin_cos_quadrant((xd - k * PIO2_HI) - k * PIO2_LO, q)
 }
 
 /// sin x and cos x.
@@ -147,9 +152,7 @@ pub fn sin_cos_turns(t: f32) -> (f32, f32) {
     // Beyond 2⁵¹ quarters t is an integer (sin 0, cos 1); ∞ and NaN give NaN.
     let quarters = if quarters.abs() < 2_251_799_813_685_248.0 { quarters } else { quarters * 0.0 };
     let (k, q) = round_int(quarters);
-    let (s, c) = sin_cos_kernel((quarters - k) * FRAC_PI_2);
-    let (s, c) = if q & 1 == 0 { (s, c) } else { (c, -s) };
-    let (s, c) = if q & 2 == 0 { (s, c) } else { (-s, -c) };
+    let (s, c) = sin_cos_quadrant((quarters - k) * FRAC_PI_2, q);
     (s as f32, c as f32)
 }
 
