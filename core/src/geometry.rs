@@ -176,7 +176,11 @@ pub fn spawn_ray(p: Vec3, ng: Vec3, dir: Vec3) -> Ray {
 pub fn spawn_ray_to(p: Vec3, ng: Vec3, q: Vec3, nq: Vec3) -> Ray {
     let d = q - p;
     let from = offset_ray_origin(p, if ng.dot(d) >= 0.0 { ng } else { -ng });
-    let to = if nq == Vec3::ZERO { q } else { offset_ray_origin(q, if nq.dot(d) <= 0.0 { nq } else { -nq }) };
+    // Without branches (`|`, not `||`; both ends computed), so that lanes of paths spawn
+    // their shadow rays together.
+    let on_surface = (nq.x != 0.0) | (nq.y != 0.0) | (nq.z != 0.0);
+    let offset = offset_ray_origin(q, if nq.dot(d) <= 0.0 { nq } else { -nq });
+    let to = if on_surface { offset } else { q };
     Ray::new(from, to - from, 1.0 - 1e-4)
 }
 

@@ -43,6 +43,24 @@ fn mix64(mut z: u64) -> u64 {
 
 const GOLDEN: u64 = 0x9e37_79b9_7f4a_7c15;
 
+/// The 64 bits of dimension `d` of the stream whose hashed key is `base`.
+#[inline(always)]
+fn bits_at(base: u64, d: u32) -> u64 {
+    mix64(base.wrapping_add((d as u64 + 1).wrapping_mul(GOLDEN)))
+}
+
+#[inline(always)]
+fn to_f32(bits: u64) -> f32 {
+    (bits >> 40) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// [`SampleStream::next_f32`] at dimension `d` of the stream whose [`SampleStream::base`]
+/// is `base`, without a stream: the same bits, for code that draws over lanes of paths.
+#[inline(always)]
+pub(crate) fn uniform_at(base: u64, d: u32) -> f32 {
+    to_f32(bits_at(base, d))
+}
+
 /// A sequence of random numbers for one key, advancing a dimension counter.
 #[derive(Clone, Debug)]
 pub struct SampleStream {
@@ -83,13 +101,19 @@ impl SampleStream {
     pub fn next_u64(&mut self) -> u64 {
         let d = self.dimension;
         self.dimension = self.dimension.wrapping_add(1);
-        mix64(self.base.wrapping_add((d as u64 + 1).wrapping_mul(GOLDEN)))
+        bits_at(self.base, d)
     }
 
     /// Uniform float in [0, 1).
     #[inline]
     pub fn next_f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / 16_777_216.0)
+        to_f32(self.next_u64())
+    }
+
+    /// The stream's key hashed: with a dimension, all its numbers ([`uniform_at`]).
+    #[inline]
+    pub(crate) fn base(&self) -> u64 {
+        self.base
     }
 
     /// Uniform double in [0, 1).

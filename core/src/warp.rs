@@ -5,7 +5,7 @@
 //! directions are per steradian ([`SolidAnglePdf`]), points on planar domains per unit
 //! area ([`AreaPdf`], for the canonical unit-sized domain; callers scale by their own area).
 
-use crate::math::{INV_2PI, INV_4PI, INV_PI, PI, TWO_PI, Vec2, Vec3, atan2, safe_sqrt, sin_cos_small, sin_cos_turns, sqrt};
+use crate::math::{INV_2PI, INV_4PI, INV_PI, PI, TWO_PI, Vec2, Vec3, atan2, safe_sqrt, sin_cos_quarter, sin_cos_turns, sqrt};
 use crate::measure::{AreaPdf, SolidAnglePdf};
 
 /// Wrap an angle from `atan2` into [0, 2π).
@@ -26,18 +26,17 @@ fn unit(x: f32) -> f32 {
 #[inline]
 pub fn sample_concentric_disk(u: Vec2) -> Vec2 {
     let o = 2.0 * u - Vec2::ONE;
-    if o.x == 0.0 && o.y == 0.0 {
-        return Vec2::ZERO;
-    }
     // θ = φ in the wedges around ±x, θ = π/2 − φ around ±y (so cos θ = sin φ): either
-    // way the series sees |φ| ≤ π/4 and needs no reduction.
-    if o.x.abs() > o.y.abs() {
-        let (s, c) = sin_cos_small((PI / 4.0) * (o.y / o.x));
-        Vec2::new(o.x * c, o.x * s)
-    } else {
-        let (s, c) = sin_cos_small((PI / 4.0) * (o.x / o.y));
-        Vec2::new(o.y * s, o.y * c)
-    }
+    // way the series sees |φ| ≤ π/4 and needs no reduction. Written without branches
+    // (the wedge picks the ratio and the result, one sine and cosine serves both) so
+    // that lanes of paths draw it together (`estimators::pt_lanes`).
+    let x_wedge = o.x.abs() > o.y.abs();
+    let centre = o.x == 0.0 && o.y == 0.0;
+    let (num, den) = if x_wedge { (o.y, o.x) } else { (o.x, o.y) };
+    let ratio = num / den;
+    let (s, c) = sin_cos_quarter((PI / 4.0) * if centre { 0.0 } else { ratio });
+    let d = if x_wedge { Vec2::new(o.x * c, o.x * s) } else { Vec2::new(o.y * s, o.y * c) };
+    if centre { Vec2::ZERO } else { d }
 }
 
 /// Density of [`sample_concentric_disk`] per unit area: 1/π.
@@ -96,7 +95,7 @@ pub fn invert_uniform_hemisphere(w: Vec3) -> Vec2 {
 // ---------------------------------------------------------------- hemisphere, cosine
 
 /// Cosine-weighted direction on the +z hemisphere (Malley's method on the concentric disk).
-#[inline]
+#[inline(always)]
 pub fn sample_cosine_hemisphere(u: Vec2) -> Vec3 {
     let d = sample_concentric_disk(u);
     let z = safe_sqrt(1.0 - d.length_squared());

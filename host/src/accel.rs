@@ -554,6 +554,11 @@ fn safe_direction(d: Vec3A) -> Vec3A {
 }
 
 impl<B: TriangleBvh> RayQuery for AccelWith<B> {
+    fn batch_width(&self) -> usize {
+        // SPIKE: measurement override.
+        std::env::var("EMBER_LANES").ok().and_then(|v| v.parse().ok()).unwrap_or(1)
+    }
+
     fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
         self.intersect_primitive(ray).map(|(h, _)| h)
     }

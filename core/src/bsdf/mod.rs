@@ -469,6 +469,16 @@ impl Material {
         (s.f.is_finite() && s.pdf.value().is_finite() && s.pdf_rev.value().is_finite()).then_some(s)
     }
 
+    /// The Lambertian model's reflectance and whether it is two-sided; `None` for every
+    /// other model. The lane kernels shade such surfaces over many paths at once.
+    #[inline]
+    pub(crate) fn lambertian(&self) -> Option<(Rgb, bool)> {
+        match &self.kind {
+            Kind::Diffuse(b) => Some((b.reflectance, self.two_sided)),
+            _ => None,
+        }
+    }
+
     /// Every lobe is a Dirac distribution (smooth conductor, smooth dielectric): nothing
     /// can connect to it.
     pub fn is_delta(&self) -> bool {

@@ -24,6 +24,7 @@ pub mod lt;
 #[cfg(feature = "lvcbpt")]
 pub mod lvcbpt;
 pub mod pt;
+mod pt_lanes;
 #[cfg(feature = "segments")]
 pub mod segment;
 #[cfg(feature = "spcbpt")]

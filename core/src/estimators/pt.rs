@@ -24,12 +24,12 @@ use crate::scene::Scene;
 use crate::segment::{CAMERA_KERNEL_KEY, Junctions, Kernel, start_cosine};
 use crate::spectrum::Rgb;
 use crate::transport::lanes::{self, Arrival, LaneProgram};
-use crate::transport::walk::{LastBounce, Layout, Leave, PathState, Roulette, Walk, light_origin, shadow_ray};
+use crate::transport::walk::{LastBounce, Layout, Leave, Moved, PathState, Roulette, Walk, light_origin, shadow_ray};
 use crate::transport::{Counters, RenderParams, SurfacePoint};
 
 /// PT's walk: radiance, 8 dimensions per bounce (light choice 1, light point 2, lobe 1,
 /// direction 2, roulette 1).
-const WALK: Walk = Walk { mode: TransportMode::Radiance, layout: Layout { per_bounce: 8, light: 0, lobe: 3, roulette: 6 } };
+pub(super) const WALK: Walk = Walk { mode: TransportMode::Radiance, layout: Layout { per_bounce: 8, light: 0, lobe: 3, roulette: 6 } };
 
 /// Render one sample for each pixel in `pixels` (index y·width + x) of pass `pass`
 /// into `out[i − pixels.start]`.
@@ -49,7 +49,14 @@ pub(crate) fn render_pixels_with_kernel<Q: RayQuery + ?Sized>(
     out: &mut [Rgb],
 ) -> Counters {
     let items = pixels.start..pixels.start.saturating_add(out.len() as u32).min(pixels.end);
-    let mut paths = CameraPaths { scene, tracer, params, kernel, pass, first: pixels.start, out, counters: Counters::default() };
+    let mut scratch;
+    let lanes = if tracer.batch_width() > 1 {
+        scratch = super::pt_lanes::Scratch::new();
+        Some(&mut scratch)
+    } else {
+        None
+    };
+    let mut paths = CameraPaths { scene, tracer, params, kernel, pass, first: pixels.start, out, counters: Counters::default(), lanes };
     lanes::run(&mut paths, tracer, items);
     paths.counters
 }
@@ -59,7 +66,7 @@ pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Render
     if !params.max_depth.allows(1) {
         return Rgb::ZERO;
     }
-    let mut paths = CameraPaths { scene, tracer, params, kernel: Kernel::Dirac, pass: 0, first: 0, out: &mut [], counters: Counters::default() };
+    let mut paths = CameraPaths { scene, tracer, params, kernel: Kernel::Dirac, pass: 0, first: 0, out: &mut [], counters: Counters::default(), lanes: None };
     let state = PathState::new(ray, Rgb::ONE, rng.dimension() + WALK.layout.per_bounce);
     let path = CameraPath { pixel: 0, rng: rng.clone(), junctions: None, state, l: Rgb::ZERO, pending: Rgb::ZERO };
     let path = lanes::run_one(&mut paths, tracer, path);
@@ -76,28 +83,30 @@ pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Render
 /// from a random stream of its own, so the walk's own random numbers keep PT's layout.
 /// What PT records per vertex: emission weighted against light sampling, and next-event
 /// estimation.
-struct CameraPaths<'a, Q: ?Sized> {
-    scene: &'a Scene,
-    tracer: &'a Q,
-    params: &'a RenderParams,
-    kernel: Kernel,
-    pass: u32,
+pub(super) struct CameraPaths<'a, Q: ?Sized> {
+    pub(super) scene: &'a Scene,
+    pub(super) tracer: &'a Q,
+    pub(super) params: &'a RenderParams,
+    pub(super) kernel: Kernel,
+    pub(super) pass: u32,
     /// The pixel of `out[0]`.
-    first: u32,
-    out: &'a mut [Rgb],
-    counters: Counters,
+    pub(super) first: u32,
+    pub(super) out: &'a mut [Rgb],
+    pub(super) counters: Counters,
+    /// Room for shading over lanes (`None`: one path at a time).
+    pub(super) lanes: Option<&'a mut super::pt_lanes::Scratch>,
 }
 
 /// One pixel's camera path in flight.
-struct CameraPath {
-    pixel: u32,
-    rng: SampleStream,
-    junctions: Option<Junctions>,
-    state: PathState,
+pub(super) struct CameraPath {
+    pub(super) pixel: u32,
+    pub(super) rng: SampleStream,
+    pub(super) junctions: Option<Junctions>,
+    pub(super) state: PathState,
     /// Radiance gathered so far.
-    l: Rgb,
+    pub(super) l: Rgb,
     /// β times the next-event sample waiting for its shadow ray.
-    pending: Rgb,
+    pub(super) pending: Rgb,
 }
 
 impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
@@ -127,8 +136,73 @@ impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
     }
 
     fn arrive(&mut self, path: &mut CameraPath, hit: Option<SurfaceHit>) -> Arrival {
+        match self.reach(path, hit) {
+            Reached::Done(arrival) => arrival,
+            Reached::Surface(v) => {
+                let material = v.sp.material(self.scene);
+                self.shade(path, &v, &material)
+            }
+        }
+    }
+
+    fn arrive_batch(&mut self, lanes: &mut [Option<CameraPath>], lane_of: &[u8], hits: &[Option<SurfaceHit>], arrivals: &mut [Arrival]) {
+        let Some(mut scratch) = self.lanes.take() else {
+            for (k, hit) in hits.iter().enumerate() {
+                let path = lanes[lane_of[k] as usize].as_mut().expect("a traced lane holds a path");
+                arrivals[k] = self.arrive(path, *hit);
+            }
+            return;
+        };
+        let batch = &mut scratch.batch;
+        batch.clear();
+        // Surfaces behind which a medium absorbs take the scalar steps.
+        let lanes_ok = self.scene.interiors.is_empty();
+        for (k, hit) in hits.iter().enumerate() {
+            let path = lanes[lane_of[k] as usize].as_mut().expect("a traced lane holds a path");
+            match self.reach(path, *hit) {
+                Reached::Done(arrival) => arrivals[k] = arrival,
+                Reached::Surface(v) => {
+                    let material = v.sp.material(self.scene);
+                    match material.lambertian() {
+                        Some((rho, two_sided)) if lanes_ok && v.moved.is_none() => batch.push(k as u8, &v.sp, rho, two_sided, path),
+                        _ => arrivals[k] = self.shade(path, &v, &material),
+                    }
+                }
+            }
+        }
+        if batch.len() > 0 {
+            super::pt_lanes::shade(self, &mut scratch, lanes, lane_of, arrivals);
+        }
+        self.lanes = Some(scratch);
+    }
+
+    fn leave(&mut self, path: &mut CameraPath, arrival: Arrival, occluded: Option<bool>) -> bool {
+        if occluded == Some(false) {
+            path.l += path.pending;
+        }
+        arrival.continues
+    }
+
+    fn finish(&mut self, path: CameraPath) {
+        // The film spreads the sample under the pixel filter (`render::Film`).
+        let value = self.counters.sanitize(path.l);
+        self.write(path.pixel, value);
+    }
+}
+
+impl<'a, Q: RayQuery + ?Sized> CameraPaths<'a, Q> {
+    fn write(&mut self, pixel: u32, value: Rgb) {
+        if let Some(slot) = self.out.get_mut(pixel.wrapping_sub(self.first) as usize) {
+            *slot = value;
+        }
+    }
+
+    /// The first half of an arrival: the emission found (or the sky), the medium
+    /// crossed, and where the next segment starts; `Done` if the path ends here.
+    #[inline(always)]
+    fn reach(&mut self, path: &mut CameraPath, hit: Option<SurfaceHit>) -> Reached {
         let (scene, params) = (self.scene, self.params);
-        let end = Arrival { shadow: None, continues: false };
+        let end = Reached::Done(Arrival { shadow: None, continues: false });
         let ray = path.state.ray;
         self.counters.rays += 1;
         let Some(hit) = hit else {
@@ -160,18 +234,24 @@ impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
         if !params.max_depth.allows(path.state.segments + 1) {
             return end;
         }
-        let material = sp.material(scene);
-
         // Start the next segment: at this vertex, or where the kernel puts it.
         let moved = WALK.junction(self.tracer, &mut path.state, &hit, path.junctions.as_mut(), &mut self.counters);
-        let start = moved.as_ref().map(|m| &m.at);
+        Reached::Surface(Vertex { sp, moved })
+    }
+
+    /// The second half: next-event estimation and the BSDF sample that continues the
+    /// path, one path at a time.
+    #[inline(always)]
+    fn shade(&mut self, path: &mut CameraPath, v: &Vertex, material: &Material) -> Arrival {
+        let sp = &v.sp;
+        let start = v.moved.as_ref().map(|m| &m.at);
 
         // Sample a light (next-event estimation) unless the BSDF is all Dirac; its
         // shadow ray is tested with the batch's.
         let wo_local = sp.frame.to_local(sp.wo);
         let mut shadow = None;
         if !material.is_delta() {
-            let at = Shading { sp: &sp, material: &material, wo_local, start };
+            let at = Shading { sp, material, wo_local, start };
             if let Some((ray, value)) = self.next_event(&path.state, &at, &mut path.rng) {
                 path.pending = path.state.beta * value;
                 shadow = Some(ray);
@@ -180,29 +260,8 @@ impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
 
         // Sample the BSDF to continue the path.
         let roulette = Roulette::Throughput { reference: 1.0 };
-        let continues = matches!(WALK.scatter(params, &mut path.state, &sp, wo_local, &material, start, roulette, &mut path.rng), Leave::Continues(_));
+        let continues = matches!(WALK.scatter(self.params, &mut path.state, sp, wo_local, material, start, roulette, &mut path.rng), Leave::Continues(_));
         Arrival { shadow, continues }
-    }
-
-    fn leave(&mut self, path: &mut CameraPath, arrival: Arrival, occluded: Option<bool>) -> bool {
-        if occluded == Some(false) {
-            path.l += path.pending;
-        }
-        arrival.continues
-    }
-
-    fn finish(&mut self, path: CameraPath) {
-        // The film spreads the sample under the pixel filter (`render::Film`).
-        let value = self.counters.sanitize(path.l);
-        self.write(path.pixel, value);
-    }
-}
-
-impl<Q: RayQuery + ?Sized> CameraPaths<'_, Q> {
-    fn write(&mut self, pixel: u32, value: Rgb) {
-        if let Some(slot) = self.out.get_mut(pixel.wrapping_sub(self.first) as usize) {
-            *slot = value;
-        }
     }
 
     /// One light sample from `at.sp` at the path's current bounce: choose a light ∝
@@ -252,6 +311,21 @@ fn emission_weight(params: &RenderParams, prev: Option<LastBounce>, light_pdf: i
         Some(p) if p.delta => 1.0,
         Some(p) => params.heuristic.weight(p.pdf, light_pdf()),
     }
+}
+
+/// What [`CameraPaths::reach`] leaves for shading.
+pub(super) enum Reached {
+    /// The path ends at this step: its arrival.
+    Done(Arrival),
+    /// It reached a surface it may continue from.
+    Surface(Vertex),
+}
+
+/// A surface a path reached: the shading point and where a segment kernel moved the
+/// next segment's start.
+pub(super) struct Vertex {
+    pub sp: SurfacePoint,
+    pub moved: Option<Moved>,
 }
 
 /// What next-event estimation needs of the vertex it starts from: the surface point,

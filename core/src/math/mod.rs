@@ -14,7 +14,7 @@
 pub use glam::{DVec3, Mat3, Mat4, Vec2, Vec3, Vec4};
 
 pub mod elementary;
-pub use elementary::{atan2, cos, exp, ln, powf, safe_acos, safe_asin, sin, sin_cos, sin_cos_small, sin_cos_turns, tan};
+pub use elementary::{atan2, cos, exp, ln, powf, safe_acos, safe_asin, sin, sin_cos, sin_cos_quarter, sin_cos_small, sin_cos_turns, tan};
 
 /// π as f32.
 pub const PI: f32 = core::f32::consts::PI;

@@ -83,6 +83,16 @@ pub trait LaneProgram {
     /// next direction; the shadow ray to test before the path leaves, if any.
     fn arrive(&mut self, path: &mut Self::Path, hit: Option<SurfaceHit>) -> Arrival;
 
+    /// [`Self::arrive`] for the traced lanes of one step at once: lane `lane_of[k]` of
+    /// `lanes` reached `hits[k]`, its arrival goes to `arrivals[k]`. A program that shades
+    /// over lanes overrides it; the default arrives lane by lane, in order.
+    fn arrive_batch(&mut self, lanes: &mut [Option<Self::Path>], lane_of: &[u8], hits: &[Option<SurfaceHit>], arrivals: &mut [Arrival]) {
+        for (k, hit) in hits.iter().enumerate() {
+            let path = lanes[lane_of[k] as usize].as_mut().expect("a traced lane holds a path");
+            arrivals[k] = self.arrive(path, *hit);
+        }
+    }
+
     /// The shadow ray asked by [`Self::arrive`] was `occluded` (`None` if none was
     /// asked). True if the path goes on.
     fn leave(&mut self, path: &mut Self::Path, arrival: Arrival, occluded: Option<bool>) -> bool;
@@ -215,18 +225,16 @@ pub fn run_with_width<P: LaneProgram, Q: RayQuery + ?Sized>(program: &mut P, tra
         tracer.intersect_batch(rays.batch(), &mut hits[..n]);
 
         // 3. Arrive; gather the shadow rays.
+        program.arrive_batch(&mut lanes[..width], &lane_of[..n], &hits[..n], &mut arrivals[..n]);
         shadows.len = 0;
         for k in 0..n {
-            let path = lanes[lane_of[k] as usize].as_mut().expect("a traced lane holds a path");
-            let arrival = program.arrive(path, hits[k]);
-            shadow_of[k] = match &arrival.shadow {
+            shadow_of[k] = match &arrivals[k].shadow {
                 Some(ray) => {
                     shadows.push(ray);
                     (shadows.len - 1) as u8
                 }
                 None => u8::MAX,
             };
-            arrivals[k] = arrival;
         }
 
         // 4. Test them.

@@ -113,7 +113,7 @@ impl PathState {
 
     /// The first dimension of the current bounce's block, plus `offset`.
     #[inline]
-    fn dimension(&self, layout: &Layout, offset: u32) -> u32 {
+    pub(crate) fn dimension(&self, layout: &Layout, offset: u32) -> u32 {
         self.dims.wrapping_add(self.segments.wrapping_sub(1).wrapping_mul(layout.per_bounce)).wrapping_add(offset)
     }
 }
