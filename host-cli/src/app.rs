@@ -257,6 +257,8 @@ pub struct RenderReport {
     pub seed: u64,
     /// The ray queries' instruction set.
     pub simd: ember_host::accel::Isa,
+    /// The lane kernels' level.
+    pub shading: ember_core::math::simd::Level,
     pub summary: RenderSummary,
     pub exr: PathBuf,
     /// The PNG beside the EXR (none for a partial image).
@@ -484,6 +486,7 @@ pub fn render(args: &RenderArgs, start: Instant, progress: bool, make: impl FnOn
         max_depth: built.max_depth,
         seed: args.seed,
         simd: built.simd,
+        shading: built.shading,
         summary,
         exr: exr.clone(),
         png: None,
@@ -633,8 +636,14 @@ impl fmt::Display for RenderReport {
         writeln!(f, "rendered   {} with {}, {}x{}, max depth {}, seed {}", self.scene, self.estimator, self.width, self.height, depth, self.seed)?;
         let setup = (s.total_seconds - s.render_seconds).max(0.0);
         writeln!(f, "time       {:.2} s ({:.2} s setup, {:.2} s rendering) on {} threads", s.total_seconds, setup, s.render_seconds, s.threads)?;
-        // The kernels' lanes; the path loop walks one path at a time (docs/lanes.md).
-        writeln!(f, "simd       {}, {} lanes (ray queries; one path at a time)", self.simd, self.simd.lanes())?;
+        // The traversal kernels' lanes, and PT's paths in flight for its lane shading
+        // (docs/lanes.md); the other estimators walk one path at a time.
+        let paths = ember_core::estimators::pt::lane_width(self.shading);
+        if self.estimator == "pt" && paths > 1 {
+            writeln!(f, "simd       {}, {} lanes (ray queries); {} shading, {paths} paths in flight", self.simd, self.simd.lanes(), self.shading.name())?;
+        } else {
+            writeln!(f, "simd       {}, {} lanes (ray queries; one path at a time)", self.simd, self.simd.lanes())?;
+        }
         writeln!(f, "passes     {} (samples per pixel)", s.passes)?;
         writeln!(f, "samples    {}samples/s ({}samples)", si(s.samples_per_second), si(s.stats.samples as f64))?;
         writeln!(f, "rays       {}rays/s ({}rays)", si(s.rays_per_second), si(s.stats.rays as f64))?;

@@ -55,7 +55,7 @@ impl CoreRenderer {
         threads: usize,
         model: Option<&Path>,
     ) -> Result<Self, String> {
-        let renderer = ember_host::setup::new_renderer(&prepared.scene, config, max_depth, seed)?;
+        let renderer = ember_host::setup::new_renderer(&prepared, config, max_depth, seed)?;
         let mut r = Self { prepared, renderer, config, setup_times: PhaseTimes::new(), setup_seconds: 0.0 };
         if let Some(path) = model {
             let camera = &r.prepared.scene.camera;
@@ -287,6 +287,8 @@ pub struct Built {
     pub max_depth: i32,
     /// The instruction set the ray queries run with (`--simd`, `EMBER_SIMD`).
     pub simd: ember_host::accel::Isa,
+    /// The level the lane kernels run with (the same option, else the widest set).
+    pub shading: ember_core::math::simd::Level,
     /// The scene file's sample count, used when neither --spp nor --time is given.
     pub file_spp: Option<u32>,
     /// Passes already rendered with this renderer's configuration and seed, which the

@@ -33,12 +33,17 @@ pub fn prepare_builtin(args: &RenderArgs) -> Result<PreparedScene, String> {
     Ok(prepared)
 }
 
-/// Set the ray queries' instruction set: `option` (`--simd`) if given, else the
-/// environment's `EMBER_SIMD`, else `Isa::best` (AVX2 where the machine has it)
-/// (`ember_host::accel::isa`). Images do not depend on it.
+/// Set the instruction sets: `option` (`--simd`) if given, else the environment's
+/// `EMBER_SIMD`, else, for the ray queries, `Isa::best` (AVX2 where the machine has it)
+/// and, for the lane kernels, the widest set (`ember_host::accel::isa`). Images do not
+/// depend on them.
 fn choose_simd(prepared: &mut PreparedScene, option: Option<&str>) -> Result<(), String> {
     let isa = ember_host::accel::Isa::select_with_env(option).map_err(|e| e.to_string())?;
-    prepared.accel.set_isa(isa).map_err(|e| e.to_string())
+    prepared.accel.set_isa(isa).map_err(|e| e.to_string())?;
+    // The lane kernels: the same set if one was named, else the widest (module `isa`).
+    let shading = ember_host::accel::Isa::select_shading_with_env(option).map_err(|e| e.to_string())?;
+    prepared.accel.set_shading_level(shading);
+    Ok(())
 }
 
 /// Load a Mitsuba 3 XML scene; `width`/`height` override the file's film.
@@ -95,6 +100,7 @@ pub fn make_built_at(args: &RenderArgs, start: Instant) -> Result<Built, String>
         scene: r.prepared.name.clone(),
         max_depth: r.renderer.params().max_depth.0,
         simd: r.prepared.accel.isa(),
+        shading: r.prepared.accel.shading_level(),
         file_spp: r.prepared.spp,
         renderer: Box::new(r),
         film,

@@ -108,7 +108,7 @@ impl Render {
             (plan.planned, plan.describe())
         };
         setup::check_memory(&prepared, &config, None).map_err(Error::Memory)?;
-        let mut renderer = setup::new_renderer(&prepared.scene, config, max_depth, request.seed).map_err(Error::Value)?;
+        let mut renderer = setup::new_renderer(&prepared, config, max_depth, request.seed).map_err(Error::Value)?;
         let setup_start = Instant::now();
         let ctx = Context { scene: &prepared.scene, tracer: &prepared.accel };
         driver::run_setup(&mut renderer, &ctx, threads, None).map_err(|e| Error::Runtime(e.to_string()))?;

@@ -292,6 +292,8 @@ pub struct AccelWith<B: TriangleBvh> {
     sphere_boxes: Vec<sphere::SphereBox>,
     sphere_ids: Vec<u32>,
     sphere_bvh: Option<Bvh2>,
+    /// The level the core's lane kernels run with on this machine ([`Isa::select_shading`]).
+    shading: ember_core::math::simd::Level,
 }
 
 impl<B: TriangleBvh> core::fmt::Debug for AccelWith<B> {
@@ -335,6 +337,19 @@ impl AccelWith<Wide> {
             Some(bvh) => bvh.set_isa(isa),
             None => Isa::from_name(isa.name()).map(drop),
         }
+    }
+}
+
+impl<B: TriangleBvh> AccelWith<B> {
+    /// The level the core's lane kernels run with ([`Isa::select_shading`]; by default the
+    /// widest set the machine offers): what a host puts in `RenderParams::simd`.
+    pub fn shading_level(&self) -> ember_core::math::simd::Level {
+        self.shading
+    }
+
+    /// Set [`Self::shading_level`] (images do not depend on it).
+    pub fn set_shading_level(&mut self, level: ember_core::math::simd::Level) {
+        self.shading = level;
     }
 }
 
@@ -388,7 +403,8 @@ impl<B: TriangleBvh> AccelWith<B> {
         };
         let spheres: Vec<Sphere> = sphere_ids.iter().map(|&i| geometry.spheres[i as usize]).collect();
         let sphere_boxes = spheres.iter().map(sphere::SphereBox::new).collect();
-        Self { bvh, tris, attrs, spheres, sphere_boxes, sphere_ids, sphere_bvh }
+        let shading = Isa::best_for_shading().shading_level();
+        Self { bvh, tris, attrs, spheres, sphere_boxes, sphere_ids, sphere_bvh, shading }
     }
 
     /// Number of triangles kept (degenerate ones dropped).
@@ -554,11 +570,6 @@ fn safe_direction(d: Vec3A) -> Vec3A {
 }
 
 impl<B: TriangleBvh> RayQuery for AccelWith<B> {
-    fn batch_width(&self) -> usize {
-        // SPIKE: measurement override.
-        std::env::var("EMBER_LANES").ok().and_then(|v| v.parse().ok()).unwrap_or(1)
-    }
-
     fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
         self.intersect_primitive(ray).map(|(h, _)| h)
     }

@@ -15,6 +15,7 @@
 //! command line spells it.
 
 use ember_core::estimators::{EstimatorConfig, Renderer};
+use ember_core::math::simd::Level;
 use ember_core::merge::RadiusRule;
 use ember_core::plan::{PilotStats, Plan, SceneFacts, pilot};
 use ember_core::render::Context;
@@ -55,8 +56,9 @@ pub fn check_seconds(v: f64, given: impl core::fmt::Display) -> Result<f64, Stri
 
 /// The render parameters every host uses: PT combines its two techniques with the power
 /// heuristic (as Mitsuba does); BDPT's weights are the balance heuristic by construction.
-pub fn render_params(max_depth: i32, seed: u64) -> RenderParams {
-    RenderParams { max_depth: MaxDepth(max_depth), seed, heuristic: Heuristic::Power, ..RenderParams::default() }
+/// `simd` is the level the lane kernels run with (`Accel::shading_level`).
+pub fn render_params(max_depth: i32, seed: u64, simd: Level) -> RenderParams {
+    RenderParams { max_depth: MaxDepth(max_depth), seed, heuristic: Heuristic::Power, simd, ..RenderParams::default() }
 }
 
 /// `config` validated, the message naming the estimator and the option (`bpf beta = -1
@@ -71,7 +73,7 @@ const PILOT_CHUNK: u32 = 256;
 
 /// Run `samples` pilot samples on `threads` threads (the counts do not depend on them).
 pub fn run_pilot(prepared: &PreparedScene, max_depth: i32, seed: u64, samples: u32, threads: usize) -> Result<PilotStats, String> {
-    let params = render_params(max_depth, seed);
+    let params = render_params(max_depth, seed, prepared.accel.shading_level());
     let ctx = Context { scene: &prepared.scene, tracer: &prepared.accel };
     let pool = crate::driver::thread_pool(threads, "ember-pilot").map_err(|e| e.to_string())?;
     let chunks = samples.div_ceil(PILOT_CHUNK);
@@ -147,10 +149,11 @@ pub fn check_memory(prepared: &PreparedScene, config: &EstimatorConfig, limit: O
     }
 }
 
-/// The core's renderer for `config` on `scene` with [`render_params`]; its setup phases
-/// are still to run.
-pub fn new_renderer(scene: &Scene, config: EstimatorConfig, max_depth: i32, seed: u64) -> Result<Renderer, String> {
-    Renderer::new(scene, render_params(max_depth, seed), config).map_err(|e| format!("{} {e}", config.kind()))
+/// The core's renderer for `config` on `prepared` with [`render_params`] (its lane
+/// kernels at the accelerator's shading level); its setup phases are still to run.
+pub fn new_renderer(prepared: &PreparedScene, config: EstimatorConfig, max_depth: i32, seed: u64) -> Result<Renderer, String> {
+    let params = render_params(max_depth, seed, prepared.accel.shading_level());
+    Renderer::new(&prepared.scene, params, config).map_err(|e| format!("{} {e}", config.kind()))
 }
 
 /// The kernel radius r₀ `renderer`'s setup chose, with the rule that chose it: the

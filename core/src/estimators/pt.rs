@@ -31,6 +31,12 @@ use crate::transport::{Counters, RenderParams, SurfacePoint};
 /// direction 2, roulette 1).
 pub(super) const WALK: Walk = Walk { mode: TransportMode::Radiance, layout: Layout { per_bounce: 8, light: 0, lobe: 3, roulette: 6 } };
 
+/// Paths PT keeps in flight when its lane kernels run at `level` (with a tracer that
+/// asks for one ray at a time): 16 on AVX2 and AVX-512, else 1 (see `pt_lanes`).
+pub fn lane_width(level: crate::math::simd::Level) -> usize {
+    super::pt_lanes::width(level)
+}
+
 /// Render one sample for each pixel in `pixels` (index y·width + x) of pass `pass`
 /// into `out[i − pixels.start]`.
 pub fn render_pixels<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &RenderParams, pass: u32, pixels: Range<u32>, out: &mut [Rgb]) -> Counters {
@@ -49,15 +55,20 @@ pub(crate) fn render_pixels_with_kernel<Q: RayQuery + ?Sized>(
     out: &mut [Rgb],
 ) -> Counters {
     let items = pixels.start..pixels.start.saturating_add(out.len() as u32).min(pixels.end);
+    // Paths in flight: what the tracer asks for, or more where the shading runs over
+    // SIMD lanes (`pt_lanes`).
+    // Only PT's own vertices shade over lanes (a segment kernel's moved starts do not).
+    let lanes_pay = if kernel == Kernel::Dirac { super::pt_lanes::width(params.simd) } else { 1 };
+    let width = tracer.batch_width().max(lanes_pay);
     let mut scratch;
-    let lanes = if tracer.batch_width() > 1 {
+    let lanes = if width > 1 {
         scratch = super::pt_lanes::Scratch::new();
         Some(&mut scratch)
     } else {
         None
     };
     let mut paths = CameraPaths { scene, tracer, params, kernel, pass, first: pixels.start, out, counters: Counters::default(), lanes };
-    lanes::run(&mut paths, tracer, items);
+    lanes::run_with_width(&mut paths, tracer, items, width);
     paths.counters
 }
 
@@ -269,6 +280,7 @@ impl<'a, Q: RayQuery + ?Sized> CameraPaths<'a, Q> {
     /// and the weighted contribution (without β) it carries if unoccluded. With a
     /// kernel-moved `start` (segment PT) the light is sampled from there, the BSDF is
     /// still the one of `sp` (eq. 6) and the cosine the one at `start`.
+    #[inline(always)]
     fn next_event(&mut self, path: &PathState, at: &Shading, rng: &mut SampleStream) -> Option<(Ray, Rgb)> {
         let (sp, start) = (at.sp, at.start);
         let from = start.unwrap_or(&sp.hit);

@@ -1,76 +1,106 @@
-//! PT's shading over lanes of paths: the vertices of one step of the lane loop that sit
-//! on Lambertian surfaces, shaded together in structure-of-arrays form.
+//! Path tracing's shading over lanes of paths: the vertices of one step of the lane
+//! loop that lie on Lambertian surfaces, shaded together.
 //!
-//! SPIKE: the same arithmetic as the scalar steps (`CameraPaths::shade`), phase by phase
-//! over the batch, so that the compiler can run each phase over SIMD lanes.
+//! # Why
+//!
+//! A path tracer that shades one vertex at a time spends about half its instructions
+//! outside the ray queries, spread thin over a light choice, a point on the light, a
+//! BSDF value and density, the MIS weight, a cosine-weighted direction, the frame,
+//! roulette and the ray offsets (docs/lanes.md). None of it depends on the other paths,
+//! so a batch of paths can do each part together: SIMD registers hold one quantity of
+//! 8 or 16 paths, and one instruction advances them all. Mitsuba 3 compiles its whole
+//! loop this way; here the lane loop ([`crate::transport::lanes`]) already keeps a batch
+//! of paths in flight, and this module shades the common case over it.
+//!
+//! # What runs over lanes
+//!
+//! `CameraPaths::arrive_batch` (in `pt.rs`) takes each traced lane through the scalar
+//! first half of an arrival (`reach`: emission found, the medium crossed, the depth
+//! cap, the kernel junction). A vertex whose material is Lambertian, with no segment
+//! kernel moving its next segment and no absorbing medium in the scene, joins the
+//! batch; any other takes the scalar second half (`shade`). The batch then runs, each
+//! phase a loop over the lanes in structure-of-arrays form ([`crate::math::soa`]):
+//!
+//! 1. **Prepare** (lanes): the shading frame, wo in it, the origin of the light sample
+//!    and the bounce's random numbers (the counter-based hash, [`uniform_at`]).
+//! 2. **Choose** (one lane at a time): the light ∝ power (an alias-table lookup), and
+//!    for a triangle light a copy of it into lane form ([`TriangleLanes`]); any other
+//!    light draws here with its own sampler.
+//! 3. **Draw** (lanes): the point on each triangle light, its solid-angle density and
+//!    radiance (`TriangleLight::sample_li`'s arithmetic).
+//! 4. **Evaluate** (lanes): next-event estimation's f |cos| L w / p_L and its shadow ray,
+//!    the Lambertian sample that continues the path (cosine-weighted, Malley's method)
+//!    and its throughput f |cos| / p.
+//! 5. **Leave** (one lane at a time): the pending sample and shadow ray, β, roulette and
+//!    the next ray, written back to each path.
+//!
+//! The lane phases are compiled for the instruction set the host chose ([`simd::run`]).
+//!
+//! # Same bits as one path at a time
+//!
+//! Each lane does the scalar code's operations in the scalar code's order: where the
+//! scalar code branches, the lane code computes both sides and selects
+//! ([`crate::math::soa::select3`]), which gives the taken side's bits; Rust never fuses a
+//! multiply and an add, and the elementary functions are the core's own at every width
+//! ([`crate::math::elementary`]). So the images are the same at every batch width and
+//! instruction set, bit for bit (`tests/tests/lane_widths.rs`), as the lane loop
+//! promises.
+//!
+//! Nothing here allocates: the scratch lives on the stack of `render_pixels`, once per
+//! range of pixels.
 
 use super::pt::{CameraPath, CameraPaths, WALK};
-use crate::geometry::{Ray, RayQuery, offset_ray_origin};
+use crate::geometry::{Ray, RayQuery, offset_ray_origin, spawn_ray, spawn_ray_to};
+use crate::light::TriangleLanes;
+use crate::math::simd::{self, Level, Set};
+use crate::math::soa::{LANES, Lane, Vec3s, select_rgb, select3};
 use crate::math::{Frame, INV_PI, Vec2, Vec3};
 use crate::rng::uniform_at;
 use crate::spectrum::Rgb;
-use crate::transport::SurfacePoint;
-use crate::transport::lanes::{Arrival, LANES};
-use crate::transport::survives_roulette;
+use crate::transport::lanes::Arrival;
 use crate::transport::walk::LastBounce;
+use crate::transport::{Heuristic, SurfacePoint, survives_roulette};
 
-type Lane = [f32; LANES];
-
-#[derive(Clone, Copy)]
-struct V3 {
-    x: Lane,
-    y: Lane,
-    z: Lane,
-}
-
-impl V3 {
-    const ZERO: Self = Self { x: [0.0; LANES], y: [0.0; LANES], z: [0.0; LANES] };
-    #[inline(always)]
-    fn get(&self, i: usize) -> Vec3 {
-        Vec3::new(self.x[i], self.y[i], self.z[i])
-    }
-    #[inline(always)]
-    fn set(&mut self, i: usize, v: Vec3) {
-        self.x[i] = v.x;
-        self.y[i] = v.y;
-        self.z[i] = v.z;
-    }
-    #[inline(always)]
-    fn get_rgb(&self, i: usize) -> Rgb {
-        Rgb::new(self.x[i], self.y[i], self.z[i])
-    }
-    #[inline(always)]
-    fn set_rgb(&mut self, i: usize, c: Rgb) {
-        self.x[i] = c.r;
-        self.y[i] = c.g;
-        self.z[i] = c.b;
+/// Paths PT keeps in flight for its lane kernels at `level`: 16 where AVX2 or AVX-512
+/// run them, else 1 (one path at a time, unless the tracer asks for more). Measured on
+/// the suite, one thread (docs/lanes.md): with the kernels on AVX-512, 16 paths ran the
+/// Cornell box 1.12× and window_env 1.15× as fast as one path at a time; with SSE2's
+/// four narrow lanes the batch cost more than it saved (0.88×).
+pub fn width(level: Level) -> usize {
+    match level.set() {
+        Set::Avx2 | Set::Avx512 => 16,
+        Set::Baseline => 1,
     }
 }
 
-/// The Lambertian vertices of one step.
+/// The Lambertian vertices of one step: what phase 1 needs of each.
 pub(super) struct Lambertian {
     len: usize,
+    /// The vertex's index among the step's traced lanes (its `arrivals` slot).
     slot: [u8; LANES],
-    p: V3,
-    ng: V3,
-    ns: V3,
-    wo: V3,
-    rho: V3,
+    p: Vec3s,
+    ng: Vec3s,
+    ns: Vec3s,
+    /// Unit world direction back along the arriving segment.
+    wo: Vec3s,
+    rho: Vec3s,
     two_sided: [bool; LANES],
+    /// The path's random stream ([`crate::rng::SampleStream::base`]) and the first
+    /// dimension of this bounce.
     base: [u64; LANES],
     dim: [u32; LANES],
 }
 
 impl Lambertian {
-    pub(super) fn new() -> Self {
+    fn new() -> Self {
         Self {
             len: 0,
             slot: [0; LANES],
-            p: V3::ZERO,
-            ng: V3::ZERO,
-            ns: V3::ZERO,
-            wo: V3::ZERO,
-            rho: V3::ZERO,
+            p: Vec3s::ZERO,
+            ng: Vec3s::ZERO,
+            ns: Vec3s::ZERO,
+            wo: Vec3s::ZERO,
+            rho: Vec3s::ZERO,
             two_sided: [false; LANES],
             base: [0; LANES],
             dim: [0; LANES],
@@ -85,6 +115,7 @@ impl Lambertian {
         self.len = 0;
     }
 
+    /// Add the vertex at `sp` of `path` (traced lane `slot`), of reflectance `rho`.
     #[inline(always)]
     pub(super) fn push(&mut self, slot: u8, sp: &SurfacePoint, rho: Rgb, two_sided: bool, path: &CameraPath) {
         let i = self.len;
@@ -101,80 +132,150 @@ impl Lambertian {
     }
 }
 
-/// Everything the lane shading keeps per step, allocated once per range of paths.
+/// Phase 1's results.
+struct Prepared {
+    s: Vec3s,
+    t: Vec3s,
+    /// wo in the shading frame.
+    wo: Vec3s,
+    /// Where the light sample is taken from (`walk::light_origin`).
+    origin: Vec3s,
+    /// The light choice, the point on the light (2), the direction (2).
+    u: [Lane; 5],
+}
+
+/// The light samples (phases 2 and 3).
+struct Drawn {
+    ok: [bool; LANES],
+    /// Lane's light is a triangle (drawn in phase 3) rather than drawn in phase 2.
+    triangle: [bool; LANES],
+    wi: Vec3s,
+    p: Vec3s,
+    n: Vec3s,
+    radiance: Vec3s,
+    dist: Lane,
+    pdf: Lane,
+    pmf: Lane,
+    delta: [bool; LANES],
+}
+
+/// Phase 4's results.
+struct Shaded {
+    /// Next-event estimation: f |cos| L w / p_L, and whether there is one.
+    nee: Vec3s,
+    nee_ok: [bool; LANES],
+    shadow_origin: Vec3s,
+    shadow_dir: Vec3s,
+    shadow_t: Lane,
+    /// The BSDF sample: world direction, throughput f |cos| / p, density, existence.
+    wi: Vec3s,
+    throughput: Vec3s,
+    pdf: Lane,
+    ok: [bool; LANES],
+}
+
+/// Everything the lane shading keeps, made once per range of pixels.
 pub(super) struct Scratch {
     pub(super) batch: Lambertian,
     pre: Prepared,
     drawn: Drawn,
+    triangles: TriangleLanes,
     shaded: Shaded,
 }
 
 impl Scratch {
     pub(super) fn new() -> Self {
-        Self { batch: Lambertian::new(), pre: Prepared::new(), drawn: Drawn::new(), shaded: Shaded::new() }
+        let zero = [0.0; LANES];
+        Self {
+            batch: Lambertian::new(),
+            pre: Prepared { s: Vec3s::ZERO, t: Vec3s::ZERO, wo: Vec3s::ZERO, origin: Vec3s::ZERO, u: [zero; 5] },
+            drawn: Drawn {
+                ok: [false; LANES],
+                triangle: [false; LANES],
+                wi: Vec3s::ZERO,
+                p: Vec3s::ZERO,
+                n: Vec3s::ZERO,
+                radiance: Vec3s::ZERO,
+                dist: zero,
+                pdf: zero,
+                pmf: zero,
+                delta: [false; LANES],
+            },
+            triangles: TriangleLanes::new(),
+            shaded: Shaded {
+                nee: Vec3s::ZERO,
+                nee_ok: [false; LANES],
+                shadow_origin: Vec3s::ZERO,
+                shadow_dir: Vec3s::ZERO,
+                shadow_t: zero,
+                wi: Vec3s::ZERO,
+                throughput: Vec3s::ZERO,
+                pdf: zero,
+                ok: [false; LANES],
+            },
+        }
     }
 }
 
-/// Shade the batch's vertices: next-event estimation and the BSDF sample, as
-/// `CameraPaths::shade` does one at a time.
-pub(super) fn shade<Q: RayQuery + ?Sized>(
-    paths: &mut CameraPaths<'_, Q>,
-    scratch: &mut Scratch,
-    lanes: &mut [Option<CameraPath>],
-    lane_of: &[u8],
-    arrivals: &mut [Arrival],
-) {
-    let Scratch { batch: b, pre, drawn: ls, shaded: out } = scratch;
+/// Shade the batch's vertices (see the module notes) and write each one's arrival.
+pub(super) fn shade<Q: RayQuery + ?Sized>(paths: &mut CameraPaths<'_, Q>, scratch: &mut Scratch, lanes: &mut [Option<CameraPath>], lane_of: &[u8], arrivals: &mut [Arrival]) {
+    let Scratch { batch: b, pre, drawn, triangles, shaded } = scratch;
     let n = b.len;
-    let layout = WALK.layout;
-    prepare(b, pre);
-    let (org, u) = (&pre.org, &pre.u);
+    let (scene, params) = (paths.scene, paths.params);
+    let isa = params.simd;
+    let groups = whole_groups(n);
 
-    // 2. The light draws, one lane at a time (a table lookup and the light's own sampler).
-    let scene = paths.scene;
-    ls.ok[..n].fill(false);
+    // 1. Frames, wo, origins, random numbers.
+    prepare(isa, b, pre, groups);
+
+    // 2. The light choices; triangle lights copied into lanes, any other light drawn.
+    drawn.ok = [false; LANES];
+    drawn.triangle = [false; LANES];
     if let Some(table) = scene.light_selection.as_ref() {
         for i in 0..n {
-            let chosen = table.sample(u[0][i]);
-            let Some(l) = scene.lights[chosen.index].sample_li(org.get(i), Vec2::new(u[1][i], u[2][i])) else { continue };
-            if !l.pdf.is_positive() || l.radiance.is_black() {
+            let chosen = table.sample(pre.u[0][i]);
+            drawn.pmf[i] = chosen.pmf;
+            let light = &scene.lights[chosen.index];
+            if light.set_triangle_lane(triangles, i) {
+                drawn.triangle[i] = true;
                 continue;
             }
-            ls.ok[i] = true;
-            ls.wi.set(i, l.wi);
-            ls.p.set(i, l.p);
-            ls.n.set(i, l.n);
-            ls.rad.set_rgb(i, l.radiance);
-            ls.dist[i] = l.dist;
-            ls.pdf[i] = l.pdf.0;
-            ls.pmf[i] = chosen.pmf;
-            ls.delta[i] = l.is_delta;
+            let Some(l) = light.sample_li(pre.origin.get(i), Vec2::new(pre.u[1][i], pre.u[2][i])) else { continue };
+            drawn.ok[i] = l.pdf.is_positive() && !l.radiance.is_black();
+            drawn.wi.set(i, l.wi);
+            drawn.p.set(i, l.p);
+            drawn.n.set(i, l.n);
+            drawn.radiance.set_rgb(i, l.radiance);
+            drawn.dist[i] = l.dist;
+            drawn.pdf[i] = l.pdf.0;
+            drawn.delta[i] = l.is_delta;
         }
     }
 
-    // 3. Next-event values and shadow rays; the BSDF samples.
-    evaluate(b, pre, ls, paths.params.heuristic, out);
-    let Shaded { nee, nee_ok, sh_o, sh_d, sh_t, bwi, bthr, bpdf, bok } = out;
+    // 3 and 4. The triangle lights' points; next-event values, shadow rays, BSDF samples.
+    draw_triangles(isa, triangles, pre, drawn, groups);
+    evaluate(isa, b, pre, drawn, params.heuristic, shaded, groups);
 
-    // 4. Back to the paths: the pending sample, β, roulette, the next ray.
-    let params = paths.params;
+    // 5. Back to the paths.
+    let layout = WALK.layout;
     for i in 0..n {
         let k = b.slot[i] as usize;
         let path = lanes[lane_of[k] as usize].as_mut().expect("a traced lane holds a path");
         let mut shadow = None;
-        if nee_ok[i] {
+        if shaded.nee_ok[i] {
             paths.counters.rays += 1;
-            path.pending = path.state.beta * nee.get_rgb(i);
-            shadow = Some(Ray { origin: sh_o.get(i), dir: sh_d.get(i), t_max: sh_t[i] });
+            path.pending = path.state.beta * shaded.nee.rgb(i);
+            shadow = Some(Ray { origin: shaded.shadow_origin.get(i), dir: shaded.shadow_dir.get(i), t_max: shaded.shadow_t[i] });
         }
+        // `Walk::scatter` with `Roulette::Throughput { reference: 1 }` from here on.
         let d0 = b.dim[i];
         let continues = 'scatter: {
             path.rng.set_dimension(d0.wrapping_add(layout.lobe + 3));
-            if !bok[i] {
+            if !shaded.ok[i] {
                 break 'scatter false;
             }
             let state = &mut path.state;
-            state.beta *= bthr.get_rgb(i);
+            state.beta *= shaded.throughput.rgb(i);
             if state.beta.is_black() || !state.beta.is_finite() {
                 break 'scatter false;
             }
@@ -183,9 +284,8 @@ pub(super) fn shade<Q: RayQuery + ?Sized>(
             if !survives_roulette(params, state.segments, &mut state.beta, 1.0, &mut path.rng) {
                 break 'scatter false;
             }
-            let (p, ng) = (b.p.get(i), b.ng.get(i));
-            state.ray = crate::geometry::spawn_ray(p, ng, bwi.get(i));
-            state.last = Some(LastBounce { origin: state.ray.origin, pdf: bpdf[i], delta: false });
+            state.ray = spawn_ray(b.p.get(i), b.ng.get(i), shaded.wi.get(i));
+            state.last = Some(LastBounce { origin: state.ray.origin, pdf: shaded.pdf[i], delta: false });
             true
         };
         arrivals[k] = Arrival { shadow, continues };
@@ -195,190 +295,121 @@ pub(super) fn shade<Q: RayQuery + ?Sized>(
 /// SIMD groups of lanes.
 const GROUP: usize = 8;
 
-/// `n` lanes rounded up to whole groups of [`GROUP`] (the lanes past `n` compute on
-/// stale data and are never read), and never past the batch.
+/// `n` lanes rounded up to whole groups of [`GROUP`]: the phases run that many, so that
+/// their loops have a length known at compile time ([`over_lanes`]); the lanes past `n`
+/// compute on stale values that nothing reads.
 #[inline(always)]
 fn whole_groups(n: usize) -> usize {
     n.next_multiple_of(GROUP).min(LANES)
 }
 
-/// `a` where `c`, else `b`, component by component (a select, never a branch).
-#[inline(always)]
-fn select3(c: bool, a: Vec3, b: Vec3) -> Vec3 {
-    Vec3::new(if c { a.x } else { b.x }, if c { a.y } else { b.y }, if c { a.z } else { b.z })
-}
-
-/// Phase 1's results per lane.
-struct Prepared {
-    s: V3,
-    t: V3,
-    wol: V3,
-    org: V3,
-    u: [Lane; 5],
-}
-
-impl Prepared {
-    fn new() -> Self {
-        Self { s: V3::ZERO, t: V3::ZERO, wol: V3::ZERO, org: V3::ZERO, u: [[0.0; LANES]; 5] }
-    }
-}
-
-/// The light samples per lane.
-struct Drawn {
-    ok: [bool; LANES],
-    wi: V3,
-    p: V3,
-    n: V3,
-    rad: V3,
-    dist: Lane,
-    pdf: Lane,
-    pmf: Lane,
-    delta: [bool; LANES],
-}
-
-impl Drawn {
-    fn new() -> Self {
-        Self {
-            ok: [false; LANES],
-            wi: V3::ZERO,
-            p: V3::ZERO,
-            n: V3::ZERO,
-            rad: V3::ZERO,
-            dist: [0.0; LANES],
-            pdf: [0.0; LANES],
-            pmf: [0.0; LANES],
-            delta: [false; LANES],
+/// Run `$body` for lanes `$i` in `0..$groups` (a multiple of [`GROUP`]), in a loop of
+/// constant length, which the compiler runs over SIMD registers (a loop of run-time
+/// length stayed scalar). A macro, not a function taking a closure: a closure reaches
+/// the phase's arrays through its captures, which hides from the compiler that they do
+/// not overlap, and the loop stayed scalar too.
+macro_rules! over_lanes {
+    ($groups:expr, |$i:ident| $body:block) => {
+        match $groups {
+            0 => {}
+            8 => for $i in 0..8 $body,
+            16 => for $i in 0..16 $body,
+            24 => for $i in 0..24 $body,
+            _ => for $i in 0..LANES $body,
         }
-    }
+    };
 }
 
-/// Phase 3's results per lane.
-struct Shaded {
-    nee: V3,
-    nee_ok: [bool; LANES],
-    sh_o: V3,
-    sh_d: V3,
-    sh_t: Lane,
-    bwi: V3,
-    bthr: V3,
-    bpdf: Lane,
-    bok: [bool; LANES],
-}
-
-impl Shaded {
-    fn new() -> Self {
-        Self {
-            nee: V3::ZERO,
-            nee_ok: [false; LANES],
-            sh_o: V3::ZERO,
-            sh_d: V3::ZERO,
-            sh_t: [0.0; LANES],
-            bwi: V3::ZERO,
-            bthr: V3::ZERO,
-            bpdf: [0.0; LANES],
-            bok: [false; LANES],
-        }
-    }
-}
-
-/// Phase 1: frames, local wo, the light samples' origin, the random numbers.
-fn prepare(b: &Lambertian, out: &mut Prepared) {
-    match whole_groups(b.len) {
-        8 => prepare_n::<8>(b, out),
-        16 => prepare_n::<16>(b, out),
-        24 => prepare_n::<24>(b, out),
-        _ => prepare_n::<LANES>(b, out),
-    }
-}
-
-#[inline(never)]
-fn prepare_n<const N: usize>(b: &Lambertian, out: &mut Prepared) {
-    for i in 0..N {
-        prepare_lane(b, out, i);
-    }
-}
-
-#[inline(always)]
-fn prepare_lane(b: &Lambertian, out: &mut Prepared, i: usize) {
+simd::kernel! {
+/// Phase 1 (see the module notes).
+fn prepare(isa, b: &Lambertian, out: &mut Prepared, groups: usize) {
     let layout = WALK.layout;
-    let ns = b.ns.get(i);
-    let frame = Frame::from_normal(ns);
-    out.s.set(i, frame.s);
-    out.t.set(i, frame.t);
-    let wo = b.wo.get(i);
-    out.wol.set(i, frame.to_local(wo));
-    let (p, ng) = (b.p.get(i), b.ng.get(i));
-    let side = if ng.dot(wo) >= 0.0 { ng } else { -ng };
-    out.org.set(i, offset_ray_origin(p, side));
-    let (base, d) = (b.base[i], b.dim[i]);
-    out.u[0][i] = uniform_at(base, d.wrapping_add(layout.light));
-    out.u[1][i] = uniform_at(base, d.wrapping_add(layout.light + 1));
-    out.u[2][i] = uniform_at(base, d.wrapping_add(layout.light + 2));
-    out.u[3][i] = uniform_at(base, d.wrapping_add(layout.lobe + 1));
-    out.u[4][i] = uniform_at(base, d.wrapping_add(layout.lobe + 2));
+    over_lanes!(groups, |i| {
+        let frame = Frame::from_normal(b.ns.get(i));
+        out.s.set(i, frame.s);
+        out.t.set(i, frame.t);
+        let wo = b.wo.get(i);
+        out.wo.set(i, frame.to_local(wo));
+        // `walk::light_origin`: where rays toward wo's side start.
+        let (p, ng) = (b.p.get(i), b.ng.get(i));
+        out.origin.set(i, offset_ray_origin(p, select3(ng.dot(wo) >= 0.0, ng, -ng)));
+        let (base, d) = (b.base[i], b.dim[i]);
+        out.u[0][i] = uniform_at(base, d.wrapping_add(layout.light));
+        out.u[1][i] = uniform_at(base, d.wrapping_add(layout.light + 1));
+        out.u[2][i] = uniform_at(base, d.wrapping_add(layout.light + 2));
+        out.u[3][i] = uniform_at(base, d.wrapping_add(layout.lobe + 1));
+        out.u[4][i] = uniform_at(base, d.wrapping_add(layout.lobe + 2));
+    });
+}
 }
 
-/// Phase 3: next-event values and shadow rays, the BSDF samples.
-fn evaluate(b: &Lambertian, pre: &Prepared, ls: &Drawn, heuristic: crate::transport::Heuristic, out: &mut Shaded) {
-    match whole_groups(b.len) {
-        8 => evaluate_n::<8>(b, pre, ls, heuristic, out),
-        16 => evaluate_n::<16>(b, pre, ls, heuristic, out),
-        24 => evaluate_n::<24>(b, pre, ls, heuristic, out),
-        _ => evaluate_n::<LANES>(b, pre, ls, heuristic, out),
-    }
+simd::kernel! {
+/// Phase 3: the lanes whose light is a triangle draw their point on it.
+fn draw_triangles(isa, triangles: &TriangleLanes, pre: &Prepared, out: &mut Drawn, groups: usize) {
+    over_lanes!(groups, |i| {
+        let (l, exists) = triangles.sample_li(i, pre.origin.get(i), Vec2::new(pre.u[1][i], pre.u[2][i]));
+        let t = out.triangle[i];
+        // `Walk::draw_light`'s test: a positive density and some radiance.
+        out.ok[i] = if t { exists && !l.radiance.is_black() } else { out.ok[i] };
+        out.wi.set(i, select3(t, l.wi, out.wi.get(i)));
+        out.p.set(i, select3(t, l.p, out.p.get(i)));
+        out.n.set(i, select3(t, l.n, out.n.get(i)));
+        out.radiance.set_rgb(i, select_rgb(t, l.radiance, out.radiance.rgb(i)));
+        out.dist[i] = if t { l.dist } else { out.dist[i] };
+        out.pdf[i] = if t { l.pdf.0 } else { out.pdf[i] };
+        out.delta[i] = if t { false } else { out.delta[i] };
+    });
+}
 }
 
-#[inline(never)]
-fn evaluate_n<const N: usize>(b: &Lambertian, pre: &Prepared, ls: &Drawn, heuristic: crate::transport::Heuristic, out: &mut Shaded) {
-    for i in 0..N {
-        evaluate_lane(b, pre, ls, heuristic, out, i);
-    }
+simd::kernel! {
+/// Phase 4: `CameraPaths::next_event` and `Material::sample` of a Lambertian lobe, with
+/// `Walk::scatter`'s throughput (radiance: no shading-normal correction).
+fn evaluate(isa, b: &Lambertian, pre: &Prepared, ls: &Drawn, heuristic: Heuristic, out: &mut Shaded, groups: usize) {
+    over_lanes!(groups, |i| {
+        let frame = Frame { s: pre.s.get(i), t: pre.t.get(i), n: b.ns.get(i) };
+        let wo = pre.wo.get(i);
+        let rho = b.rho.rgb(i);
+        // A two-sided material seen from the back is its front, mirrored (`Material`).
+        let mirrored = b.two_sided[i] & (wo.z < 0.0);
+        let wo_z = if mirrored { -wo.z } else { wo.z };
+        let (p, ng) = (b.p.get(i), b.ng.get(i));
+
+        // Next-event estimation: f and p_B at the light's direction.
+        let wi_world = ls.wi.get(i);
+        let wi_local = frame.to_local(wi_world);
+        let wi_z = if mirrored { -wi_local.z } else { wi_local.z };
+        let above = (wo_z > 0.0) & (wi_z > 0.0);
+        let f = select_rgb(above, rho * INV_PI, Rgb::ZERO);
+        let f = select_rgb(f.is_finite(), f, Rgb::ZERO);
+        let pdf = if above { wi_z.max(0.0) * INV_PI } else { 0.0 };
+        let pdf = if pdf.is_finite() & (pdf >= 0.0) { pdf } else { 0.0 };
+        let delta = ls.delta[i];
+        out.nee_ok[i] = ls.ok[i] & !f.is_black();
+        let f = f * wi_local.z.abs();
+        let light_pdf = ls.pmf[i] * ls.pdf[i];
+        let w = if delta { 1.0 } else { heuristic.weight(light_pdf, if delta { 0.0 } else { pdf }) };
+        out.nee.set_rgb(i, f * ls.radiance.rgb(i) * (w / light_pdf));
+        // `walk::shadow_ray`: to the point on a light at a finite distance, else along wi.
+        let finite = ls.dist[i].is_finite();
+        let to_point = spawn_ray_to(p, ng, ls.p.get(i), ls.n.get(i));
+        let along = spawn_ray(p, ng, wi_world);
+        out.shadow_origin.set(i, select3(finite, to_point.origin, along.origin));
+        out.shadow_dir.set(i, select3(finite, to_point.dir, along.dir));
+        out.shadow_t[i] = if finite { to_point.t_max } else { along.t_max };
+
+        // The BSDF sample (`Material::sample`, `Diffuse::sample`).
+        let wo_ok = (wo_z.abs() >= f32::MIN_POSITIVE) & wo.is_finite() & (wo_z > 0.0);
+        let d = crate::warp::sample_cosine_hemisphere(Vec2::new(pre.u[3][i], pre.u[4][i]));
+        let up = (wo_z > 0.0) & (d.z > 0.0);
+        let pdf = if up { d.z.max(0.0) * INV_PI } else { 0.0 };
+        let f = select_rgb(up, rho * INV_PI, Rgb::ZERO);
+        let pdf_rev = if up { wo_z.max(0.0) * INV_PI } else { 0.0 };
+        out.ok[i] = wo_ok & (pdf > 0.0) & f.is_finite() & pdf.is_finite() & pdf_rev.is_finite();
+        let wi = Vec3::new(d.x, d.y, if mirrored { -d.z } else { d.z });
+        out.wi.set(i, frame.to_world(wi));
+        out.pdf[i] = pdf;
+        out.throughput.set_rgb(i, f * (wi.z.abs() / pdf));
+    });
 }
-
-#[inline(always)]
-fn evaluate_lane(b: &Lambertian, pre: &Prepared, ls: &Drawn, heuristic: crate::transport::Heuristic, out: &mut Shaded, i: usize) {
-    let frame = Frame { s: pre.s.get(i), t: pre.t.get(i), n: b.ns.get(i) };
-    let wo = pre.wol.get(i);
-    let rho = b.rho.get_rgb(i);
-    let mirrored = b.two_sided[i] && wo.z < 0.0;
-    let wo_m = if mirrored { Vec3::new(wo.x, wo.y, -wo.z) } else { wo };
-    let (p, ng) = (b.p.get(i), b.ng.get(i));
-
-    // Next-event estimation (`CameraPaths::next_event`).
-    let wi_world = ls.wi.get(i);
-    let wi_local = frame.to_local(wi_world);
-    let wi_mz = if mirrored { -wi_local.z } else { wi_local.z };
-    let above = wo_m.z > 0.0 && wi_mz > 0.0;
-    let f0 = if above { rho * INV_PI } else { Rgb::ZERO };
-    let f0 = if f0.is_finite() { f0 } else { Rgb::ZERO };
-    let pdf = if above { wi_mz.max(0.0) * INV_PI } else { 0.0 };
-    let pdf = if pdf.is_finite() && pdf >= 0.0 { pdf } else { 0.0 };
-    let bsdf_pdf = if ls.delta[i] { 0.0 } else { pdf };
-    out.nee_ok[i] = ls.ok[i] && !f0.is_black();
-    let f = f0 * wi_local.z.abs();
-    let light_pdf = ls.pmf[i] * ls.pdf[i];
-    let w = if ls.delta[i] { 1.0 } else { heuristic.weight(light_pdf, bsdf_pdf) };
-    out.nee.set_rgb(i, f * ls.rad.get_rgb(i) * (w / light_pdf));
-    // `shadow_ray`: to the point on a light at a finite distance, else along the direction.
-    let to_point = crate::geometry::spawn_ray_to(p, ng, ls.p.get(i), ls.n.get(i));
-    let along = crate::geometry::spawn_ray(p, ng, wi_world);
-    let finite = ls.dist[i].is_finite();
-    out.sh_o.set(i, select3(finite, to_point.origin, along.origin));
-    out.sh_d.set(i, select3(finite, to_point.dir, along.dir));
-    out.sh_t[i] = if finite { to_point.t_max } else { along.t_max };
-
-    // The BSDF sample (`Material::sample` of a Lambertian lobe).
-    let valid_wo = wo_m.z.abs() >= f32::MIN_POSITIVE && wo_m.is_finite() && wo_m.z > 0.0;
-    let d = crate::warp::sample_cosine_hemisphere(Vec2::new(pre.u[3][i], pre.u[4][i]));
-    let up = wo_m.z > 0.0 && d.z > 0.0;
-    let spdf = if up { d.z.max(0.0) * INV_PI } else { 0.0 };
-    let sf = if up { rho * INV_PI } else { Rgb::ZERO };
-    let srev = if up { wo_m.z.max(0.0) * INV_PI } else { 0.0 };
-    out.bok[i] = valid_wo && spdf > 0.0 && sf.is_finite() && spdf.is_finite() && srev.is_finite();
-    let wi_s = if mirrored { Vec3::new(d.x, d.y, -d.z) } else { d };
-    out.bwi.set(i, frame.to_world(wi_s));
-    out.bpdf[i] = spdf;
-    out.bthr.set_rgb(i, sf * (wi_s.z.abs() / spdf));
 }
-// t
-// t

@@ -33,6 +33,7 @@ mod infinite;
 mod point;
 mod sphere;
 mod triangle;
+pub(crate) use triangle::TriangleLanes;
 
 use crate::math::{Bounds3, Vec2, Vec3};
 use crate::measure::{AreaPdf, SolidAnglePdf};
@@ -163,6 +164,19 @@ impl Light {
             Kind::Environment(l) => l.disk.set(center, radius),
             Kind::EnvMap(l) => l.disk.set(center, radius),
             _ => {}
+        }
+    }
+
+    /// If this is a triangle light, copy it into lane `i` of `lanes` (true); else false.
+    /// The lane shading draws from triangle lights over SIMD lanes ([`TriangleLanes`]).
+    #[inline]
+    pub(crate) fn set_triangle_lane(&self, lanes: &mut TriangleLanes, i: usize) -> bool {
+        match &self.kind {
+            Kind::Triangle(l) => {
+                lanes.set(i, l);
+                true
+            }
+            _ => false,
         }
     }
 

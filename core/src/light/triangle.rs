@@ -7,6 +7,7 @@
 //! [·½] (pbrt-v4 `DiffuseAreaLight::SampleLe`).
 
 use super::{EmissionSample, LightSample, finite_or_zero};
+use crate::math::soa::{LANES, Lane, Vec3s, select_rgb};
 use crate::math::{Bounds3, Frame, PI, Vec2, Vec3, sqrt};
 use crate::measure::{AreaPdf, SolidAnglePdf};
 use crate::spectrum::Rgb;
@@ -56,33 +57,37 @@ impl TriangleLight {
     }
 
     /// Radiance leaving the triangle toward `w`.
-    #[inline]
+    #[inline(always)]
     pub(super) fn radiance(&self, w: Vec3) -> Rgb {
         let c = self.n.dot(w);
-        if c > 0.0 || (self.two_sided && c < 0.0) { self.radiance } else { Rgb::ZERO }
+        select_rgb((c > 0.0) | (self.two_sided & (c < 0.0)), self.radiance, Rgb::ZERO)
     }
 
     /// Uniform point on the area, converted to solid angle at `p_ref` by [`Self::pdf_li`].
+    #[inline]
     pub(super) fn sample_li(&self, p_ref: Vec3, u: Vec2) -> Option<LightSample> {
-        if self.area <= 0.0 {
-            return None;
-        }
+        let (sample, ok) = self.sample_li_lane(p_ref, u);
+        ok.then_some(sample)
+    }
+
+    /// [`Self::sample_li`] without branches: the sample and whether it exists (false for a
+    /// degenerate triangle, a reference point on the light, a grazing direction). Every
+    /// quantity is computed either way, so lanes of paths draw together
+    /// ([`TriangleLanes`]); where it exists, the sample has `sample_li`'s bits.
+    #[inline(always)]
+    fn sample_li_lane(&self, p_ref: Vec3, u: Vec2) -> (LightSample, bool) {
         let p = self.point(warp::sample_uniform_triangle(u));
         let d = p - p_ref;
         let dist2 = d.length_squared();
-        if dist2 <= 0.0 {
-            return None;
-        }
         let dist = sqrt(dist2);
         let wi = d / dist;
         let pdf = self.pdf_li(p_ref, wi, p);
-        if !pdf.is_positive() {
-            return None;
-        }
-        Some(LightSample { wi, dist, p, n: self.n, radiance: self.radiance(-wi), pdf, is_delta: false })
+        let ok = self.area > 0.0 && dist2 > 0.0 && pdf.is_positive();
+        (LightSample { wi, dist, p, n: self.n, radiance: self.radiance(-wi), pdf, is_delta: false }, ok)
     }
 
     /// p_ω = (1/A) · d² / |n·wi|; 0 when the direction grazes the plane.
+    #[inline(always)]
     pub(super) fn pdf_li(&self, p_ref: Vec3, wi: Vec3, p_light: Vec3) -> SolidAnglePdf {
         let dist2 = (p_light - p_ref).length_squared();
         finite_or_zero(warp::uniform_triangle_pdf(self.area).to_solid_angle(self.n.dot(wi), dist2))
@@ -129,5 +134,53 @@ impl TriangleLight {
     pub(super) fn power(&self) -> f32 {
         let sides = if self.two_sided { 2.0 } else { 1.0 };
         sides * PI * self.area * self.radiance.average()
+    }
+}
+
+/// Triangle lights chosen by lanes of paths, one per lane, in structure-of-arrays form:
+/// [`Self::set`] copies lane `i`'s light in, [`Self::sample_li`] draws from it with
+/// `TriangleLight::sample_li`'s arithmetic. The copy is the gather (one light per lane,
+/// anywhere in the scene's list); the draw is what runs over SIMD lanes.
+#[derive(Clone, Debug)]
+pub(crate) struct TriangleLanes {
+    p0: Vec3s,
+    p1: Vec3s,
+    p2: Vec3s,
+    n: Vec3s,
+    area: Lane,
+    radiance: Vec3s,
+    two_sided: [bool; LANES],
+}
+
+impl TriangleLanes {
+    pub(crate) fn new() -> Self {
+        Self { p0: Vec3s::ZERO, p1: Vec3s::ZERO, p2: Vec3s::ZERO, n: Vec3s::ZERO, area: [0.0; LANES], radiance: Vec3s::ZERO, two_sided: [false; LANES] }
+    }
+
+    #[inline(always)]
+    pub(super) fn set(&mut self, i: usize, l: &TriangleLight) {
+        self.p0.set(i, l.p0);
+        self.p1.set(i, l.p1);
+        self.p2.set(i, l.p2);
+        self.n.set(i, l.n);
+        self.area[i] = l.area;
+        self.radiance.set_rgb(i, l.radiance);
+        self.two_sided[i] = l.two_sided;
+    }
+
+    /// Lane `i`'s draw from `p_ref`: `TriangleLight::sample_li` of its light, and whether
+    /// it exists.
+    #[inline(always)]
+    pub(crate) fn sample_li(&self, i: usize, p_ref: Vec3, u: Vec2) -> (LightSample, bool) {
+        let light = TriangleLight {
+            p0: self.p0.get(i),
+            p1: self.p1.get(i),
+            p2: self.p2.get(i),
+            n: self.n.get(i),
+            area: self.area[i],
+            radiance: self.radiance.rgb(i),
+            two_sided: self.two_sided[i],
+        };
+        light.sample_li_lane(p_ref, u)
     }
 }

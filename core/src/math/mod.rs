@@ -14,6 +14,8 @@
 pub use glam::{DVec3, Mat3, Mat4, Vec2, Vec3, Vec4};
 
 pub mod elementary;
+pub mod simd;
+pub mod soa;
 pub use elementary::{atan2, cos, exp, ln, powf, safe_acos, safe_asin, sin, sin_cos, sin_cos_quarter, sin_cos_small, sin_cos_turns, tan};
 
 /// π as f32.
@@ -44,7 +46,7 @@ pub fn round(x: f32) -> f32 {
 #[inline]
 pub fn sqrt(x: f32) -> f32 {
     #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-    return sse::sqrt(x);
+    return simd::sqrt(x);
     #[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
     libm::sqrtf(x)
 }
@@ -57,31 +59,9 @@ pub fn safe_sqrt(x: f32) -> f32 {
 #[inline]
 pub fn sqrt_f64(x: f64) -> f64 {
     #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-    return sse::sqrt_f64(x);
+    return simd::sqrt_f64(x);
     #[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
     libm::sqrt(x)
-}
-
-/// The core's only `unsafe`: SSE2's square roots as intrinsics, compiled where the target
-/// enables SSE2 (every x86-64 target with floating-point registers). Calling a
-/// `#[target_feature]` function needs `unsafe` even where the build enables the feature.
-#[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-#[allow(unsafe_code)]
-mod sse {
-    use core::arch::x86_64::{_mm_cvtsd_f64, _mm_cvtss_f32, _mm_set_sd, _mm_set_ss, _mm_sqrt_sd, _mm_sqrt_ss};
-
-    #[inline(always)]
-    pub(super) fn sqrt(x: f32) -> f32 {
-        // SAFETY: the build enables SSE2 (the module's cfg), so the CPU has it; the
-        // intrinsics read and write only their register arguments.
-        unsafe { _mm_cvtss_f32(_mm_sqrt_ss(_mm_set_ss(x))) }
-    }
-
-    #[inline(always)]
-    pub(super) fn sqrt_f64(x: f64) -> f64 {
-        // SAFETY: as for `sqrt`.
-        unsafe { _mm_cvtsd_f64(_mm_sqrt_sd(_mm_set_sd(x), _mm_set_sd(x))) }
-    }
 }
 
 #[inline]

@@ -65,7 +65,7 @@ use core::ops::Range;
 use crate::geometry::{Ray, RayBatch, RayQuery, SurfaceHit};
 
 /// Paths in flight per batch.
-pub const LANES: usize = 32;
+pub use crate::math::soa::LANES;
 
 /// What a path does at each step of the lane loop (see the module notes).
 pub trait LaneProgram {

@@ -66,11 +66,14 @@ pub struct RenderParams {
     /// Surfaces a path meets before Russian roulette may end it (Mitsuba's `rr_depth`,
     /// 5; with 1, a path may end after the first surface it meets).
     pub rr_depth: u32,
+    /// The instruction set lane kernels are compiled for (the host's choice for this
+    /// machine; the images are the same at every level).
+    pub simd: crate::math::simd::Level,
 }
 
 impl Default for RenderParams {
     fn default() -> Self {
-        Self { max_depth: MaxDepth::UNBOUNDED, seed: 0, heuristic: Heuristic::Balance, rr_depth: 5 }
+        Self { max_depth: MaxDepth::UNBOUNDED, seed: 0, heuristic: Heuristic::Balance, rr_depth: 5, simd: crate::math::simd::Level::BASELINE }
     }
 }
 

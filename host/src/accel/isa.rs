@@ -157,6 +157,44 @@ impl Isa {
         }
     }
 
+    /// The level the core's lane kernels (PT's shading over lanes of paths,
+    /// `ember_core::math::simd`) run with for this set: AVX2 and AVX-512 where the machine
+    /// offers them, the build's baseline for every other set.
+    pub fn shading_level(self) -> ember_core::math::simd::Level {
+        use ember_core::math::simd::{Level, Set};
+        match self {
+            // SAFETY: `is_available` detected the set on this machine.
+            Isa::Avx2 if self.is_available() => unsafe { Level::assume(Set::Avx2) },
+            // SAFETY: as above.
+            Isa::Avx512 if self.is_available() => unsafe { Level::assume(Set::Avx512) },
+            _ => Level::BASELINE,
+        }
+    }
+
+    /// The set the lane kernels use unless one is asked for: the widest. Unlike the
+    /// traversal's four-lane kernels ([`Isa::best`]), they fill whatever the registers
+    /// hold: PT on the Cornell box ran 1.12× as fast with its lanes on AVX-512 as on
+    /// AVX2 (docs/lanes.md).
+    pub fn best_for_shading() -> Isa {
+        const PREFERENCE: [Isa; 6] = [Isa::Avx512, Isa::Avx2, Isa::Sse, Isa::Neon, Isa::Simd128, Isa::Scalar];
+        PREFERENCE.into_iter().find(|i| i.is_available()).expect("every target offers its baseline")
+    }
+
+    /// The lane kernels' level: the set `option` (`--simd`) or else `env` (`EMBER_SIMD`)
+    /// names, as [`Isa::select`] (so a forced set applies to queries and shading alike),
+    /// else [`Isa::best_for_shading`]'s.
+    pub fn select_shading(option: Option<&str>, env: Option<&str>) -> Result<ember_core::math::simd::Level, IsaError> {
+        let forced = option.is_some() || env.is_some_and(|e| !e.is_empty());
+        let isa = if forced { Self::select(option, env)? } else { Self::best_for_shading() };
+        Ok(isa.shading_level())
+    }
+
+    /// [`Isa::select_shading`] with the environment's `EMBER_SIMD`.
+    pub fn select_shading_with_env(option: Option<&str>) -> Result<ember_core::math::simd::Level, IsaError> {
+        let env = std::env::var("EMBER_SIMD").ok();
+        Self::select_shading(option, env.as_deref())
+    }
+
     /// [`Isa::select`] with the environment's `EMBER_SIMD` (what every host reads).
     pub fn select_with_env(option: Option<&str>) -> Result<Isa, IsaError> {
         let env = std::env::var("EMBER_SIMD").ok();

@@ -1,0 +1,70 @@
+//! Lanes of paths in structure-of-arrays form: one array per component, indexed by lane.
+//!
+//! The lane loop (`transport::lanes`) keeps up to [`LANES`] paths in flight. Code that
+//! shades them together stores each quantity as a [`Lane`] of floats (or a [`Vec3s`] of
+//! three), and writes each phase as a loop over the lanes whose body is the scalar
+//! arithmetic of one lane: straight-line code, with `if`s that pick between two values
+//! already computed (selects) rather than branches. The compiler then runs the loop over
+//! SIMD registers, and every lane gets the bits the scalar code gives it (Rust never
+//! fuses a multiply and an add, and each lane does the same operations in the same
+//! order).
+
+use crate::math::Vec3;
+use crate::spectrum::Rgb;
+
+/// Paths in flight per batch of the lane loop.
+pub const LANES: usize = 32;
+
+/// One float per lane.
+pub type Lane = [f32; LANES];
+
+/// A vector (or an RGB triple) per lane, one array per component.
+#[derive(Clone, Copy, Debug)]
+pub struct Vec3s {
+    pub x: Lane,
+    pub y: Lane,
+    pub z: Lane,
+}
+
+impl Vec3s {
+    pub const ZERO: Self = Self { x: [0.0; LANES], y: [0.0; LANES], z: [0.0; LANES] };
+
+    /// Lane `i`'s vector.
+    #[inline(always)]
+    pub fn get(&self, i: usize) -> Vec3 {
+        Vec3::new(self.x[i], self.y[i], self.z[i])
+    }
+
+    #[inline(always)]
+    pub fn set(&mut self, i: usize, v: Vec3) {
+        self.x[i] = v.x;
+        self.y[i] = v.y;
+        self.z[i] = v.z;
+    }
+
+    /// Lane `i` read as a colour.
+    #[inline(always)]
+    pub fn rgb(&self, i: usize) -> Rgb {
+        Rgb::new(self.x[i], self.y[i], self.z[i])
+    }
+
+    #[inline(always)]
+    pub fn set_rgb(&mut self, i: usize, c: Rgb) {
+        self.x[i] = c.r;
+        self.y[i] = c.g;
+        self.z[i] = c.b;
+    }
+}
+
+/// `a` where `c`, else `b`, component by component: a select in every lane, where an
+/// `if` over whole vectors may compile to a branch and keep the loop scalar.
+#[inline(always)]
+pub fn select3(c: bool, a: Vec3, b: Vec3) -> Vec3 {
+    Vec3::new(if c { a.x } else { b.x }, if c { a.y } else { b.y }, if c { a.z } else { b.z })
+}
+
+/// [`select3`] for colours.
+#[inline(always)]
+pub fn select_rgb(c: bool, a: Rgb, b: Rgb) -> Rgb {
+    Rgb::new(if c { a.r } else { b.r }, if c { a.g } else { b.g }, if c { a.b } else { b.b })
+}
