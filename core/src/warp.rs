@@ -254,7 +254,10 @@ mod tests {
         points.extend([Vec2::splat(0.5), Vec2::ZERO, Vec2::new(0.5, 0.0), Vec2::new(0.0, 0.5), Vec2::splat(1.0 - f32::EPSILON / 2.0)]);
         points.extend((0..1000).map(|k| Vec2::splat(k as f32 / 1000.0)));
         points.extend((0..1000).map(|k| Vec2::new(k as f32 / 1000.0, 1.0 - k as f32 / 1000.0)));
-        let differ = points.iter().filter(|&&u| sample_concentric_disk(u).to_array().map(f32::to_bits) != concentric_disk_branchy(u).to_array().map(f32::to_bits)).count();
+        let differ = points
+            .iter()
+            .filter(|&&u| sample_concentric_disk(u).to_array().map(f32::to_bits) != concentric_disk_branchy(u).to_array().map(f32::to_bits))
+            .count();
         assert_eq!(differ, 0, "{differ} of {} points differ", points.len());
     }
 

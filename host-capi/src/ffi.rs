@@ -494,7 +494,9 @@ unsafe fn create(scene: EmberScene, settings: *const EmberRenderSettings, callba
     let out = unsafe { out(renderer, "renderer") }?;
     let config = settings.config()?;
     let identity = RenderIdentity::of(&config);
-    let Config { estimator, params, memory_limit, threads } = config;
+    let Config { estimator, mut params, memory_limit, threads } = config;
+    // The lane kernels at the level the scene's accelerator chose for this machine.
+    params.simd = data.accel.shading_level();
     crate::check_memory(&data, &estimator, memory_limit)?;
     let r = Renderer::new(&data.scene, params, estimator).map_err(|e| Error::new(EmberStatus::InvalidConfig, e.to_string()))?;
     let film = Film::for_camera(&data.scene.camera);

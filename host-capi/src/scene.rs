@@ -615,6 +615,8 @@ impl SceneData {
         let mut accel = Accel::new(&geometry);
         let isa = ember_host::accel::Isa::select_with_env(None).map_err(|e| Error::arg(e.message))?;
         accel.set_isa(isa).map_err(|e| Error::arg(e.message))?;
+        // The lane kernels: the same set if `EMBER_SIMD` names one, else the widest.
+        accel.set_shading_level(ember_host::accel::Isa::select_shading_with_env(None).map_err(|e| Error::arg(e.message))?);
         Ok(Self { scene, geometry, accel, triangle_index, hash: OnceLock::new() })
     }
 

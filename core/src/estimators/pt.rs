@@ -157,7 +157,7 @@ impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
     }
 
     fn arrive_batch(&mut self, lanes: &mut [Option<CameraPath>], lane_of: &[u8], hits: &[Option<SurfaceHit>], arrivals: &mut [Arrival]) {
-        let Some(mut scratch) = self.lanes.take() else {
+        let Some(scratch) = self.lanes.take() else {
             for (k, hit) in hits.iter().enumerate() {
                 let path = lanes[lane_of[k] as usize].as_mut().expect("a traced lane holds a path");
                 arrivals[k] = self.arrive(path, *hit);
@@ -182,7 +182,7 @@ impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
             }
         }
         if batch.len() > 0 {
-            super::pt_lanes::shade(self, &mut scratch, lanes, lane_of, arrivals);
+            super::pt_lanes::shade(self, scratch, lanes, lane_of, arrivals);
         }
         self.lanes = Some(scratch);
     }

@@ -218,7 +218,13 @@ impl Scratch {
 }
 
 /// Shade the batch's vertices (see the module notes) and write each one's arrival.
-pub(super) fn shade<Q: RayQuery + ?Sized>(paths: &mut CameraPaths<'_, Q>, scratch: &mut Scratch, lanes: &mut [Option<CameraPath>], lane_of: &[u8], arrivals: &mut [Arrival]) {
+pub(super) fn shade<Q: RayQuery + ?Sized>(
+    paths: &mut CameraPaths<'_, Q>,
+    scratch: &mut Scratch,
+    lanes: &mut [Option<CameraPath>],
+    lane_of: &[u8],
+    arrivals: &mut [Arrival],
+) {
     let Scratch { batch: b, pre, drawn, triangles, shaded } = scratch;
     let n = b.len;
     let (scene, params) = (paths.scene, paths.params);

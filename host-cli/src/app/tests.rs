@@ -83,7 +83,15 @@ fn render_writes_exr_and_png_and_reports() {
     let a = args(&["--spp", "3", "--threads", "2", "--width", "8", "--height", "4", "-o", out.to_str().unwrap()]);
     let report = render(&a, Instant::now(), false, |a| {
         let (w, h) = builtin_resolution(a);
-        Ok(Built { renderer: Box::new(ramp_host(w, h)), scene: "ramp".into(), max_depth: -1, simd: ember_host::accel::Isa::best(), shading: Default::default(), file_spp: None, film: None })
+        Ok(Built {
+            renderer: Box::new(ramp_host(w, h)),
+            scene: "ramp".into(),
+            max_depth: -1,
+            simd: ember_host::accel::Isa::best(),
+            shading: Default::default(),
+            file_spp: None,
+            film: None,
+        })
     })
     .unwrap();
     assert_eq!(report.summary.passes, 3);
@@ -135,7 +143,15 @@ fn a_held_film_is_continued_not_restarted() {
                 r.render(&mut film, limits, DriverConfig { progress: false, ..DriverConfig::with_threads(2) }, Instant::now()).unwrap();
                 film
             });
-            Ok(Built { scene: "box".into(), max_depth: -1, simd: ember_host::accel::Isa::best(), shading: Default::default(), file_spp: None, renderer: Box::new(r), film })
+            Ok(Built {
+                scene: "box".into(),
+                max_depth: -1,
+                simd: ember_host::accel::Isa::best(),
+                shading: Default::default(),
+                file_spp: None,
+                renderer: Box::new(r),
+                film,
+            })
         })
         .unwrap();
         (report, image_io::read_exr(&out).unwrap().pixels)
