@@ -16,7 +16,9 @@
 
 use core::ops::Range;
 
+use super::pt_lanes;
 use crate::bsdf::{Material, TransportMode};
+use crate::geometry::spawn_ray;
 use crate::geometry::{Ray, RayQuery, SurfaceHit};
 use crate::math::Vec3;
 use crate::rng::{SampleStream, Stream};
@@ -24,17 +26,17 @@ use crate::scene::Scene;
 use crate::segment::{CAMERA_KERNEL_KEY, Junctions, Kernel, start_cosine};
 use crate::spectrum::Rgb;
 use crate::transport::lanes::{self, Arrival, LaneProgram};
-use crate::transport::walk::{LastBounce, Layout, Leave, Moved, PathState, Roulette, Walk, light_origin, shadow_ray};
-use crate::transport::{Counters, RenderParams, SurfacePoint};
+use crate::transport::walk::{LastBounce, Leave, Moved, PathState, Roulette, Walk, light_origin, shadow_ray};
+use crate::transport::{Counters, RenderParams, SurfacePoint, survives_roulette};
 
 /// PT's walk: radiance, 8 dimensions per bounce (light choice 1, light point 2, lobe 1,
 /// direction 2, roulette 1).
-pub(super) const WALK: Walk = Walk { mode: TransportMode::Radiance, layout: Layout { per_bounce: 8, light: 0, lobe: 3, roulette: 6 } };
+const WALK: Walk = Walk { mode: TransportMode::Radiance, layout: pt_lanes::LAYOUT };
 
 /// Paths PT keeps in flight when its lane kernels run at `level` (with a tracer that
 /// asks for one ray at a time): 16 on AVX2 and AVX-512, else 1 (see `pt_lanes`).
 pub fn lane_width(level: crate::math::simd::Level) -> usize {
-    super::pt_lanes::width(level)
+    pt_lanes::width(level)
 }
 
 /// Render one sample for each pixel in `pixels` (index y·width + x) of pass `pass`
@@ -58,11 +60,11 @@ pub(crate) fn render_pixels_with_kernel<Q: RayQuery + ?Sized>(
     // Paths in flight: what the tracer asks for, or more where the shading runs over
     // SIMD lanes (`pt_lanes`).
     // Only PT's own vertices shade over lanes (a segment kernel's moved starts do not).
-    let lanes_pay = if kernel == Kernel::Dirac { super::pt_lanes::width(params.simd) } else { 1 };
+    let lanes_pay = if kernel == Kernel::Dirac { pt_lanes::width(params.simd) } else { 1 };
     let width = tracer.batch_width().max(lanes_pay);
     let mut scratch;
     let lanes = if width > 1 {
-        scratch = super::pt_lanes::Scratch::new();
+        scratch = pt_lanes::Scratch::new();
         Some(&mut scratch)
     } else {
         None
@@ -94,30 +96,30 @@ pub fn radiance<Q: RayQuery + ?Sized>(scene: &Scene, tracer: &Q, params: &Render
 /// from a random stream of its own, so the walk's own random numbers keep PT's layout.
 /// What PT records per vertex: emission weighted against light sampling, and next-event
 /// estimation.
-pub(super) struct CameraPaths<'a, Q: ?Sized> {
-    pub(super) scene: &'a Scene,
-    pub(super) tracer: &'a Q,
-    pub(super) params: &'a RenderParams,
-    pub(super) kernel: Kernel,
-    pub(super) pass: u32,
+struct CameraPaths<'a, Q: ?Sized> {
+    scene: &'a Scene,
+    tracer: &'a Q,
+    params: &'a RenderParams,
+    kernel: Kernel,
+    pass: u32,
     /// The pixel of `out[0]`.
-    pub(super) first: u32,
-    pub(super) out: &'a mut [Rgb],
-    pub(super) counters: Counters,
+    first: u32,
+    out: &'a mut [Rgb],
+    counters: Counters,
     /// Room for shading over lanes (`None`: one path at a time).
-    pub(super) lanes: Option<&'a mut super::pt_lanes::Scratch>,
+    lanes: Option<&'a mut pt_lanes::Scratch>,
 }
 
 /// One pixel's camera path in flight.
-pub(super) struct CameraPath {
-    pub(super) pixel: u32,
-    pub(super) rng: SampleStream,
-    pub(super) junctions: Option<Junctions>,
-    pub(super) state: PathState,
+struct CameraPath {
+    pixel: u32,
+    rng: SampleStream,
+    junctions: Option<Junctions>,
+    state: PathState,
     /// Radiance gathered so far.
-    pub(super) l: Rgb,
+    l: Rgb,
     /// β times the next-event sample waiting for its shadow ray.
-    pub(super) pending: Rgb,
+    pending: Rgb,
 }
 
 impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
@@ -175,14 +177,21 @@ impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
                 Reached::Surface(v) => {
                     let material = v.sp.material(self.scene);
                     match material.lambertian() {
-                        Some((rho, two_sided)) if lanes_ok && v.moved.is_none() => batch.push(k as u8, &v.sp, rho, two_sided, path),
+                        Some((rho, two_sided)) if lanes_ok && v.moved.is_none() => {
+                            batch.push(k as u8, &v.sp, rho, two_sided, path.rng.base(), path.state.dimension(&WALK.layout, 0));
+                        }
                         _ => arrivals[k] = self.shade(path, &v, &material),
                     }
                 }
             }
         }
-        if batch.len() > 0 {
-            super::pt_lanes::shade(self, scratch, lanes, lane_of, arrivals);
+        if scratch.len() > 0 {
+            pt_lanes::shade(self.scene, self.params, scratch);
+            for i in 0..scratch.len() {
+                let v = scratch.lane(i);
+                let path = lanes[lane_of[v.slot] as usize].as_mut().expect("a traced lane holds a path");
+                arrivals[v.slot] = self.leave_lambertian(path, &v);
+            }
         }
         self.lanes = Some(scratch);
     }
@@ -275,6 +284,36 @@ impl<'a, Q: RayQuery + ?Sized> CameraPaths<'a, Q> {
         Arrival { shadow, continues }
     }
 
+    /// A Lambertian vertex's arrival from what the lane shading found for it
+    /// (`pt_lanes`): its next-event sample pending, and `Walk::scatter`'s continuation
+    /// (roulette by throughput, reference 1) from its BSDF sample.
+    #[inline(always)]
+    fn leave_lambertian(&mut self, path: &mut CameraPath, v: &pt_lanes::Shaded1) -> Arrival {
+        let layout = WALK.layout;
+        let mut shadow = None;
+        if let Some((value, ray)) = v.nee {
+            self.counters.rays += 1;
+            path.pending = path.state.beta * value;
+            shadow = Some(ray);
+        }
+        let d0 = path.state.dimension(&layout, 0);
+        path.rng.set_dimension(d0.wrapping_add(layout.lobe + 3));
+        let Some((throughput, wi, pdf)) = v.bounce else { return Arrival { shadow, continues: false } };
+        let state = &mut path.state;
+        state.beta *= throughput;
+        if state.beta.is_black() || !state.beta.is_finite() {
+            return Arrival { shadow, continues: false };
+        }
+        path.rng.set_dimension(d0.wrapping_add(layout.roulette));
+        state.segments += 1;
+        if !survives_roulette(self.params, state.segments, &mut state.beta, 1.0, &mut path.rng) {
+            return Arrival { shadow, continues: false };
+        }
+        state.ray = spawn_ray(v.p, v.ng, wi);
+        state.last = Some(LastBounce { origin: state.ray.origin, pdf, delta: false });
+        Arrival { shadow, continues: true }
+    }
+
     /// One light sample from `at.sp` at the path's current bounce: choose a light ∝
     /// power, sample a point on it, weight against BSDF sampling. Returns the shadow ray
     /// and the weighted contribution (without β) it carries if unoccluded. With a
@@ -326,7 +365,7 @@ fn emission_weight(params: &RenderParams, prev: Option<LastBounce>, light_pdf: i
 }
 
 /// What [`CameraPaths::reach`] leaves for shading.
-pub(super) enum Reached {
+enum Reached {
     /// The path ends at this step: its arrival.
     Done(Arrival),
     /// It reached a surface it may continue from.
@@ -335,9 +374,9 @@ pub(super) enum Reached {
 
 /// A surface a path reached: the shading point and where a segment kernel moved the
 /// next segment's start.
-pub(super) struct Vertex {
-    pub sp: SurfacePoint,
-    pub moved: Option<Moved>,
+struct Vertex {
+    sp: SurfacePoint,
+    moved: Option<Moved>,
 }
 
 /// What next-event estimation needs of the vertex it starts from: the surface point,

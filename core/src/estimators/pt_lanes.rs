@@ -49,17 +49,21 @@
 //! Nothing here allocates: the scratch lives on the stack of `render_pixels`, once per
 //! range of pixels.
 
-use super::pt::{CameraPath, CameraPaths, WALK};
-use crate::geometry::{Ray, RayQuery, offset_ray_origin, spawn_ray, spawn_ray_to};
+use crate::geometry::{Ray, offset_ray_origin, spawn_ray, spawn_ray_to};
 use crate::light::TriangleLanes;
 use crate::math::simd::{self, Level, Set};
 use crate::math::soa::{LANES, Lane, Vec3s, select_rgb, select3};
 use crate::math::{Frame, INV_PI, Vec2, Vec3};
 use crate::rng::uniform_at;
+use crate::scene::Scene;
 use crate::spectrum::Rgb;
-use crate::transport::lanes::Arrival;
-use crate::transport::walk::LastBounce;
-use crate::transport::{Heuristic, SurfacePoint, survives_roulette};
+use crate::transport::walk::Layout;
+use crate::transport::{Heuristic, RenderParams, SurfacePoint};
+
+/// PT's random dimensions per bounce (`Walk`'s layout, module notes of
+/// `transport::walk`): light choice 0, point on the light 1–2, lobe 3, direction 4–5,
+/// roulette 6. `pt.rs` walks with this layout too.
+pub(super) const LAYOUT: Layout = Layout { per_bounce: 8, light: 0, lobe: 3, roulette: 6 };
 
 /// Paths PT keeps in flight for its lane kernels at `level`: 16 where AVX2 or AVX-512
 /// run them, else 1 (one path at a time, unless the tracer asks for more). Measured on
@@ -107,17 +111,15 @@ impl Lambertian {
         }
     }
 
-    pub(super) fn len(&self) -> usize {
-        self.len
-    }
-
     pub(super) fn clear(&mut self) {
         self.len = 0;
     }
 
-    /// Add the vertex at `sp` of `path` (traced lane `slot`), of reflectance `rho`.
+    /// Add the vertex at `sp` (traced lane `slot`), of reflectance `rho`, whose path's
+    /// random stream is `base` and whose bounce draws from dimension `dim` at `layout`'s
+    /// offsets.
     #[inline(always)]
-    pub(super) fn push(&mut self, slot: u8, sp: &SurfacePoint, rho: Rgb, two_sided: bool, path: &CameraPath) {
+    pub(super) fn push(&mut self, slot: u8, sp: &SurfacePoint, rho: Rgb, two_sided: bool, base: u64, dim: u32) {
         let i = self.len;
         self.slot[i] = slot;
         self.p.set(i, sp.hit.p);
@@ -126,8 +128,8 @@ impl Lambertian {
         self.wo.set(i, sp.wo);
         self.rho.set_rgb(i, rho);
         self.two_sided[i] = two_sided;
-        self.base[i] = path.rng.base();
-        self.dim[i] = path.state.dimension(&WALK.layout, 0);
+        self.base[i] = base;
+        self.dim[i] = dim;
         self.len += 1;
     }
 }
@@ -217,17 +219,11 @@ impl Scratch {
     }
 }
 
-/// Shade the batch's vertices (see the module notes) and write each one's arrival.
-pub(super) fn shade<Q: RayQuery + ?Sized>(
-    paths: &mut CameraPaths<'_, Q>,
-    scratch: &mut Scratch,
-    lanes: &mut [Option<CameraPath>],
-    lane_of: &[u8],
-    arrivals: &mut [Arrival],
-) {
+/// Shade the batch's vertices (phases 1 to 4 of the module notes); read each one's
+/// results with [`Scratch::lane`].
+pub(super) fn shade(scene: &Scene, params: &RenderParams, scratch: &mut Scratch) {
     let Scratch { batch: b, pre, drawn, triangles, shaded } = scratch;
     let n = b.len;
-    let (scene, params) = (paths.scene, paths.params);
     let isa = params.simd;
     let groups = whole_groups(n);
 
@@ -261,40 +257,34 @@ pub(super) fn shade<Q: RayQuery + ?Sized>(
     // 3 and 4. The triangle lights' points; next-event values, shadow rays, BSDF samples.
     draw_triangles(isa, triangles, pre, drawn, groups);
     evaluate(isa, b, pre, drawn, params.heuristic, shaded, groups);
+}
 
-    // 5. Back to the paths.
-    let layout = WALK.layout;
-    for i in 0..n {
-        let k = b.slot[i] as usize;
-        let path = lanes[lane_of[k] as usize].as_mut().expect("a traced lane holds a path");
-        let mut shadow = None;
-        if shaded.nee_ok[i] {
-            paths.counters.rays += 1;
-            path.pending = path.state.beta * shaded.nee.rgb(i);
-            shadow = Some(Ray { origin: shaded.shadow_origin.get(i), dir: shaded.shadow_dir.get(i), t_max: shaded.shadow_t[i] });
-        }
-        // `Walk::scatter` with `Roulette::Throughput { reference: 1 }` from here on.
-        let d0 = b.dim[i];
-        let continues = 'scatter: {
-            path.rng.set_dimension(d0.wrapping_add(layout.lobe + 3));
-            if !shaded.ok[i] {
-                break 'scatter false;
-            }
-            let state = &mut path.state;
-            state.beta *= shaded.throughput.rgb(i);
-            if state.beta.is_black() || !state.beta.is_finite() {
-                break 'scatter false;
-            }
-            path.rng.set_dimension(d0.wrapping_add(layout.roulette));
-            state.segments += 1;
-            if !survives_roulette(params, state.segments, &mut state.beta, 1.0, &mut path.rng) {
-                break 'scatter false;
-            }
-            state.ray = spawn_ray(b.p.get(i), b.ng.get(i), shaded.wi.get(i));
-            state.last = Some(LastBounce { origin: state.ray.origin, pdf: shaded.pdf[i], delta: false });
-            true
-        };
-        arrivals[k] = Arrival { shadow, continues };
+/// What the lane shading found for one vertex of the batch.
+pub(super) struct Shaded1 {
+    /// The vertex's index among the step's traced lanes.
+    pub slot: usize,
+    /// Next-event estimation's f |cos| L w / p_L (without β) and its shadow ray.
+    pub nee: Option<(Rgb, Ray)>,
+    /// The BSDF sample: f |cos| / p, the next ray's direction and p (`None`: no sample).
+    pub bounce: Option<(Rgb, Vec3, f32)>,
+    /// The vertex's position and geometric normal (the next ray leaves from them).
+    pub p: Vec3,
+    pub ng: Vec3,
+}
+
+impl Scratch {
+    /// The vertices shaded by the last [`shade`].
+    pub(super) fn len(&self) -> usize {
+        self.batch.len
+    }
+
+    /// Vertex `i`'s results.
+    #[inline(always)]
+    pub(super) fn lane(&self, i: usize) -> Shaded1 {
+        let (b, s) = (&self.batch, &self.shaded);
+        let nee = s.nee_ok[i].then(|| (s.nee.rgb(i), Ray { origin: s.shadow_origin.get(i), dir: s.shadow_dir.get(i), t_max: s.shadow_t[i] }));
+        let bounce = s.ok[i].then(|| (s.throughput.rgb(i), s.wi.get(i), s.pdf[i]));
+        Shaded1 { slot: b.slot[i] as usize, nee, bounce, p: b.p.get(i), ng: b.ng.get(i) }
     }
 }
 
@@ -329,7 +319,7 @@ macro_rules! over_lanes {
 simd::kernel! {
 /// Phase 1 (see the module notes).
 fn prepare(isa, b: &Lambertian, out: &mut Prepared, groups: usize) {
-    let layout = WALK.layout;
+    let layout = LAYOUT;
     over_lanes!(groups, |i| {
         let frame = Frame::from_normal(b.ns.get(i));
         out.s.set(i, frame.s);
