@@ -44,6 +44,7 @@ use crate::spectrum::Rgb;
 use conductor::Conductor;
 use dielectric::Dielectric;
 use diffuse::Diffuse;
+pub(crate) use diffuse::LambertLane;
 use microfacet::Microfacet;
 use plastic::Plastic;
 use principled::Principled;
@@ -469,12 +470,12 @@ impl Material {
         (s.f.is_finite() && s.pdf.value().is_finite() && s.pdf_rev.value().is_finite()).then_some(s)
     }
 
-    /// The Lambertian model's reflectance and whether it is two-sided; `None` for every
-    /// other model. The lane kernels shade such surfaces over many paths at once.
+    /// The Lambertian model as lane code evaluates and samples it; `None` for every other
+    /// model. The lane kernels shade such surfaces over many paths at once.
     #[inline]
-    pub(crate) fn lambertian(&self) -> Option<(Rgb, bool)> {
+    pub(crate) fn lambertian(&self) -> Option<LambertLane> {
         match &self.kind {
-            Kind::Diffuse(b) => Some((b.reflectance, self.two_sided)),
+            Kind::Diffuse(b) => Some(LambertLane { rho: b.reflectance, two_sided: self.two_sided }),
             _ => None,
         }
     }

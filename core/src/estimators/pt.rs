@@ -177,8 +177,8 @@ impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
                 Reached::Surface(v) => {
                     let material = v.sp.material(self.scene);
                     match material.lambertian() {
-                        Some((rho, two_sided)) if lanes_ok && v.moved.is_none() => {
-                            batch.push(k as u8, &v.sp, rho, two_sided, path.rng.base(), path.state.dimension(&WALK.layout, 0));
+                        Some(lobe) if lanes_ok && v.moved.is_none() => {
+                            batch.push(k as u8, &v.sp, lobe, path.rng.base(), path.state.dimension(&WALK.layout, 0));
                         }
                         _ => arrivals[k] = self.shade(path, &v, &material),
                     }

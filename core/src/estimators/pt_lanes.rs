@@ -49,11 +49,12 @@
 //! Nothing here allocates: the scratch lives on the stack of `render_pixels`, once per
 //! range of pixels.
 
+use crate::bsdf::LambertLane;
 use crate::geometry::{Ray, offset_ray_origin, spawn_ray, spawn_ray_to};
 use crate::light::TriangleLanes;
 use crate::math::simd::{self, Level, Set};
 use crate::math::soa::{LANES, Lane, Vec3s, select_rgb, select3};
-use crate::math::{Frame, INV_PI, Vec2, Vec3};
+use crate::math::{Frame, Vec2, Vec3};
 use crate::rng::uniform_at;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -119,15 +120,15 @@ impl Lambertian {
     /// random stream is `base` and whose bounce draws from dimension `dim` at `layout`'s
     /// offsets.
     #[inline(always)]
-    pub(super) fn push(&mut self, slot: u8, sp: &SurfacePoint, rho: Rgb, two_sided: bool, base: u64, dim: u32) {
+    pub(super) fn push(&mut self, slot: u8, sp: &SurfacePoint, lobe: LambertLane, base: u64, dim: u32) {
         let i = self.len;
         self.slot[i] = slot;
         self.p.set(i, sp.hit.p);
         self.ng.set(i, sp.hit.ng);
         self.ns.set(i, sp.hit.ns);
         self.wo.set(i, sp.wo);
-        self.rho.set_rgb(i, rho);
-        self.two_sided[i] = two_sided;
+        self.rho.set_rgb(i, lobe.rho);
+        self.two_sided[i] = lobe.two_sided;
         self.base[i] = base;
         self.dim[i] = dim;
         self.len += 1;
@@ -365,21 +366,13 @@ fn evaluate(isa, b: &Lambertian, pre: &Prepared, ls: &Drawn, heuristic: Heuristi
     over_lanes!(groups, |i| {
         let frame = Frame { s: pre.s.get(i), t: pre.t.get(i), n: b.ns.get(i) };
         let wo = pre.wo.get(i);
-        let rho = b.rho.rgb(i);
-        // A two-sided material seen from the back is its front, mirrored (`Material`).
-        let mirrored = b.two_sided[i] & (wo.z < 0.0);
-        let wo_z = if mirrored { -wo.z } else { wo.z };
+        let lobe = LambertLane { rho: b.rho.rgb(i), two_sided: b.two_sided[i] };
         let (p, ng) = (b.p.get(i), b.ng.get(i));
 
         // Next-event estimation: f and p_B at the light's direction.
         let wi_world = ls.wi.get(i);
         let wi_local = frame.to_local(wi_world);
-        let wi_z = if mirrored { -wi_local.z } else { wi_local.z };
-        let above = (wo_z > 0.0) & (wi_z > 0.0);
-        let f = select_rgb(above, rho * INV_PI, Rgb::ZERO);
-        let f = select_rgb(f.is_finite(), f, Rgb::ZERO);
-        let pdf = if above { wi_z.max(0.0) * INV_PI } else { 0.0 };
-        let pdf = if pdf.is_finite() & (pdf >= 0.0) { pdf } else { 0.0 };
+        let (f, pdf) = lobe.eval_pdf(wo, wi_local);
         let delta = ls.delta[i];
         out.nee_ok[i] = ls.ok[i] & !f.is_black();
         let f = f * wi_local.z.abs();
@@ -394,15 +387,9 @@ fn evaluate(isa, b: &Lambertian, pre: &Prepared, ls: &Drawn, heuristic: Heuristi
         out.shadow_dir.set(i, select3(finite, to_point.dir, along.dir));
         out.shadow_t[i] = if finite { to_point.t_max } else { along.t_max };
 
-        // The BSDF sample (`Material::sample`, `Diffuse::sample`).
-        let wo_ok = (wo_z.abs() >= f32::MIN_POSITIVE) & wo.is_finite() & (wo_z > 0.0);
-        let d = crate::warp::sample_cosine_hemisphere(Vec2::new(pre.u[3][i], pre.u[4][i]));
-        let up = (wo_z > 0.0) & (d.z > 0.0);
-        let pdf = if up { d.z.max(0.0) * INV_PI } else { 0.0 };
-        let f = select_rgb(up, rho * INV_PI, Rgb::ZERO);
-        let pdf_rev = if up { wo_z.max(0.0) * INV_PI } else { 0.0 };
-        out.ok[i] = wo_ok & (pdf > 0.0) & f.is_finite() & pdf.is_finite() & pdf_rev.is_finite();
-        let wi = Vec3::new(d.x, d.y, if mirrored { -d.z } else { d.z });
+        // The BSDF sample.
+        let (wi, f, pdf, ok) = lobe.sample(wo, Vec2::new(pre.u[3][i], pre.u[4][i]));
+        out.ok[i] = ok;
         out.wi.set(i, frame.to_world(wi));
         out.pdf[i] = pdf;
         out.throughput.set_rgb(i, f * (wi.z.abs() / pdf));
