@@ -160,7 +160,7 @@ impl PerspectiveCamera {
     /// Importance arriving at the connected point per unit projected area there,
     /// W_e |cos θ_c| / d²: what a light-path vertex multiplies its throughput by when it
     /// connects to the pinhole (the pinhole's counterpart of a delta light's I / d²).
-    #[inline]
+    #[inline(always)]
     pub fn arriving_importance(&self, cs: &CameraSample) -> f32 {
         let cos_c = self.forward().dot(-cs.wi).abs();
         cs.importance * cos_c / (cs.dist * cs.dist)
@@ -346,13 +346,18 @@ impl PerspectiveCamera {
 
     /// [`Self::film_position`] of a camera-space direction from the pinhole.
     fn local_film_position(&self, local: Vec3) -> Option<Vec2> {
-        if local.z <= 0.0 {
-            return None;
-        }
+        let (film, inside) = self.local_film_position_lane(local);
+        inside.then_some(film)
+    }
+
+    /// [`Self::local_film_position`] without branches: the point and whether it is on
+    /// the film.
+    #[inline(always)]
+    fn local_film_position_lane(&self, local: Vec3) -> (Vec2, bool) {
         let plane = Vec2::new(local.x, local.y) / (local.z * self.tan_half);
         let film = 0.5 * (Vec2::ONE - plane) * Vec2::new(self.width as f32, self.height as f32);
-        let inside = film.x >= 0.0 && film.y >= 0.0 && film.x < self.width as f32 && film.y < self.height as f32;
-        inside.then_some(film)
+        let inside = (film.x >= 0.0) & (film.y >= 0.0) & (film.x < self.width as f32) & (film.y < self.height as f32);
+        (film, (local.z > 0.0) & inside)
     }
 
     /// cos θ between a world direction and the viewing axis, if it lands on the film.
@@ -377,7 +382,7 @@ impl PerspectiveCamera {
     }
 
     /// 1/(A_pixel cos⁴θ), 0 where not finite.
-    #[inline]
+    #[inline(always)]
     fn we_of_cos(&self, c: f32) -> f32 {
         let c2 = c * c;
         let we = 1.0 / (self.pixel_area * c2 * c2);
@@ -448,23 +453,28 @@ impl PerspectiveCamera {
     }
 
     fn connect_pinhole(&self, p_ref: Vec3) -> Option<CameraSample> {
+        let (sample, exists) = self.connect_pinhole_lane(p_ref);
+        exists.then_some(sample)
+    }
+
+    /// [`Self::sample_wi`] of a pinhole camera without branches, for lanes of paths: the
+    /// sample and whether it exists; where it does, the bits of `sample_wi`'s.
+    #[inline(always)]
+    pub fn connect_pinhole_lane(&self, p_ref: Vec3) -> (CameraSample, bool) {
         let d = self.position - p_ref;
         let dist2 = d.length_squared();
-        if dist2 <= 0.0 || !dist2.is_finite() {
-            return None;
-        }
         let dist = sqrt(dist2);
         let wi = d / dist;
         // `film_position` and `importance` of -wi, with the direction taken to camera
         // space once (they each did it, and `importance` found the film point again).
         let local = self.to_local * -wi;
-        let film = self.local_film_position(local)?;
-        let len = local.length();
+        let (film, on_film) = self.local_film_position_lane(local);
+        // `local.length()` with the core's square root (glam's would be libm's, the same
+        // bits, but a call no lane loop vectorises).
+        let len = sqrt(local.length_squared());
         let importance = if len > 0.0 { self.we_of_cos(local.z / len) } else { 0.0 };
-        if importance <= 0.0 {
-            return None;
-        }
-        Some(CameraSample { film, wi, dist, position: self.position, importance, pdf: SolidAnglePdf(1.0) })
+        let exists = (dist2 > 0.0) & dist2.is_finite() & on_film & (importance > 0.0);
+        (CameraSample { film, wi, dist, position: self.position, importance, pdf: SolidAnglePdf(1.0) }, exists)
     }
 
     /// Connect `p_ref` to camera-space lens point `l`.

@@ -8,8 +8,8 @@
 //! so only the loop differs between widths; it also counts the batches, so the test
 //! fails if the loop never asked one of more than one ray (a width that is not used).
 //!
-//! PT's Lambertian vertices shade over lanes (`estimators::pt_lanes`) at every width above
-//! 1, and at every instruction set the lane kernels are compiled for
+//! PT's and LT's Lambertian vertices shade over lanes (`estimators::pt_lanes`,
+//! `lt_lanes`) at every width above 1, and at every instruction set the lane kernels are compiled for
 //! (`math::simd::Level`): the baseline, and AVX2 and AVX-512 where this machine has them.
 //! Each is compared with width 1 at the baseline.
 //!
@@ -22,14 +22,22 @@
 //! the BSDF sample (`d.z` for `-d.z`): 556 of 1 024 pixels differ; the MIS weight taken
 //! as the balance heuristic's where the power heuristic is asked (`light_pdf /
 //! (light_pdf + pdf)`): 559; a triangle light's density kept for lanes whose light is
-//! not a triangle (`out.pdf[i] = l.pdf.0` without the select): 684.
+//! not a triangle (`out.pdf[i] = l.pdf.0` without the select): 684. In `lt_lanes`: the
+//! camera connection's value without β: 713 of 1 024 (the same scene); the adjoint's
+//! shading-normal correction left out of the continuation's throughput, or of the
+//! connection: 2 and 3 of 576 pixels of the window room with a smooth-shaded panel (the
+//! only scene here whose shading normals differ from the geometric ones; the others
+//! passed).
 
 use std::cell::Cell;
 
+use ember_core::bsdf::Material;
 use ember_core::estimators::{EstimatorConfig, EstimatorKind, KernelChoice, SegmentAlgorithm, SegmentConfig};
 use ember_core::geometry::{Ray, RayBatch, RayQuery, SurfaceHit};
+use ember_core::math::Vec3;
 use ember_core::math::simd::{Level, Set};
 use ember_core::scene::SceneBuilder;
+use ember_core::spectrum::Rgb;
 use ember_core::transport::{Heuristic, RenderParams};
 use ember_tests::render::Passes;
 use ember_tests::scenes::{cornell_with_delta_lights, window_room};
@@ -148,8 +156,21 @@ fn check(name: &str, builder: SceneBuilder) {
     }
 }
 
+/// The window room with a diffuse panel whose vertex normals lean away from its plane:
+/// shading normals unlike the geometric one, so the adjoint's shading-normal correction
+/// (light tracing) is not 1.
+fn window_room_with_smooth_panel() -> SceneBuilder {
+    let mut b = window_room(24, 24);
+    let panel = b.add_material(Material::diffuse(Rgb::new(0.6, 0.7, 0.5)));
+    let p = [Vec3::new(-1.0, 0.2, -0.8), Vec3::new(0.6, 0.3, -1.2), Vec3::new(-0.2, 1.6, -1.0)];
+    let n = [Vec3::new(0.3, 0.1, 1.0).normalize(), Vec3::new(-0.4, 0.2, 1.0).normalize(), Vec3::new(0.1, -0.5, 1.0).normalize()];
+    b.add_triangle(p, Some(n), panel, None);
+    b
+}
+
 #[test]
 fn images_are_the_same_at_every_lane_width() {
     check("cornell with spheres and Dirac lights", cornell_with_delta_lights(32, 32));
     check("window room", window_room(24, 24));
+    check("window room with a smooth-shaded panel", window_room_with_smooth_panel());
 }

@@ -533,6 +533,7 @@ impl Material {
 /// Veach's adjoint correction for shading normals (thesis §5.3; pbrt-v3
 /// `CorrectShadingNormal`): for `Importance` mode |wo·ns| |wi·ng| / (|wo·ng| |wi·ns|), 1 for
 /// `Radiance`. World-space directions and normals. Returns 0 instead of ∞ or NaN.
+#[inline(always)]
 pub fn shading_normal_correction(mode: TransportMode, wo: Vec3, wi: Vec3, ng: Vec3, ns: Vec3) -> f32 {
     match mode {
         TransportMode::Radiance => 1.0,

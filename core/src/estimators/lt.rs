@@ -23,19 +23,20 @@
 
 use core::ops::Range;
 
-use crate::bsdf::TransportMode;
-use crate::geometry::{Ray, RayQuery, SurfaceHit, spawn_ray_to};
+use super::lt_lanes;
+use crate::bsdf::{Material, TransportMode};
+use crate::geometry::{Ray, RayQuery, SurfaceHit, spawn_ray, spawn_ray_to};
 use crate::math::{Vec2, Vec3};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::segment::{Junctions, Kernel, LIGHT_KERNEL_KEY};
 use crate::spectrum::Rgb;
 use crate::transport::lanes::{self, Arrival, LaneProgram};
-use crate::transport::walk::{Layout, Leave, PathState, Roulette, Walk};
-use crate::transport::{Counters, RenderParams, Splat, SurfacePoint};
+use crate::transport::walk::{LastBounce, Leave, PathState, Roulette, Walk};
+use crate::transport::{Counters, RenderParams, Splat, SurfacePoint, survives_roulette};
 
 /// LT's walk: importance, 4 dimensions per bounce (lobe 1, direction 2, roulette 1).
-const WALK: Walk = Walk { mode: TransportMode::Importance, layout: Layout { per_bounce: 4, light: 0, lobe: 0, roulette: 3 } };
+const WALK: Walk = Walk { mode: TransportMode::Importance, layout: lt_lanes::LAYOUT };
 
 /// Trace light paths `paths` of pass `pass`; every camera connection goes to `splat`.
 pub fn trace_paths<Q: RayQuery + ?Sized>(
@@ -60,8 +61,19 @@ pub(crate) fn trace_paths_with_kernel<Q: RayQuery + ?Sized>(
     paths: Range<u32>,
     splat: &mut dyn FnMut(Splat),
 ) -> Counters {
-    let mut program = LightPaths { scene, tracer, params, kernel, pass, splat, counters: Counters::default() };
-    lanes::run(&mut program, tracer, paths);
+    // Paths in flight: what the tracer asks for, or more where the shading runs over
+    // SIMD lanes (`lt_lanes`: a pinhole camera, no segment kernel, no medium).
+    let lanes_pay = kernel == Kernel::Dirac && !scene.camera.has_lens() && scene.interiors.is_empty();
+    let width = tracer.batch_width().max(if lanes_pay { params.simd.paths_in_flight() } else { 1 });
+    let mut scratch;
+    let lanes = if width > 1 && lanes_pay {
+        scratch = lt_lanes::Scratch::new();
+        Some(&mut scratch)
+    } else {
+        None
+    };
+    let mut program = LightPaths { scene, tracer, params, kernel, pass, splat, counters: Counters::default(), lanes };
+    lanes::run_with_width(&mut program, tracer, paths, width);
     program.counters
 }
 
@@ -98,6 +110,8 @@ struct LightPaths<'a, Q: ?Sized> {
     pass: u32,
     splat: &'a mut dyn FnMut(Splat),
     counters: Counters,
+    /// Room for shading over lanes (`None`: one path at a time).
+    lanes: Option<&'a mut lt_lanes::Scratch>,
 }
 
 /// One light path in flight.
@@ -163,17 +177,78 @@ impl<Q: RayQuery + ?Sized> LaneProgram for LightPaths<'_, Q> {
     }
 
     fn arrive(&mut self, path: &mut LightPath, arrived: Option<SurfaceHit>) -> Arrival {
-        let (scene, params) = (self.scene, self.params);
+        let Some(sp) = self.reach(path, arrived) else { return Arrival { shadow: None, continues: false } };
+        let material = sp.material(self.scene);
+        self.shade(path, &sp, &material)
+    }
+
+    fn arrive_batch(&mut self, lanes: &mut [Option<LightPath>], lane_of: &[u8], hits: &[Option<SurfaceHit>], arrivals: &mut [Arrival]) {
+        let Some(scratch) = self.lanes.take() else {
+            for (k, hit) in hits.iter().enumerate() {
+                let path = lanes[lane_of[k] as usize].as_mut().expect("a traced lane holds a path");
+                arrivals[k] = self.arrive(path, *hit);
+            }
+            return;
+        };
+        scratch.clear();
+        for (k, hit) in hits.iter().enumerate() {
+            let path = lanes[lane_of[k] as usize].as_mut().expect("a traced lane holds a path");
+            let Some(sp) = self.reach(path, *hit) else {
+                arrivals[k] = Arrival { shadow: None, continues: false };
+                continue;
+            };
+            let material = sp.material(self.scene);
+            match material.lambertian() {
+                // `lanes` exists only where the camera is a pinhole, no segment kernel
+                // moves the shading point and no medium absorbs.
+                Some(lobe) => {
+                    let connect = self.params.max_depth.allows(path.state.segments + 1);
+                    scratch.push(k as u8, &sp, lobe, path.state.beta, connect, path.rng.base(), path.state.dimension(&WALK.layout, 0));
+                }
+                None => arrivals[k] = self.shade(path, &sp, &material),
+            }
+        }
+        if scratch.len() > 0 {
+            lt_lanes::shade(&self.scene.camera, self.params, scratch);
+            for i in 0..scratch.len() {
+                let v = scratch.lane(i);
+                let path = lanes[lane_of[v.slot] as usize].as_mut().expect("a traced lane holds a path");
+                arrivals[v.slot] = self.leave_lambertian(path, &v);
+            }
+        }
+        self.lanes = Some(scratch);
+    }
+
+    fn leave(&mut self, path: &mut LightPath, arrival: Arrival, occluded: Option<bool>) -> bool {
+        if let (Some(s), Some(false)) = (path.pending.take(), occluded) {
+            (self.splat)(Splat { film: s.film, value: self.counters.sanitize(s.value) });
+        }
+        arrival.continues
+    }
+
+    fn finish(&mut self, _: LightPath) {}
+}
+
+impl<'a, Q: RayQuery + ?Sized> LightPaths<'a, Q> {
+    /// The first half of an arrival: the medium crossed and the shading point (where a
+    /// segment kernel moved it); `None` if the path escaped.
+    #[inline(always)]
+    fn reach(&mut self, path: &mut LightPath, arrived: Option<SurfaceHit>) -> Option<SurfacePoint> {
         self.counters.rays += 1;
-        let Some(arrived) = arrived else { return Arrival { shadow: None, continues: false } };
+        let arrived = arrived?;
         // Attenuate by an absorbing medium the segment crossed.
-        Walk::pass_medium(scene, &mut path.state, &arrived);
+        Walk::pass_medium(self.scene, &mut path.state, &arrived);
         // The next segment starts here, or where the kernel puts it (the shading point
         // moves there, β takes the kernel's reversed ratio).
         let hit = WALK.junction(self.tracer, &mut path.state, &arrived, path.junctions.as_mut(), &mut self.counters).map_or(arrived, |m| m.at);
-        let sp = SurfacePoint::new(hit, -path.state.ray.dir);
-        let material = sp.material(scene);
+        Some(SurfacePoint::new(hit, -path.state.ray.dir))
+    }
 
+    /// The second half, one path at a time: the camera connection and the continuation.
+    #[inline(always)]
+    fn shade(&mut self, path: &mut LightPath, sp: &SurfacePoint, material: &Material) -> Arrival {
+        let (scene, params) = (self.scene, self.params);
+        let hit = sp.hit;
         // Connect this vertex to the camera: segments + 1 segments in all.
         let mut shadow = None;
         path.pending = None;
@@ -195,16 +270,42 @@ impl<Q: RayQuery + ?Sized> LaneProgram for LightPaths<'_, Q> {
         }
 
         // Sample the adjoint BSDF to continue.
-        let leave = WALK.scatter(params, &mut path.state, &sp, sp.frame.to_local(sp.wo), &material, None, path.roulette, &mut path.rng);
+        let leave = WALK.scatter(params, &mut path.state, sp, sp.frame.to_local(sp.wo), material, None, path.roulette, &mut path.rng);
         Arrival { shadow, continues: matches!(leave, Leave::Continues(_)) }
     }
 
-    fn leave(&mut self, path: &mut LightPath, arrival: Arrival, occluded: Option<bool>) -> bool {
-        if let (Some(s), Some(false)) = (path.pending.take(), occluded) {
-            (self.splat)(Splat { film: s.film, value: self.counters.sanitize(s.value) });
+    /// A Lambertian vertex's arrival from what the lane shading found for it
+    /// (`lt_lanes`): its splat pending, and `Walk::scatter`'s continuation (roulette by
+    /// throughput against the path's reference) from its BSDF sample.
+    #[inline(always)]
+    fn leave_lambertian(&mut self, path: &mut LightPath, v: &lt_lanes::Shaded1) -> Arrival {
+        let layout = WALK.layout;
+        let mut shadow = None;
+        path.pending = None;
+        if let Some((film, value, ray)) = v.splat {
+            self.counters.rays += 1;
+            shadow = Some(ray);
+            path.pending = Some(Splat { film, value });
         }
-        arrival.continues
+        if !self.params.max_depth.allows(path.state.segments + 2) {
+            return Arrival { shadow, continues: false };
+        }
+        let Roulette::Throughput { reference } = path.roulette else { unreachable!("light paths roll roulette by throughput") };
+        let d0 = path.state.dimension(&layout, 0);
+        path.rng.set_dimension(d0.wrapping_add(layout.lobe + 3));
+        let Some((throughput, wi, pdf)) = v.bounce else { return Arrival { shadow, continues: false } };
+        let state = &mut path.state;
+        state.beta *= throughput;
+        if state.beta.is_black() || !state.beta.is_finite() {
+            return Arrival { shadow, continues: false };
+        }
+        path.rng.set_dimension(d0.wrapping_add(layout.roulette));
+        state.segments += 1;
+        if !survives_roulette(self.params, state.segments, &mut state.beta, reference, &mut path.rng) {
+            return Arrival { shadow, continues: false };
+        }
+        state.ray = spawn_ray(v.p, v.ng, wi);
+        state.last = Some(LastBounce { origin: state.ray.origin, pdf, delta: false });
+        Arrival { shadow, continues: true }
     }
-
-    fn finish(&mut self, _: LightPath) {}
 }

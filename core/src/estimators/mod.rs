@@ -21,6 +21,7 @@ pub mod bdpt;
 #[cfg(feature = "filtering")]
 pub mod filter;
 pub mod lt;
+mod lt_lanes;
 #[cfg(feature = "lvcbpt")]
 pub mod lvcbpt;
 pub mod pt;

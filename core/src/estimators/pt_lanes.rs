@@ -52,8 +52,8 @@
 use crate::bsdf::LambertLane;
 use crate::geometry::{Ray, offset_ray_origin, spawn_ray, spawn_ray_to};
 use crate::light::TriangleLanes;
-use crate::math::simd::{self, Level, Set};
-use crate::math::soa::{LANES, Lane, Vec3s, select_rgb, select3};
+use crate::math::simd::{self, Level};
+use crate::math::soa::{LANES, Lane, Vec3s, over_lanes, select_rgb, select3, whole_groups};
 use crate::math::{Frame, Vec2, Vec3};
 use crate::rng::uniform_at;
 use crate::scene::Scene;
@@ -66,16 +66,9 @@ use crate::transport::{Heuristic, RenderParams, SurfacePoint};
 /// roulette 6. `pt.rs` walks with this layout too.
 pub(super) const LAYOUT: Layout = Layout { per_bounce: 8, light: 0, lobe: 3, roulette: 6 };
 
-/// Paths PT keeps in flight for its lane kernels at `level`: 16 where AVX2 or AVX-512
-/// run them, else 1 (one path at a time, unless the tracer asks for more). Measured on
-/// the suite, one thread (docs/lanes.md): with the kernels on AVX-512, 16 paths ran the
-/// Cornell box 1.12× and window_env 1.15× as fast as one path at a time; with SSE2's
-/// four narrow lanes the batch cost more than it saved (0.88×).
+/// Paths PT keeps in flight for its lane kernels at `level` ([`Level::paths_in_flight`]).
 pub fn width(level: Level) -> usize {
-    match level.set() {
-        Set::Avx2 | Set::Avx512 => 16,
-        Set::Baseline => 1,
-    }
+    level.paths_in_flight()
 }
 
 /// The Lambertian vertices of one step: what phase 1 needs of each.
@@ -287,34 +280,6 @@ impl Scratch {
         let bounce = s.ok[i].then(|| (s.throughput.rgb(i), s.wi.get(i), s.pdf[i]));
         Shaded1 { slot: b.slot[i] as usize, nee, bounce, p: b.p.get(i), ng: b.ng.get(i) }
     }
-}
-
-/// SIMD groups of lanes.
-const GROUP: usize = 8;
-
-/// `n` lanes rounded up to whole groups of [`GROUP`]: the phases run that many, so that
-/// their loops have a length known at compile time ([`over_lanes`]); the lanes past `n`
-/// compute on stale values that nothing reads.
-#[inline(always)]
-fn whole_groups(n: usize) -> usize {
-    n.next_multiple_of(GROUP).min(LANES)
-}
-
-/// Run `$body` for lanes `$i` in `0..$groups` (a multiple of [`GROUP`]), in a loop of
-/// constant length, which the compiler runs over SIMD registers (a loop of run-time
-/// length stayed scalar). A macro, not a function taking a closure: a closure reaches
-/// the phase's arrays through its captures, which hides from the compiler that they do
-/// not overlap, and the loop stayed scalar too.
-macro_rules! over_lanes {
-    ($groups:expr, |$i:ident| $body:block) => {
-        match $groups {
-            0 => {}
-            8 => for $i in 0..8 $body,
-            16 => for $i in 0..16 $body,
-            24 => for $i in 0..24 $body,
-            _ => for $i in 0..LANES $body,
-        }
-    };
 }
 
 simd::kernel! {

@@ -68,3 +68,33 @@ pub fn select3(c: bool, a: Vec3, b: Vec3) -> Vec3 {
 pub fn select_rgb(c: bool, a: Rgb, b: Rgb) -> Rgb {
     Rgb::new(if c { a.r } else { b.r }, if c { a.g } else { b.g }, if c { a.b } else { b.b })
 }
+
+/// SIMD groups of lanes.
+pub const GROUP: usize = 8;
+
+/// `n` lanes rounded up to whole groups of [`GROUP`]: the phases run that many, so that
+/// their loops have a length known at compile time ([`over_lanes`]); the lanes past `n`
+/// compute on stale values that nothing reads.
+#[inline(always)]
+pub fn whole_groups(n: usize) -> usize {
+    n.next_multiple_of(GROUP).min(LANES)
+}
+
+/// Run `$body` for lanes `$i` in `0..$groups` (a multiple of [`GROUP`]), in a loop of
+/// constant length, which the compiler runs over SIMD registers (a loop of run-time
+/// length stayed scalar). A macro, not a function taking a closure: a closure reaches
+/// the phase's arrays through its captures, which hides from the compiler that they do
+/// not overlap, and the loop stayed scalar too.
+macro_rules! over_lanes {
+    ($groups:expr, |$i:ident| $body:block) => {
+        match $groups {
+            0 => {}
+            8 => for $i in 0..8 $body,
+            16 => for $i in 0..16 $body,
+            24 => for $i in 0..24 $body,
+            _ => for $i in 0..$crate::math::soa::LANES $body,
+        }
+    };
+}
+
+pub(crate) use over_lanes;
