@@ -495,8 +495,12 @@ unsafe fn create(scene: EmberScene, settings: *const EmberRenderSettings, callba
     let config = settings.config()?;
     let identity = RenderIdentity::of(&config);
     let Config { estimator, mut params, memory_limit, threads } = config;
-    // The lane kernels at the level the scene's accelerator chose for this machine.
-    params.simd = data.accel.shading_level();
+    // The lane kernels at the level the scene's accelerator chose for this machine, with
+    // its BVH; an engine's callbacks get batches of the width they ask for (one ray per
+    // call for single-ray callbacks), so the lanes stay at the baseline's one path.
+    if callbacks.is_none() {
+        params.simd = data.accel.shading_level();
+    }
     crate::check_memory(&data, &estimator, memory_limit)?;
     let r = Renderer::new(&data.scene, params, estimator).map_err(|e| Error::new(EmberStatus::InvalidConfig, e.to_string()))?;
     let film = Film::for_camera(&data.scene.camera);
