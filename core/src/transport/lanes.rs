@@ -17,11 +17,15 @@
 //!
 //! Batching pays only where something works on the batch as a whole: a tracer with
 //! packet or stream queries, a C caller whose callback costs a crossing per call, and
-//! (not yet) lane-wise shading. Measured on the built-in box with our BVH4 answering one
-//! ray at a time, 32 paths in flight cost PT 10 % more instructions and 19 % more time
-//! than one (more stores and loads of path state, 16 % more mispredicted branches:
-//! docs/performance.md), so the default width is 1: one path at a time through the
-//! same steps with single-ray queries, which is then the reference for every width.
+//! lane-wise shading ([`LaneProgram::arrive_batch`]: PT's and LT's Lambertian vertices,
+//! `estimators::pt_lanes`, `lt_lanes`). Measured on the built-in box with our BVH4
+//! answering one ray at a time and nothing shaded over lanes, 32 paths in flight cost
+//! PT 10 % more instructions and 19 % more time than one (more stores and loads of path
+//! state, 16 % more mispredicted branches: docs/performance.md). So [`run`] keeps the
+//! tracer's width (1 for our BVH4: one path at a time through the same steps with
+//! single-ray queries, the reference for every width), and PT and LT ask
+//! [`run_with_width`] for 16 where their lane kernels run on AVX2 or AVX-512
+//! (`math::simd::Level::paths_in_flight`).
 //!
 //! # The steps
 //!
