@@ -183,13 +183,7 @@ impl<Q: RayQuery + ?Sized> LaneProgram for LightPaths<'_, Q> {
     }
 
     fn arrive_batch(&mut self, lanes: &mut [Option<LightPath>], lane_of: &[u8], hits: &[Option<SurfaceHit>], arrivals: &mut [Arrival]) {
-        let Some(scratch) = self.lanes.take() else {
-            for (k, hit) in hits.iter().enumerate() {
-                let path = lanes[lane_of[k] as usize].as_mut().expect("a traced lane holds a path");
-                arrivals[k] = self.arrive(path, *hit);
-            }
-            return;
-        };
+        let Some(scratch) = self.lanes.take() else { return lanes::arrive_each(self, lanes, lane_of, hits, arrivals) };
         scratch.clear();
         for (k, hit) in hits.iter().enumerate() {
             let path = lanes[lane_of[k] as usize].as_mut().expect("a traced lane holds a path");

@@ -26,10 +26,11 @@ use crate::bsdf::{LambertLane, TransportMode, shading_normal_correction};
 use crate::camera::PerspectiveCamera;
 use crate::geometry::{Ray, spawn_ray_to};
 use crate::math::simd;
-use crate::math::soa::{LANES, Lane, Vec3s, over_lanes, select_rgb, whole_groups};
+use crate::math::soa::{BounceLanes, LANES, Lane, RayLanes, Vec3s, over_lanes, select_rgb, whole_groups};
 use crate::math::{Frame, Vec2, Vec3};
 use crate::rng::uniform_at;
 use crate::spectrum::Rgb;
+use crate::transport::lane_vertices::LambertVertices;
 use crate::transport::walk::Layout;
 use crate::transport::{RenderParams, SurfacePoint};
 
@@ -37,25 +38,14 @@ use crate::transport::{RenderParams, SurfacePoint};
 /// `transport::walk`): lobe 0, direction 1–2, roulette 3. `lt.rs` walks with it too.
 pub(super) const LAYOUT: Layout = Layout { per_bounce: 4, light: 0, lobe: 0, roulette: 3 };
 
-/// The Lambertian vertices of one step.
+/// The Lambertian vertices of one step, with what the camera connection needs of
+/// their paths.
 struct Vertices {
-    len: usize,
-    /// The vertex's index among the step's traced lanes.
-    slot: [u8; LANES],
-    p: Vec3s,
-    ng: Vec3s,
-    ns: Vec3s,
-    /// Unit world direction back along the arriving segment.
-    wo: Vec3s,
-    rho: Vec3s,
-    two_sided: [bool; LANES],
+    v: LambertVertices,
     /// The path's throughput β.
     beta: Vec3s,
     /// The path may connect to the camera here (its depth allows one more segment).
     connect: [bool; LANES],
-    /// The path's random stream and the first dimension of this bounce.
-    base: [u64; LANES],
-    dim: [u32; LANES],
 }
 
 /// Phase 1's results.
@@ -75,14 +65,9 @@ struct Shaded {
     film_y: Lane,
     value: Vec3s,
     splat: [bool; LANES],
-    shadow_origin: Vec3s,
-    shadow_dir: Vec3s,
-    shadow_t: Lane,
-    /// The BSDF sample: world direction, throughput f |cos| c_sn / p, p, existence.
-    wi: Vec3s,
-    throughput: Vec3s,
-    pdf: Lane,
-    ok: [bool; LANES],
+    shadow: RayLanes,
+    /// The BSDF sample (throughput f |cos| c_sn / p).
+    bounce: BounceLanes,
 }
 
 /// Everything the lane shading keeps, made once per range of light paths.
@@ -111,44 +96,19 @@ impl Scratch {
         let zero = [0.0; LANES];
         let v = Vec3s::ZERO;
         Self {
-            batch: Vertices {
-                len: 0,
-                slot: [0; LANES],
-                p: v,
-                ng: v,
-                ns: v,
-                wo: v,
-                rho: v,
-                two_sided: [false; LANES],
-                beta: v,
-                connect: [false; LANES],
-                base: [0; LANES],
-                dim: [0; LANES],
-            },
+            batch: Vertices { v: LambertVertices::new(), beta: v, connect: [false; LANES] },
             pre: Prepared { s: v, t: v, wo: v, u: [zero; 2] },
-            shaded: Shaded {
-                film_x: zero,
-                film_y: zero,
-                value: v,
-                splat: [false; LANES],
-                shadow_origin: v,
-                shadow_dir: v,
-                shadow_t: zero,
-                wi: v,
-                throughput: v,
-                pdf: zero,
-                ok: [false; LANES],
-            },
+            shaded: Shaded { film_x: zero, film_y: zero, value: v, splat: [false; LANES], shadow: RayLanes::ZERO, bounce: BounceLanes::ZERO },
         }
     }
 
     pub(super) fn clear(&mut self) {
-        self.batch.len = 0;
+        self.batch.v.clear();
     }
 
     /// The vertices in the batch.
     pub(super) fn len(&self) -> usize {
-        self.batch.len
+        self.batch.v.len
     }
 
     /// Add the vertex at `sp` (traced lane `slot`) of a path of throughput `beta`, whose
@@ -158,30 +118,20 @@ impl Scratch {
     #[allow(clippy::too_many_arguments)]
     pub(super) fn push(&mut self, slot: u8, sp: &SurfacePoint, lobe: LambertLane, beta: Rgb, connect: bool, base: u64, dim: u32) {
         let b = &mut self.batch;
-        let i = b.len;
-        b.slot[i] = slot;
-        b.p.set(i, sp.hit.p);
-        b.ng.set(i, sp.hit.ng);
-        b.ns.set(i, sp.hit.ns);
-        b.wo.set(i, sp.wo);
-        b.rho.set_rgb(i, lobe.rho);
-        b.two_sided[i] = lobe.two_sided;
+        let i = b.v.push(slot, sp, lobe, base, dim);
         b.beta.set_rgb(i, beta);
         b.connect[i] = connect;
-        b.base[i] = base;
-        b.dim[i] = dim;
-        b.len += 1;
     }
 
     /// Vertex `i`'s results.
     #[inline(always)]
     pub(super) fn lane(&self, i: usize) -> Shaded1 {
-        let (b, s) = (&self.batch, &self.shaded);
+        let (b, s) = (&self.batch.v, &self.shaded);
         let splat = s.splat[i].then(|| {
-            let ray = Ray { origin: s.shadow_origin.get(i), dir: s.shadow_dir.get(i), t_max: s.shadow_t[i] };
+            let ray = Ray { origin: s.shadow.origin.get(i), dir: s.shadow.dir.get(i), t_max: s.shadow.t_max[i] };
             (Vec2::new(s.film_x[i], s.film_y[i]), s.value.rgb(i), ray)
         });
-        let bounce = s.ok[i].then(|| (s.throughput.rgb(i), s.wi.get(i), s.pdf[i]));
+        let bounce = s.bounce.get(i);
         Shaded1 { slot: b.slot[i] as usize, splat, bounce, p: b.p.get(i), ng: b.ng.get(i) }
     }
 }
@@ -190,19 +140,19 @@ impl Scratch {
 /// [`Scratch::lane`]. The camera must be a pinhole.
 pub(super) fn shade(camera: &PerspectiveCamera, params: &RenderParams, scratch: &mut Scratch) {
     let Scratch { batch, pre, shaded } = scratch;
-    let groups = whole_groups(batch.len);
-    prepare(params.simd, batch, pre, groups);
+    let groups = whole_groups(batch.v.len);
+    prepare(params.simd, &batch.v, pre, groups);
     evaluate(params.simd, camera, batch, pre, shaded, groups);
 }
 
 simd::kernel! {
 /// Phase 1: frames, wo, the direction's random numbers.
-fn prepare(isa, b: &Vertices, out: &mut Prepared, groups: usize) {
+fn prepare(isa, b: &LambertVertices, out: &mut Prepared, groups: usize) {
     over_lanes!(groups, |i| {
-        let frame = Frame::from_normal(b.ns.get(i));
+        let (frame, wo_local) = b.frame(i);
         out.s.set(i, frame.s);
         out.t.set(i, frame.t);
-        out.wo.set(i, frame.to_local(b.wo.get(i)));
+        out.wo.set(i, wo_local);
         let (base, d) = (b.base[i], b.dim[i]);
         out.u[0][i] = uniform_at(base, d.wrapping_add(LAYOUT.lobe + 1));
         out.u[1][i] = uniform_at(base, d.wrapping_add(LAYOUT.lobe + 2));
@@ -213,11 +163,12 @@ fn prepare(isa, b: &Vertices, out: &mut Prepared, groups: usize) {
 simd::kernel! {
 /// Phase 2: the camera connection (`LightPaths::arrive`, `SurfacePoint::f_cos` in
 /// importance mode) and the BSDF sample (`Walk::scatter` in importance mode).
-fn evaluate(isa, camera: &PerspectiveCamera, b: &Vertices, pre: &Prepared, out: &mut Shaded, groups: usize) {
+fn evaluate(isa, camera: &PerspectiveCamera, batch: &Vertices, pre: &Prepared, out: &mut Shaded, groups: usize) {
     over_lanes!(groups, |i| {
+        let b = &batch.v;
         let frame = Frame { s: pre.s.get(i), t: pre.t.get(i), n: b.ns.get(i) };
         let wo_local = pre.wo.get(i);
-        let lobe = LambertLane { rho: b.rho.rgb(i), two_sided: b.two_sided[i] };
+        let lobe = b.lobe(i);
         let (p, ng, ns, wo) = (b.p.get(i), b.ng.get(i), b.ns.get(i), b.wo.get(i));
 
         // The camera connection.
@@ -226,24 +177,19 @@ fn evaluate(isa, camera: &PerspectiveCamera, b: &Vertices, pre: &Prepared, out: 
         let (f, _) = lobe.eval_pdf(wo_local, wi_local);
         let correction = shading_normal_correction(TransportMode::Importance, wo, cs.wi, ng, ns);
         let f_cos = select_rgb(f.is_black(), Rgb::ZERO, f * (wi_local.z.abs() * correction));
-        let value = b.beta.rgb(i) * f_cos * camera.arriving_importance(&cs);
-        out.splat[i] = b.connect[i] & on_film & !value.is_black();
+        let value = batch.beta.rgb(i) * f_cos * camera.arriving_importance(&cs);
+        out.splat[i] = batch.connect[i] & on_film & !value.is_black();
         out.film_x[i] = cs.film.x;
         out.film_y[i] = cs.film.y;
         out.value.set_rgb(i, value);
         let shadow = spawn_ray_to(p, ng, cs.position, Vec3::ZERO);
-        out.shadow_origin.set(i, shadow.origin);
-        out.shadow_dir.set(i, shadow.dir);
-        out.shadow_t[i] = shadow.t_max;
+        out.shadow.set(i, shadow.origin, shadow.dir, shadow.t_max);
 
         // The BSDF sample, with the adjoint's correction.
         let (wi_local, f, pdf, ok) = lobe.sample(wo_local, Vec2::new(pre.u[0][i], pre.u[1][i]));
         let wi = frame.to_world(wi_local);
-        out.ok[i] = ok;
-        out.wi.set(i, wi);
-        out.pdf[i] = pdf;
         let correction = shading_normal_correction(TransportMode::Importance, wo, wi, ng, ns);
-        out.throughput.set_rgb(i, f * (wi_local.z.abs() * correction / pdf));
+        out.bounce.set(i, wi, f * (wi_local.z.abs() * correction / pdf), pdf, ok);
     });
 }
 }

@@ -159,13 +159,7 @@ impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
     }
 
     fn arrive_batch(&mut self, lanes: &mut [Option<CameraPath>], lane_of: &[u8], hits: &[Option<SurfaceHit>], arrivals: &mut [Arrival]) {
-        let Some(scratch) = self.lanes.take() else {
-            for (k, hit) in hits.iter().enumerate() {
-                let path = lanes[lane_of[k] as usize].as_mut().expect("a traced lane holds a path");
-                arrivals[k] = self.arrive(path, *hit);
-            }
-            return;
-        };
+        let Some(scratch) = self.lanes.take() else { return lanes::arrive_each(self, lanes, lane_of, hits, arrivals) };
         let batch = &mut scratch.batch;
         batch.clear();
         // Surfaces behind which a medium absorbs take the scalar steps.

@@ -49,17 +49,17 @@
 //! Nothing here allocates: the scratch lives on the stack of `render_pixels`, once per
 //! range of pixels.
 
-use crate::bsdf::LambertLane;
 use crate::geometry::{Ray, offset_ray_origin, spawn_ray, spawn_ray_to};
 use crate::light::TriangleLanes;
 use crate::math::simd::{self, Level};
-use crate::math::soa::{LANES, Lane, Vec3s, over_lanes, select_rgb, select3, whole_groups};
+use crate::math::soa::{BounceLanes, LANES, Lane, RayLanes, Vec3s, over_lanes, select_rgb, select3, whole_groups};
 use crate::math::{Frame, Vec2, Vec3};
 use crate::rng::uniform_at;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
+use crate::transport::lane_vertices::LambertVertices;
 use crate::transport::walk::Layout;
-use crate::transport::{Heuristic, RenderParams, SurfacePoint};
+use crate::transport::{Heuristic, RenderParams};
 
 /// PT's random dimensions per bounce (`Walk`'s layout, module notes of
 /// `transport::walk`): light choice 0, point on the light 1–2, lobe 3, direction 4–5,
@@ -71,62 +71,8 @@ pub fn width(level: Level) -> usize {
     level.paths_in_flight()
 }
 
-/// The Lambertian vertices of one step: what phase 1 needs of each.
-pub(super) struct Lambertian {
-    len: usize,
-    /// The vertex's index among the step's traced lanes (its `arrivals` slot).
-    slot: [u8; LANES],
-    p: Vec3s,
-    ng: Vec3s,
-    ns: Vec3s,
-    /// Unit world direction back along the arriving segment.
-    wo: Vec3s,
-    rho: Vec3s,
-    two_sided: [bool; LANES],
-    /// The path's random stream ([`crate::rng::SampleStream::base`]) and the first
-    /// dimension of this bounce.
-    base: [u64; LANES],
-    dim: [u32; LANES],
-}
-
-impl Lambertian {
-    fn new() -> Self {
-        Self {
-            len: 0,
-            slot: [0; LANES],
-            p: Vec3s::ZERO,
-            ng: Vec3s::ZERO,
-            ns: Vec3s::ZERO,
-            wo: Vec3s::ZERO,
-            rho: Vec3s::ZERO,
-            two_sided: [false; LANES],
-            base: [0; LANES],
-            dim: [0; LANES],
-        }
-    }
-
-    pub(super) fn clear(&mut self) {
-        self.len = 0;
-    }
-
-    /// Add the vertex at `sp` (traced lane `slot`), of reflectance `rho`, whose path's
-    /// random stream is `base` and whose bounce draws from dimension `dim` at `layout`'s
-    /// offsets.
-    #[inline(always)]
-    pub(super) fn push(&mut self, slot: u8, sp: &SurfacePoint, lobe: LambertLane, base: u64, dim: u32) {
-        let i = self.len;
-        self.slot[i] = slot;
-        self.p.set(i, sp.hit.p);
-        self.ng.set(i, sp.hit.ng);
-        self.ns.set(i, sp.hit.ns);
-        self.wo.set(i, sp.wo);
-        self.rho.set_rgb(i, lobe.rho);
-        self.two_sided[i] = lobe.two_sided;
-        self.base[i] = base;
-        self.dim[i] = dim;
-        self.len += 1;
-    }
-}
+/// The Lambertian vertices of one step.
+pub(super) type Lambertian = LambertVertices;
 
 /// Phase 1's results.
 struct Prepared {
@@ -160,14 +106,9 @@ struct Shaded {
     /// Next-event estimation: f |cos| L w / p_L, and whether there is one.
     nee: Vec3s,
     nee_ok: [bool; LANES],
-    shadow_origin: Vec3s,
-    shadow_dir: Vec3s,
-    shadow_t: Lane,
-    /// The BSDF sample: world direction, throughput f |cos| / p, density, existence.
-    wi: Vec3s,
-    throughput: Vec3s,
-    pdf: Lane,
-    ok: [bool; LANES],
+    shadow: RayLanes,
+    /// The BSDF sample (throughput f |cos| / p).
+    bounce: BounceLanes,
 }
 
 /// Everything the lane shading keeps, made once per range of pixels.
@@ -183,7 +124,7 @@ impl Scratch {
     pub(super) fn new() -> Self {
         let zero = [0.0; LANES];
         Self {
-            batch: Lambertian::new(),
+            batch: LambertVertices::new(),
             pre: Prepared { s: Vec3s::ZERO, t: Vec3s::ZERO, wo: Vec3s::ZERO, origin: Vec3s::ZERO, u: [zero; 5] },
             drawn: Drawn {
                 ok: [false; LANES],
@@ -198,17 +139,7 @@ impl Scratch {
                 delta: [false; LANES],
             },
             triangles: TriangleLanes::new(),
-            shaded: Shaded {
-                nee: Vec3s::ZERO,
-                nee_ok: [false; LANES],
-                shadow_origin: Vec3s::ZERO,
-                shadow_dir: Vec3s::ZERO,
-                shadow_t: zero,
-                wi: Vec3s::ZERO,
-                throughput: Vec3s::ZERO,
-                pdf: zero,
-                ok: [false; LANES],
-            },
+            shaded: Shaded { nee: Vec3s::ZERO, nee_ok: [false; LANES], shadow: RayLanes::ZERO, bounce: BounceLanes::ZERO },
         }
     }
 }
@@ -276,8 +207,8 @@ impl Scratch {
     #[inline(always)]
     pub(super) fn lane(&self, i: usize) -> Shaded1 {
         let (b, s) = (&self.batch, &self.shaded);
-        let nee = s.nee_ok[i].then(|| (s.nee.rgb(i), Ray { origin: s.shadow_origin.get(i), dir: s.shadow_dir.get(i), t_max: s.shadow_t[i] }));
-        let bounce = s.ok[i].then(|| (s.throughput.rgb(i), s.wi.get(i), s.pdf[i]));
+        let nee = s.nee_ok[i].then(|| (s.nee.rgb(i), Ray { origin: s.shadow.origin.get(i), dir: s.shadow.dir.get(i), t_max: s.shadow.t_max[i] }));
+        let bounce = s.bounce.get(i);
         Shaded1 { slot: b.slot[i] as usize, nee, bounce, p: b.p.get(i), ng: b.ng.get(i) }
     }
 }
@@ -287,11 +218,11 @@ simd::kernel! {
 fn prepare(isa, b: &Lambertian, out: &mut Prepared, groups: usize) {
     let layout = LAYOUT;
     over_lanes!(groups, |i| {
-        let frame = Frame::from_normal(b.ns.get(i));
+        let (frame, wo_local) = b.frame(i);
         out.s.set(i, frame.s);
         out.t.set(i, frame.t);
+        out.wo.set(i, wo_local);
         let wo = b.wo.get(i);
-        out.wo.set(i, frame.to_local(wo));
         // `walk::light_origin`: where rays toward wo's side start.
         let (p, ng) = (b.p.get(i), b.ng.get(i));
         out.origin.set(i, offset_ray_origin(p, select3(ng.dot(wo) >= 0.0, ng, -ng)));
@@ -331,7 +262,7 @@ fn evaluate(isa, b: &Lambertian, pre: &Prepared, ls: &Drawn, heuristic: Heuristi
     over_lanes!(groups, |i| {
         let frame = Frame { s: pre.s.get(i), t: pre.t.get(i), n: b.ns.get(i) };
         let wo = pre.wo.get(i);
-        let lobe = LambertLane { rho: b.rho.rgb(i), two_sided: b.two_sided[i] };
+        let lobe = b.lobe(i);
         let (p, ng) = (b.p.get(i), b.ng.get(i));
 
         // Next-event estimation: f and p_B at the light's direction.
@@ -348,16 +279,12 @@ fn evaluate(isa, b: &Lambertian, pre: &Prepared, ls: &Drawn, heuristic: Heuristi
         let finite = ls.dist[i].is_finite();
         let to_point = spawn_ray_to(p, ng, ls.p.get(i), ls.n.get(i));
         let along = spawn_ray(p, ng, wi_world);
-        out.shadow_origin.set(i, select3(finite, to_point.origin, along.origin));
-        out.shadow_dir.set(i, select3(finite, to_point.dir, along.dir));
-        out.shadow_t[i] = if finite { to_point.t_max } else { along.t_max };
+        let t_max = if finite { to_point.t_max } else { along.t_max };
+        out.shadow.set(i, select3(finite, to_point.origin, along.origin), select3(finite, to_point.dir, along.dir), t_max);
 
         // The BSDF sample.
         let (wi, f, pdf, ok) = lobe.sample(wo, Vec2::new(pre.u[3][i], pre.u[4][i]));
-        out.ok[i] = ok;
-        out.wi.set(i, frame.to_world(wi));
-        out.pdf[i] = pdf;
-        out.throughput.set_rgb(i, f * (wi.z.abs() / pdf));
+        out.bounce.set(i, frame.to_world(wi), f * (wi.z.abs() / pdf), pdf, ok);
     });
 }
 }

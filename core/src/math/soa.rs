@@ -56,6 +56,53 @@ impl Vec3s {
     }
 }
 
+/// A ray per lane (origin, direction, t_max): the shadow rays lane kernels ask.
+#[derive(Clone, Copy, Debug)]
+pub struct RayLanes {
+    pub origin: Vec3s,
+    pub dir: Vec3s,
+    pub t_max: Lane,
+}
+
+impl RayLanes {
+    pub const ZERO: Self = Self { origin: Vec3s::ZERO, dir: Vec3s::ZERO, t_max: [0.0; LANES] };
+
+    #[inline(always)]
+    pub fn set(&mut self, i: usize, origin: Vec3, dir: Vec3, t_max: f32) {
+        self.origin.set(i, origin);
+        self.dir.set(i, dir);
+        self.t_max[i] = t_max;
+    }
+}
+
+/// A BSDF sample per lane that continues a path: the next direction (world), the
+/// throughput f |cos| c / p, p, and whether there is one.
+#[derive(Clone, Copy, Debug)]
+pub struct BounceLanes {
+    pub wi: Vec3s,
+    pub throughput: Vec3s,
+    pub pdf: Lane,
+    pub ok: [bool; LANES],
+}
+
+impl BounceLanes {
+    pub const ZERO: Self = Self { wi: Vec3s::ZERO, throughput: Vec3s::ZERO, pdf: [0.0; LANES], ok: [false; LANES] };
+
+    /// Lane `i`'s sample: its throughput, direction and p, if there is one.
+    #[inline(always)]
+    pub fn get(&self, i: usize) -> Option<(Rgb, Vec3, f32)> {
+        self.ok[i].then(|| (self.throughput.rgb(i), self.wi.get(i), self.pdf[i]))
+    }
+
+    #[inline(always)]
+    pub fn set(&mut self, i: usize, wi: Vec3, throughput: Rgb, pdf: f32, ok: bool) {
+        self.wi.set(i, wi);
+        self.throughput.set_rgb(i, throughput);
+        self.pdf[i] = pdf;
+        self.ok[i] = ok;
+    }
+}
+
 /// `a` where `c`, else `b`, component by component: a select in every lane, where an
 /// `if` over whole vectors may compile to a branch and keep the loop scalar.
 #[inline(always)]

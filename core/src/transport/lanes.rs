@@ -91,10 +91,7 @@ pub trait LaneProgram {
     /// `lanes` reached `hits[k]`, its arrival goes to `arrivals[k]`. A program that shades
     /// over lanes overrides it; the default arrives lane by lane, in order.
     fn arrive_batch(&mut self, lanes: &mut [Option<Self::Path>], lane_of: &[u8], hits: &[Option<SurfaceHit>], arrivals: &mut [Arrival]) {
-        for (k, hit) in hits.iter().enumerate() {
-            let path = lanes[lane_of[k] as usize].as_mut().expect("a traced lane holds a path");
-            arrivals[k] = self.arrive(path, *hit);
-        }
+        arrive_each(self, lanes, lane_of, hits, arrivals);
     }
 
     /// The shadow ray asked by [`Self::arrive`] was `occluded` (`None` if none was
@@ -103,6 +100,21 @@ pub trait LaneProgram {
 
     /// The path ended: record its result.
     fn finish(&mut self, path: Self::Path);
+}
+
+/// [`LaneProgram::arrive_batch`] lane by lane, in order: its default, and what an
+/// override does for the steps it does not shade over lanes.
+pub fn arrive_each<P: LaneProgram + ?Sized>(
+    program: &mut P,
+    lanes: &mut [Option<P::Path>],
+    lane_of: &[u8],
+    hits: &[Option<SurfaceHit>],
+    arrivals: &mut [Arrival],
+) {
+    for (k, hit) in hits.iter().enumerate() {
+        let path = lanes[lane_of[k] as usize].as_mut().expect("a traced lane holds a path");
+        arrivals[k] = program.arrive(path, *hit);
+    }
 }
 
 /// What [`LaneProgram::arrive`] asks of the rest of the step.

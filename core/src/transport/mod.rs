@@ -9,6 +9,7 @@
 //! −1 = unbounded. Unbounded paths end by Russian roulette from the fifth segment on.
 
 pub mod config;
+pub(crate) mod lane_vertices;
 pub mod lanes;
 mod surface;
 pub mod walk;
