@@ -1,6 +1,7 @@
 //! Rays, surface hits and the ray-query trait through which hosts and embedding engines
 //! plug in their own tracer.
 
+use crate::math::soa::{Lane, Vec3s};
 use crate::math::{Vec2, Vec3};
 
 /// A ray `origin + t·dir`, t in (0, t_max). `dir` need not be unit length, but the
@@ -92,6 +93,32 @@ pub trait RayQuery {
         for (o, ray) in occluded.iter_mut().zip(rays.iter()) {
             *o = self.occluded(&ray);
         }
+    }
+}
+
+/// A ray per lane of a lane kernel (the shadow rays of `estimators::pt_lanes` and
+/// `lt_lanes`), in structure-of-arrays form and owned, where [`RayBatch`] borrows.
+#[derive(Clone, Copy, Debug)]
+pub struct RayLanes {
+    pub origin: Vec3s,
+    pub dir: Vec3s,
+    pub t_max: Lane,
+}
+
+impl RayLanes {
+    pub const ZERO: Self = Self { origin: Vec3s::ZERO, dir: Vec3s::ZERO, t_max: [0.0; crate::math::soa::LANES] };
+
+    /// Lane `i`'s ray.
+    #[inline(always)]
+    pub fn get(&self, i: usize) -> Ray {
+        Ray { origin: self.origin.get(i), dir: self.dir.get(i), t_max: self.t_max[i] }
+    }
+
+    #[inline(always)]
+    pub fn set(&mut self, i: usize, ray: Ray) {
+        self.origin.set(i, ray.origin);
+        self.dir.set(i, ray.dir);
+        self.t_max[i] = ray.t_max;
     }
 }
 

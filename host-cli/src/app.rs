@@ -638,7 +638,7 @@ impl fmt::Display for RenderReport {
         writeln!(f, "time       {:.2} s ({:.2} s setup, {:.2} s rendering) on {} threads", s.total_seconds, setup, s.render_seconds, s.threads)?;
         // The traversal kernels' lanes, and PT's paths in flight for its lane shading
         // (docs/lanes.md); the other estimators walk one path at a time.
-        let paths = ember_core::estimators::pt::lane_width(self.shading);
+        let paths = self.shading.paths_in_flight();
         if self.estimator == "pt" && paths > 1 {
             writeln!(f, "simd       {}, {} lanes (ray queries); {} shading, {paths} paths in flight", self.simd, self.simd.lanes(), self.shading.name())?;
         } else {

@@ -25,15 +25,15 @@ use core::ops::Range;
 
 use super::lt_lanes;
 use crate::bsdf::{Material, TransportMode};
-use crate::geometry::{Ray, RayQuery, SurfaceHit, spawn_ray, spawn_ray_to};
+use crate::geometry::{Ray, RayQuery, SurfaceHit, spawn_ray_to};
 use crate::math::{Vec2, Vec3};
 use crate::rng::{SampleStream, Stream};
 use crate::scene::Scene;
 use crate::segment::{Junctions, Kernel, LIGHT_KERNEL_KEY};
 use crate::spectrum::Rgb;
 use crate::transport::lanes::{self, Arrival, LaneProgram};
-use crate::transport::walk::{LastBounce, Leave, PathState, Roulette, Walk};
-use crate::transport::{Counters, RenderParams, Splat, SurfacePoint, survives_roulette};
+use crate::transport::walk::{Bounce, Leave, PathState, Roulette, Walk};
+use crate::transport::{Counters, RenderParams, Splat, SurfacePoint};
 
 /// LT's walk: importance, 4 dimensions per bounce (lobe 1, direction 2, roulette 1).
 const WALK: Walk = Walk { mode: TransportMode::Importance, layout: lt_lanes::LAYOUT };
@@ -284,22 +284,11 @@ impl<'a, Q: RayQuery + ?Sized> LightPaths<'a, Q> {
         if !self.params.max_depth.allows(path.state.segments + 2) {
             return Arrival { shadow, continues: false };
         }
-        let Roulette::Throughput { reference } = path.roulette else { unreachable!("light paths roll roulette by throughput") };
-        let d0 = path.state.dimension(&layout, 0);
-        path.rng.set_dimension(d0.wrapping_add(layout.lobe + 3));
+        // Where `Walk::scatter`'s draw leaves the stream (the lobe and the direction).
+        path.rng.set_dimension(path.state.dimension(&layout, layout.lobe + 3));
         let Some((throughput, wi, pdf)) = v.bounce else { return Arrival { shadow, continues: false } };
-        let state = &mut path.state;
-        state.beta *= throughput;
-        if state.beta.is_black() || !state.beta.is_finite() {
-            return Arrival { shadow, continues: false };
-        }
-        path.rng.set_dimension(d0.wrapping_add(layout.roulette));
-        state.segments += 1;
-        if !survives_roulette(self.params, state.segments, &mut state.beta, reference, &mut path.rng) {
-            return Arrival { shadow, continues: false };
-        }
-        state.ray = spawn_ray(v.p, v.ng, wi);
-        state.last = Some(LastBounce { origin: state.ray.origin, pdf, delta: false });
-        Arrival { shadow, continues: true }
+        let bounce = Bounce { wi, pdf, delta: false, throughput };
+        let continues = matches!(WALK.advance(self.params, &mut path.state, bounce, v.p, v.ng, path.roulette, &mut path.rng), Leave::Continues(_));
+        Arrival { shadow, continues }
     }
 }

@@ -24,9 +24,9 @@
 
 use crate::bsdf::{LambertLane, TransportMode, shading_normal_correction};
 use crate::camera::PerspectiveCamera;
-use crate::geometry::{Ray, spawn_ray_to};
+use crate::geometry::{Ray, RayLanes, spawn_ray_to};
 use crate::math::simd;
-use crate::math::soa::{BounceLanes, LANES, Lane, RayLanes, Vec3s, over_lanes, select_rgb, whole_groups};
+use crate::math::soa::{BounceLanes, LANES, Lane, Vec3s, over_lanes, select_rgb, whole_groups};
 use crate::math::{Frame, Vec2, Vec3};
 use crate::rng::uniform_at;
 use crate::spectrum::Rgb;
@@ -50,6 +50,7 @@ struct Vertices {
 
 /// Phase 1's results.
 struct Prepared {
+    /// The shading frame (its normal is the vertex's `ns`).
     s: Vec3s,
     t: Vec3s,
     /// wo in the shading frame.
@@ -127,10 +128,7 @@ impl Scratch {
     #[inline(always)]
     pub(super) fn lane(&self, i: usize) -> Shaded1 {
         let (b, s) = (&self.batch.v, &self.shaded);
-        let splat = s.splat[i].then(|| {
-            let ray = Ray { origin: s.shadow.origin.get(i), dir: s.shadow.dir.get(i), t_max: s.shadow.t_max[i] };
-            (Vec2::new(s.film_x[i], s.film_y[i]), s.value.rgb(i), ray)
-        });
+        let splat = s.splat[i].then(|| (Vec2::new(s.film_x[i], s.film_y[i]), s.value.rgb(i), s.shadow.get(i)));
         let bounce = s.bounce.get(i);
         Shaded1 { slot: b.slot[i] as usize, splat, bounce, p: b.p.get(i), ng: b.ng.get(i) }
     }
@@ -149,9 +147,10 @@ simd::kernel! {
 /// Phase 1: frames, wo, the direction's random numbers.
 fn prepare(isa, b: &LambertVertices, out: &mut Prepared, groups: usize) {
     over_lanes!(groups, |i| {
-        let (frame, wo_local) = b.frame(i);
+        let frame = b.frame(i);
         out.s.set(i, frame.s);
         out.t.set(i, frame.t);
+        let wo_local = frame.to_local(b.wo.get(i));
         out.wo.set(i, wo_local);
         let (base, d) = (b.base[i], b.dim[i]);
         out.u[0][i] = uniform_at(base, d.wrapping_add(LAYOUT.lobe + 1));
@@ -183,7 +182,7 @@ fn evaluate(isa, camera: &PerspectiveCamera, batch: &Vertices, pre: &Prepared, o
         out.film_y[i] = cs.film.y;
         out.value.set_rgb(i, value);
         let shadow = spawn_ray_to(p, ng, cs.position, Vec3::ZERO);
-        out.shadow.set(i, shadow.origin, shadow.dir, shadow.t_max);
+        out.shadow.set(i, shadow);
 
         // The BSDF sample, with the adjoint's correction.
         let (wi_local, f, pdf, ok) = lobe.sample(wo_local, Vec2::new(pre.u[0][i], pre.u[1][i]));

@@ -18,7 +18,6 @@ use core::ops::Range;
 
 use super::pt_lanes;
 use crate::bsdf::{Material, TransportMode};
-use crate::geometry::spawn_ray;
 use crate::geometry::{Ray, RayQuery, SurfaceHit};
 use crate::math::Vec3;
 use crate::rng::{SampleStream, Stream};
@@ -26,18 +25,12 @@ use crate::scene::Scene;
 use crate::segment::{CAMERA_KERNEL_KEY, Junctions, Kernel, start_cosine};
 use crate::spectrum::Rgb;
 use crate::transport::lanes::{self, Arrival, LaneProgram};
-use crate::transport::walk::{LastBounce, Leave, Moved, PathState, Roulette, Walk, light_origin, shadow_ray};
-use crate::transport::{Counters, RenderParams, SurfacePoint, survives_roulette};
+use crate::transport::walk::{Bounce, LastBounce, Leave, Moved, PathState, Roulette, Walk, light_origin, shadow_ray};
+use crate::transport::{Counters, RenderParams, SurfacePoint};
 
 /// PT's walk: radiance, 8 dimensions per bounce (light choice 1, light point 2, lobe 1,
 /// direction 2, roulette 1).
 const WALK: Walk = Walk { mode: TransportMode::Radiance, layout: pt_lanes::LAYOUT };
-
-/// Paths PT keeps in flight when its lane kernels run at `level` (with a tracer that
-/// asks for one ray at a time): 16 on AVX2 and AVX-512, else 1 (see `pt_lanes`).
-pub fn lane_width(level: crate::math::simd::Level) -> usize {
-    pt_lanes::width(level)
-}
 
 /// Render one sample for each pixel in `pixels` (index y·width + x) of pass `pass`
 /// into `out[i − pixels.start]`.
@@ -58,12 +51,12 @@ pub(crate) fn render_pixels_with_kernel<Q: RayQuery + ?Sized>(
 ) -> Counters {
     let items = pixels.start..pixels.start.saturating_add(out.len() as u32).min(pixels.end);
     // Paths in flight: what the tracer asks for, or more where the shading runs over
-    // SIMD lanes (`pt_lanes`).
-    // Only PT's own vertices shade over lanes (a segment kernel's moved starts do not).
-    let lanes_pay = if kernel == Kernel::Dirac { pt_lanes::width(params.simd) } else { 1 };
-    let width = tracer.batch_width().max(lanes_pay);
+    // SIMD lanes (`pt_lanes`: PT's own vertices, not a segment kernel's moved starts; no
+    // medium).
+    let lanes_pay = kernel == Kernel::Dirac && scene.interiors.is_empty();
+    let width = tracer.batch_width().max(if lanes_pay { params.simd.paths_in_flight() } else { 1 });
     let mut scratch;
-    let lanes = if width > 1 {
+    let lanes = if width > 1 && lanes_pay {
         scratch = pt_lanes::Scratch::new();
         Some(&mut scratch)
     } else {
@@ -162,8 +155,6 @@ impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
         let Some(scratch) = self.lanes.take() else { return lanes::arrive_each(self, lanes, lane_of, hits, arrivals) };
         let batch = &mut scratch.batch;
         batch.clear();
-        // Surfaces behind which a medium absorbs take the scalar steps.
-        let lanes_ok = self.scene.interiors.is_empty();
         for (k, hit) in hits.iter().enumerate() {
             let path = lanes[lane_of[k] as usize].as_mut().expect("a traced lane holds a path");
             match self.reach(path, *hit) {
@@ -171,7 +162,9 @@ impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
                 Reached::Surface(v) => {
                     let material = v.sp.material(self.scene);
                     match material.lambertian() {
-                        Some(lobe) if lanes_ok && v.moved.is_none() => {
+                        // `lanes` exists only without a segment kernel (`moved` is then
+                        // always `None`) and without a medium.
+                        Some(lobe) if v.moved.is_none() => {
                             batch.push(k as u8, &v.sp, lobe, path.rng.base(), path.state.dimension(&WALK.layout, 0));
                         }
                         _ => arrivals[k] = self.shade(path, &v, &material),
@@ -290,22 +283,13 @@ impl<'a, Q: RayQuery + ?Sized> CameraPaths<'a, Q> {
             path.pending = path.state.beta * value;
             shadow = Some(ray);
         }
-        let d0 = path.state.dimension(&layout, 0);
-        path.rng.set_dimension(d0.wrapping_add(layout.lobe + 3));
+        // Where `Walk::scatter`'s draw leaves the stream (the lobe and the direction).
+        path.rng.set_dimension(path.state.dimension(&layout, layout.lobe + 3));
         let Some((throughput, wi, pdf)) = v.bounce else { return Arrival { shadow, continues: false } };
-        let state = &mut path.state;
-        state.beta *= throughput;
-        if state.beta.is_black() || !state.beta.is_finite() {
-            return Arrival { shadow, continues: false };
-        }
-        path.rng.set_dimension(d0.wrapping_add(layout.roulette));
-        state.segments += 1;
-        if !survives_roulette(self.params, state.segments, &mut state.beta, 1.0, &mut path.rng) {
-            return Arrival { shadow, continues: false };
-        }
-        state.ray = spawn_ray(v.p, v.ng, wi);
-        state.last = Some(LastBounce { origin: state.ray.origin, pdf, delta: false });
-        Arrival { shadow, continues: true }
+        let bounce = Bounce { wi, pdf, delta: false, throughput };
+        let roulette = Roulette::Throughput { reference: 1.0 };
+        let continues = matches!(WALK.advance(self.params, &mut path.state, bounce, v.p, v.ng, roulette, &mut path.rng), Leave::Continues(_));
+        Arrival { shadow, continues }
     }
 
     /// One light sample from `at.sp` at the path's current bounce: choose a light ∝

@@ -49,10 +49,10 @@
 //! Nothing here allocates: the scratch lives on the stack of `render_pixels`, once per
 //! range of pixels.
 
-use crate::geometry::{Ray, offset_ray_origin, spawn_ray, spawn_ray_to};
+use crate::geometry::{Ray, RayLanes, offset_ray_origin, spawn_ray, spawn_ray_to};
 use crate::light::TriangleLanes;
-use crate::math::simd::{self, Level};
-use crate::math::soa::{BounceLanes, LANES, Lane, RayLanes, Vec3s, over_lanes, select_rgb, select3, whole_groups};
+use crate::math::simd;
+use crate::math::soa::{BounceLanes, LANES, Lane, Vec3s, over_lanes, select_rgb, select3, whole_groups};
 use crate::math::{Frame, Vec2, Vec3};
 use crate::rng::uniform_at;
 use crate::scene::Scene;
@@ -66,16 +66,9 @@ use crate::transport::{Heuristic, RenderParams};
 /// roulette 6. `pt.rs` walks with this layout too.
 pub(super) const LAYOUT: Layout = Layout { per_bounce: 8, light: 0, lobe: 3, roulette: 6 };
 
-/// Paths PT keeps in flight for its lane kernels at `level` ([`Level::paths_in_flight`]).
-pub fn width(level: Level) -> usize {
-    level.paths_in_flight()
-}
-
-/// The Lambertian vertices of one step.
-pub(super) type Lambertian = LambertVertices;
-
 /// Phase 1's results.
 struct Prepared {
+    /// The shading frame (its normal is the vertex's `ns`).
     s: Vec3s,
     t: Vec3s,
     /// wo in the shading frame.
@@ -113,7 +106,7 @@ struct Shaded {
 
 /// Everything the lane shading keeps, made once per range of pixels.
 pub(super) struct Scratch {
-    pub(super) batch: Lambertian,
+    pub(super) batch: LambertVertices,
     pre: Prepared,
     drawn: Drawn,
     triangles: TriangleLanes,
@@ -207,7 +200,7 @@ impl Scratch {
     #[inline(always)]
     pub(super) fn lane(&self, i: usize) -> Shaded1 {
         let (b, s) = (&self.batch, &self.shaded);
-        let nee = s.nee_ok[i].then(|| (s.nee.rgb(i), Ray { origin: s.shadow.origin.get(i), dir: s.shadow.dir.get(i), t_max: s.shadow.t_max[i] }));
+        let nee = s.nee_ok[i].then(|| (s.nee.rgb(i), s.shadow.get(i)));
         let bounce = s.bounce.get(i);
         Shaded1 { slot: b.slot[i] as usize, nee, bounce, p: b.p.get(i), ng: b.ng.get(i) }
     }
@@ -215,12 +208,13 @@ impl Scratch {
 
 simd::kernel! {
 /// Phase 1 (see the module notes).
-fn prepare(isa, b: &Lambertian, out: &mut Prepared, groups: usize) {
+fn prepare(isa, b: &LambertVertices, out: &mut Prepared, groups: usize) {
     let layout = LAYOUT;
     over_lanes!(groups, |i| {
-        let (frame, wo_local) = b.frame(i);
+        let frame = b.frame(i);
         out.s.set(i, frame.s);
         out.t.set(i, frame.t);
+        let wo_local = frame.to_local(b.wo.get(i));
         out.wo.set(i, wo_local);
         let wo = b.wo.get(i);
         // `walk::light_origin`: where rays toward wo's side start.
@@ -258,7 +252,7 @@ fn draw_triangles(isa, triangles: &TriangleLanes, pre: &Prepared, out: &mut Draw
 simd::kernel! {
 /// Phase 4: `CameraPaths::next_event` and `Material::sample` of a Lambertian lobe, with
 /// `Walk::scatter`'s throughput (radiance: no shading-normal correction).
-fn evaluate(isa, b: &Lambertian, pre: &Prepared, ls: &Drawn, heuristic: Heuristic, out: &mut Shaded, groups: usize) {
+fn evaluate(isa, b: &LambertVertices, pre: &Prepared, ls: &Drawn, heuristic: Heuristic, out: &mut Shaded, groups: usize) {
     over_lanes!(groups, |i| {
         let frame = Frame { s: pre.s.get(i), t: pre.t.get(i), n: b.ns.get(i) };
         let wo = pre.wo.get(i);
@@ -280,7 +274,7 @@ fn evaluate(isa, b: &Lambertian, pre: &Prepared, ls: &Drawn, heuristic: Heuristi
         let to_point = spawn_ray_to(p, ng, ls.p.get(i), ls.n.get(i));
         let along = spawn_ray(p, ng, wi_world);
         let t_max = if finite { to_point.t_max } else { along.t_max };
-        out.shadow.set(i, select3(finite, to_point.origin, along.origin), select3(finite, to_point.dir, along.dir), t_max);
+        out.shadow.set(i, Ray { origin: select3(finite, to_point.origin, along.origin), dir: select3(finite, to_point.dir, along.dir), t_max });
 
         // The BSDF sample.
         let (wi, f, pdf, ok) = lobe.sample(wo, Vec2::new(pre.u[3][i], pre.u[4][i]));

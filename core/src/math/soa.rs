@@ -56,25 +56,6 @@ impl Vec3s {
     }
 }
 
-/// A ray per lane (origin, direction, t_max): the shadow rays lane kernels ask.
-#[derive(Clone, Copy, Debug)]
-pub struct RayLanes {
-    pub origin: Vec3s,
-    pub dir: Vec3s,
-    pub t_max: Lane,
-}
-
-impl RayLanes {
-    pub const ZERO: Self = Self { origin: Vec3s::ZERO, dir: Vec3s::ZERO, t_max: [0.0; LANES] };
-
-    #[inline(always)]
-    pub fn set(&mut self, i: usize, origin: Vec3, dir: Vec3, t_max: f32) {
-        self.origin.set(i, origin);
-        self.dir.set(i, dir);
-        self.t_max[i] = t_max;
-    }
-}
-
 /// A BSDF sample per lane that continues a path: the next direction (world), the
 /// throughput f |cos| c / p, p, and whether there is one.
 #[derive(Clone, Copy, Debug)]

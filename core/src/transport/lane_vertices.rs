@@ -3,8 +3,8 @@
 //! kernel (`estimators::pt_lanes`, `lt_lanes`) reads of a vertex.
 
 use crate::bsdf::LambertLane;
+use crate::math::Frame;
 use crate::math::soa::{LANES, Vec3s};
-use crate::math::{Frame, Vec3};
 use crate::transport::SurfacePoint;
 
 /// Vertices on Lambertian surfaces, one per lane, with their paths' random streams.
@@ -54,7 +54,7 @@ impl LambertVertices {
         self.slot[i] = slot;
         self.p.set(i, sp.hit.p);
         self.ng.set(i, sp.hit.ng);
-        self.ns.set(i, sp.hit.ns);
+        self.ns.set(i, sp.frame.n);
         self.wo.set(i, sp.wo);
         self.rho.set_rgb(i, lobe.rho);
         self.two_sided[i] = lobe.two_sided;
@@ -70,10 +70,11 @@ impl LambertVertices {
         LambertLane { rho: self.rho.rgb(i), two_sided: self.two_sided[i] }
     }
 
-    /// Lane `i`'s shading frame and wo in it (`SurfacePoint::new`'s frame).
+    /// Lane `i`'s shading frame, `SurfacePoint::new`'s, built again in a kernel's first
+    /// phase: the scalar `reach` built it too, but copying its two vectors into the batch
+    /// measured no faster than recomputing them over lanes.
     #[inline(always)]
-    pub fn frame(&self, i: usize) -> (Frame, Vec3) {
-        let frame = Frame::from_normal(self.ns.get(i));
-        (frame, frame.to_local(self.wo.get(i)))
+    pub fn frame(&self, i: usize) -> Frame {
+        Frame::from_normal(self.ns.get(i))
     }
 }

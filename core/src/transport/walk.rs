@@ -299,7 +299,28 @@ impl Walk {
         let correction = shading_normal_correction(self.mode, sp.wo, wi, sp.hit.ng, sp.hit.ns);
         let throughput = bs.f * (cos * correction / bs.pdf.0);
         let bounce = Bounce { wi, pdf: bs.pdf.0, delta: bs.is_delta, throughput };
+        let from = start.unwrap_or(&sp.hit);
+        self.advance(params, state, bounce, from.p, from.ng, roulette, rng)
+    }
 
+    /// [`Self::scatter`]'s second half, once the BSDF has drawn `bounce` (a positive
+    /// density): multiply β by its throughput, apply `roulette` (a fixed one was rolled
+    /// before the draw), and spawn the next ray from `p` (geometric normal `ng`). The
+    /// lane kernels, which draw over lanes of paths (`estimators::pt_lanes`, `lt_lanes`),
+    /// finish each path's bounce here.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub fn advance(
+        &self,
+        params: &RenderParams,
+        state: &mut PathState,
+        bounce: Bounce,
+        p: Vec3,
+        ng: Vec3,
+        roulette: Roulette,
+        rng: &mut SampleStream,
+    ) -> Leave {
+        let throughput = bounce.throughput;
         // Update β and apply the roulette rule.
         match roulette {
             Roulette::Throughput { reference } => {
@@ -330,9 +351,8 @@ impl Walk {
         }
 
         // Spawn the next segment.
-        let from = start.unwrap_or(&sp.hit);
-        state.ray = spawn_ray(from.p, from.ng, wi);
-        state.last = Some(LastBounce { origin: state.ray.origin, pdf: bs.pdf.0, delta: bs.is_delta });
+        state.ray = spawn_ray(p, ng, bounce.wi);
+        state.last = Some(LastBounce { origin: state.ray.origin, pdf: bounce.pdf, delta: bounce.delta });
         Leave::Continues(bounce)
     }
 }
