@@ -644,6 +644,12 @@ impl fmt::Display for RenderReport {
         } else {
             writeln!(f, "simd       {}, {} lanes (ray queries; one path at a time)", self.simd, self.simd.lanes())?;
         }
+        // Where a pass's time goes, phase by phase (filters, bidirectional estimators):
+        // render seconds over the whole loop, every thread's work in its phase.
+        if s.phase_seconds.len() > 1 {
+            let phases: Vec<String> = s.phase_seconds.iter().map(|(name, t)| format!("{name} {t:.2} s")).collect();
+            writeln!(f, "phases     {}", phases.join(", "))?;
+        }
         writeln!(f, "passes     {} (samples per pixel)", s.passes)?;
         writeln!(f, "samples    {}samples/s ({}samples)", si(s.samples_per_second), si(s.stats.samples as f64))?;
         writeln!(f, "rays       {}rays/s ({}rays)", si(s.rays_per_second), si(s.stats.rays as f64))?;
