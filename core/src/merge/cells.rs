@@ -103,6 +103,17 @@ impl CellGrid {
     /// Call `visit(i)` for every point i within distance `radius()` of `p`, once each, in
     /// slot order.
     pub fn query(&self, p: Vec3, mut visit: impl FnMut(u32)) {
+        let r2 = self.radius * self.radius;
+        let mut report = |k: u32| visit(self.slots.indices[k as usize]);
+        self.query_ranges(p, |slots| self.slots.scan(slots, p, r2, &mut report));
+    }
+
+    /// Call `visit(slots)` for each run of consecutive slots a query at `p` scans, in slot
+    /// order, each slot once: every point within `radius()` of `p` lies in one of them
+    /// (with others, which the caller tests; [`Self::query`] keeps those within the
+    /// radius). For callers that test the points of a run in lanes of their own
+    /// ([`Self::positions`], [`Self::order`]).
+    pub fn query_ranges(&self, p: Vec3, mut visit: impl FnMut(core::ops::Range<usize>)) {
         if self.slots.indices.is_empty() || !p.is_finite() {
             return;
         }
@@ -141,18 +152,29 @@ impl CellGrid {
                 j -= 1;
             }
         }
-        let r2 = r * r;
-        let mut report = |k: u32| visit(self.slots.indices[k as usize]);
         let mut current = ranges[0];
         for &(a, b) in &ranges[1..] {
             if a <= current.1.saturating_add(1) {
                 current.1 = current.1.max(b);
             } else {
-                self.slots.scan(self.slots.buckets(current.0, current.1), p, r2, &mut report);
+                visit(self.slots.buckets(current.0, current.1));
                 current = (a, b);
             }
         }
-        self.slots.scan(self.slots.buckets(current.0, current.1), p, r2, &mut report);
+        visit(self.slots.buckets(current.0, current.1));
+    }
+
+    /// After the caller put its points in [`Self::order`], with this grid's at `offset`
+    /// onwards of `total`: report slot k as point `offset + k`, as a rebuild over the
+    /// reordered points would (a stable counting sort leaves points already in bucket
+    /// order where they are, and the positions by slot do not move).
+    pub fn relabel_in_order(&mut self, offset: usize, total: usize) {
+        self.slots.relabel_in_order(offset, total);
+    }
+
+    /// The points' coordinates by slot (x, y, z), for [`Self::query_ranges`]' callers.
+    pub fn positions(&self) -> (&[f32], &[f32], &[f32]) {
+        self.slots.positions()
     }
 }
 

@@ -88,6 +88,24 @@ impl Slots {
         self.starts[0] = 0;
     }
 
+    /// [`super::CellGrid::relabel_in_order`].
+    pub fn relabel_in_order(&mut self, offset: usize, total: usize) {
+        let n = self.indices.len();
+        for (k, i) in self.indices.iter_mut().enumerate() {
+            *i = (offset + k) as u32;
+        }
+        self.slot_of.clear();
+        self.slot_of.resize(total, u32::MAX);
+        for (k, s) in self.slot_of[offset..offset + n].iter_mut().enumerate() {
+            *s = k as u32;
+        }
+    }
+
+    /// The coordinates by slot.
+    pub fn positions(&self) -> (&[f32], &[f32], &[f32]) {
+        (&self.xs, &self.ys, &self.zs)
+    }
+
     /// The slots of buckets `first ..= last`.
     #[inline]
     pub fn buckets(&self, first: u32, last: u32) -> Range<usize> {

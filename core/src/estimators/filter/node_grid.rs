@@ -17,6 +17,7 @@
 use alloc::vec::Vec;
 
 use super::nodes::{Node, NodeKind};
+use super::weights::KernelPoint;
 use crate::math::Vec3;
 use crate::merge::CellGrid;
 
@@ -46,14 +47,164 @@ impl Side {
 pub struct NodeGrid {
     camera: CellGrid,
     light: CellGrid,
+    /// What a kernel test reads of each grid's nodes, by slot.
+    camera_kernels: KernelSlots,
+    light_kernels: KernelSlots,
+}
+
+/// The disk kernels' data of a grid's nodes by slot, as structures of arrays: each node's
+/// side normal ([`crate::segment::Kernel::side_normal`]), its kernel's scale and whether
+/// it may take part (not Dirac). [`NodeGrid::query_kernel`] tests [`LANES`] of them at a
+/// time.
+#[derive(Clone, Debug, Default)]
+struct KernelSlots {
+    nx: Vec<f32>,
+    ny: Vec<f32>,
+    nz: Vec<f32>,
+    scale: Vec<f32>,
+    live: Vec<bool>,
+}
+
+impl KernelSlots {
+    fn fill(&mut self, nodes: &[Node], order: &[u32]) {
+        for v in [&mut self.nx, &mut self.ny, &mut self.nz, &mut self.scale] {
+            v.clear();
+        }
+        self.live.clear();
+        for &i in order {
+            let n = &nodes[i as usize];
+            let side = crate::segment::Kernel::side_normal(&n.hit, n.wo);
+            self.nx.push(side.x);
+            self.ny.push(side.y);
+            self.nz.push(side.z);
+            self.scale.push(n.kernel_scale);
+            self.live.push(!n.delta);
+        }
+    }
+
+    /// From the kernel points of the nodes in slot order.
+    fn fill_points(&mut self, points: &[KernelPoint]) {
+        for v in [&mut self.nx, &mut self.ny, &mut self.nz, &mut self.scale] {
+            v.clear();
+        }
+        self.live.clear();
+        self.nx.extend(points.iter().map(|k| k.side.x));
+        self.ny.extend(points.iter().map(|k| k.side.y));
+        self.nz.extend(points.iter().map(|k| k.side.z));
+        self.scale.extend(points.iter().map(|k| k.scale));
+        self.live.extend(points.iter().map(|k| !k.delta));
+    }
+
+    fn size_bytes(&self) -> usize {
+        (self.nx.capacity() + self.ny.capacity() + self.nz.capacity() + self.scale.capacity()) * 4 + self.live.capacity()
+    }
+}
+
+/// Candidates a kernel query tests at a time.
+const LANES: usize = 8;
+
+/// Whose disk kernel [`NodeGrid::query_kernel`] evaluates.
+#[derive(Clone, Copy, Debug)]
+pub enum KernelOf {
+    /// The centre's own, K(centre → node): `p` and side normal `n` of the centre, `radius`
+    /// its kernel's (the pass's times its scale).
+    Centre { p: Vec3, n: Vec3, radius: f32 },
+    /// Each node's own, K(node → x) for the point `x` with normal `nx`; `radius` the
+    /// pass's (times each node's scale).
+    Nodes { x: Vec3, nx: Vec3, radius: f32 },
+}
+
+/// A node's end as the grids read it: 16 bytes, where a node takes 236 (a pass builds
+/// its grids two or three times, each build reading every node twice).
+#[derive(Clone, Copy, Debug)]
+pub struct NodeEnd {
+    pub p: Vec3,
+    pub side: Option<Side>,
+}
+
+impl NodeEnd {
+    pub fn of(node: &Node) -> Self {
+        Self { p: node.hit.p, side: Side::of(node) }
+    }
 }
 
 impl NodeGrid {
     /// Rebuild over `nodes` for queries of radius `radius`. Queries report node indices.
     pub fn build(&mut self, nodes: &[Node], radius: f32) {
-        let on = |side| nodes.iter().map(move |n| if Side::of(n) == Some(side) { n.hit.p } else { Vec3::NAN });
+        let ends: Vec<NodeEnd> = nodes.iter().map(NodeEnd::of).collect();
+        self.build_positions(&ends, radius);
+        self.camera_kernels.fill(nodes, self.camera.order());
+        self.light_kernels.fill(nodes, self.light.order());
+    }
+
+    /// Rebuild the grids over the nodes' `ends`, leaving the kernel data stale: only
+    /// [`Self::query`] and [`Self::order`] may follow, until [`Self::relabel_sorted`].
+    pub fn build_positions(&mut self, ends: &[NodeEnd], radius: f32) {
+        let on = |side| ends.iter().map(move |e| if e.side == Some(side) { e.p } else { Vec3::NAN });
         self.camera.build(on(Side::Camera), radius);
         self.light.build(on(Side::Light), radius);
+    }
+
+    /// After the nodes were put in [`Self::order`] (`points` their kernel points, in that
+    /// order): the grids a rebuild over them would give, without rebuilding. Node k now
+    /// lies in the camera grid's slot k, node (camera nodes) + k in the light grid's
+    /// slot k: a stable counting sort of nodes already in bucket order leaves them where
+    /// they are (`sorting_nodes_keeps_every_query_and_link`).
+    pub fn relabel_sorted(&mut self, points: &[KernelPoint]) {
+        let (nc, nl) = (self.camera.len(), self.light.len());
+        self.camera.relabel_in_order(0, points.len());
+        self.light.relabel_in_order(nc, points.len());
+        self.camera_kernels.fill_points(&points[..nc]);
+        self.light_kernels.fill_points(&points[nc..nc + nl]);
+    }
+
+    /// Call `visit(i, k)` for every non-Dirac node i of `side` (both, camera side first,
+    /// for `None`) within the query radius of `p` whose disk kernel density `k` (as
+    /// `of` says whose) is positive: the nodes [`Self::query`] reports, in its order,
+    /// less those the kernel leaves out, with the density
+    /// [`crate::segment::Kernel::density_around`] gives, to the bit.
+    ///
+    /// The candidates are tested [`LANES`] at a time without a branch (the ball, the
+    /// kernel's disk and slab, the node's liveness), and only those inside reach `visit`.
+    /// One at a time, about four candidates were rejected per node kept, each rejection a
+    /// branch no predictor could learn.
+    #[inline]
+    pub fn query_kernel(&self, side: Option<Side>, p: Vec3, of: KernelOf, mut visit: impl FnMut(u32, f32)) {
+        if side != Some(Side::Light) {
+            Self::query_kernel_in(&self.camera, &self.camera_kernels, p, of, &mut visit);
+        }
+        if side != Some(Side::Camera) {
+            Self::query_kernel_in(&self.light, &self.light_kernels, p, of, &mut visit);
+        }
+    }
+
+    #[inline]
+    fn query_kernel_in(grid: &CellGrid, kernels: &KernelSlots, p: Vec3, of: KernelOf, visit: &mut impl FnMut(u32, f32)) {
+        let (xs, ys, zs) = grid.positions();
+        let order = grid.order();
+        let r = grid.radius();
+        let r2 = r * r;
+        grid.query_ranges(p, |slots| {
+            let mut j = slots.start;
+            while j < slots.end {
+                let full = j + LANES <= slots.end;
+                // A full block reads the slots as they lie; the last, partial one a copy
+                // padded with points that are never inside (NaN compares false).
+                let pad = |v: &[f32]| -> [f32; LANES] { core::array::from_fn(|l| if j + l < slots.end { v[j + l] } else { f32::NAN }) };
+                let block = |v: &[f32]| -> [f32; LANES] { if full { v[j..j + LANES].try_into().expect("a full block") } else { pad(v) } };
+                let (x, y, z) = (block(xs), block(ys), block(zs));
+                let (nx, ny, nz, scale) = (block(&kernels.nx), block(&kernels.ny), block(&kernels.nz), block(&kernels.scale));
+                let mut k = [0.0f32; LANES];
+                let mut mask = lanes(&x, &y, &z, &nx, &ny, &nz, &scale, p, r2, of, &mut k);
+                mask &= live_mask(&kernels.live[j..slots.end.min(j + LANES)]);
+                while mask != 0 {
+                    let l = mask.trailing_zeros() as usize;
+                    visit(order[j + l], k[l]);
+                    mask &= mask - 1;
+                }
+                j += LANES;
+            }
+        });
     }
 
     /// The query radius.
@@ -63,7 +214,7 @@ impl NodeGrid {
 
     /// Bytes held (capacity).
     pub fn size_bytes(&self) -> usize {
-        self.camera.size_bytes() + self.light.size_bytes()
+        self.camera.size_bytes() + self.light.size_bytes() + self.camera_kernels.size_bytes() + self.light_kernels.size_bytes()
     }
 
     /// Call `visit(i)` for every node i of `side` within the query radius of `p`.
@@ -97,6 +248,68 @@ impl NodeGrid {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+}
+
+/// One block's kernel densities into `k` and the mask of its lanes inside both the
+/// query ball (radius √`r2` around `p`, `Slots::scan`'s test in its order) and the kernel,
+/// with a positive density.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn lanes(
+    x: &[f32; LANES],
+    y: &[f32; LANES],
+    z: &[f32; LANES],
+    nx: &[f32; LANES],
+    ny: &[f32; LANES],
+    nz: &[f32; LANES],
+    scale: &[f32; LANES],
+    p: Vec3,
+    r2: f32,
+    of: KernelOf,
+    k: &mut [f32; LANES],
+) -> u32 {
+    let mut mask = 0u32;
+    match of {
+        KernelOf::Centre { p: c, n: cn, radius } => {
+            for l in 0..LANES {
+                let q = Vec3::new(x[l], y[l], z[l]);
+                let (dx, dy, dz) = (q.x - p.x, q.y - p.y, q.z - p.z);
+                let ball = dx * dx + dy * dy + dz * dz <= r2;
+                let (density, inside) = disk(c, cn, radius, q, Vec3::new(nx[l], ny[l], nz[l]));
+                k[l] = density;
+                mask |= ((ball & inside & (density > 0.0)) as u32) << l;
+            }
+        }
+        KernelOf::Nodes { x: at, nx: an, radius } => {
+            for l in 0..LANES {
+                let q = Vec3::new(x[l], y[l], z[l]);
+                let (dx, dy, dz) = (q.x - p.x, q.y - p.y, q.z - p.z);
+                let ball = dx * dx + dy * dy + dz * dz <= r2;
+                let (density, inside) = disk(q, Vec3::new(nx[l], ny[l], nz[l]), radius * scale[l], at, an);
+                k[l] = density;
+                mask |= ((ball & inside & (density > 0.0)) as u32) << l;
+            }
+        }
+    }
+    mask
+}
+
+/// Bit l set where `live[l]` (fewer than [`LANES`] at a run's end).
+#[inline(always)]
+fn live_mask(live: &[bool]) -> u32 {
+    live.iter().enumerate().fold(0, |m, (l, &b)| m | (b as u32) << l)
+}
+
+/// The disk kernel's density of `x` (normal `nx`) around `y` (side normal `n`) for
+/// `radius`, without a branch, and whether it is inside: the operations of
+/// [`crate::segment::Kernel::density_around`] in its order (its density where inside).
+#[inline(always)]
+fn disk(y: Vec3, n: Vec3, radius: f32, x: Vec3, nx: Vec3) -> (f32, bool) {
+    let d = x - y;
+    let h = d.dot(n);
+    let tangential = d - n * h;
+    let inside = !(tangential.length_squared() >= radius * radius) & !(h.abs() > radius);
+    (nx.dot(n).abs() / (core::f32::consts::PI * radius * radius), inside)
 }
 
 /// Each node's position in `order`, the others after them in their own order: the

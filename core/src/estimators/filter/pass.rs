@@ -6,7 +6,7 @@ use alloc::vec::Vec;
 
 use super::bidir::BidirDenominators;
 use super::graph::{FilterGraph, Rgb3, reserve_headroom};
-use super::node_grid::{NodeGrid, grid_permutation};
+use super::node_grid::{NodeEnd, NodeGrid, grid_permutation};
 use super::nodes::{NONE, Node};
 use super::weights::{Denominators, KernelPoint, Neighbourhood};
 use crate::camera::CameraPass;
@@ -151,6 +151,8 @@ pub struct FilterPass {
     pub links_per: LinksPer,
     /// Scratch: each gathered node's index in grid order ([`Self::sort_nodes`]).
     new_index: Vec<u32>,
+    /// Scratch: the gathered nodes' ends, what the grids are built from.
+    ends: Vec<NodeEnd>,
 }
 
 impl FilterPass {
@@ -171,6 +173,7 @@ impl FilterPass {
             + self.graph.size_bytes()
             + self.radiance.capacity() * core::mem::size_of::<Rgb3<f32>>()
             + self.new_index.capacity() * 4
+            + self.ends.capacity() * core::mem::size_of::<NodeEnd>()
     }
 
     /// What the weights read.
@@ -210,7 +213,10 @@ impl FilterPass {
         self.r = r;
         // The disk kernel's support (within r of the tangent plane, inside the disk)
         // reaches √2 r from its centre.
-        self.grid.build(&self.nodes, r * core::f32::consts::SQRT_2);
+        self.ends.clear();
+        reserve_headroom(&mut self.ends, self.nodes.len());
+        self.ends.extend(self.nodes.iter().map(NodeEnd::of));
+        self.grid.build_positions(&self.ends, r * core::f32::consts::SQRT_2);
         // The neighbour budget: rows cost O(Σ n²), so where nodes crowd (a caustic, a
         // spot light's pool) the pass's radius is lowered until the mean kernel holds at
         // most `neighbours` nodes (surface density: n ∝ r²). The radius still goes
@@ -218,12 +224,13 @@ impl FilterPass {
         let mean = self.mean_neighbours();
         if mean > neighbours as f64 {
             self.r = r * crate::math::sqrt((neighbours as f64 / mean) as f32).max(1.0 / 64.0);
-            self.grid.build(&self.nodes, self.r * core::f32::consts::SQRT_2);
+            self.grid.build_positions(&self.ends, self.r * core::f32::consts::SQRT_2);
         }
         self.sort_nodes();
     }
 
-    /// Put the nodes in the grid's bucket order, and rebuild the grid over them.
+    /// Put the nodes in the grid's bucket order, and relabel the grid for them (no rebuild:
+    /// [`NodeGrid::relabel_sorted`]).
     ///
     /// The weights visit every node's kernel neighbours, and the rows and denominators
     /// run over the nodes in index order. In the order the paths were traced, the
@@ -264,10 +271,10 @@ impl FilterPass {
                 self.new_index.swap(i, j);
             }
         }
-        self.grid.build(&self.nodes, self.r * core::f32::consts::SQRT_2);
         self.points.clear();
         reserve_headroom(&mut self.points, n);
         self.points.extend(self.nodes.iter().map(KernelPoint::of));
+        self.grid.relabel_sorted(&self.points);
     }
 
     /// Append the chunks' nodes (bridges, whose links are already global) after the

@@ -23,7 +23,7 @@
 use alloc::vec::Vec;
 
 use super::graph::{Real, Rgb3, rgb, scale3};
-use super::node_grid::NodeGrid;
+use super::node_grid::{KernelOf, NodeGrid};
 use super::nodes::{NONE, Node, NodeKind};
 use crate::bsdf::TransportMode;
 use crate::math::Vec3;
@@ -132,16 +132,9 @@ impl Neighbourhood<'_> {
     /// `center`'s end (otherwise: K(node → center)), with that density.
     fn each_neighbour(&self, center: &Node, as_center: bool, mut visit: impl FnMut(u32, &Node, f64)) {
         let c = KernelPoint::of(center);
-        self.grid.query(c.p, |i| {
-            let n = &self.points[i as usize];
-            if n.delta {
-                return;
-            }
-            let k = if as_center { c.kernel(&self.kernel, n) } else { n.kernel(&self.kernel, &c) };
-            if k > 0.0 {
-                visit(i, &self.nodes[i as usize], k);
-            }
-        });
+        let Kernel::Disk { radius } = self.kernel else { return };
+        let of = if as_center { KernelOf::Centre { p: c.p, n: c.side, radius: radius * c.scale } } else { KernelOf::Nodes { x: c.p, nx: c.side, radius } };
+        self.grid.query_kernel(None, c.p, of, |i, k| visit(i, &self.nodes[i as usize], k as f64));
     }
 
     /// D of node `index`'s continuation and light-sampled segment. Its own technique
