@@ -155,7 +155,7 @@ use alloc::vec::Vec;
 
 use super::bridge::{self, bridge_end, bridges_from};
 use super::graph::{REFLECTED, Real, Rgb3, add3, mul3, rgb, scale3};
-use super::node_grid::Side;
+use super::node_grid::{KernelOf, Side};
 use super::nodes::{LightEnd, NONE, Node, NodeKind};
 use super::weights::{KernelPoint, Neighbourhood};
 use crate::bsdf::TransportMode;
@@ -351,16 +351,10 @@ impl Bidirectional<'_> {
     fn camera_techniques<const N: usize>(&self, x: &Node, segments: [CameraSegment; N], twin_of: u32) -> [(f64, f64, f64); N] {
         let mut sums = [(0.0, 0.0, 0.0); N];
         let xp = KernelPoint::of(x);
-        self.hood.grid.query_side(Side::Camera, x.hit.p, |i| {
-            // (The camera side's grid holds camera-kind nodes only.)
-            let tp = &self.hood.points[i as usize];
-            if tp.delta {
-                return;
-            }
-            let k = tp.kernel(&self.hood.kernel, &xp);
-            if !(k > 0.0) {
-                return;
-            }
+        // (The camera side's grid holds camera-kind nodes only.)
+        let of = KernelOf::Nodes { x: xp.p, nx: xp.side };
+        self.hood.grid.query_kernel(Some(Side::Camera), x.hit.p, self.hood.kernel, of, |i, k| {
+            let k = k as f64;
             let t = &self.nodes()[i as usize];
             if t.twin && t.pred == twin_of {
                 return;
@@ -404,19 +398,14 @@ impl Bidirectional<'_> {
         }
         let (mut sum, mut ends) = (0.0, 0.0);
         let bridges = self.bridge_choice.is_some() && !own_only;
-        self.hood.grid.query_side(Side::Light, py, |i| {
-            // The kernel point first, then the kernel: most neighbours are skipped
-            // without their node (reading every light node in the ball was a fifth of a
-            // pass on the Cornell box), and one outside its kernel adds nothing.
-            let tp = &self.hood.points[i as usize];
-            // (The light side's grid holds light nodes only.)
-            if (own_only && i != own) || tp.delta {
+        // The kernels first, without the nodes: most neighbours are skipped without
+        // reading theirs (reading every light node in the ball was a fifth of a pass on
+        // the Cornell box). (The light side's grid holds light nodes only.)
+        self.hood.grid.query_kernel(Some(Side::Light), py, self.hood.kernel, KernelOf::Nodes { x: py, nx: ny }, |i, k| {
+            if own_only && i != own {
                 return;
             }
-            let k = tp.density_at(&self.hood.kernel, py, ny);
-            if !(k > 0.0) {
-                return;
-            }
+            let k = k as f64;
             let t = &self.nodes()[i as usize];
             if bridges && bridge_end(t) {
                 ends += k;
@@ -694,9 +683,10 @@ impl Bidirectional<'_> {
         let light_junction = centre.kind == NodeKind::Light && !v.delta && !self.merges_only && self.light_side_owns_dirac();
         let own_path = if light_junction && self.light_paths > 0.0 { 1.0 / self.light_paths } else { 0.0 };
         let cp = KernelPoint::of(centre);
-        self.hood.grid.query(centre.hit.p, |i| {
+        let of = KernelOf::Centre { p: cp.p, n: cp.side, scale: cp.scale };
+        self.hood.grid.query_kernel(None, centre.hit.p, self.hood.kernel, of, |i, k| {
             let up = &self.hood.points[i as usize];
-            if up.delta || up.kind == NodeKind::Emission {
+            if up.kind == NodeKind::Emission {
                 return;
             }
             // Merges only: a camera junction reuses its own segments and light segments,
@@ -708,10 +698,7 @@ impl Bidirectional<'_> {
                 // Its own arriving segment: the sample that placed it.
                 return;
             }
-            let k = cp.kernel(&self.hood.kernel, up);
-            if !(k > 0.0) {
-                return;
-            }
+            let k = k as f64;
             let u = &nodes[i as usize];
             let d = &dens[i as usize];
             let n = u.hit.ns;

@@ -20,6 +20,7 @@ use super::nodes::{Node, NodeKind};
 use super::weights::KernelPoint;
 use crate::math::Vec3;
 use crate::merge::CellGrid;
+use crate::segment::Kernel;
 
 /// The two sides of a pass's nodes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -103,15 +104,15 @@ impl KernelSlots {
 /// Candidates a kernel query tests at a time.
 const LANES: usize = 8;
 
-/// Whose disk kernel [`NodeGrid::query_kernel`] evaluates.
+/// Whose kernel [`NodeGrid::query_kernel`] evaluates (the pass's, scaled by the
+/// owner's [`Node::kernel_scale`]).
 #[derive(Clone, Copy, Debug)]
 pub enum KernelOf {
-    /// The centre's own, K(centre → node): `p` and side normal `n` of the centre, `radius`
-    /// its kernel's (the pass's times its scale).
-    Centre { p: Vec3, n: Vec3, radius: f32 },
-    /// Each node's own, K(node → x) for the point `x` with normal `nx`; `radius` the
-    /// pass's (times each node's scale).
-    Nodes { x: Vec3, nx: Vec3, radius: f32 },
+    /// The centre's own, K(centre → node): the centre's point `p`, side normal `n` and
+    /// kernel scale.
+    Centre { p: Vec3, n: Vec3, scale: f32 },
+    /// Each node's own, K(node → x) for the point `x` with normal `nx`.
+    Nodes { x: Vec3, nx: Vec3 },
 }
 
 /// A node's end as the grids read it: 16 bytes, where a node takes 236 (a pass builds
@@ -169,17 +170,19 @@ impl NodeGrid {
     /// One at a time, about four candidates were rejected per node kept, each rejection a
     /// branch no predictor could learn.
     #[inline]
-    pub fn query_kernel(&self, side: Option<Side>, p: Vec3, of: KernelOf, mut visit: impl FnMut(u32, f32)) {
+    pub fn query_kernel(&self, side: Option<Side>, p: Vec3, kernel: Kernel, of: KernelOf, mut visit: impl FnMut(u32, f32)) {
+        // The Dirac kernel has no continuous part: no node has a density in it.
+        let Kernel::Disk { radius } = kernel else { return };
         if side != Some(Side::Light) {
-            Self::query_kernel_in(&self.camera, &self.camera_kernels, p, of, &mut visit);
+            Self::query_kernel_in(&self.camera, &self.camera_kernels, p, radius, of, &mut visit);
         }
         if side != Some(Side::Camera) {
-            Self::query_kernel_in(&self.light, &self.light_kernels, p, of, &mut visit);
+            Self::query_kernel_in(&self.light, &self.light_kernels, p, radius, of, &mut visit);
         }
     }
 
     #[inline]
-    fn query_kernel_in(grid: &CellGrid, kernels: &KernelSlots, p: Vec3, of: KernelOf, visit: &mut impl FnMut(u32, f32)) {
+    fn query_kernel_in(grid: &CellGrid, kernels: &KernelSlots, p: Vec3, radius: f32, of: KernelOf, visit: &mut impl FnMut(u32, f32)) {
         let (xs, ys, zs) = grid.positions();
         let order = grid.order();
         let r = grid.radius();
@@ -195,7 +198,7 @@ impl NodeGrid {
                 let (x, y, z) = (block(xs), block(ys), block(zs));
                 let (nx, ny, nz, scale) = (block(&kernels.nx), block(&kernels.ny), block(&kernels.nz), block(&kernels.scale));
                 let mut k = [0.0f32; LANES];
-                let mut mask = lanes(&x, &y, &z, &nx, &ny, &nz, &scale, p, r2, of, &mut k);
+                let mut mask = lanes(&x, &y, &z, &nx, &ny, &nz, &scale, p, r2, radius, of, &mut k);
                 mask &= live_mask(&kernels.live[j..slots.end.min(j + LANES)]);
                 while mask != 0 {
                     let l = mask.trailing_zeros() as usize;
@@ -265,12 +268,14 @@ fn lanes(
     scale: &[f32; LANES],
     p: Vec3,
     r2: f32,
+    radius: f32,
     of: KernelOf,
     k: &mut [f32; LANES],
 ) -> u32 {
     let mut mask = 0u32;
     match of {
-        KernelOf::Centre { p: c, n: cn, radius } => {
+        KernelOf::Centre { p: c, n: cn, scale: centre_scale } => {
+            let radius = radius * centre_scale;
             for l in 0..LANES {
                 let q = Vec3::new(x[l], y[l], z[l]);
                 let (dx, dy, dz) = (q.x - p.x, q.y - p.y, q.z - p.z);
@@ -280,7 +285,7 @@ fn lanes(
                 mask |= ((ball & inside & (density > 0.0)) as u32) << l;
             }
         }
-        KernelOf::Nodes { x: at, nx: an, radius } => {
+        KernelOf::Nodes { x: at, nx: an } => {
             for l in 0..LANES {
                 let q = Vec3::new(x[l], y[l], z[l]);
                 let (dx, dy, dz) = (q.x - p.x, q.y - p.y, q.z - p.z);

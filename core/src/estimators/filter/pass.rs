@@ -153,6 +153,10 @@ pub struct FilterPass {
     new_index: Vec<u32>,
     /// Scratch: the gathered nodes' ends, what the grids are built from.
     ends: Vec<NodeEnd>,
+    /// Scratch: each chunk's first node's index in the chunks' order, and one past the last.
+    chunk_starts: Vec<u32>,
+    /// Scratch: the chunks' index of each node in grid order ([`Self::place_nodes`]).
+    old_index: Vec<u32>,
 }
 
 impl FilterPass {
@@ -174,6 +178,7 @@ impl FilterPass {
             + self.radiance.capacity() * core::mem::size_of::<Rgb3<f32>>()
             + self.new_index.capacity() * 4
             + self.ends.capacity() * core::mem::size_of::<NodeEnd>()
+            + (self.chunk_starts.capacity() + self.old_index.capacity()) * 4
     }
 
     /// What the weights read.
@@ -181,41 +186,43 @@ impl FilterPass {
         Neighbourhood { scene, nodes: &self.nodes, points: &self.points, grid: &self.grid, kernel: Kernel::Disk { radius: self.r } }
     }
 
-    /// Gather the chunks' nodes, links and values (node indices shifted to global), and
-    /// build the grid for kernel radius `r`, lowered where the mean kernel would hold
-    /// more than `neighbours` nodes (`FilterConfig::neighbours`).
+    /// Gather the chunks' nodes, links and values (node indices global), build the grid
+    /// for kernel radius `r`, lowered where the mean kernel would hold more than
+    /// `neighbours` nodes (`FilterConfig::neighbours`), and put the nodes in its order.
+    ///
+    /// Work here runs on one thread while the others wait (on 16 cores it was half of a
+    /// multi-vertex filtering pass), so the nodes (236 bytes each) are read once: the
+    /// grids are built from their 16-byte ends, and each node is copied from its chunk
+    /// straight to its place in grid order ([`Self::place_nodes`]).
     pub fn gather_nodes(&mut self, outputs: &mut [ChunkOutput], r: f32, neighbours: u32) {
-        self.nodes.clear();
         self.links.clear();
         self.values.clear();
+        self.ends.clear();
+        self.chunk_starts.clear();
         let (mut nodes, mut links) = (0, 0);
         for out in outputs.iter_mut() {
             let chunk = out.data.filter_chunk();
             nodes += chunk.nodes.len();
             links += chunk.links.len();
         }
-        reserve_headroom(&mut self.nodes, nodes);
+        reserve_headroom(&mut self.ends, nodes);
         reserve_headroom(&mut self.links, links);
         reserve_headroom(&mut self.values, links);
+        reserve_headroom(&mut self.chunk_starts, outputs.len() + 1);
+        let mut offset = 0u32;
         for out in outputs.iter_mut() {
             let chunk = out.data.filter_chunk();
-            let offset = self.nodes.len() as u32;
+            self.chunk_starts.push(offset);
             let shift = |i: u32| if i == NONE { NONE } else { i + offset };
-            self.nodes.extend(chunk.nodes.iter().map(|n| {
-                let mut n = *n;
-                n.next.node = shift(n.next.node);
-                n.pred = shift(n.pred);
-                n
-            }));
+            self.ends.extend(chunk.nodes.iter().map(NodeEnd::of));
             self.links.extend(chunk.links.iter().map(|&i| shift(i)));
             self.values.extend_from_slice(&chunk.values);
+            offset += chunk.nodes.len() as u32;
         }
+        self.chunk_starts.push(offset);
         self.r = r;
         // The disk kernel's support (within r of the tangent plane, inside the disk)
         // reaches √2 r from its centre.
-        self.ends.clear();
-        reserve_headroom(&mut self.ends, self.nodes.len());
-        self.ends.extend(self.nodes.iter().map(NodeEnd::of));
         self.grid.build_positions(&self.ends, r * core::f32::consts::SQRT_2);
         // The neighbour budget: rows cost O(Σ n²), so where nodes crowd (a caustic, a
         // spot light's pool) the pass's radius is lowered until the mean kernel holds at
@@ -226,10 +233,12 @@ impl FilterPass {
             self.r = r * crate::math::sqrt((neighbours as f64 / mean) as f32).max(1.0 / 64.0);
             self.grid.build_positions(&self.ends, self.r * core::f32::consts::SQRT_2);
         }
-        self.sort_nodes();
+        self.place_nodes(outputs);
     }
 
-    /// Put the nodes in the grid's bucket order, and relabel the grid for them (no rebuild:
+    /// Copy the chunks' nodes into `nodes` in the grid's bucket order (their indices
+    /// mapped), put per-node links and values in the same order, and relabel the grid for
+    /// them (the grid a rebuild would give, without rebuilding:
     /// [`NodeGrid::relabel_sorted`]).
     ///
     /// The weights visit every node's kernel neighbours, and the rows and denominators
@@ -241,34 +250,47 @@ impl FilterPass {
     /// Within a bucket the order is unchanged (the grid's counting sort is stable), so a
     /// query meets the same nodes in the same order as before: every sum, and the image,
     /// is the same to the bit. Emission nodes, which are in no bucket, go last.
-    fn sort_nodes(&mut self) {
-        let n = self.nodes.len();
+    fn place_nodes(&mut self, outputs: &mut [ChunkOutput]) {
+        let n = self.ends.len();
         grid_permutation(n, self.grid.order(), &mut self.new_index);
-        let map = |i: u32, new_index: &[u32]| if i == NONE { NONE } else { new_index[i as usize] };
-        for node in &mut self.nodes {
-            node.next.node = map(node.next.node, &self.new_index);
-            node.pred = map(node.pred, &self.new_index);
+        // Node k of the new order is node old_index[k] of the chunks'.
+        self.old_index.clear();
+        reserve_headroom(&mut self.old_index, n);
+        self.old_index.resize(n, 0);
+        for (old, &k) in self.new_index.iter().enumerate() {
+            self.old_index[k as usize] = old as u32;
+        }
+        let map = |i: u32, offset: u32, new_index: &[u32]| if i == NONE { NONE } else { new_index[(i + offset) as usize] };
+        self.nodes.clear();
+        reserve_headroom(&mut self.nodes, n);
+        for &old in &self.old_index {
+            // The chunk holding it: the last whose start is not past it (empty chunks
+            // share their start with the next).
+            let c = self.chunk_starts.partition_point(|&s| s <= old) - 1;
+            let offset = self.chunk_starts[c];
+            let mut node = outputs[c].data.filter_chunk().nodes[(old - offset) as usize];
+            node.next.node = map(node.next.node, offset, &self.new_index);
+            node.pred = map(node.pred, offset, &self.new_index);
+            self.nodes.push(node);
         }
         for link in &mut self.links {
-            *link = map(*link, &self.new_index);
+            *link = map(*link, 0, &self.new_index);
         }
-        // Node i goes to new_index[i]: follow each cycle, swapping (no second copy of
-        // the nodes); each swap puts one node in its place.
+        // Per-node links and values: link i goes to new_index[i]; follow each cycle,
+        // swapping, each swap putting one in its place.
         let per_node_links = self.links_per == LinksPer::Node;
         debug_assert!(!per_node_links || (self.links.len() == n && self.values.len() == n), "per-node links and values, one per node");
-        let per_node = per_node_links && self.links.len() == n && self.values.len() == n;
-        for i in 0..n {
-            loop {
-                let j = self.new_index[i] as usize;
-                if j == i {
-                    break;
-                }
-                self.nodes.swap(i, j);
-                if per_node {
+        if per_node_links && self.links.len() == n && self.values.len() == n {
+            for i in 0..n {
+                loop {
+                    let j = self.new_index[i] as usize;
+                    if j == i {
+                        break;
+                    }
                     self.links.swap(i, j);
                     self.values.swap(i, j);
+                    self.new_index.swap(i, j);
                 }
-                self.new_index.swap(i, j);
             }
         }
         self.points.clear();
@@ -300,14 +322,14 @@ impl FilterPass {
 
     /// Mean number of nodes in a node's grid ball, from up to 512 nodes spread evenly.
     fn mean_neighbours(&self) -> f64 {
-        let n = self.nodes.len();
+        let n = self.ends.len();
         if n == 0 {
             return 0.0;
         }
         let stride = n.div_ceil(512);
         let (mut count, mut probes) = (0u64, 0u64);
-        for node in self.nodes.iter().step_by(stride) {
-            self.grid.query(node.hit.p, |_| count += 1);
+        for end in self.ends.iter().step_by(stride) {
+            self.grid.query(end.p, |_| count += 1);
             probes += 1;
         }
         count as f64 / probes as f64

@@ -132,9 +132,8 @@ impl Neighbourhood<'_> {
     /// `center`'s end (otherwise: K(node → center)), with that density.
     fn each_neighbour(&self, center: &Node, as_center: bool, mut visit: impl FnMut(u32, &Node, f64)) {
         let c = KernelPoint::of(center);
-        let Kernel::Disk { radius } = self.kernel else { return };
-        let of = if as_center { KernelOf::Centre { p: c.p, n: c.side, radius: radius * c.scale } } else { KernelOf::Nodes { x: c.p, nx: c.side, radius } };
-        self.grid.query_kernel(None, c.p, of, |i, k| visit(i, &self.nodes[i as usize], k as f64));
+        let of = if as_center { KernelOf::Centre { p: c.p, n: c.side, scale: c.scale } } else { KernelOf::Nodes { x: c.p, nx: c.side } };
+        self.grid.query_kernel(None, c.p, self.kernel, of, |i, k| visit(i, &self.nodes[i as usize], k as f64));
     }
 
     /// D of node `index`'s continuation and light-sampled segment. Its own technique
