@@ -330,7 +330,24 @@ fn the_report_names_each_phase_and_its_seconds() {
     let dir = temp_dir("phases");
     let out = dir.join("p.exr");
     let report = |estimator: &str| {
-        let o = ember(&["render", "--builtin", "cornell-box", "-e", estimator, "--width", "16", "--height", "16", "--spp", "2", "--threads", "1", "--no-plan", "-o", out.to_str().unwrap()]);
+        let o = ember(&[
+            "render",
+            "--builtin",
+            "cornell-box",
+            "-e",
+            estimator,
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "2",
+            "--threads",
+            "1",
+            "--no-plan",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
         assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
         String::from_utf8_lossy(&o.stdout).into_owned()
     };
@@ -346,7 +363,8 @@ fn the_report_names_each_phase_and_its_seconds() {
     let names: Vec<&str> = phases.iter().map(|p| p.0).collect();
     assert_eq!(names, ["camera paths", "denominators", "filter", "propagate"], "{line}");
     // The render's own seconds hold every phase's.
-    let render: f64 = mvf.lines().find_map(|l| l.split_once(" s setup, ")).and_then(|(_, r)| r.split(' ').next()).and_then(|s| s.parse().ok()).expect("time line");
+    let render: f64 =
+        mvf.lines().find_map(|l| l.split_once(" s setup, ")).and_then(|(_, r)| r.split(' ').next()).and_then(|s| s.parse().ok()).expect("time line");
     let sum: f64 = phases.iter().map(|p| p.1).sum();
     assert!(phases.iter().all(|p| p.1 >= 0.0) && sum <= render + 0.02, "phases sum to {sum} s of {render} s: {line}");
     assert!(!report("pt").lines().any(|l| l.starts_with("phases")), "PT has one phase");
