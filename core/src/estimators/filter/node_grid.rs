@@ -1,5 +1,6 @@
 //! Where a pass finds kernel neighbours: its nodes in two grids by side, camera-kind
-//! nodes (camera nodes and light nodes' twins) in one and light nodes in the other.
+//! nodes (camera nodes and light nodes' twins) in one and light nodes in the other, and
+//! the disk kernel's test over them ([`KernelPoint`], [`NodeGrid::query_kernel`]).
 //!
 //! The weights ask for one side at a time: the camera techniques of a segment sum over
 //! camera nodes around its start, the light techniques over light nodes around its end
@@ -17,7 +18,6 @@
 use alloc::vec::Vec;
 
 use super::nodes::{Node, NodeKind};
-use super::weights::KernelPoint;
 use crate::math::Vec3;
 use crate::merge::CellGrid;
 use crate::segment::Kernel;
@@ -41,6 +41,48 @@ impl Side {
             NodeKind::Emission => None,
         }
     }
+}
+
+/// What a kernel test reads of a node, packed in 28 bytes (a node takes 236). Every
+/// grid candidate is tested, and many are then skipped (Dirac nodes, nodes of the
+/// other side, nodes outside the kernel) without reading their node.
+#[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
+pub struct KernelPoint {
+    /// The node's end.
+    pub p: Vec3,
+    /// Its side normal ([`Kernel::side_normal`]): the kernel's plane as a centre, and as
+    /// a point in another's kernel its normal (whose sign the density ignores).
+    pub side: Vec3,
+    pub delta: bool,
+    pub kind: NodeKind,
+    /// Its kernel's radius over the pass's ([`Node::kernel_scale`]).
+    pub scale: f32,
+}
+
+impl KernelPoint {
+    pub fn of(node: &Node) -> Self {
+        Self { p: node.hit.p, side: Kernel::side_normal(&node.hit, node.wo), delta: node.delta, kind: node.kind, scale: node.kernel_scale }
+    }
+
+    /// K(self → x): the density of `x` in this point's own kernel (the pass's `kernel`
+    /// scaled by [`Self::scale`]).
+    #[inline]
+    pub fn kernel(&self, kernel: &Kernel, x: &KernelPoint) -> f64 {
+        self.density_at(kernel, x.p, x.side)
+    }
+
+    /// K(self → x) for the point `x` with normal `nx` (either orientation): the same as
+    /// [`super::Neighbourhood`]'s `kernel_at` of this point's node, without reading the node.
+    #[inline]
+    pub fn density_at(&self, kernel: &Kernel, x: Vec3, nx: Vec3) -> f64 {
+        kernel.scaled(self.scale).density_around(self.p, self.side, x, nx).0 as f64
+    }
+}
+
+/// Each node's kernel point, in node order.
+pub fn kernel_points(nodes: &[Node]) -> Vec<KernelPoint> {
+    nodes.iter().map(KernelPoint::of).collect()
 }
 
 /// The pass's nodes in a camera-side and a light-side grid.
@@ -165,7 +207,7 @@ impl NodeGrid {
     /// less those the kernel leaves out, with the density
     /// [`crate::segment::Kernel::density_around`] gives, to the bit.
     ///
-    /// The candidates are tested [`LANES`] at a time without a branch (the ball, the
+    /// The candidates are tested `LANES` (8) at a time without a branch (the ball, the
     /// kernel's disk and slab, the node's liveness), and only those inside reach `visit`.
     /// One at a time, about four candidates were rejected per node kept, each rejection a
     /// branch no predictor could learn.

@@ -6,9 +6,10 @@ use alloc::vec::Vec;
 
 use super::bidir::BidirDenominators;
 use super::graph::{FilterGraph, Rgb3, reserve_headroom};
+use super::node_grid::KernelPoint;
 use super::node_grid::{NodeEnd, NodeGrid, grid_permutation};
 use super::nodes::{NONE, Node};
-use super::weights::{Denominators, KernelPoint, Neighbourhood};
+use super::weights::{Denominators, Neighbourhood};
 use crate::camera::CameraPass;
 use crate::estimators::ChunkOutput;
 use crate::render::Film;
@@ -193,7 +194,7 @@ impl FilterPass {
     /// Work here runs on one thread while the others wait (on 16 cores it was half of a
     /// multi-vertex filtering pass), so the nodes (236 bytes each) are read once: the
     /// grids are built from their 16-byte ends, and each node is copied from its chunk
-    /// straight to its place in grid order ([`Self::place_nodes`]).
+    /// straight to its place in grid order (`place_nodes`).
     pub fn gather_nodes(&mut self, outputs: &mut [ChunkOutput], r: f32, neighbours: u32) {
         self.links.clear();
         self.values.clear();

@@ -23,10 +23,9 @@
 use alloc::vec::Vec;
 
 use super::graph::{Real, Rgb3, rgb, scale3};
-use super::node_grid::{KernelOf, NodeGrid};
-use super::nodes::{NONE, Node, NodeKind};
+use super::node_grid::{KernelOf, KernelPoint, NodeGrid};
+use super::nodes::{NONE, Node};
 use crate::bsdf::TransportMode;
-use crate::math::Vec3;
 use crate::scene::Scene;
 use crate::segment::Kernel;
 use crate::spectrum::Rgb;
@@ -42,48 +41,6 @@ pub struct Neighbourhood<'a> {
     pub points: &'a [KernelPoint],
     pub grid: &'a NodeGrid,
     pub kernel: Kernel,
-}
-
-/// What a kernel test reads of a node, packed in 28 bytes (a node takes 236). Every
-/// grid candidate is tested, and many are then skipped (Dirac nodes, nodes of the
-/// other side, nodes outside the kernel) without reading their node.
-#[derive(Clone, Copy, Debug)]
-#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
-pub struct KernelPoint {
-    /// The node's end.
-    pub p: Vec3,
-    /// Its side normal ([`Kernel::side_normal`]): the kernel's plane as a centre, and as
-    /// a point in another's kernel its normal (whose sign the density ignores).
-    pub side: Vec3,
-    pub delta: bool,
-    pub kind: NodeKind,
-    /// Its kernel's radius over the pass's ([`Node::kernel_scale`]).
-    pub scale: f32,
-}
-
-impl KernelPoint {
-    pub fn of(node: &Node) -> Self {
-        Self { p: node.hit.p, side: Kernel::side_normal(&node.hit, node.wo), delta: node.delta, kind: node.kind, scale: node.kernel_scale }
-    }
-
-    /// K(self → x): the density of `x` in this point's own kernel (the pass's `kernel`
-    /// scaled by [`Self::scale`]).
-    #[inline]
-    pub fn kernel(&self, kernel: &Kernel, x: &KernelPoint) -> f64 {
-        self.density_at(kernel, x.p, x.side)
-    }
-
-    /// K(self → x) for the point `x` with normal `nx` (either orientation): the same as
-    /// [`Neighbourhood::kernel_at`] of this point's node, without reading the node.
-    #[inline]
-    pub fn density_at(&self, kernel: &Kernel, x: Vec3, nx: Vec3) -> f64 {
-        kernel.scaled(self.scale).density_around(self.p, self.side, x, nx).0 as f64
-    }
-}
-
-/// Each node's kernel point, in node order.
-pub fn kernel_points(nodes: &[Node]) -> Vec<KernelPoint> {
-    nodes.iter().map(KernelPoint::of).collect()
 }
 
 /// The MMIS denominators of one node's two segments (per solid angle at its end).
