@@ -174,8 +174,10 @@ impl NodeEnd {
 impl NodeGrid {
     /// Rebuild over `nodes` for queries of radius `radius`. Queries report node indices.
     pub fn build(&mut self, nodes: &[Node], radius: f32) {
-        let ends: Vec<NodeEnd> = nodes.iter().map(NodeEnd::of).collect();
-        self.build_positions(&ends, radius);
+        // (Straight from the nodes: no list of ends to allocate.)
+        let on = |side| nodes.iter().map(move |n| if Side::of(n) == Some(side) { n.hit.p } else { Vec3::NAN });
+        self.camera.build(on(Side::Camera), radius);
+        self.light.build(on(Side::Light), radius);
         self.camera_kernels.fill(nodes, self.camera.order());
         self.light_kernels.fill(nodes, self.light.order());
     }
