@@ -48,6 +48,11 @@ def test_ctrl_c_raises_keyboard_interrupt_between_passes(scenes, mode):
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        # The child starts with SIGINT's default action, as from a terminal: a test run
+        # started in the background by a non-interactive shell inherits SIGINT ignored,
+        # and Python then installs no KeyboardInterrupt handler (the children never
+        # stopped, and both cases failed at their deadline).
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:
         # The child says when it renders; a child that never returns between passes
