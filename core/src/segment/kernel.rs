@@ -102,13 +102,22 @@ impl Kernel {
     #[inline]
     pub fn density_around(&self, y: Vec3, n: Vec3, x: Vec3, nx: Vec3) -> AreaPdf {
         let Self::Disk { radius } = *self else { return AreaPdf::ZERO };
+        let (density, inside) = Self::disk_density(y, n, radius, x, nx);
+        if inside { AreaPdf(density) } else { AreaPdf::ZERO }
+    }
+
+    /// The disk of `radius` around `y` (side normal `n`): the density |n_x · n| / (π r²)
+    /// of `x` (normal `nx`) and whether `x` lies inside (within r of the tangent plane and
+    /// in the projected disk), computed without a branch. [`Self::density_around`] is the
+    /// density where inside, zero elsewhere; the segment filters test eight neighbours at
+    /// a time with it (`NodeGrid::query_kernel`), the same bits.
+    #[inline(always)]
+    pub fn disk_density(y: Vec3, n: Vec3, radius: f32, x: Vec3, nx: Vec3) -> (f32, bool) {
         let d = x - y;
         let h = d.dot(n);
         let tangential = d - n * h;
-        if tangential.length_squared() >= radius * radius || h.abs() > radius {
-            return AreaPdf::ZERO;
-        }
-        AreaPdf(nx.dot(n).abs() / (core::f32::consts::PI * radius * radius))
+        let inside = !(tangential.length_squared() >= radius * radius) & !(h.abs() > radius);
+        (nx.dot(n).abs() / (core::f32::consts::PI * radius * radius), inside)
     }
 
     /// ∫ K dx over the surfaces, the continuous part's mass: the share of the disk whose

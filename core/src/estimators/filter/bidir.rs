@@ -155,8 +155,7 @@ use alloc::vec::Vec;
 
 use super::bridge::{self, bridge_end, bridges_from};
 use super::graph::{REFLECTED, Real, Rgb3, add3, mul3, rgb, scale3};
-use super::node_grid::KernelPoint;
-use super::node_grid::{KernelOf, Side};
+use super::node_grid::{KernelOf, KernelPoint, Side};
 use super::nodes::{LightEnd, NONE, Node, NodeKind};
 use super::weights::Neighbourhood;
 use crate::bsdf::TransportMode;

@@ -109,33 +109,17 @@ struct KernelSlots {
 }
 
 impl KernelSlots {
-    fn fill(&mut self, nodes: &[Node], order: &[u32]) {
+    /// From the kernel points of the grid's nodes, in slot order.
+    fn fill(&mut self, points: impl Iterator<Item = KernelPoint> + Clone) {
         for v in [&mut self.nx, &mut self.ny, &mut self.nz, &mut self.scale] {
             v.clear();
         }
         self.live.clear();
-        for &i in order {
-            let n = &nodes[i as usize];
-            let side = crate::segment::Kernel::side_normal(&n.hit, n.wo);
-            self.nx.push(side.x);
-            self.ny.push(side.y);
-            self.nz.push(side.z);
-            self.scale.push(n.kernel_scale);
-            self.live.push(!n.delta);
-        }
-    }
-
-    /// From the kernel points of the nodes in slot order.
-    fn fill_points(&mut self, points: &[KernelPoint]) {
-        for v in [&mut self.nx, &mut self.ny, &mut self.nz, &mut self.scale] {
-            v.clear();
-        }
-        self.live.clear();
-        self.nx.extend(points.iter().map(|k| k.side.x));
-        self.ny.extend(points.iter().map(|k| k.side.y));
-        self.nz.extend(points.iter().map(|k| k.side.z));
-        self.scale.extend(points.iter().map(|k| k.scale));
-        self.live.extend(points.iter().map(|k| !k.delta));
+        self.nx.extend(points.clone().map(|k| k.side.x));
+        self.ny.extend(points.clone().map(|k| k.side.y));
+        self.nz.extend(points.clone().map(|k| k.side.z));
+        self.scale.extend(points.clone().map(|k| k.scale));
+        self.live.extend(points.map(|k| !k.delta));
     }
 
     fn size_bytes(&self) -> usize {
@@ -158,7 +142,7 @@ pub enum KernelOf {
 }
 
 /// A node's end as the grids read it: 16 bytes, where a node takes 236 (a pass builds
-/// its grids two or three times, each build reading every node twice).
+/// its grids up to twice, each build reading every node twice).
 #[derive(Clone, Copy, Debug)]
 pub struct NodeEnd {
     pub p: Vec3,
@@ -175,17 +159,20 @@ impl NodeGrid {
     /// Rebuild over `nodes` for queries of radius `radius`. Queries report node indices.
     pub fn build(&mut self, nodes: &[Node], radius: f32) {
         // (Straight from the nodes: no list of ends to allocate.)
-        let on = |side| nodes.iter().map(move |n| if Side::of(n) == Some(side) { n.hit.p } else { Vec3::NAN });
-        self.camera.build(on(Side::Camera), radius);
-        self.light.build(on(Side::Light), radius);
-        self.camera_kernels.fill(nodes, self.camera.order());
-        self.light_kernels.fill(nodes, self.light.order());
+        self.build_over(nodes.iter().map(NodeEnd::of), radius);
+        let point = |&i: &u32| KernelPoint::of(&nodes[i as usize]);
+        self.camera_kernels.fill(self.camera.order().iter().map(point));
+        self.light_kernels.fill(self.light.order().iter().map(point));
     }
 
     /// Rebuild the grids over the nodes' `ends`, leaving the kernel data stale: only
     /// [`Self::query`] and [`Self::order`] may follow, until [`Self::relabel_sorted`].
     pub fn build_positions(&mut self, ends: &[NodeEnd], radius: f32) {
-        let on = |side| ends.iter().map(move |e| if e.side == Some(side) { e.p } else { Vec3::NAN });
+        self.build_over(ends.iter().copied(), radius);
+    }
+
+    fn build_over(&mut self, ends: impl ExactSizeIterator<Item = NodeEnd> + Clone, radius: f32) {
+        let on = |side| ends.clone().map(move |e| if e.side == Some(side) { e.p } else { Vec3::NAN });
         self.camera.build(on(Side::Camera), radius);
         self.light.build(on(Side::Light), radius);
     }
@@ -199,8 +186,8 @@ impl NodeGrid {
         let (nc, nl) = (self.camera.len(), self.light.len());
         self.camera.relabel_in_order(0, points.len());
         self.light.relabel_in_order(nc, points.len());
-        self.camera_kernels.fill_points(&points[..nc]);
-        self.light_kernels.fill_points(&points[nc..nc + nl]);
+        self.camera_kernels.fill(points[..nc].iter().copied());
+        self.light_kernels.fill(points[nc..nc + nl].iter().copied());
     }
 
     /// Call `visit(i, k)` for every non-Dirac node i of `side` (both, camera side first,
@@ -324,7 +311,7 @@ fn lanes(
                 let q = Vec3::new(x[l], y[l], z[l]);
                 let (dx, dy, dz) = (q.x - p.x, q.y - p.y, q.z - p.z);
                 let ball = dx * dx + dy * dy + dz * dz <= r2;
-                let (density, inside) = disk(c, cn, radius, q, Vec3::new(nx[l], ny[l], nz[l]));
+                let (density, inside) = Kernel::disk_density(c, cn, radius, q, Vec3::new(nx[l], ny[l], nz[l]));
                 k[l] = density;
                 mask |= ((ball & inside & (density > 0.0)) as u32) << l;
             }
@@ -334,7 +321,7 @@ fn lanes(
                 let q = Vec3::new(x[l], y[l], z[l]);
                 let (dx, dy, dz) = (q.x - p.x, q.y - p.y, q.z - p.z);
                 let ball = dx * dx + dy * dy + dz * dz <= r2;
-                let (density, inside) = disk(q, Vec3::new(nx[l], ny[l], nz[l]), radius * scale[l], at, an);
+                let (density, inside) = Kernel::disk_density(q, Vec3::new(nx[l], ny[l], nz[l]), radius * scale[l], at, an);
                 k[l] = density;
                 mask |= ((ball & inside & (density > 0.0)) as u32) << l;
             }
@@ -347,18 +334,6 @@ fn lanes(
 #[inline(always)]
 fn live_mask(live: &[bool]) -> u32 {
     live.iter().enumerate().fold(0, |m, (l, &b)| m | (b as u32) << l)
-}
-
-/// The disk kernel's density of `x` (normal `nx`) around `y` (side normal `n`) for
-/// `radius`, without a branch, and whether it is inside: the operations of
-/// [`crate::segment::Kernel::density_around`] in its order (its density where inside).
-#[inline(always)]
-fn disk(y: Vec3, n: Vec3, radius: f32, x: Vec3, nx: Vec3) -> (f32, bool) {
-    let d = x - y;
-    let h = d.dot(n);
-    let tangential = d - n * h;
-    let inside = !(tangential.length_squared() >= radius * radius) & !(h.abs() > radius);
-    (nx.dot(n).abs() / (core::f32::consts::PI * radius * radius), inside)
 }
 
 /// Each node's position in `order`, the others after them in their own order: the

@@ -6,8 +6,7 @@ use alloc::vec::Vec;
 
 use super::bidir::BidirDenominators;
 use super::graph::{FilterGraph, Rgb3, reserve_headroom};
-use super::node_grid::KernelPoint;
-use super::node_grid::{NodeEnd, NodeGrid, grid_permutation};
+use super::node_grid::{KernelPoint, NodeEnd, NodeGrid, grid_permutation};
 use super::nodes::{NONE, Node};
 use super::weights::{Denominators, Neighbourhood};
 use crate::camera::CameraPass;
@@ -150,7 +149,7 @@ pub struct FilterPass {
     pub radiance: Vec<Rgb3<f32>>,
     /// What `links` and `values` hold.
     pub links_per: LinksPer,
-    /// Scratch: each gathered node's index in grid order ([`Self::sort_nodes`]).
+    /// Scratch: each gathered node's index in grid order (`place_nodes`).
     new_index: Vec<u32>,
     /// Scratch: the gathered nodes' ends, what the grids are built from.
     ends: Vec<NodeEnd>,
@@ -264,6 +263,8 @@ impl FilterPass {
         let map = |i: u32, offset: u32, new_index: &[u32]| if i == NONE { NONE } else { new_index[(i + offset) as usize] };
         self.nodes.clear();
         reserve_headroom(&mut self.nodes, n);
+        self.points.clear();
+        reserve_headroom(&mut self.points, n);
         for &old in &self.old_index {
             // The chunk holding it: the last whose start is not past it (empty chunks
             // share their start with the next).
@@ -272,6 +273,7 @@ impl FilterPass {
             let mut node = outputs[c].data.filter_chunk().nodes[(old - offset) as usize];
             node.next.node = map(node.next.node, offset, &self.new_index);
             node.pred = map(node.pred, offset, &self.new_index);
+            self.points.push(KernelPoint::of(&node));
             self.nodes.push(node);
         }
         for link in &mut self.links {
@@ -294,9 +296,6 @@ impl FilterPass {
                 }
             }
         }
-        self.points.clear();
-        reserve_headroom(&mut self.points, n);
-        self.points.extend(self.nodes.iter().map(KernelPoint::of));
         self.grid.relabel_sorted(&self.points);
     }
 

@@ -210,19 +210,16 @@ impl Neighbourhood<'_> {
         // direction, so they gave no pair.)
         let of = KernelOf::Centre { p: centre.p, n: centre.side, scale: centre.scale };
         self.grid.query_kernel(None, w.hit.p, self.kernel, of, |i, k| {
-            let k = k as f64;
-            {
-                // The BSDF of the reused arrival's own node (its frame, its material), as
-                // MVF's rows take the BSDF of the node whose arrival they keep.
-                let u = &self.nodes[i as usize];
-                // (Through `eval_world`: a Lambertian lobe reads two cosines and builds no
-                // frame; the same bits as through the frame.)
-                let material = self.scene.material(u.hit.material, u.hit.uv);
-                let fr = material.eval_world(u.hit.ns, out, u.wo, TransportMode::Radiance);
-                if !fr.is_black() {
-                    // The flux leaving w reaches u through the medium w's continuation crossed.
-                    pairs.push((i, scale3(rgb::<T>(fr * w.next.transmittance()), cos * T::from_f64(k))));
-                }
+            // The BSDF of the reused arrival's own node (its frame, its material), as
+            // MVF's rows take the BSDF of the node whose arrival they keep. (Through
+            // `eval_world`: a Lambertian lobe reads two cosines and builds no frame; the
+            // same bits as through the frame.)
+            let u = &self.nodes[i as usize];
+            let material = self.scene.material(u.hit.material, u.hit.uv);
+            let fr = material.eval_world(u.hit.ns, out, u.wo, TransportMode::Radiance);
+            if !fr.is_black() {
+                // The flux leaving w reaches u through the medium w's continuation crossed.
+                pairs.push((i, scale3(rgb::<T>(fr * w.next.transmittance()), cos * T::from_f64(k as f64))));
             }
         });
         (rgb::<T>(base), zero)
