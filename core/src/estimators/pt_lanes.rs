@@ -214,9 +214,8 @@ fn prepare(isa, b: &LambertVertices, out: &mut Prepared, groups: usize) {
         let frame = b.frame(i);
         out.s.set(i, frame.s);
         out.t.set(i, frame.t);
-        let wo_local = frame.to_local(b.wo.get(i));
-        out.wo.set(i, wo_local);
         let wo = b.wo.get(i);
+        out.wo.set(i, frame.to_local(wo));
         // `walk::light_origin`: where rays toward wo's side start.
         let (p, ng) = (b.p.get(i), b.ng.get(i));
         out.origin.set(i, offset_ray_origin(p, select3(ng.dot(wo) >= 0.0, ng, -ng)));
