@@ -636,11 +636,28 @@ impl fmt::Display for RenderReport {
         writeln!(f, "rendered   {} with {}, {}x{}, max depth {}, seed {}", self.scene, self.estimator, self.width, self.height, depth, self.seed)?;
         let setup = (s.total_seconds - s.render_seconds).max(0.0);
         writeln!(f, "time       {:.2} s ({:.2} s setup, {:.2} s rendering) on {} threads", s.total_seconds, setup, s.render_seconds, s.threads)?;
-        // The traversal kernels' lanes, and PT's paths in flight for its lane shading
-        // (docs/lanes.md); the other estimators walk one path at a time.
-        let paths = self.shading.paths_in_flight();
-        if self.estimator == "pt" && paths > 1 {
-            writeln!(f, "simd       {}, {} lanes (ray queries); {} shading, {paths} paths in flight", self.simd, self.simd.lanes(), self.shading.name())?;
+        // The traversal kernels' lanes, and the paths in flight where the estimator
+        // shaded over lanes (PT and LT, docs/lanes.md), as the lane loop counted them;
+        // the other estimators walk one path at a time.
+        let lanes = s.stats.lanes;
+        if lanes.width() > 1 {
+            writeln!(
+                f,
+                "simd       {}, {} lanes (ray queries); {} shading, {} paths in flight",
+                self.simd,
+                self.simd.lanes(),
+                self.shading.name(),
+                lanes.width()
+            )?;
+            // Issue 52's occupancy: lane-steps with a path (only a range's tail leaves
+            // lanes idle), and the arrivals the lane kernels shaded (Lambertian ones).
+            writeln!(
+                f,
+                "lanes      {:.2} % of lane-steps busy ({} steps), {:.1} % of arrivals shaded over lanes",
+                100.0 * lanes.occupancy(),
+                lanes.steps,
+                100.0 * lanes.shaded_share()
+            )?;
         } else {
             writeln!(f, "simd       {}, {} lanes (ray queries; one path at a time)", self.simd, self.simd.lanes())?;
         }

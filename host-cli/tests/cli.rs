@@ -369,3 +369,43 @@ fn the_report_names_each_phase_and_its_seconds() {
     assert!(phases.iter().all(|p| p.1 >= 0.0) && sum <= render + 0.02, "phases sum to {sum} s of {render} s: {line}");
     assert!(!report("pt").lines().any(|l| l.starts_with("phases")), "PT has one phase");
 }
+
+/// Issue 52's lane occupancy in the report: where PT and LT run 16 paths in flight (AVX2
+/// or AVX-512 shading), a `lanes` line gives the share of lane-steps with a path and of
+/// arrivals shaded over lanes; at the baseline (one path at a time) there is none. On
+/// the built-in box lanes idle only at a range's tail (so never none, never most), and
+/// most arrivals land on its Lambertian walls (the rest on the lamp, or escaping). Seen
+/// to fail with the lane-shaded count left out of `Counters` (0.0 % shaded) and with
+/// the slots counted as the busy lanes instead of the width (100.0 % busy).
+#[test]
+fn the_report_gives_the_lane_occupancy() {
+    let dir = temp_dir("lanes");
+    let out = dir.join("l.exr");
+    let report = |estimator: &str, simd: &str| {
+        let mut args = vec!["render", "--builtin", "cornell-box", "-e", estimator, "--width", "32", "--height", "32", "--spp", "4"];
+        args.extend(["--threads", "2", "--no-plan", "-o", out.to_str().unwrap()]);
+        if !simd.is_empty() {
+            args.extend(["--simd", simd]);
+        }
+        let o = ember(&args);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    for estimator in ["pt", "lt"] {
+        let text = report(estimator, "");
+        if !text.contains("paths in flight") {
+            // A machine without AVX2 shades one path at a time: no lanes to report.
+            assert!(!text.lines().any(|l| l.starts_with("lanes")), "{text}");
+            continue;
+        }
+        let line = text.lines().find(|l| l.starts_with("lanes      ")).unwrap_or_else(|| panic!("no lanes line:\n{text}"));
+        let percents: Vec<f64> = line.split(" %").filter_map(|p| p.rsplit(' ').next()?.parse().ok()).collect();
+        let [busy, shaded] = percents[..] else { panic!("{line}") };
+        assert!(busy > 50.0 && busy < 100.0, "{estimator}: {line}");
+        assert!(shaded > 50.0 && shaded <= 100.0, "{estimator}: {line}");
+    }
+    if cfg!(target_arch = "x86_64") {
+        let text = report("pt", "sse");
+        assert!(!text.lines().any(|l| l.starts_with("lanes")), "one path at a time has no lanes line:\n{text}");
+    }
+}

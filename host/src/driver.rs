@@ -31,6 +31,7 @@ use rayon::prelude::*;
 use ember_core::geometry::RayQuery;
 use ember_core::render::{Band, ChunkOutput, Context, Film, Phase, PhaseBuffers, Phased};
 use ember_core::transport::ConnectionStats;
+use ember_core::transport::lanes::LaneStats;
 
 /// A contribution at a continuous film position: the core's type.
 pub use ember_core::transport::Splat;
@@ -44,6 +45,8 @@ pub struct PassStats {
     pub samples: u64,
     /// Interior connections traced, and how many the shadow ray found occluded.
     pub connections: ConnectionStats,
+    /// The lane loop's steps, busy lanes and lane-shaded arrivals (PT, LT).
+    pub lanes: LaneStats,
 }
 
 impl core::ops::Add for PassStats {
@@ -51,7 +54,9 @@ impl core::ops::Add for PassStats {
     fn add(self, o: Self) -> Self {
         let mut connections = self.connections;
         connections += o.connections;
-        Self { rays: self.rays + o.rays, samples: self.samples + o.samples, connections }
+        let mut lanes = self.lanes;
+        lanes += o.lanes;
+        Self { rays: self.rays + o.rays, samples: self.samples + o.samples, connections, lanes }
     }
 }
 
@@ -149,6 +154,7 @@ where
     // In chunk order, so the sums do not depend on the thread count.
     for out in outputs.iter() {
         stats.connections += out.counters.connections;
+        stats.lanes += out.counters.lanes;
     }
     if phase.samples {
         stats.samples += phase.items as u64;

@@ -73,7 +73,8 @@ pub(crate) fn trace_paths_with_kernel<Q: RayQuery + ?Sized>(
         None
     };
     let mut program = LightPaths { scene, tracer, params, kernel, pass, splat, counters: Counters::default(), lanes };
-    lanes::run_with_width(&mut program, tracer, paths, width);
+    let steps = lanes::run_with_width(&mut program, tracer, paths, width);
+    program.counters.lanes += steps;
     program.counters
 }
 
@@ -203,6 +204,7 @@ impl<Q: RayQuery + ?Sized> LaneProgram for LightPaths<'_, Q> {
             }
         }
         if scratch.len() > 0 {
+            self.counters.lanes.shaded += scratch.len() as u64;
             lt_lanes::shade(&self.scene.camera, self.params, scratch);
             for i in 0..scratch.len() {
                 let v = scratch.lane(i);

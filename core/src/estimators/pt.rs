@@ -63,7 +63,8 @@ pub(crate) fn render_pixels_with_kernel<Q: RayQuery + ?Sized>(
         None
     };
     let mut paths = CameraPaths { scene, tracer, params, kernel, pass, first: pixels.start, out, counters: Counters::default(), lanes };
-    lanes::run_with_width(&mut paths, tracer, items, width);
+    let steps = lanes::run_with_width(&mut paths, tracer, items, width);
+    paths.counters.lanes += steps;
     paths.counters
 }
 
@@ -173,6 +174,7 @@ impl<Q: RayQuery + ?Sized> LaneProgram for CameraPaths<'_, Q> {
             }
         }
         if scratch.len() > 0 {
+            self.counters.lanes.shaded += scratch.len() as u64;
             pt_lanes::shade(self.scene, self.params, scratch);
             for i in 0..scratch.len() {
                 let v = scratch.lane(i);

@@ -128,19 +128,33 @@ pub struct Arrival {
 
 /// Steps of a [`run`] and the lane-steps that traced a ray.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "wire", derive(serde::Serialize, serde::Deserialize))]
 pub struct LaneStats {
     /// Steps (batches traced).
     pub steps: u64,
-    /// Lanes with a path, summed over steps.
+    /// Lanes with a path, summed over steps: every one an arrival.
     pub busy: u64,
     /// Lanes in flight (the width), summed over steps.
     pub slots: u64,
+    /// Arrivals shaded by a program's lane kernels ([`LaneProgram::arrive_batch`]),
+    /// the rest having been shaded one path at a time. A program counts these itself.
+    pub shaded: u64,
 }
 
 impl LaneStats {
     /// The share of lane-steps doing work.
     pub fn occupancy(&self) -> f64 {
         if self.slots == 0 { 1.0 } else { self.busy as f64 / self.slots as f64 }
+    }
+
+    /// The share of arrivals shaded over lanes.
+    pub fn shaded_share(&self) -> f64 {
+        if self.busy == 0 { 0.0 } else { self.shaded as f64 / self.busy as f64 }
+    }
+
+    /// Paths in flight per step (the width the loop ran at; 0 before any step).
+    pub fn width(&self) -> u64 {
+        self.slots.checked_div(self.steps).unwrap_or(0)
     }
 }
 
@@ -149,6 +163,7 @@ impl core::ops::AddAssign for LaneStats {
         self.steps += o.steps;
         self.busy += o.busy;
         self.slots += o.slots;
+        self.shaded += o.shaded;
     }
 }
 

@@ -139,6 +139,9 @@ pub struct Counters {
     pub truncated: u64,
     /// Interior connections traced and found occluded.
     pub connections: ConnectionStats,
+    /// The lane loop's steps and busy lanes ([`lanes::LaneStats`]), for the estimators
+    /// that walk on it (PT, LT).
+    pub lanes: lanes::LaneStats,
 }
 
 impl core::ops::AddAssign for Counters {
@@ -147,6 +150,7 @@ impl core::ops::AddAssign for Counters {
         self.discarded += o.discarded;
         self.truncated += o.truncated;
         self.connections += o.connections;
+        self.lanes += o.lanes;
     }
 }
 
