@@ -47,7 +47,7 @@ use alloc::vec::Vec;
 
 use super::bidir::Bidirectional;
 use super::bridge::{bridge_end, trace_bridges};
-use super::nodes::{scale_kernels, trace_camera_nodes, trace_light_nodes};
+use super::nodes::{NodeKind, scale_kernels, trace_camera_nodes, trace_light_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk, phase};
 use crate::camera::CameraPass;
 use crate::estimators::FilterConfig;
@@ -220,6 +220,15 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
             phase::BRIDGES => self.pass.append_nodes(outputs),
             id => {
                 self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0)), self.config.neighbours);
+                if id == phase::DENOMINATORS {
+                    // A light node's row where its kernel lies, at its predecessor: the
+                    // light side's rows (contiguous in grid order) in their predecessors'
+                    // order; camera rows stay in node order.
+                    let nodes = &self.pass.nodes;
+                    let start = nodes.iter().position(|n| n.kind == NodeKind::Light).unwrap_or(nodes.len());
+                    let end = start + nodes[start..].iter().take_while(|n| n.kind == NodeKind::Light).count();
+                    self.pass.order_rows(start..end, |pass, v| pass.nodes[v].pred);
+                }
                 if id == phase::PATHS && self.config.bridges() {
                     self.bridge_ends.clear();
                     self.bridge_ends.extend(self.pass.nodes.iter().enumerate().filter(|(_, n)| bridge_end(n)).map(|(i, _)| i as u32));

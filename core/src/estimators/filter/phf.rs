@@ -171,7 +171,13 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Phf {
                     film.set_camera_samples(CameraPass { seed: self.params.seed, pass: phase.pass.unwrap_or(0) }, out.items.clone(), &out.pixels);
                 }
             }
-            id => self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0)), self.config.neighbours),
+            id => {
+                self.pass.reduce_phase(id, outputs, self.radius(phase.pass.unwrap_or(0)), self.config.neighbours);
+                if id == phase::DENOMINATORS {
+                    // Each row where its kernel lies: at the node's predecessor.
+                    self.pass.order_rows(0..self.pass.nodes.len(), |pass, v| pass.links[v]);
+                }
+            }
         }
         // Before the gather: its kernel keeps the progressive radius (the neighbour
         // budget bounds the cost of the rows only; the gather is linear in photons).
