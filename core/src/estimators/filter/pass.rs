@@ -612,7 +612,7 @@ mod tests {
         };
         let mut order = RowOrder::default();
         for (range, keys_past_n) in [(0..n, false), (40..250, false), (10..11, false), (37..300, true), (5..5, false)] {
-            let key = |v: usize| if keys_past_n && v % 7 == 0 { NONE } else { hash(v, 1) };
+            let key = |v: usize| if keys_past_n && v.is_multiple_of(7) { NONE } else { hash(v, 1) };
             order.sort(range.clone(), n, key);
             for k in 0..n {
                 let v = order.node(k);
@@ -635,7 +635,7 @@ mod tests {
             let (mut by_node, mut by_row) = (FilterGraph::<f64>::new(), FilterGraph::<f64>::new());
             for v in 0..n {
                 let (e, pairs) = row_of(v);
-                by_node.push_row(e, [0.0; 3], pairs.into_iter());
+                by_node.push_row(e, [0.0; 3], pairs);
             }
             for k in 0..n {
                 let (e, pairs) = row_of(order.node(k));
