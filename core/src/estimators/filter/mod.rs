@@ -47,6 +47,7 @@ pub mod node_grid;
 pub mod nodes;
 pub mod pass;
 pub mod phf;
+mod row_order;
 pub mod weights;
 
 pub use bidir::BidirDenominators;
