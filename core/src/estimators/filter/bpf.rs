@@ -47,7 +47,7 @@ use alloc::vec::Vec;
 
 use super::bidir::Bidirectional;
 use super::bridge::{bridge_end, trace_bridges};
-use super::nodes::{NodeKind, scale_kernels, trace_camera_nodes, trace_light_nodes};
+use super::nodes::{scale_kernels, trace_camera_nodes, trace_light_nodes};
 use super::pass::{CHUNK, FilterPass, node_chunk, phase};
 use crate::camera::CameraPass;
 use crate::estimators::FilterConfig;
@@ -224,10 +224,7 @@ impl<Q: RayQuery + ?Sized> Phased<Q> for Bpf {
                     // A light node's row where its kernel lies, at its predecessor: the
                     // light side's rows (contiguous in grid order) in their predecessors'
                     // order; camera rows stay in node order.
-                    let nodes = &self.pass.nodes;
-                    let start = nodes.iter().position(|n| n.kind == NodeKind::Light).unwrap_or(nodes.len());
-                    let end = start + nodes[start..].iter().take_while(|n| n.kind == NodeKind::Light).count();
-                    self.pass.order_rows(start..end, |pass, v| pass.nodes[v].pred);
+                    self.pass.order_rows(self.pass.light_side(), |pass, v| pass.nodes[v].pred);
                 }
                 if id == phase::PATHS && self.config.bridges() {
                     self.bridge_ends.clear();

@@ -182,12 +182,14 @@ impl NodeGrid {
     /// lies in the camera grid's slot k, node (camera nodes) + k in the light grid's
     /// slot k: a stable counting sort of nodes already in bucket order leaves them where
     /// they are (`sorting_nodes_keeps_every_query_and_link`).
-    pub fn relabel_sorted(&mut self, points: &[KernelPoint]) {
+    /// Returns the light side's nodes (they follow the camera side's).
+    pub fn relabel_sorted(&mut self, points: &[KernelPoint]) -> core::ops::Range<usize> {
         let (nc, nl) = (self.camera.len(), self.light.len());
         self.camera.relabel_in_order(0, points.len());
         self.light.relabel_in_order(nc, points.len());
         self.camera_kernels.fill(points[..nc].iter().copied());
         self.light_kernels.fill(points[nc..nc + nl].iter().copied());
+        nc..nc + nl
     }
 
     /// Call `visit(i, k)` for every non-Dirac node i of `side` (both, camera side first,

@@ -152,6 +152,8 @@ pub struct FilterPass {
     pub radiance: Vec<Rgb3<f32>>,
     /// The order of the rows (see [`RowOrder`]).
     row_order: RowOrder,
+    /// The light side's nodes in grid order ([`Self::light_side`]).
+    light_side: core::ops::Range<usize>,
     /// What `links` and `values` hold.
     pub links_per: LinksPer,
     /// Scratch: each gathered node's index in grid order (`place_nodes`).
@@ -303,7 +305,13 @@ impl FilterPass {
                 }
             }
         }
-        self.grid.relabel_sorted(&self.points);
+        self.light_side = self.grid.relabel_sorted(&self.points);
+    }
+
+    /// The gathered light nodes (bridges, appended later, not included): contiguous,
+    /// after the camera side's, in grid order.
+    pub fn light_side(&self) -> core::ops::Range<usize> {
+        self.light_side.clone()
     }
 
     /// Append the chunks' nodes (bridges, whose links are already global) after the
